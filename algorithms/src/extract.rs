@@ -1,0 +1,137 @@
+//! The one extractor trait, its output buffer and statistics, and the post-process trait.
+
+use crate::lattice::LatticeError;
+use crate::mesh::{TetMesh, TriMesh};
+use crate::samples::{SampleError, Samples};
+use std::time::Duration;
+
+/// Wall time of each stage. Stages an algorithm does not have stay zero.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StageTimes {
+    /// Field evaluation (copied from [`Samples::sampling_time`]).
+    pub sampling: Duration,
+    /// Vertex pass: edge crossings, clustering, vertex placement.
+    pub vertex: Duration,
+    /// Geometry pass: triangles or tetrahedra.
+    pub geometry: Duration,
+    /// Vertex normals.
+    pub normals: Duration,
+    /// Post-processes (edge collapse, relaxation, smoothing).
+    pub post: Duration,
+}
+
+impl StageTimes {
+    /// Extraction only: vertex + geometry + normals.
+    pub fn extraction(&self) -> Duration {
+        self.vertex + self.geometry + self.normals
+    }
+
+    /// Everything: sampling + extraction + post.
+    pub fn total(&self) -> Duration {
+        self.sampling + self.extraction() + self.post
+    }
+}
+
+/// What an extraction produced and what it cost.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Stats {
+    /// Per-stage wall times.
+    pub times: StageTimes,
+    /// Surface vertices.
+    pub vertices: usize,
+    /// Surface triangles.
+    pub triangles: usize,
+    /// Tetrahedra (volume extractors).
+    pub tetrahedra: usize,
+    /// Triangles discarded as degenerate (repeated vertex), e.g. by clustering.
+    pub discarded_triangles: usize,
+    /// Lattice cells visited that could hold surface.
+    pub active_cells: usize,
+    /// Bytes of output buffers plus scratch buffers held at the end.
+    pub buffer_bytes: usize,
+}
+
+/// The output of an extractor: a reusable buffer. [`Extraction::clear`] keeps capacity so
+/// re-meshing does not allocate once buffers have grown.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Extraction {
+    /// The surface.
+    pub surface: TriMesh,
+    /// The tetrahedral volume, for volume extractors (empty otherwise).
+    pub volume: TetMesh,
+    /// Times and counts.
+    pub stats: Stats,
+}
+
+impl Extraction {
+    /// Empties the buffers, keeping capacity, and resets the stats.
+    pub fn clear(&mut self) {
+        self.surface.clear();
+        self.volume.clear();
+        self.stats = Stats::default();
+    }
+
+    /// Fills the counts and buffer bytes from the meshes (`scratch_bytes` is what the extractor
+    /// held besides).
+    pub fn finish_counts(&mut self, scratch_bytes: usize) {
+        self.stats.vertices = self.surface.positions.len();
+        self.stats.triangles = self.surface.triangles.len();
+        self.stats.tetrahedra = self.volume.tetrahedra.len();
+        self.stats.buffer_bytes = self.surface.capacity_bytes() + self.volume.capacity_bytes() + scratch_bytes;
+    }
+}
+
+/// Errors from extraction.
+#[derive(Debug, thiserror::Error)]
+pub enum ExtractError {
+    /// The algorithm cannot run on this lattice.
+    #[error("{algorithm} does not run on a {lattice} lattice; use {supported}")]
+    UnsupportedLattice {
+        /// Algorithm name.
+        algorithm: &'static str,
+        /// Lattice given.
+        lattice: &'static str,
+        /// Lattices it supports.
+        supported: &'static str,
+    },
+    /// The output would not fit 32-bit indices.
+    #[error("{algorithm}: output too large for 32-bit indices ({vertices} vertices)")]
+    TooLarge {
+        /// Algorithm name.
+        algorithm: &'static str,
+        /// Vertices it would need.
+        vertices: usize,
+    },
+    /// Sampling failed.
+    #[error(transparent)]
+    Samples(#[from] SampleError),
+    /// The lattice could not be built.
+    #[error(transparent)]
+    Lattice(#[from] LatticeError),
+}
+
+/// An isosurface or volume extractor. Dyn-compatible: experiments iterate over
+/// [`crate::extractors::registry`].
+pub trait Extractor: Send + Sync {
+    /// Stable kebab-case name used by the CLI, the registry and the report.
+    fn name(&self) -> &'static str;
+
+    /// One line saying what it does.
+    fn description(&self) -> &'static str;
+
+    /// Extracts from `samples` into `out`, which is cleared first (keeping capacity).
+    fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError>;
+}
+
+/// A mesh-to-mesh filter that composes with any extractor (edge collapse, relaxation, ...).
+/// Implementations add their wall time to `stats.times.post`.
+pub trait PostProcess: Send + Sync {
+    /// Stable kebab-case name (the CLI's `--post` value).
+    fn name(&self) -> &'static str;
+
+    /// One line saying what it does.
+    fn description(&self) -> &'static str;
+
+    /// Rewrites `out` in place.
+    fn apply(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError>;
+}

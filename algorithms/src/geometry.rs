@@ -1,0 +1,153 @@
+//! Small geometric helpers shared by fields, lattices and extractors.
+
+use glam::Vec3;
+
+/// An axis-aligned bounding box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    /// Smallest corner.
+    pub min: Vec3,
+    /// Largest corner.
+    pub max: Vec3,
+}
+
+impl Aabb {
+    /// A box from its two corners.
+    pub const fn new(min: Vec3, max: Vec3) -> Self {
+        Self { min, max }
+    }
+
+    /// The cube `[-h, h]^3`.
+    pub fn cube(h: f32) -> Self {
+        Self::new(Vec3::splat(-h), Vec3::splat(h))
+    }
+
+    /// The empty box (grows to fit the first point added).
+    pub fn empty() -> Self {
+        Self::new(Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY))
+    }
+
+    /// Grows the box to contain `p`.
+    pub fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// The smallest box containing both.
+    pub fn union(&self, other: &Aabb) -> Aabb {
+        Aabb::new(self.min.min(other.min), self.max.max(other.max))
+    }
+
+    /// Side lengths.
+    pub fn extent(&self) -> Vec3 {
+        self.max - self.min
+    }
+
+    /// Centre point.
+    pub fn centre(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    /// Longest side length.
+    pub fn longest_side(&self) -> f32 {
+        self.extent().max_element()
+    }
+
+    /// The box grown by `margin` on every side.
+    pub fn expanded(&self, margin: f32) -> Aabb {
+        Aabb::new(self.min - Vec3::splat(margin), self.max + Vec3::splat(margin))
+    }
+
+    /// Squared distance from `p` to the box (0 inside).
+    pub fn distance_squared(&self, p: Vec3) -> f32 {
+        let d = (self.min - p).max(p - self.max).max(Vec3::ZERO);
+        d.length_squared()
+    }
+
+    /// Whether `p` lies in the closed box.
+    pub fn contains(&self, p: Vec3) -> bool {
+        p.cmpge(self.min).all() && p.cmple(self.max).all()
+    }
+}
+
+/// The closest point to `p` on triangle `(a, b, c)` (Ericson, Real-Time Collision Detection, 5.1.5).
+pub fn closest_point_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    let ab = b - a;
+    let ac = c - a;
+    let ap = p - a;
+    let d1 = ab.dot(ap);
+    let d2 = ac.dot(ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let d3 = ab.dot(bp);
+    let d4 = ac.dot(bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return a + ab * v;
+    }
+    let cp = p - c;
+    let d5 = ab.dot(cp);
+    let d6 = ac.dot(cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return a + ac * w;
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return b + (c - b) * w;
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let v = vb * denom;
+    let w = vc * denom;
+    a + ab * v + ac * w
+}
+
+/// Signed solid angle of triangle `(a, b, c)` seen from `p` (Van Oosterom & Strackee 1983),
+/// positive when `p` is behind the counter-clockwise face. Summed over a closed outward mesh and
+/// divided by 4π it is the winding number: 1 inside, 0 outside.
+pub fn solid_angle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> f64 {
+    let a = (a - p).as_dvec3();
+    let b = (b - p).as_dvec3();
+    let c = (c - p).as_dvec3();
+    let (la, lb, lc) = (a.length(), b.length(), c.length());
+    let det = a.dot(b.cross(c));
+    let den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+    2.0 * det.atan2(den)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn closest_point_regions() {
+        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+        assert_eq!(closest_point_on_triangle(Vec3::new(-1.0, -1.0, 0.0), a, b, c), a);
+        assert!(closest_point_on_triangle(Vec3::new(0.2, 0.2, 1.0), a, b, c).abs_diff_eq(Vec3::new(0.2, 0.2, 0.0), 1e-6));
+        let p = closest_point_on_triangle(Vec3::new(1.0, 1.0, 0.0), a, b, c);
+        assert!((p - Vec3::new(0.5, 0.5, 0.0)).length() < 1e-6);
+    }
+
+    #[test]
+    fn winding_number_of_a_tetrahedron() {
+        let v = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z];
+        // Outward counter-clockwise faces.
+        let faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        let w = |p: Vec3| -> f64 {
+            faces.iter().map(|f| solid_angle(p, v[f[0]], v[f[1]], v[f[2]])).sum::<f64>() / (4.0 * std::f64::consts::PI)
+        };
+        assert!((w(Vec3::splat(0.1)) - 1.0).abs() < 1e-9);
+        assert!(w(Vec3::splat(2.0)).abs() < 1e-9);
+    }
+}

@@ -1,0 +1,214 @@
+//! The 256-case marching cubes table (Lorensen & Cline 1987, "Marching cubes: a high resolution
+//! 3D surface construction algorithm", DOI 10.1145/37402.37422).
+//!
+//! ## Origin
+//! The table is **generated**, not copied: for each of the 256 sign patterns the isoline
+//! segments on the six cube faces are chained into closed polygons, which are fan-triangulated.
+//! Corner and edge numbering follow the widely used convention of Paul Bourke's "Polygonising a
+//! scalar field" (1994), so edge `e` here is edge `e` there.
+//!
+//! On an ambiguous face (two diagonal corners inside) a [`FaceRule`] decides which corners the
+//! surface separates. [`FaceRule::SeparateInside`] (the default table) always separates the
+//! inside corners, a rule that depends only on the face's own four signs, so the two cells sharing
+//! a face always agree and the surface is closed and manifold for every pattern (the original
+//! Lorensen table was not; its complementary cases disagreed). Every edge crossing is one polygon
+//! vertex in exactly two face segments, so polygons are disjoint simple cycles.
+//!
+//! Orientation: each face segment is directed so that the triangle it bounds faces the outside
+//! corners; hence triangles are counter-clockwise seen from outside (`f > iso`).
+
+use std::sync::LazyLock;
+
+/// Corner `i` of the unit cell, as `(x, y, z)` offsets.
+pub const CORNERS: [[u8; 3]; 8] = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]];
+
+/// Edge `e` joins corners `EDGES[e].0` and `EDGES[e].1`.
+pub const EDGES: [(u8, u8); 12] = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)];
+
+/// Each face: its corners in cyclic order and its outward normal.
+pub const FACES: [([u8; 4], [i8; 3]); 6] = [
+    ([0, 1, 2, 3], [0, 0, -1]),
+    ([4, 5, 6, 7], [0, 0, 1]),
+    ([0, 1, 5, 4], [0, -1, 0]),
+    ([3, 2, 6, 7], [0, 1, 0]),
+    ([0, 3, 7, 4], [-1, 0, 0]),
+    ([1, 2, 6, 5], [1, 0, 0]),
+];
+
+/// Most triangles any case produces.
+pub const MAX_TRIANGLES: usize = 12;
+
+/// How an ambiguous face (diagonal corners inside) is resolved.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FaceRule {
+    /// The inside corners are separated (the outside region is connected across the face).
+    SeparateInside,
+    /// The inside corners are joined (the outside corners are separated).
+    JoinInside,
+}
+
+/// One table entry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Case {
+    /// Bit `e` set when edge `e` crosses the surface.
+    pub edge_mask: u16,
+    /// Number of triangles.
+    pub count: u8,
+    /// Triangles as edge numbers; the first `count` are used.
+    pub triangles: [[u8; 3]; MAX_TRIANGLES],
+}
+
+impl Case {
+    /// The used triangles.
+    pub fn triangles(&self) -> &[[u8; 3]] {
+        &self.triangles[..self.count as usize]
+    }
+}
+
+/// The default table: [`FaceRule::SeparateInside`] on every face. Case index bit `c` is set when
+/// corner `c` is inside (`f < iso`).
+pub static TABLE: LazyLock<[Case; 256]> = LazyLock::new(|| std::array::from_fn(|c| generate_case(c as u8, |_, _| FaceRule::SeparateInside)));
+
+fn edge_between(a: u8, b: u8) -> u8 {
+    EDGES.iter().position(|&(p, q)| (p, q) == (a, b) || (p, q) == (b, a)).expect("adjacent corners") as u8
+}
+
+fn corner_pos(c: u8) -> [f32; 3] {
+    CORNERS[c as usize].map(f32::from)
+}
+
+fn edge_mid(e: u8) -> [f32; 3] {
+    let (a, b) = EDGES[e as usize];
+    let (pa, pb) = (corner_pos(a), corner_pos(b));
+    [0, 1, 2].map(|i| 0.5 * (pa[i] + pb[i]))
+}
+
+fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn centroid(corners: impl Iterator<Item = u8>) -> [f32; 3] {
+    let (mut s, mut n) = ([0.0; 3], 0.0);
+    for c in corners {
+        let p = corner_pos(c);
+        for i in 0..3 {
+            s[i] += p[i];
+        }
+        n += 1.0;
+    }
+    s.map(|v| v / n)
+}
+
+/// The directed segments `(from_edge, to_edge)` on one face, for a case.
+pub fn face_segments(case: u8, face: usize, rule: FaceRule) -> Vec<(u8, u8)> {
+    let (cyc, normal) = FACES[face];
+    let inside = |k: usize| case >> cyc[k % 4] & 1 == 1;
+    let face_edge = |k: usize| edge_between(cyc[k % 4], cyc[(k + 1) % 4]);
+    let crossing: Vec<usize> = (0..4).filter(|&k| inside(k) != inside(k + 1)).collect();
+    // Pairs of face-edge positions (i, j): the segment cuts off corners i+1..=j.
+    let pairs: Vec<(usize, usize)> = match crossing.len() {
+        2 => vec![(crossing[0], crossing[1])],
+        4 => {
+            // Corners k and k+2 share a state; cut off the ones the rule separates.
+            let separate_inside = rule == FaceRule::SeparateInside;
+            (0..4).filter(|&k| inside(k) == separate_inside).map(|k| ((k + 3) % 4, k)).collect()
+        }
+        _ => vec![],
+    };
+    let n = normal.map(f32::from);
+    pairs
+        .into_iter()
+        .map(|(i, j)| {
+            let span = (j + 4 - i) % 4;
+            let side_a: Vec<u8> = (1..=span).map(|s| cyc[(i + s) % 4]).collect();
+            let side_b: Vec<u8> = cyc.iter().copied().filter(|c| !side_a.contains(c)).collect();
+            let a_inside = case >> side_a[0] & 1 == 1;
+            let (from_in, to_out) = if a_inside { (&side_a, &side_b) } else { (&side_b, &side_a) };
+            let d = sub(centroid(to_out.iter().copied()), centroid(from_in.iter().copied()));
+            let (ea, eb) = (face_edge(i), face_edge(j));
+            if dot(cross(n, sub(edge_mid(eb), edge_mid(ea))), d) > 0.0 {
+                (ea, eb)
+            } else {
+                (eb, ea)
+            }
+        })
+        .collect()
+}
+
+/// Builds one table entry; `rule(case, face)` resolves each ambiguous face.
+pub fn generate_case(case: u8, rule: impl Fn(u8, usize) -> FaceRule) -> Case {
+    let mut next = [u8::MAX; 12];
+    let mut edge_mask = 0u16;
+    for face in 0..6 {
+        for (a, b) in face_segments(case, face, rule(case, face)) {
+            debug_assert_eq!(next[a as usize], u8::MAX, "case {case}: edge {a} has two successors");
+            next[a as usize] = b;
+            edge_mask |= 1 << a | 1 << b;
+        }
+    }
+    let mut triangles = [[0u8; 3]; MAX_TRIANGLES];
+    let mut count = 0;
+    let mut visited = 0u16;
+    for start in 0..12u8 {
+        if edge_mask >> start & 1 == 0 || visited >> start & 1 == 1 {
+            continue;
+        }
+        let mut polygon = Vec::with_capacity(12);
+        let mut e = start;
+        while visited >> e & 1 == 0 {
+            visited |= 1 << e;
+            polygon.push(e);
+            e = next[e as usize];
+        }
+        for k in 1..polygon.len() - 1 {
+            triangles[count] = [polygon[0], polygon[k], polygon[k + 1]];
+            count += 1;
+        }
+    }
+    Case { edge_mask, count: count as u8, triangles }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn edge_masks_are_exactly_the_sign_changes() {
+        for (c, case) in TABLE.iter().enumerate() {
+            for (e, &(a, b)) in EDGES.iter().enumerate() {
+                let crosses = (c >> a & 1) != (c >> b & 1);
+                assert_eq!(case.edge_mask >> e & 1 == 1, crosses, "case {c} edge {e}");
+            }
+        }
+    }
+
+    #[test]
+    fn complements_have_as_many_triangles_or_differ_only_on_ambiguous_faces() {
+        assert_eq!(TABLE[0].count, 0);
+        assert_eq!(TABLE[255].count, 0);
+        assert_eq!(TABLE[1].count, 1);
+        assert_eq!(TABLE[254].count, 1);
+        // Case 3 (corners 0 and 1): one quad, two triangles.
+        assert_eq!(TABLE[3].count, 2);
+        // Case 5 (corners 0 and 2, diagonal on the bottom face): inside corners separated.
+        assert_eq!(TABLE[5].count, 2);
+        // Its complement (corners 0 and 2 outside): the six-sided tube, four triangles.
+        assert_eq!(TABLE[250].count, 4);
+    }
+
+    #[test]
+    fn single_corner_triangle_faces_away_from_the_corner() {
+        // Corner 0 inside: the triangle's normal must point toward +x+y+z (away from corner 0).
+        let t = TABLE[1].triangles()[0].map(edge_mid);
+        let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+        assert!(dot(n, [1.0, 1.0, 1.0]) > 0.0, "{n:?}");
+    }
+}

@@ -1,0 +1,3 @@
+//! Lookup tables shared by extractors, each with its origin stated in its module.
+
+pub mod marching_cubes;

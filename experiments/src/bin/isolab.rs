@@ -1,0 +1,142 @@
+//! `isolab`: list algorithms and fields, extract a mesh with metrics, or measure a mesh file.
+//!
+//! Exit codes: 0 success, 1 failure (bad file, impossible lattice, non-finite field, unwritable
+//! output), 2 usage error (unknown algorithm, post-process or field; bad arguments).
+
+use clap::{Parser, Subcommand};
+use isolab_algorithms::{extractors, fields};
+use isolab_experiments::io;
+use isolab_experiments::run::{run, write_json, LatticeKind, RunConfig, RunError};
+use isolab_metrics::MeshMetrics;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "isolab", version, about = "Extract and compare isosurface meshes from scalar fields")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// List algorithms, post-processes and fields.
+    List,
+    /// Sample a field, extract a mesh, and optionally write it and its metrics.
+    Extract {
+        /// Algorithm name (see `isolab list`).
+        #[arg(long, short)]
+        algorithm: String,
+        /// Built-in field name or path to an OBJ file.
+        #[arg(long, short)]
+        field: String,
+        /// Samples along the longest side of the domain (at least 2).
+        #[arg(long, short, default_value_t = 64)]
+        resolution: usize,
+        /// Exact samples per axis, NX,NY,NZ (overrides --resolution).
+        #[arg(long, value_delimiter = ',', num_args = 3)]
+        dims: Option<Vec<usize>>,
+        /// Lattice to sample on.
+        #[arg(long, value_enum, default_value_t = LatticeKind::Cubic)]
+        lattice: LatticeKind,
+        /// Iso-value (inside is f < iso).
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        iso: f32,
+        /// Seed of the noise fields.
+        #[arg(long, default_value_t = fields::DEFAULT_SEED, allow_negative_numbers = true)]
+        seed: i32,
+        /// Post-process to apply (repeatable).
+        #[arg(long)]
+        post: Vec<String>,
+        /// Write the mesh (.obj or .ply).
+        #[arg(long, short)]
+        output: Option<PathBuf>,
+        /// Write the metrics JSON here (printed to stdout when absent).
+        #[arg(long, short)]
+        metrics: Option<PathBuf>,
+    },
+    /// Print the metrics JSON of a mesh file (.obj or .ply).
+    Metrics {
+        /// The mesh file.
+        file: PathBuf,
+    },
+}
+
+fn list() {
+    println!("algorithms:");
+    for e in extractors::registry() {
+        println!("  {:<34} {}", e.name(), e.description());
+    }
+    println!("post-processes:");
+    let posts = extractors::post_processes();
+    if posts.is_empty() {
+        println!("  (none yet)");
+    }
+    for p in posts {
+        println!("  {:<34} {}", p.name(), p.description());
+    }
+    println!("fields (or a path to an .obj file):");
+    for f in fields::registry() {
+        println!("  {:<34} {}", f.name, f.description);
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result: Result<(), (i32, String)> = match cli.command {
+        Command::List => {
+            list();
+            Ok(())
+        }
+        Command::Extract { algorithm, field, resolution, dims, lattice, iso, seed, post, output, metrics } => {
+            let config = RunConfig {
+                algorithm,
+                field,
+                resolution,
+                dims: dims.map(|d| [d[0], d[1], d[2]]),
+                lattice,
+                iso,
+                seed,
+                post,
+            };
+            extract(&config, output, metrics).map_err(|e| (e.exit_code(), e.to_string()))
+        }
+        Command::Metrics { file } => io::read_mesh(&file)
+            .map(|mesh| {
+                let m = MeshMetrics::measure(&mesh, None);
+                println!("{}", serde_json::to_string_pretty(&m).unwrap_or_default());
+            })
+            .map_err(|e| (1, e.to_string())),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err((code, message)) => {
+            eprintln!("error: {message}");
+            ExitCode::from(code as u8)
+        }
+    }
+}
+
+fn extract(config: &RunConfig, output: Option<PathBuf>, metrics: Option<PathBuf>) -> Result<(), RunError> {
+    // Refuse unwritable outputs before spending time on extraction.
+    for path in output.iter().chain(metrics.iter()) {
+        let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+        if !dir.is_dir() {
+            return Err(io::IoError::Write { path: path.clone(), source: std::io::Error::new(std::io::ErrorKind::NotFound, "directory does not exist") }.into());
+        }
+    }
+    if let Some(path) = &output {
+        if !matches!(path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref(), Some("obj" | "ply")) {
+            return Err(io::IoError::UnknownFormat { path: path.clone() }.into());
+        }
+    }
+    let outcome = run(config)?;
+    if let Some(path) = &output {
+        io::write_mesh(path, &outcome.extraction.surface)?;
+    }
+    match &metrics {
+        Some(path) => write_json(path, &outcome.report)?,
+        None => println!("{}", serde_json::to_string_pretty(&outcome.report).unwrap_or_default()),
+    }
+    Ok(())
+}

@@ -1,0 +1,8 @@
+//! # isolab experiments
+//!
+//! Everything that knows about files, command lines and the report: mesh file formats
+//! ([`io`]), the one-call pipeline the CLI and experiments share ([`run`]), and the binaries
+//! `isolab` (the CLI) and `report` (regenerates `report/`).
+
+pub mod io;
+pub mod run;

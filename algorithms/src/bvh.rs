@@ -160,11 +160,7 @@ fn build(nodes: &mut Vec<Node>, tris: &mut [[Vec3; 3]], offset: usize, index: us
         normal_sum += n;
     }
     let centre = if area_sum > 0.0 { weighted / area_sum } else { bounds.centre().as_dvec3() };
-    let radius = tris
-        .iter()
-        .flat_map(|t| t.iter())
-        .map(|v| v.as_dvec3().distance(centre))
-        .fold(0.0, f64::max);
+    let radius = tris.iter().flat_map(|t| t.iter()).map(|v| v.as_dvec3().distance(centre)).fold(0.0, f64::max);
     let node = Node { bounds, start: offset as u32, count: tris.len() as u32, centre, normal_sum, radius };
     if tris.len() <= LEAF_SIZE {
         nodes[index] = node;

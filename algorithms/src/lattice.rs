@@ -218,6 +218,9 @@ mod tests {
         let d = Aabb::cube(0.5);
         assert_eq!(Grid::covering(&d, 1), Err(LatticeError::ResolutionTooSmall { resolution: 1 }));
         assert!(matches!(Grid::covering(&d, 5000), Err(LatticeError::TooManySamples { .. })));
-        assert!(matches!(Grid::covering(&Aabb::new(Vec3::ZERO, Vec3::new(1.0, 0.0, 1.0)), 8), Err(LatticeError::BadDomain { .. })));
+        assert!(matches!(
+            Grid::covering(&Aabb::new(Vec3::ZERO, Vec3::new(1.0, 0.0, 1.0)), 8),
+            Err(LatticeError::BadDomain { .. })
+        ));
     }
 }

@@ -17,7 +17,9 @@ fn marching_cubes(c: &mut Criterion) {
             let samples = Samples::sample_cubic(field.clone(), grid, 0.0).unwrap();
             let mc = MarchingCubes::default();
             let mut out = Extraction::default();
-            group.bench_with_input(BenchmarkId::new(name, n), &samples, |b, s| b.iter(|| mc.extract(black_box(s), &mut out).unwrap()));
+            group.bench_with_input(BenchmarkId::new(name, n), &samples, |b, s| {
+                b.iter(|| mc.extract(black_box(s), &mut out).unwrap())
+            });
         }
     }
     group.finish();

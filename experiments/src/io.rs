@@ -212,16 +212,28 @@ pub fn read_ply(path: &Path) -> Result<TriMesh, IoError> {
         let words: Vec<&str> = l.split_whitespace().collect();
         match words.as_slice() {
             ["element", "vertex", n] => {
-                nv = n.parse().map_err(|_| IoError::Malformed { path: path.into(), line: k + 1, reason: "bad vertex count".into() })?;
+                nv = n.parse().map_err(|_| IoError::Malformed {
+                    path: path.into(),
+                    line: k + 1,
+                    reason: "bad vertex count".into(),
+                })?;
                 in_vertex = true;
             }
             ["element", "face", n] => {
-                nf = n.parse().map_err(|_| IoError::Malformed { path: path.into(), line: k + 1, reason: "bad face count".into() })?;
+                nf = n.parse().map_err(|_| IoError::Malformed {
+                    path: path.into(),
+                    line: k + 1,
+                    reason: "bad face count".into(),
+                })?;
                 in_vertex = false;
             }
             ["property", "float", _] if in_vertex => vprops += 1,
             ["property", t, _] if in_vertex => {
-                return Err(IoError::Malformed { path: path.into(), line: k + 1, reason: format!("vertex property type '{t}' unsupported (float only)") })
+                return Err(IoError::Malformed {
+                    path: path.into(),
+                    line: k + 1,
+                    reason: format!("vertex property type '{t}' unsupported (float only)"),
+                })
             }
             _ => {}
         }
@@ -244,7 +256,8 @@ pub fn read_ply(path: &Path) -> Result<TriMesh, IoError> {
     for _ in 0..nf {
         let n = take(1)?[0] as usize;
         let idx = take(4 * n)?;
-        let ids: Vec<u32> = (0..n).map(|i| i32::from_le_bytes([idx[4 * i], idx[4 * i + 1], idx[4 * i + 2], idx[4 * i + 3]]) as u32).collect();
+        let ids: Vec<u32> =
+            (0..n).map(|i| i32::from_le_bytes([idx[4 * i], idx[4 * i + 1], idx[4 * i + 2], idx[4 * i + 3]]) as u32).collect();
         if ids.iter().any(|&i| i as usize >= nv) || n < 3 {
             return Err(bad("face refers to a missing vertex"));
         }
@@ -288,7 +301,8 @@ mod tests {
     #[test]
     fn round_trips_and_atomic_failure() {
         let dir = tempfile::tempdir().unwrap();
-        let mesh = parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n", Path::new("t.obj")).unwrap();
+        let mesh =
+            parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n", Path::new("t.obj")).unwrap();
         for ext in ["obj", "ply"] {
             let p = dir.path().join(format!("t.{ext}"));
             write_mesh(&p, &mesh).unwrap();

@@ -2,7 +2,9 @@
 //! sample once, extract, post-process, measure, and describe the run as the metrics JSON.
 
 use crate::io::{self, IoError};
-use isolab_algorithms::{extractors, fields, ExtractError, Extraction, Field, FieldError, Grid, Lattice, LatticeError, SampleError, Samples};
+use isolab_algorithms::{
+    extractors, fields, ExtractError, Extraction, Field, FieldError, Grid, Lattice, LatticeError, SampleError, Samples,
+};
 use isolab_metrics::MeshMetrics;
 use serde::Serialize;
 use std::path::Path;
@@ -90,6 +92,9 @@ pub enum RunError {
     /// Extraction failed.
     #[error(transparent)]
     Extract(#[from] ExtractError),
+    /// The iso-value is NaN or infinite.
+    #[error("iso-value {0} is not finite")]
+    BadIso(f32),
     /// Not enough memory for the lattice.
     #[error("a {dims:?} {lattice} lattice needs about {need_mib} MiB, but only {available_mib} MiB of memory is available; lower --resolution")]
     OutOfMemory {
@@ -236,8 +241,13 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
     let posts = config
         .post
         .iter()
-        .map(|p| extractors::post_by_name(p).ok_or_else(|| RunError::UnknownPost { name: p.clone(), valid: extractors::post_names() }))
+        .map(|p| {
+            extractors::post_by_name(p).ok_or_else(|| RunError::UnknownPost { name: p.clone(), valid: extractors::post_names() })
+        })
         .collect::<Result<Vec<_>, _>>()?;
+    if !config.iso.is_finite() {
+        return Err(RunError::BadIso(config.iso));
+    }
     let field = load_field(&config.field, config.seed)?;
     let lattice = lattice_for(field.as_ref(), config)?;
     check_memory(&lattice)?;

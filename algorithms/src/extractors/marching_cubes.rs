@@ -381,7 +381,11 @@ impl Extractor for MarchingCubes {
         out.clear();
         out.stats.times.sampling = samples.sampling_time();
         let Lattice::Cubic(grid) = *samples.lattice() else {
-            return Err(ExtractError::UnsupportedLattice { algorithm: "marching-cubes", lattice: samples.lattice().kind(), supported: "cubic" });
+            return Err(ExtractError::UnsupportedLattice {
+                algorithm: "marching-cubes",
+                lattice: samples.lattice().kind(),
+                supported: "cubic",
+            });
         };
         let [nx, _, nz] = grid.dims;
         let field = samples.field().filter(|f| match self.options.normals {
@@ -400,7 +404,9 @@ impl Extractor for MarchingCubes {
         let slab_cells = nz - 1;
         let tasks = match self.options.parallelism {
             Parallelism::Serial => 1,
-            Parallelism::Rayon => (grid.cell_count() / MIN_CELLS_PER_SLAB).clamp(1, 4 * rayon::current_num_threads()).min(slab_cells),
+            Parallelism::Rayon => {
+                (grid.cell_count() / MIN_CELLS_PER_SLAB).clamp(1, 4 * rayon::current_num_threads()).min(slab_cells)
+            }
         };
         let mut pool = self.pool.lock().unwrap_or_else(|e| e.into_inner());
         while pool.len() < tasks {
@@ -415,7 +421,11 @@ impl Extractor for MarchingCubes {
             ctx.slab(0, slab_cells, false, &mut scratches[0]);
             std::mem::swap(&mut scratches[0].mesh, &mut out.surface);
         } else {
-            scratches.par_iter_mut().zip(bounds.par_iter()).enumerate().for_each(|(t, (s, &(z0, z1)))| ctx.slab(z0, z1, t > 0, s));
+            scratches
+                .par_iter_mut()
+                .zip(bounds.par_iter())
+                .enumerate()
+                .for_each(|(t, (s, &(z0, z1)))| ctx.slab(z0, z1, t > 0, s));
         }
         let slab_wall = t_slabs.elapsed();
 
@@ -459,7 +469,8 @@ impl Extractor for MarchingCubes {
 
         // Split the slab phase's wall time between the vertex and geometry passes in proportion
         // to the CPU time each took across tasks.
-        let (cpu_v, cpu_g) = scratches.iter().fold((0.0, 0.0), |(v, g), s| (v + s.vertex_time.as_secs_f64(), g + s.geometry_time.as_secs_f64()));
+        let (cpu_v, cpu_g) =
+            scratches.iter().fold((0.0, 0.0), |(v, g), s| (v + s.vertex_time.as_secs_f64(), g + s.geometry_time.as_secs_f64()));
         let vertex_share = if cpu_v + cpu_g > 0.0 { cpu_v / (cpu_v + cpu_g) } else { 0.5 };
         out.stats.times.vertex = row_time + slab_wall.mul_f64(vertex_share);
         out.stats.times.geometry = slab_wall.mul_f64(1.0 - vertex_share) + join_time;
@@ -505,7 +516,8 @@ mod tests {
         assert_eq!(a.surface.triangles.len(), b.surface.triangles.len());
         // Same triangles as position triples (vertex order differs between runs).
         let key = |m: &TriMesh| {
-            let mut v: Vec<[[u32; 3]; 3]> = m.triangles.iter().map(|t| t.map(|i| m.positions[i as usize].to_array().map(f32::to_bits))).collect();
+            let mut v: Vec<[[u32; 3]; 3]> =
+                m.triangles.iter().map(|t| t.map(|i| m.positions[i as usize].to_array().map(f32::to_bits))).collect();
             v.sort_unstable();
             v
         };

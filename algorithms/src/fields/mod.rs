@@ -67,7 +67,8 @@ pub fn registry() -> &'static [FieldInfo] {
         },
         FieldInfo {
             name: "terrain",
-            description: "fractal height field with 3D-noise overhangs and caves in [-0.5,0.5]x[-0.25,0.25]x[-0.5,0.5]; open at the domain",
+            description:
+                "fractal height field with 3D-noise overhangs and caves in [-0.5,0.5]x[-0.25,0.25]x[-0.5,0.5]; open at the domain",
             make: |p| Arc::new(Terrain::new(p.seed)),
         },
         FieldInfo {
@@ -86,14 +87,10 @@ pub fn registry() -> &'static [FieldInfo] {
 
 /// Builds the built-in field called `name`.
 pub fn builtin(name: &str, params: FieldParams) -> Result<Arc<dyn Field>, FieldError> {
-    registry()
-        .iter()
-        .find(|f| f.name == name)
-        .map(|f| (f.make)(params))
-        .ok_or_else(|| FieldError::Unknown {
-            name: name.to_owned(),
-            valid: registry().iter().map(|f| f.name).collect::<Vec<_>>().join(", "),
-        })
+    registry().iter().find(|f| f.name == name).map(|f| (f.make)(params)).ok_or_else(|| FieldError::Unknown {
+        name: name.to_owned(),
+        valid: registry().iter().map(|f| f.name).collect::<Vec<_>>().join(", "),
+    })
 }
 
 #[cfg(test)]

@@ -56,11 +56,7 @@ pub struct Terrain {
 impl Terrain {
     /// The terrain for `seed`.
     pub fn new(seed: i32) -> Self {
-        Self {
-            height: fbm(seed, 1.8, 5),
-            warp: fbm(seed.wrapping_add(1), 3.0, 3),
-            caves: fbm(seed.wrapping_add(2), 2.5, 2),
-        }
+        Self { height: fbm(seed, 1.8, 5), warp: fbm(seed.wrapping_add(1), 3.0, 3), caves: fbm(seed.wrapping_add(2), 2.5, 2) }
     }
 }
 

@@ -23,7 +23,8 @@ use std::sync::LazyLock;
 pub const CORNERS: [[u8; 3]; 8] = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]];
 
 /// Edge `e` joins corners `EDGES[e].0` and `EDGES[e].1`.
-pub const EDGES: [(u8, u8); 12] = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)];
+pub const EDGES: [(u8, u8); 12] =
+    [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)];
 
 /// Each face: its corners in cyclic order and its outward normal.
 pub const FACES: [([u8; 4], [i8; 3]); 6] = [
@@ -67,7 +68,8 @@ impl Case {
 
 /// The default table: [`FaceRule::SeparateInside`] on every face. Case index bit `c` is set when
 /// corner `c` is inside (`f < iso`).
-pub static TABLE: LazyLock<[Case; 256]> = LazyLock::new(|| std::array::from_fn(|c| generate_case(c as u8, |_, _| FaceRule::SeparateInside)));
+pub static TABLE: LazyLock<[Case; 256]> =
+    LazyLock::new(|| std::array::from_fn(|c| generate_case(c as u8, |_, _| FaceRule::SeparateInside)));
 
 fn edge_between(a: u8, b: u8) -> u8 {
     EDGES.iter().position(|&(p, q)| (p, q) == (a, b) || (p, q) == (b, a)).expect("adjacent corners") as u8
@@ -168,12 +170,54 @@ pub fn generate_case(case: u8, rule: impl Fn(u8, usize) -> FaceRule) -> Case {
             polygon.push(e);
             e = next[e as usize];
         }
-        for k in 1..polygon.len() - 1 {
-            triangles[count] = [polygon[0], polygon[k], polygon[k + 1]];
+        for t in triangulate(&polygon).expect("every polygon has a triangulation without face-crossing diagonals") {
+            triangles[count] = t;
             count += 1;
         }
     }
     Case { edge_mask, count: count as u8, triangles }
+}
+
+/// Whether cube edges `a` and `b` lie on a common face.
+fn share_face(a: u8, b: u8) -> bool {
+    FACES.iter().any(|(cyc, _)| {
+        let on = |e: u8| {
+            let (p, q) = EDGES[e as usize];
+            cyc.contains(&p) && cyc.contains(&q)
+        };
+        on(a) && on(b)
+    })
+}
+
+/// Triangulates a polygon of edge vertices so that no diagonal joins two vertices on a common cube
+/// face. Such a diagonal would lie on (or cut through) the face, where the neighbouring cell may
+/// place its own edge between the same two vertices: the edge would then have four triangles.
+/// Among the valid triangulations, the first found trying fans early is taken.
+fn triangulate(polygon: &[u8]) -> Option<Vec<[u8; 3]>> {
+    fn rec(p: &[u8], out: &mut Vec<[u8; 3]>) -> bool {
+        let n = p.len();
+        if n < 3 {
+            return true;
+        }
+        // The triangle on edge (p[0], p[n-1]) has apex p[k]; its two other sides are diagonals
+        // unless they are polygon edges.
+        for k in (1..n - 1).rev() {
+            let ok_left = k == 1 || !share_face(p[0], p[k]);
+            let ok_right = k == n - 2 || !share_face(p[k], p[n - 1]);
+            if !(ok_left && ok_right) {
+                continue;
+            }
+            let mark = out.len();
+            out.push([p[0], p[k], p[n - 1]]);
+            if rec(&p[..=k], out) && rec(&p[k..], out) {
+                return true;
+            }
+            out.truncate(mark);
+        }
+        false
+    }
+    let mut out = Vec::with_capacity(polygon.len() - 2);
+    rec(polygon, &mut out).then_some(out)
 }
 
 #[cfg(test)]
@@ -202,6 +246,21 @@ mod tests {
         assert_eq!(TABLE[5].count, 2);
         // Its complement (corners 0 and 2 outside): the six-sided tube, four triangles.
         assert_eq!(TABLE[250].count, 4);
+    }
+
+    #[test]
+    fn no_triangle_side_joins_two_vertices_of_a_face_unless_it_is_a_face_segment() {
+        for (c, case) in TABLE.iter().enumerate() {
+            let segments: Vec<(u8, u8)> = (0..6).flat_map(|f| face_segments(c as u8, f, FaceRule::SeparateInside)).collect();
+            for t in case.triangles() {
+                for k in 0..3 {
+                    let (a, b) = (t[k], t[(k + 1) % 3]);
+                    if share_face(a, b) {
+                        assert!(segments.iter().any(|&(p, q)| (p, q) == (a, b) || (p, q) == (b, a)), "case {c}: side {a}-{b}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]

@@ -33,9 +33,9 @@ enum Command {
         /// Samples along the longest side of the domain (at least 2).
         #[arg(long, short, default_value_t = 64)]
         resolution: usize,
-        /// Exact samples per axis, NX,NY,NZ (overrides --resolution).
-        #[arg(long, value_delimiter = ',', num_args = 3)]
-        dims: Option<Vec<usize>>,
+        /// Exact samples per axis, NX,NY,NZ or NXxNYxNZ (overrides --resolution).
+        #[arg(long, value_parser = parse_dims)]
+        dims: Option<[usize; 3]>,
         /// Lattice to sample on.
         #[arg(long, value_enum, default_value_t = LatticeKind::Cubic)]
         lattice: LatticeKind,
@@ -60,6 +60,13 @@ enum Command {
         /// The mesh file.
         file: PathBuf,
     },
+}
+
+fn parse_dims(text: &str) -> Result<[usize; 3], String> {
+    let parts: Vec<&str> = text.split([',', 'x']).collect();
+    let dims: Vec<usize> =
+        parts.iter().map(|p| p.trim().parse::<usize>()).collect::<Result<_, _>>().map_err(|e| format!("'{text}': {e}"))?;
+    <[usize; 3]>::try_from(dims).map_err(|_| format!("'{text}': expected three numbers, like 75,40,56"))
 }
 
 fn list() {
@@ -89,16 +96,7 @@ fn main() -> ExitCode {
             Ok(())
         }
         Command::Extract { algorithm, field, resolution, dims, lattice, iso, seed, post, output, metrics } => {
-            let config = RunConfig {
-                algorithm,
-                field,
-                resolution,
-                dims: dims.map(|d| [d[0], d[1], d[2]]),
-                lattice,
-                iso,
-                seed,
-                post,
-            };
+            let config = RunConfig { algorithm, field, resolution, dims, lattice, iso, seed, post };
             extract(&config, output, metrics).map_err(|e| (e.exit_code(), e.to_string()))
         }
         Command::Metrics { file } => io::read_mesh(&file)
@@ -122,7 +120,11 @@ fn extract(config: &RunConfig, output: Option<PathBuf>, metrics: Option<PathBuf>
     for path in output.iter().chain(metrics.iter()) {
         let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
         if !dir.is_dir() {
-            return Err(io::IoError::Write { path: path.clone(), source: std::io::Error::new(std::io::ErrorKind::NotFound, "directory does not exist") }.into());
+            return Err(io::IoError::Write {
+                path: path.clone(),
+                source: std::io::Error::new(std::io::ErrorKind::NotFound, "directory does not exist"),
+            }
+            .into());
         }
     }
     if let Some(path) = &output {

@@ -1,0 +1,165 @@
+//! The `isolab` command line as scripts use it: outputs, metrics, and every kind of bad input
+//! (a clear message, a non-zero exit code, no panic, no half-written file).
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn isolab(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_isolab")).args(args).output().expect("isolab runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn assert_clean_failure(o: &Output, code: i32, needles: &[&str]) {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(code), "stderr: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for n in needles {
+        assert!(err.contains(n), "'{n}' not in: {err}");
+    }
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+#[test]
+fn list_names_algorithms_post_processes_and_fields() {
+    let o = isolab(&["list"]);
+    assert!(o.status.success());
+    let out = String::from_utf8_lossy(&o.stdout);
+    for name in ["marching-cubes", "post-processes", "sphere", "torus", "gyroid", "asteroid", "terrain", "csg", "thin"] {
+        assert!(out.contains(name), "{name} missing from:\n{out}");
+    }
+}
+
+#[test]
+fn extract_writes_mesh_and_metrics_that_metrics_command_reproduces() {
+    let dir = tempfile::tempdir().unwrap();
+    for ext in ["obj", "ply"] {
+        let mesh = dir.path().join(format!("s.{ext}"));
+        let metrics = dir.path().join("s.json");
+        let o = isolab(&[
+            "extract",
+            "--algorithm",
+            "marching-cubes",
+            "--field",
+            "sphere",
+            "--resolution",
+            "32",
+            "--output",
+            mesh.to_str().unwrap(),
+            "--metrics",
+            metrics.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let m = json(&metrics);
+        for key in [
+            "algorithm",
+            "field",
+            "resolution",
+            "lattice",
+            "vertices",
+            "triangles",
+            "tetrahedra",
+            "times_ms",
+            "aspect_ratio",
+            "aspect_ratio_cgal",
+            "min_angle_deg",
+            "max_angle_deg",
+            "closed",
+            "edge_manifold",
+            "vertex_manifold",
+            "oriented",
+            "components",
+            "euler",
+            "genus",
+            "boundary_edges",
+            "degenerate_triangles",
+            "volume",
+            "area",
+            "surface_distance",
+        ] {
+            assert!(m.get(key).is_some(), "metrics JSON lacks '{key}'");
+        }
+        for key in ["sampling", "extraction", "post", "total"] {
+            assert!(m["times_ms"][key].is_number(), "times_ms.{key}");
+        }
+        assert_eq!(m["euler"], 2);
+        assert_eq!(m["closed"], true);
+        let again = isolab(&["metrics", mesh.to_str().unwrap()]);
+        assert!(again.status.success(), "{}", stderr(&again));
+        let r: serde_json::Value = serde_json::from_slice(&again.stdout).unwrap();
+        for key in ["vertices", "triangles", "euler", "genus", "closed"] {
+            assert_eq!(r[key], m[key], "{key} differs after a round trip through .{ext}");
+        }
+        let (a, b) = (r["volume"].as_f64().unwrap(), m["volume"].as_f64().unwrap());
+        assert!((a - b).abs() < 1e-6 * b.abs(), "{a} vs {b}");
+    }
+}
+
+#[test]
+fn unknown_names_exit_2_and_list_the_valid_ones() {
+    let o = isolab(&["extract", "-a", "marching-cube", "-f", "sphere"]);
+    assert_clean_failure(&o, 2, &["unknown algorithm 'marching-cube'", "marching-cubes"]);
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "spere"]);
+    assert_clean_failure(&o, 2, &["unknown field 'spere'", "sphere", "terrain"]);
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "--post", "nope"]);
+    assert_clean_failure(&o, 2, &["unknown post-process 'nope'"]);
+}
+
+#[test]
+fn impossible_resolutions_are_refused_before_allocating() {
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "1"]);
+    assert_clean_failure(&o, 1, &["resolution 1", "at least 2"]);
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "5000"]);
+    assert_clean_failure(&o, 1, &["samples"]);
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "--dims", "10,1,10"]);
+    assert_clean_failure(&o, 1, &["at least 2"]);
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "--iso", "NaN"]);
+    assert_clean_failure(&o, 1, &["iso"]);
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "--lattice", "bcc", "-r", "8"]);
+    assert_clean_failure(&o, 1, &["cubic"]);
+}
+
+#[test]
+fn malformed_and_empty_obj_files_name_the_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.obj");
+    std::fs::write(&bad, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n").unwrap();
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", bad.to_str().unwrap(), "-r", "8"]);
+    assert_clean_failure(&o, 1, &["bad.obj:4:", "out of range"]);
+    let nan = dir.path().join("nan.obj");
+    std::fs::write(&nan, "v 0 0 0\nv nan 0 0\n").unwrap();
+    assert_clean_failure(&isolab(&["metrics", nan.to_str().unwrap()]), 1, &["nan.obj:2:", "not finite"]);
+    let empty = dir.path().join("empty.obj");
+    std::fs::write(&empty, "# nothing here\n").unwrap();
+    assert_clean_failure(
+        &isolab(&["extract", "-a", "marching-cubes", "-f", empty.to_str().unwrap()]),
+        1,
+        &["empty.obj", "no faces"],
+    );
+    let missing = dir.path().join("missing.obj");
+    assert_clean_failure(&isolab(&["metrics", missing.to_str().unwrap()]), 1, &["missing.obj"]);
+}
+
+#[test]
+fn unwritable_outputs_fail_and_leave_no_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let nowhere = dir.path().join("no/such/dir/s.obj");
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "8", "-o", nowhere.to_str().unwrap()]);
+    assert_clean_failure(&o, 1, &["cannot write", "s.obj"]);
+    // The output path is an existing directory: the rename fails after writing.
+    let target = dir.path().join("taken.obj");
+    std::fs::create_dir(&target).unwrap();
+    std::fs::write(target.join("keep"), "x").unwrap();
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "8", "-o", target.to_str().unwrap()]);
+    assert_clean_failure(&o, 1, &["cannot write", "taken.obj"]);
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(left.len(), 1, "temporary files left behind: {left:?}");
+    let o =
+        isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "8", "-o", dir.path().join("s.stl").to_str().unwrap()]);
+    assert_clean_failure(&o, 1, &["unknown extension"]);
+}

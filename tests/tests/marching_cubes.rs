@@ -1,0 +1,205 @@
+//! Marching cubes: every cube sign pattern, random fields (property tests), serial against
+//! parallel, and analytic invariants on the built-in fields and shipped models.
+
+use isolab_algorithms::extractors::marching_cubes::{MarchingCubes, McOptions, Parallelism};
+use isolab_algorithms::{fields, Grid, Samples};
+use isolab_experiments::run::{run, RunConfig};
+use isolab_tests::{assert_closed_manifold, extract, grid_samples};
+use proptest::prelude::*;
+
+fn serial() -> MarchingCubes {
+    MarchingCubes::new(McOptions { parallelism: Parallelism::Serial, ..Default::default() })
+}
+
+/// A 4x4x4 grid whose inner 2x2x2 block carries `case` (bit set = inside) with the given
+/// magnitudes, and whose outer layer is outside, so the surface is closed.
+fn embedded_case(case: u8, magnitude: impl Fn(usize) -> f32) -> Samples {
+    grid_samples([4, 4, 4], |x, y, z| {
+        let inner = (1..=2).contains(&x) && (1..=2).contains(&y) && (1..=2).contains(&z);
+        if !inner {
+            return 1.0;
+        }
+        // Corner numbering of the table: 0 (0,0,0) 1 (1,0,0) 2 (1,1,0) 3 (0,1,0), +4 for z = 1.
+        let (cx, cy, cz) = (x - 1, y - 1, z - 1);
+        let corner = [0, 1, 3, 2][cx + 2 * cy] + 4 * cz;
+        let inside = case >> corner & 1 == 1;
+        let m = magnitude(corner);
+        if inside {
+            -m
+        } else {
+            m
+        }
+    })
+}
+
+#[test]
+fn all_256_cube_patterns_give_closed_manifold_outward_meshes() {
+    for case in 0..=255u8 {
+        for (variant, magnitude) in [(0, 1.0f32), (1, 0.1), (2, 7.0)] {
+            let s = embedded_case(case, |c| if variant == 0 { 1.0 } else { magnitude * (1.0 + c as f32 * 0.13) });
+            let out = extract(&serial(), &s);
+            let t = assert_closed_manifold(&out.surface, &format!("case {case} variant {variant}"));
+            assert_eq!(out.surface.triangles.is_empty(), case == 0, "case {case}");
+            if case != 0 {
+                assert_eq!(t.components as u32, components_of_inside_corners(case), "case {case}");
+            }
+        }
+    }
+}
+
+/// Inside corners of the block grouped by shared cube edges: with inside corners separated on
+/// every face and the outside layer around the block, each group is one closed component.
+fn components_of_inside_corners(case: u8) -> u32 {
+    use isolab_algorithms::tables::marching_cubes::EDGES;
+    let mut parent: Vec<u8> = (0..8).collect();
+    fn root(p: &mut [u8], mut a: u8) -> u8 {
+        while p[a as usize] != a {
+            a = p[a as usize];
+        }
+        a
+    }
+    for &(a, b) in &EDGES {
+        if case >> a & 1 == 1 && case >> b & 1 == 1 {
+            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+            parent[ra as usize] = rb;
+        }
+    }
+    (0..8u8).filter(|&c| case >> c & 1 == 1 && root(&mut parent, c) == c).count() as u32
+}
+
+/// A smooth random field: a few Gaussian blobs minus a threshold, forced outside on the border.
+fn blob_field(n: usize, blobs: &[(f32, f32, f32, f32)], threshold: f32) -> Samples {
+    grid_samples([n, n, n], |x, y, z| {
+        if x == 0 || y == 0 || z == 0 || x == n - 1 || y == n - 1 || z == n - 1 {
+            return 1.0;
+        }
+        let p = glam::Vec3::new(x as f32, y as f32, z as f32) / (n - 1) as f32;
+        let density: f32 =
+            blobs.iter().map(|&(bx, by, bz, r)| (-(p - glam::Vec3::new(bx, by, bz)).length_squared() / (r * r)).exp()).sum();
+        threshold - density
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 1000, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_smooth_fields_give_closed_manifold_meshes(
+        n in 5usize..18,
+        blobs in prop::collection::vec((0.1f32..0.9, 0.1f32..0.9, 0.1f32..0.9, 0.05f32..0.4), 1..6),
+        threshold in 0.2f32..0.9,
+    ) {
+        let s = blob_field(n, &blobs, threshold);
+        let out = extract(&serial(), &s);
+        assert_closed_manifold(&out.surface, "blob field");
+    }
+
+    #[test]
+    fn random_sign_patterns_give_closed_manifold_meshes(
+        values in prop::collection::vec(-1.0f32..1.0, 6 * 6 * 6),
+    ) {
+        let s = grid_samples([8, 8, 8], |x, y, z| {
+            if x == 0 || y == 0 || z == 0 || x == 7 || y == 7 || z == 7 { 1.0 } else { values[(x - 1) + 6 * ((y - 1) + 6 * (z - 1))] }
+        });
+        let out = extract(&serial(), &s);
+        assert_closed_manifold(&out.surface, "white noise");
+    }
+}
+
+#[test]
+fn parallel_slabs_join_without_cracks_on_white_noise() {
+    // 64^3 cells of white noise: many slabs, every slab boundary crowded with crossings.
+    let mut state = 0x9e3779b97f4a7c15u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+    };
+    let n = 65;
+    let noise: Vec<f32> = (0..n * n * n).map(|_| next()).collect();
+    let s = grid_samples([n, n, n], |x, y, z| {
+        if x == 0 || y == 0 || z == 0 || x == n - 1 || y == n - 1 || z == n - 1 {
+            1.0
+        } else {
+            noise[x + n * (y + n * z)]
+        }
+    });
+    let parallel = extract(&MarchingCubes::default(), &s);
+    let single = extract(&serial(), &s);
+    assert_eq!(parallel.surface.positions.len(), single.surface.positions.len());
+    assert_eq!(parallel.surface.triangles.len(), single.surface.triangles.len());
+    let tp = assert_closed_manifold(&parallel.surface, "parallel white noise");
+    let ts = assert_closed_manifold(&single.surface, "serial white noise");
+    assert_eq!((tp.euler, tp.components), (ts.euler, ts.components));
+}
+
+#[test]
+fn sphere_at_64_is_closed_genus_0_with_volume_within_half_a_percent() {
+    let report = run(&RunConfig::new("marching-cubes", "sphere", 64)).unwrap().report;
+    let m = &report.metrics;
+    assert!(m.topology.is_watertight_manifold() && m.topology.outward);
+    assert_eq!((m.topology.euler, m.topology.genus), (2, Some(0)));
+    let exact = 4.0 / 3.0 * std::f64::consts::PI * 0.4f64.powi(3);
+    assert!((m.volume / exact - 1.0).abs() < 0.005, "volume {} vs {exact}", m.volume);
+    // Vertices lie on the sphere to within a small fraction of the spacing (1/63).
+    let d = m.surface_distance.unwrap();
+    assert!(d.max < 0.05 / 63.0, "max distance {}", d.max);
+}
+
+#[test]
+fn sphere_volume_and_area_converge() {
+    let field = fields::builtin("sphere", Default::default()).unwrap();
+    let exact_v = field.analytic_volume(0.0).unwrap();
+    let mut last = f64::INFINITY;
+    for n in [16, 32, 64, 128] {
+        let s = Samples::sample_cubic(field.clone(), Grid::covering(&field.domain(), n).unwrap(), 0.0).unwrap();
+        let out = extract(&MarchingCubes::default(), &s);
+        let err = (isolab_metrics::signed_volume(&out.surface) - exact_v).abs() / exact_v;
+        assert!(err < last, "volume error did not shrink at {n}: {err} >= {last}");
+        last = err;
+    }
+    assert!(last < 1e-3, "{last}");
+}
+
+#[test]
+fn torus_has_euler_characteristic_0() {
+    let m = run(&RunConfig::new("marching-cubes", "torus", 64)).unwrap().report.metrics;
+    assert!(m.topology.is_watertight_manifold());
+    assert_eq!((m.topology.euler, m.topology.genus, m.topology.components), (0, Some(1), 1));
+    let exact = 2.0 * std::f64::consts::PI.powi(2) * 0.3 * 0.12f64.powi(2);
+    assert!((m.volume / exact - 1.0).abs() < 0.01, "{} vs {exact}", m.volume);
+}
+
+#[test]
+fn closed_fields_are_watertight_and_open_ones_only_open_at_the_domain() {
+    for name in ["asteroid", "csg", "thin"] {
+        let out = run(&RunConfig::new("marching-cubes", name, 48)).unwrap();
+        assert_closed_manifold(&out.extraction.surface, name);
+    }
+    // Thin: a tube, a sheet and two close sheets stay four separate closed components at 64.
+    let thin = run(&RunConfig::new("marching-cubes", "thin", 64)).unwrap().report.metrics;
+    assert_eq!((thin.topology.components, thin.topology.euler), (4, 8));
+    for name in ["gyroid", "terrain"] {
+        let out = run(&RunConfig::new("marching-cubes", name, 40)).unwrap();
+        let t = isolab_metrics::topology(&out.extraction.surface);
+        assert!(t.edge_manifold && t.vertex_manifold && t.oriented, "{name}: {t:?}");
+        let bounds = isolab_algorithms::Grid::covering(
+            &out.extraction.surface.positions.iter().fold(isolab_algorithms::Aabb::empty(), |mut b, p| {
+                b.grow(*p);
+                b
+            }),
+            2,
+        )
+        .unwrap()
+        .bounds();
+        // Every boundary edge lies on the domain's boundary.
+        let on_border =
+            |p: glam::Vec3| (p - bounds.min).abs().min_element() < 1e-5 || (p - bounds.max).abs().min_element() < 1e-5;
+        for [a, b] in &t.offenders.boundary_edges {
+            let pa = out.extraction.surface.positions[*a as usize];
+            let pb = out.extraction.surface.positions[*b as usize];
+            assert!(on_border(pa) && on_border(pb), "{name}: interior boundary edge {pa} {pb}");
+        }
+    }
+}

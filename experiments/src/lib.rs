@@ -5,4 +5,5 @@
 //! `isolab` (the CLI) and `report` (regenerates `report/`).
 
 pub mod io;
+pub mod report;
 pub mod run;

@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Live reference check: builds isolab, writes meshes, and has independent libraries (VTK's
+# vtkMassProperties / vtkMeshQuality / vtkFeatureEdges, pymeshlab's topological measures) measure
+# them. The virtual environment lives in tests/reference/.venv with pinned versions.
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+root="$(cd "$here/../.." && pwd)"
+venv="$here/.venv"
+if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import vtk, pymeshlab" 2>/dev/null; then
+  python3 -m venv "$venv"
+  "$venv/bin/pip" install --quiet --disable-pip-version-check -r "$here/requirements.txt"
+fi
+cargo build --release --quiet -p isolab-experiments --bin isolab
+"$venv/bin/python" "$here/check_mesh.py" --isolab "$root/target/release/isolab" --models "$root/models"

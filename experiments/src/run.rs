@@ -140,10 +140,15 @@ pub fn available_memory() -> Option<u64> {
 }
 
 /// Refuses lattices whose samples plus a generous output estimate (four times the samples'
-/// bytes) exceed the available memory.
+/// bytes) exceed the memory available to this process.
 pub fn check_memory(lattice: &Lattice) -> Result<(), RunError> {
+    check_memory_against(lattice, available_memory())
+}
+
+/// [`check_memory`] against a given number of available bytes (`None`: unknown, accept).
+pub fn check_memory_against(lattice: &Lattice, available: Option<u64>) -> Result<(), RunError> {
     let need = lattice.sample_count() as u64 * 4 * 5;
-    match available_memory() {
+    match available {
         Some(available) if need > available => Err(RunError::OutOfMemory {
             dims: lattice.grid().dims,
             lattice: lattice.kind(),
@@ -295,4 +300,29 @@ pub fn write_json(path: &Path, value: &impl Serialize) -> Result<(), IoError> {
         serde_json::to_writer_pretty(&mut *w, value).map_err(std::io::Error::other)?;
         std::io::Write::write_all(w, b"\n")
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lattices_larger_than_memory_are_refused_with_sizes() {
+        let field = fields::builtin("sphere", Default::default()).unwrap();
+        let lattice = lattice_for(field.as_ref(), &RunConfig::new("marching-cubes", "sphere", 512)).unwrap();
+        let err = check_memory_against(&lattice, Some(1 << 30)).unwrap_err();
+        assert!(matches!(err, RunError::OutOfMemory { need_mib: 2560, available_mib: 1024, .. }), "{err}");
+        assert!(err.to_string().contains("lower --resolution"));
+        assert!(check_memory_against(&lattice, Some(1 << 34)).is_ok());
+        assert!(check_memory_against(&lattice, None).is_ok());
+    }
+
+    #[test]
+    fn mesh_fields_are_loaded_by_path_and_builtins_by_name() {
+        let bunny = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/spot.obj");
+        assert_eq!(load_field(bunny, 0).unwrap().name(), "spot");
+        assert_eq!(load_field("torus", 0).unwrap().name(), "torus");
+        assert!(matches!(load_field("no-such-field", 0), Err(RunError::Field(FieldError::Unknown { .. }))));
+        assert_eq!(RunError::Field(FieldError::Unknown { name: String::new(), valid: String::new() }).exit_code(), 2);
+    }
 }

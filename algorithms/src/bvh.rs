@@ -38,18 +38,59 @@ struct Node {
 pub struct TriangleBvh {
     nodes: Vec<Node>,
     triangles: Vec<[Vec3; 3]>,
+    /// Original index of each stored triangle.
+    ids: Vec<u32>,
 }
 
 impl TriangleBvh {
     /// Builds the hierarchy. `triangles` holds vertex positions, wound counter-clockwise seen from
     /// outside. An empty input gives an empty tree (every query then answers "far, outside").
-    pub fn new(mut triangles: Vec<[Vec3; 3]>) -> Self {
-        let mut nodes = Vec::with_capacity(2 * triangles.len() / LEAF_SIZE + 1);
-        if !triangles.is_empty() {
+    pub fn new(triangles: Vec<[Vec3; 3]>) -> Self {
+        let mut tagged: Vec<([Vec3; 3], u32)> = triangles.into_iter().zip(0..).collect();
+        let mut nodes = Vec::with_capacity(2 * tagged.len() / LEAF_SIZE + 1);
+        if !tagged.is_empty() {
             nodes.push(placeholder());
-            build(&mut nodes, &mut triangles, 0, 0);
+            build(&mut nodes, &mut tagged, 0, 0);
         }
-        Self { nodes, triangles }
+        let (triangles, ids) = tagged.into_iter().unzip();
+        Self { nodes, triangles, ids }
+    }
+
+    /// Calls `visit(id, triangle)` for every triangle whose bounds overlap `query` (closed boxes),
+    /// where `id` is the triangle's index in the input to [`TriangleBvh::new`].
+    pub fn for_each_overlapping(&self, query: &Aabb, mut visit: impl FnMut(u32, &[Vec3; 3])) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let overlaps = |b: &Aabb| b.min.cmple(query.max).all() && query.min.cmple(b.max).all();
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = &self.nodes[stack[top] as usize];
+            if !overlaps(&node.bounds) {
+                continue;
+            }
+            if node.count > 0 {
+                for k in node.start as usize..(node.start + node.count) as usize {
+                    let t = &self.triangles[k];
+                    let mut b = Aabb::empty();
+                    t.iter().for_each(|&v| b.grow(v));
+                    if overlaps(&b) {
+                        visit(self.ids[k], t);
+                    }
+                }
+            } else {
+                stack[top] = node.start;
+                stack[top + 1] = node.start + 1;
+                top += 2;
+            }
+        }
+    }
+
+    /// The closest point on any triangle to `p`, its squared distance, and the triangle's id.
+    pub fn closest_triangle(&self, p: Vec3) -> Option<(Vec3, f32, u32)> {
+        self.closest(p)
     }
 
     /// Number of triangles.
@@ -69,10 +110,14 @@ impl TriangleBvh {
 
     /// The closest point on any triangle to `p`, and its squared distance.
     pub fn closest_point(&self, p: Vec3) -> Option<(Vec3, f32)> {
+        self.closest(p).map(|(q, d, _)| (q, d))
+    }
+
+    fn closest(&self, p: Vec3) -> Option<(Vec3, f32, u32)> {
         if self.nodes.is_empty() {
             return None;
         }
-        let mut best = (Vec3::ZERO, f32::INFINITY);
+        let mut best = (Vec3::ZERO, f32::INFINITY, u32::MAX);
         let mut stack = [0u32; 64];
         let mut top = 1;
         while top > 0 {
@@ -82,12 +127,12 @@ impl TriangleBvh {
                 continue;
             }
             if node.count > 0 {
-                let range = node.start as usize..(node.start + node.count) as usize;
-                for t in &self.triangles[range] {
+                for k in node.start as usize..(node.start + node.count) as usize {
+                    let t = &self.triangles[k];
                     let q = closest_point_on_triangle(p, t[0], t[1], t[2]);
                     let d = q.distance_squared(p);
                     if d < best.1 {
-                        best = (q, d);
+                        best = (q, d, self.ids[k]);
                     }
                 }
             } else {
@@ -141,13 +186,13 @@ fn placeholder() -> Node {
 }
 
 /// Builds the subtree for `tris` (a slice starting at triangle `offset`) into `nodes[index]`.
-fn build(nodes: &mut Vec<Node>, tris: &mut [[Vec3; 3]], offset: usize, index: usize) {
+fn build(nodes: &mut Vec<Node>, tris: &mut [([Vec3; 3], u32)], offset: usize, index: usize) {
     let mut bounds = Aabb::empty();
     let mut centroid_bounds = Aabb::empty();
     let mut weighted = DVec3::ZERO;
     let mut area_sum = 0.0;
     let mut normal_sum = DVec3::ZERO;
-    for t in tris.iter() {
+    for (t, _) in tris.iter() {
         for v in t {
             bounds.grow(*v);
         }
@@ -160,7 +205,7 @@ fn build(nodes: &mut Vec<Node>, tris: &mut [[Vec3; 3]], offset: usize, index: us
         normal_sum += n;
     }
     let centre = if area_sum > 0.0 { weighted / area_sum } else { bounds.centre().as_dvec3() };
-    let radius = tris.iter().flat_map(|t| t.iter()).map(|v| v.as_dvec3().distance(centre)).fold(0.0, f64::max);
+    let radius = tris.iter().flat_map(|(t, _)| t.iter()).map(|v| v.as_dvec3().distance(centre)).fold(0.0, f64::max);
     let node = Node { bounds, start: offset as u32, count: tris.len() as u32, centre, normal_sum, radius };
     if tris.len() <= LEAF_SIZE {
         nodes[index] = node;
@@ -168,7 +213,7 @@ fn build(nodes: &mut Vec<Node>, tris: &mut [[Vec3; 3]], offset: usize, index: us
     }
     let axis = centroid_bounds.extent().max_position();
     let mid = tris.len() / 2;
-    let key = |t: &[Vec3; 3]| (t[0][axis] + t[1][axis] + t[2][axis]) / 3.0;
+    let key = |(t, _): &([Vec3; 3], u32)| (t[0][axis] + t[1][axis] + t[2][axis]) / 3.0;
     tris.select_nth_unstable_by(mid, |a, b| key(a).total_cmp(&key(b)));
     let left = nodes.len();
     nodes.push(placeholder());

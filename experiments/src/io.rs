@@ -58,15 +58,24 @@ pub enum IoError {
     },
 }
 
+/// Which vertex coordinates an OBJ reader accepts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Coordinates {
+    /// Only finite coordinates; NaN or infinity is an error naming the line (for fields).
+    Finite,
+    /// Any, so a measuring tool can report NaN vertices instead of refusing the file.
+    Any,
+}
+
 /// Reads the triangles of an OBJ file.
-pub fn read_obj(path: &Path) -> Result<TriMesh, IoError> {
+pub fn read_obj(path: &Path, coordinates: Coordinates) -> Result<TriMesh, IoError> {
     let text = std::fs::read(path).map_err(|source| IoError::Read { path: path.into(), source })?;
     let text = String::from_utf8_lossy(&text);
-    parse_obj(&text, path)
+    parse_obj(&text, path, coordinates)
 }
 
 /// Parses OBJ text; `path` is only used in error messages.
-pub fn parse_obj(text: &str, path: &Path) -> Result<TriMesh, IoError> {
+pub fn parse_obj(text: &str, path: &Path, coordinates: Coordinates) -> Result<TriMesh, IoError> {
     let mut mesh = TriMesh::default();
     let malformed = |line: usize, reason: String| IoError::Malformed { path: path.into(), line, reason };
     let mut face = Vec::with_capacity(8);
@@ -80,7 +89,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<TriMesh, IoError> {
                 for (k, c) in xyz.iter_mut().enumerate() {
                     let w = words.next().ok_or_else(|| malformed(line, format!("vertex has {k} coordinates, expected 3")))?;
                     *c = w.parse().map_err(|_| malformed(line, format!("'{w}' is not a number")))?;
-                    if !c.is_finite() {
+                    if !c.is_finite() && coordinates == Coordinates::Finite {
                         return Err(malformed(line, format!("coordinate '{w}' is not finite")));
                     }
                 }
@@ -268,11 +277,11 @@ pub fn read_ply(path: &Path) -> Result<TriMesh, IoError> {
     Ok(mesh)
 }
 
-/// Reads `.obj` or `.ply` by extension.
+/// Reads `.obj` or `.ply` by extension, accepting any coordinates (for measuring).
 pub fn read_mesh(path: &Path) -> Result<TriMesh, IoError> {
     match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("ply") => read_ply(path),
-        _ => read_obj(path),
+        _ => read_obj(path, Coordinates::Any),
     }
 }
 
@@ -283,26 +292,31 @@ mod tests {
     #[test]
     fn obj_errors_name_the_line() {
         let p = Path::new("m.obj");
-        let e = parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", p).unwrap_err().to_string();
+        let e = parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", p, Coordinates::Finite).unwrap_err().to_string();
         assert!(e.starts_with("m.obj:4:"), "{e}");
-        let e = parse_obj("v 0 0 0\nv 1 zero 0\n", p).unwrap_err().to_string();
+        let e = parse_obj("v 0 0 0\nv 1 zero 0\n", p, Coordinates::Finite).unwrap_err().to_string();
         assert!(e.starts_with("m.obj:2:"), "{e}");
-        let e = parse_obj("v 0 0 0\nf 1 2 3\n", p).unwrap_err().to_string();
+        let e = parse_obj("v 0 0 0\nf 1 2 3\n", p, Coordinates::Finite).unwrap_err().to_string();
         assert!(e.contains(":2:") && e.contains("out of range"), "{e}");
-        assert!(matches!(parse_obj("# nothing\n", p), Err(IoError::Empty { .. })));
+        assert!(matches!(parse_obj("# nothing\n", p, Coordinates::Finite), Err(IoError::Empty { .. })));
     }
 
     #[test]
     fn obj_polygons_and_negative_indices() {
-        let m = parse_obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1/1/1 2//2 3 -1\n", Path::new("q.obj")).unwrap();
+        let m = parse_obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1/1/1 2//2 3 -1\n", Path::new("q.obj"), Coordinates::Finite)
+            .unwrap();
         assert_eq!(m.triangles, vec![[0, 1, 2], [0, 2, 3]]);
     }
 
     #[test]
     fn round_trips_and_atomic_failure() {
         let dir = tempfile::tempdir().unwrap();
-        let mesh =
-            parse_obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n", Path::new("t.obj")).unwrap();
+        let mesh = parse_obj(
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+            Path::new("t.obj"),
+            Coordinates::Finite,
+        )
+        .unwrap();
         for ext in ["obj", "ply"] {
             let p = dir.path().join(format!("t.{ext}"));
             write_mesh(&p, &mesh).unwrap();

@@ -126,7 +126,7 @@ pub fn load_field(spec: &str, seed: i32) -> Result<Arc<dyn Field>, RunError> {
     if !looks_like_file {
         return Ok(fields::builtin(spec, fields::FieldParams { seed })?);
     }
-    let mesh = io::read_obj(path)?;
+    let mesh = io::read_obj(path, io::Coordinates::Finite)?;
     let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or(spec);
     Ok(Arc::new(fields::MeshField::new(name, &mesh.positions, &mesh.triangles)?))
 }

@@ -132,8 +132,15 @@ fn malformed_and_empty_obj_files_name_the_file_and_line() {
     let o = isolab(&["extract", "-a", "marching-cubes", "-f", bad.to_str().unwrap(), "-r", "8"]);
     assert_clean_failure(&o, 1, &["bad.obj:4:", "out of range"]);
     let nan = dir.path().join("nan.obj");
-    std::fs::write(&nan, "v 0 0 0\nv nan 0 0\n").unwrap();
-    assert_clean_failure(&isolab(&["metrics", nan.to_str().unwrap()]), 1, &["nan.obj:2:", "not finite"]);
+    std::fs::write(&nan, "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", nan.to_str().unwrap(), "-r", "8"]);
+    assert_clean_failure(&o, 1, &["nan.obj:2:", "not finite"]);
+    // Measuring reports NaN vertices instead of refusing or crashing.
+    let o = isolab(&["metrics", nan.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(m["non_finite_vertices"], 1);
+    assert_eq!(m["volume"], serde_json::Value::Null);
     let empty = dir.path().join("empty.obj");
     std::fs::write(&empty, "# nothing here\n").unwrap();
     assert_clean_failure(
@@ -142,7 +149,14 @@ fn malformed_and_empty_obj_files_name_the_file_and_line() {
         &["empty.obj", "no faces"],
     );
     let missing = dir.path().join("missing.obj");
-    assert_clean_failure(&isolab(&["metrics", missing.to_str().unwrap()]), 1, &["missing.obj"]);
+    assert_clean_failure(&isolab(&["metrics", missing.to_str().unwrap()]), 2, &["missing.obj"]);
+    assert_clean_failure(&isolab(&["metrics", empty.to_str().unwrap()]), 2, &["empty.obj", "no faces"]);
+    let lines = dir.path().join("lines.obj");
+    std::fs::write(&lines, "v 0 0 0\nv 1 0 0\nf 1 2\n").unwrap();
+    assert_clean_failure(&isolab(&["metrics", lines.to_str().unwrap()]), 2, &["lines.obj:3:", "at least 3"]);
+    let ply = dir.path().join("odd.ply");
+    std::fs::write(&ply, "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty double x\nend_header\n").unwrap();
+    assert_clean_failure(&isolab(&["metrics", ply.to_str().unwrap()]), 2, &["odd.ply", "double"]);
 }
 
 #[test]

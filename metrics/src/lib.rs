@@ -11,11 +11,22 @@
 //! - [`MeshMetrics`]: all of the above in one serializable struct, the metrics JSON's core.
 
 pub mod accuracy;
+pub mod histogram;
+pub mod intersections;
+pub mod overdraw;
 pub mod quality;
+pub mod tet_quality;
 pub mod topology;
 
-pub use accuracy::{signed_volume, surface_area, surface_distance, DistanceStats};
+pub use accuracy::{
+    hausdorff, normal_deviation, signed_volume, surface_area, surface_distance, DistanceStats, Hausdorff, NormalDeviation,
+    Sampling,
+};
+pub use histogram::Histogram;
+pub use intersections::{self_intersections, SelfIntersections};
+pub use overdraw::{quad_overdraw, Overdraw, View};
 pub use quality::{triangle_quality, TriangleQuality};
+pub use tet_quality::{tet_quality, TetQuality};
 pub use topology::{topology, Topology};
 
 use isolab_algorithms::{Field, TriMesh};
@@ -53,6 +64,26 @@ impl Summary {
     }
 }
 
+/// Quality distributions (aspect ratio over [1, 5) in 40 bins; min angle over [0, 60) in 30).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct QualityHistograms {
+    /// Verdict aspect ratio of each non-degenerate triangle.
+    pub aspect_ratio: Histogram,
+    /// Smallest angle of each non-degenerate triangle, degrees.
+    pub min_angle_deg: Histogram,
+}
+
+impl QualityHistograms {
+    /// Histograms of `mesh`'s triangles.
+    pub fn of(mesh: &TriMesh) -> QualityHistograms {
+        let shapes = quality::shapes(mesh);
+        QualityHistograms {
+            aspect_ratio: Histogram::new(1.0, 5.0, 40, shapes.iter().map(|s| s.aspect_ratio)),
+            min_angle_deg: Histogram::new(0.0, 60.0, 30, shapes.iter().map(|s| s.min_angle_deg)),
+        }
+    }
+}
+
 /// Everything measured on one triangle mesh: the core of the metrics JSON.
 #[derive(Clone, Debug, Serialize)]
 pub struct MeshMetrics {
@@ -60,12 +91,17 @@ pub struct MeshMetrics {
     pub vertices: usize,
     /// Triangles.
     pub triangles: usize,
+    /// Vertices with a NaN or infinite coordinate (ideal 0). When there are any, only the
+    /// topology is measured and the geometric measures are `null`.
+    pub non_finite_vertices: usize,
     /// Quality of the non-degenerate triangles.
     #[serde(flatten)]
     pub quality: TriangleQuality,
     /// Topology checks.
     #[serde(flatten)]
     pub topology: Topology,
+    /// Pairs of triangles that intersect (ideal 0).
+    pub self_intersections: SelfIntersections,
     /// Signed volume (divergence theorem); positive for a closed outward mesh.
     pub volume: f64,
     /// Total area.
@@ -73,19 +109,51 @@ pub struct MeshMetrics {
     /// Distance of vertices to the true surface, where the field is known.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub surface_distance: Option<DistanceStats>,
+    /// Angle between vertex normals and the field's gradient, where the field is known.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub normal_deviation: Option<NormalDeviation>,
+    /// Quad overshading at 1024x1024 from the default view.
+    pub overdraw: Overdraw,
+    /// Quality distributions.
+    pub histograms: QualityHistograms,
 }
 
 impl MeshMetrics {
-    /// Measures `mesh`; with `field` (and its `iso`), also the distance of vertices to its level set.
+    /// Measures `mesh`; with `field` (and its `iso`), also the distance of vertices to its level
+    /// set and the deviation of normals from its gradient. Never panics on NaN coordinates: they
+    /// are counted and the geometric measures are left out.
     pub fn measure(mesh: &TriMesh, field: Option<(&dyn Field, f32)>) -> MeshMetrics {
+        let non_finite_vertices = mesh.positions.iter().filter(|p| !p.is_finite()).count();
+        let topology = topology(mesh);
+        if non_finite_vertices > 0 {
+            return MeshMetrics {
+                vertices: mesh.positions.len(),
+                triangles: mesh.triangles.len(),
+                non_finite_vertices,
+                quality: TriangleQuality::default(),
+                topology,
+                self_intersections: SelfIntersections::default(),
+                volume: f64::NAN,
+                area: f64::NAN,
+                surface_distance: None,
+                normal_deviation: None,
+                overdraw: Overdraw::default(),
+                histograms: QualityHistograms::of(&TriMesh::default()),
+            };
+        }
         MeshMetrics {
             vertices: mesh.positions.len(),
             triangles: mesh.triangles.len(),
+            non_finite_vertices,
             quality: triangle_quality(mesh),
-            topology: topology(mesh),
+            topology,
+            self_intersections: self_intersections(mesh),
             volume: signed_volume(mesh),
             area: surface_area(mesh),
             surface_distance: field.map(|(f, iso)| surface_distance(mesh, f, iso)),
+            normal_deviation: field.map(|(f, _)| normal_deviation(mesh, f)),
+            overdraw: quad_overdraw(mesh, &View::default()),
+            histograms: QualityHistograms::of(mesh),
         }
     }
 }

@@ -98,10 +98,13 @@ pub struct TriangleQuality {
     pub degenerate_triangles: usize,
 }
 
-/// Shape statistics of `mesh`.
-pub fn triangle_quality(mesh: &TriMesh) -> TriangleQuality {
-    let shapes: Vec<Option<TriangleShape>> = mesh
-        .triangles
+/// Shapes of the non-degenerate triangles of `mesh`.
+pub fn shapes(mesh: &TriMesh) -> Vec<TriangleShape> {
+    shape_per_triangle(mesh).into_iter().flatten().collect()
+}
+
+fn shape_per_triangle(mesh: &TriMesh) -> Vec<Option<TriangleShape>> {
+    mesh.triangles
         .par_iter()
         .map(|t| {
             if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
@@ -110,7 +113,12 @@ pub fn triangle_quality(mesh: &TriMesh) -> TriangleQuality {
             let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
             triangle_shape(a, b, c)
         })
-        .collect();
+        .collect()
+}
+
+/// Shape statistics of `mesh`.
+pub fn triangle_quality(mesh: &TriMesh) -> TriangleQuality {
+    let shapes = shape_per_triangle(mesh);
     let good = shapes.iter().flatten();
     let ar = Summary::of(good.clone().map(|s| s.aspect_ratio));
     let cg = Summary::of(good.clone().map(|s| s.aspect_ratio_cgal));

@@ -1,7 +1,8 @@
 //! `isolab`: list algorithms and fields, extract a mesh with metrics, or measure a mesh file.
 //!
-//! Exit codes: 0 success, 1 failure (bad file, impossible lattice, non-finite field, unwritable
-//! output), 2 usage error (unknown algorithm, post-process or field; bad arguments).
+//! Exit codes: 0 success; 1 a failed extraction (bad field file, impossible lattice, non-finite
+//! field, unwritable output); 2 a usage error (unknown algorithm, post-process or field, bad
+//! arguments) or a mesh `isolab metrics` cannot read.
 
 use clap::{Parser, Subcommand};
 use isolab_algorithms::{extractors, fields};
@@ -104,7 +105,7 @@ fn main() -> ExitCode {
                 let m = MeshMetrics::measure(&mesh, None);
                 println!("{}", serde_json::to_string_pretty(&m).unwrap_or_default());
             })
-            .map_err(|e| (1, e.to_string())),
+            .map_err(|e| (2, e.to_string())),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,248 @@
+//! Self-intersections: pairs of triangles that meet anywhere other than along the vertices and
+//! edges they share. Candidate pairs come from a bounding volume hierarchy; every test is decided
+//! by exact orientation predicates (Shewchuk's, from the `robust` crate) on the `f32` coordinates,
+//! which are exact in `f64`, so the answer does not depend on rounding.
+//!
+//! As in CGAL's `Polygon_mesh_processing::self_intersections`:
+//! - triangles sharing an edge intersect only when they fold onto each other (coplanar, opposite
+//!   vertices on the same side of the edge);
+//! - triangles sharing one vertex intersect when the opposite edge of either meets the other
+//!   triangle, or an edge from the shared vertex runs into the other triangle in its plane;
+//! - other pairs intersect when they share any point (touching counts).
+//!
+//! Degenerate triangles (repeated index or zero area) are skipped: the topology report counts them.
+
+use glam::{DVec3, Vec3};
+use isolab_algorithms::bvh::TriangleBvh;
+use isolab_algorithms::{Aabb, TriMesh};
+use rayon::prelude::*;
+use robust::{orient2d, orient3d, Coord, Coord3D};
+use serde::Serialize;
+
+/// At most this many intersecting pairs are listed.
+pub const MAX_LISTED_PAIRS: usize = 100;
+
+/// Self-intersection report.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct SelfIntersections {
+    /// Intersecting triangle pairs (ideal 0).
+    pub count: usize,
+    /// The first [`MAX_LISTED_PAIRS`] pairs, as triangle indices `[i, j]` with `i < j`, sorted.
+    pub pairs: Vec<[u32; 2]>,
+}
+
+fn c3(p: Vec3) -> Coord3D<f64> {
+    Coord3D { x: f64::from(p.x), y: f64::from(p.y), z: f64::from(p.z) }
+}
+
+fn o3(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> i8 {
+    let v = orient3d(c3(a), c3(b), c3(c), c3(d));
+    (v > 0.0) as i8 - (v < 0.0) as i8
+}
+
+/// Drops the coordinate along `axis` for 2D tests in a plane.
+fn c2(p: Vec3, axis: usize) -> Coord<f64> {
+    let (u, v) = match axis {
+        0 => (p.y, p.z),
+        1 => (p.z, p.x),
+        _ => (p.x, p.y),
+    };
+    Coord { x: f64::from(u), y: f64::from(v) }
+}
+
+fn o2(a: Vec3, b: Vec3, c: Vec3, axis: usize) -> i8 {
+    let v = orient2d(c2(a, axis), c2(b, axis), c2(c, axis));
+    (v > 0.0) as i8 - (v < 0.0) as i8
+}
+
+/// The axis a triangle's plane is least parallel to (the one to drop for 2D tests).
+fn dominant_axis(t: &[Vec3; 3]) -> usize {
+    let n: DVec3 = (t[1] - t[0]).as_dvec3().cross((t[2] - t[0]).as_dvec3()).abs();
+    if n.x >= n.y && n.x >= n.z {
+        0
+    } else if n.y >= n.z {
+        1
+    } else {
+        2
+    }
+}
+
+fn same_sign_or_zero(a: i8, b: i8, c: i8) -> bool {
+    (a >= 0 && b >= 0 && c >= 0) || (a <= 0 && b <= 0 && c <= 0)
+}
+
+/// Closed 2D segment-segment intersection.
+fn segments_meet_2d(p: Vec3, q: Vec3, a: Vec3, b: Vec3, axis: usize) -> bool {
+    let (d1, d2) = (o2(a, b, p, axis), o2(a, b, q, axis));
+    let (d3, d4) = (o2(p, q, a, axis), o2(p, q, b, axis));
+    if d1 * d2 < 0 && d3 * d4 < 0 {
+        return true;
+    }
+    let on = |x: Vec3, s: Vec3, e: Vec3| {
+        let (cx, cs, ce) = (c2(x, axis), c2(s, axis), c2(e, axis));
+        cx.x >= cs.x.min(ce.x) && cx.x <= cs.x.max(ce.x) && cx.y >= cs.y.min(ce.y) && cx.y <= cs.y.max(ce.y)
+    };
+    (d1 == 0 && on(p, a, b)) || (d2 == 0 && on(q, a, b)) || (d3 == 0 && on(a, p, q)) || (d4 == 0 && on(b, p, q))
+}
+
+/// Closed 2D point-in-triangle.
+fn point_in_triangle_2d(p: Vec3, t: &[Vec3; 3], axis: usize) -> bool {
+    same_sign_or_zero(o2(t[0], t[1], p, axis), o2(t[1], t[2], p, axis), o2(t[2], t[0], p, axis))
+}
+
+/// Whether the closed segment `pq` meets the closed triangle `t`.
+pub fn segment_meets_triangle(p: Vec3, q: Vec3, t: &[Vec3; 3]) -> bool {
+    let (s1, s2) = (o3(t[0], t[1], t[2], p), o3(t[0], t[1], t[2], q));
+    if s1 == s2 && s1 != 0 {
+        return false;
+    }
+    if s1 == 0 && s2 == 0 {
+        let axis = dominant_axis(t);
+        return point_in_triangle_2d(p, t, axis)
+            || point_in_triangle_2d(q, t, axis)
+            || (0..3).any(|k| segments_meet_2d(p, q, t[k], t[(k + 1) % 3], axis));
+    }
+    same_sign_or_zero(o3(p, q, t[0], t[1]), o3(p, q, t[1], t[2]), o3(p, q, t[2], t[0]))
+}
+
+/// Whether two closed triangles with no shared vertex meet.
+pub fn triangles_meet(a: &[Vec3; 3], b: &[Vec3; 3]) -> bool {
+    (0..3).any(|k| segment_meets_triangle(a[k], a[(k + 1) % 3], b))
+        || (0..3).any(|k| segment_meets_triangle(b[k], b[(k + 1) % 3], a))
+}
+
+/// Triangles `(s, a, b)` and `(s, c, d)` sharing only vertex `s`: do they meet elsewhere?
+fn meet_beyond_shared_vertex(s: Vec3, a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> bool {
+    let t1 = [s, a, b];
+    let t2 = [s, c, d];
+    if segment_meets_triangle(a, b, &t2) || segment_meets_triangle(c, d, &t1) {
+        return true;
+    }
+    // An edge from s lying in the other triangle's plane and pointing into its wedge at s.
+    let into_wedge = |x: Vec3, t: &[Vec3; 3], u: Vec3, v: Vec3| {
+        if o3(t[0], t[1], t[2], x) != 0 {
+            return false;
+        }
+        let axis = dominant_axis(t);
+        let w = o2(s, u, v, axis);
+        w != 0 && o2(s, u, x, axis) * w >= 0 && o2(s, x, v, axis) * w >= 0
+    };
+    into_wedge(a, &t2, c, d) || into_wedge(b, &t2, c, d) || into_wedge(c, &t1, a, b) || into_wedge(d, &t1, a, b)
+}
+
+fn is_degenerate(mesh: &TriMesh, t: [u32; 3]) -> bool {
+    if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+        return true;
+    }
+    let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+    (b - a).as_dvec3().cross((c - a).as_dvec3()).length_squared() == 0.0
+}
+
+/// Whether triangles `i` and `j` of `mesh` (both non-degenerate) intersect beyond what they share.
+pub fn pair_intersects(mesh: &TriMesh, i: u32, j: u32) -> bool {
+    let (ti, tj) = (mesh.triangles[i as usize], mesh.triangles[j as usize]);
+    let shared: Vec<u32> = ti.iter().copied().filter(|v| tj.contains(v)).collect();
+    let p = |v: u32| mesh.positions[v as usize];
+    let other = |t: [u32; 3], not: &[u32]| t.into_iter().filter(|v| !not.contains(v)).collect::<Vec<u32>>();
+    match shared.len() {
+        0 => triangles_meet(&ti.map(p), &tj.map(p)),
+        1 => {
+            let (a, b) = (other(ti, &shared), other(tj, &shared));
+            meet_beyond_shared_vertex(p(shared[0]), p(a[0]), p(a[1]), p(b[0]), p(b[1]))
+        }
+        2 => {
+            let (u, v) = (p(shared[0]), p(shared[1]));
+            let (x, y) = (p(other(ti, &shared)[0]), p(other(tj, &shared)[0]));
+            if o3(u, v, x, y) != 0 {
+                return false;
+            }
+            let axis = dominant_axis(&[u, v, x]);
+            o2(u, v, x, axis) * o2(u, v, y, axis) > 0
+        }
+        _ => true, // the same triangle twice
+    }
+}
+
+/// All self-intersecting pairs of `mesh`.
+pub fn self_intersections(mesh: &TriMesh) -> SelfIntersections {
+    let valid: Vec<bool> = mesh.triangles.par_iter().map(|&t| !is_degenerate(mesh, t)).collect();
+    let soup: Vec<[Vec3; 3]> = mesh.triangles.iter().map(|t| t.map(|i| mesh.positions[i as usize])).collect();
+    let bvh = TriangleBvh::new(soup.clone());
+    let mut pairs: Vec<[u32; 2]> = (0..mesh.triangles.len() as u32)
+        .into_par_iter()
+        .filter(|&i| valid[i as usize])
+        .flat_map_iter(|i| {
+            let mut bounds = Aabb::empty();
+            soup[i as usize].iter().for_each(|&v| bounds.grow(v));
+            let mut hits = Vec::new();
+            bvh.for_each_overlapping(&bounds, |j, _| {
+                if j > i && valid[j as usize] && pair_intersects(mesh, i, j) {
+                    hits.push([i, j]);
+                }
+            });
+            hits
+        })
+        .collect();
+    pairs.sort_unstable();
+    let count = pairs.len();
+    pairs.truncate(MAX_LISTED_PAIRS);
+    SelfIntersections { count, pairs }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn mesh(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> TriMesh {
+        TriMesh { positions, normals: vec![], triangles }
+    }
+
+    #[test]
+    fn crossing_and_separate_triangles() {
+        let a = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let crossing = [Vec3::new(0.2, 0.2, -1.0), Vec3::new(0.2, 0.2, 1.0), Vec3::new(0.3, 0.1, 0.0)];
+        assert!(triangles_meet(&a, &crossing));
+        let above = a.map(|v| v + Vec3::Z * 0.1);
+        assert!(!triangles_meet(&a, &above));
+        // Coplanar overlap and coplanar containment.
+        assert!(triangles_meet(&a, &a.map(|v| v * 0.5 + Vec3::splat(0.1).with_z(0.0))));
+        // Touching at a point counts.
+        assert!(triangles_meet(&a, &[Vec3::X, Vec3::new(2.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 1.0)]));
+    }
+
+    #[test]
+    fn closed_tetrahedron_has_none_and_a_pierced_one_is_listed() {
+        let tet = mesh(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z], vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]);
+        assert_eq!(self_intersections(&tet).count, 0);
+        // A separate triangle piercing face [0, 2, 1] (z = 0) only.
+        let mut pierced = tet.clone();
+        pierced.positions.extend([Vec3::new(0.2, 0.2, -0.5), Vec3::new(0.3, 0.2, 0.05), Vec3::new(0.2, 0.3, 0.05)]);
+        pierced.triangles.push([4, 5, 6]);
+        let r = self_intersections(&pierced);
+        assert_eq!((r.count, r.pairs.clone()), (1, vec![[0, 4]]));
+    }
+
+    #[test]
+    fn shared_edge_fold_and_shared_vertex_overlap() {
+        // Two triangles on edge 0-1 folded onto each other (coplanar, same side).
+        let folded =
+            mesh(vec![Vec3::ZERO, Vec3::X, Vec3::new(0.5, 1.0, 0.0), Vec3::new(0.5, 0.5, 0.0)], vec![[0, 1, 2], [1, 0, 3]]);
+        assert!(pair_intersects(&folded, 0, 1));
+        // The same edge with the second triangle on the other side: fine.
+        let flat =
+            mesh(vec![Vec3::ZERO, Vec3::X, Vec3::new(0.5, 1.0, 0.0), Vec3::new(0.5, -1.0, 0.0)], vec![[0, 1, 2], [1, 0, 3]]);
+        assert!(!pair_intersects(&flat, 0, 1));
+        // Sharing vertex 0; the second triangle's edge runs into the first in its plane.
+        let wedge = mesh(
+            vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(0.3, 0.3, 0.0), Vec3::new(0.3, 0.3, 1.0)],
+            vec![[0, 1, 2], [0, 3, 4]],
+        );
+        assert!(pair_intersects(&wedge, 0, 1));
+        // Sharing vertex 0 and otherwise apart.
+        let apart = mesh(
+            vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(-1.0, 0.0, 0.5), Vec3::new(0.0, -1.0, 0.5)],
+            vec![[0, 1, 2], [0, 3, 4]],
+        );
+        assert!(!pair_intersects(&apart, 0, 1));
+    }
+}

@@ -34,7 +34,7 @@ pub struct Topology {
     pub oriented: bool,
     /// Closed, oriented, positive volume.
     pub outward: bool,
-    /// Connected components (by shared vertices).
+    /// Connected components: triangles joined through shared edges.
     pub components: usize,
     /// `V - E + F`.
     pub euler: i64,
@@ -123,19 +123,20 @@ pub fn topology(mesh: &TriMesh) -> Topology {
     }
 
     // Half-edges keyed by (min, max) with the direction in the low bit of the payload.
-    let mut half: Vec<(u64, bool)> = valid
+    let mut half: Vec<(u64, bool, u32)> = valid
         .par_iter()
         .flat_map_iter(|&t| {
             let tri = mesh.triangles[t as usize];
             (0..3).map(move |k| {
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                ((u64::from(a.min(b)) << 32) | u64::from(a.max(b)), a < b)
+                ((u64::from(a.min(b)) << 32) | u64::from(a.max(b)), a < b, t)
             })
         })
         .collect();
     half.par_sort_unstable();
 
     let mut edges = 0i64;
+    let mut face_uf = UnionFind::new(mesh.triangles.len());
     let mut boundary_uf = UnionFind::new(n);
     let mut boundary_vertices = Vec::new();
     let mut i = 0;
@@ -147,6 +148,9 @@ pub fn topology(mesh: &TriMesh) -> Topology {
         }
         let pair = [(key >> 32) as u32, key as u32];
         edges += 1;
+        for k in i + 1..j {
+            face_uf.union(half[i].2, half[k].2);
+        }
         match j - i {
             1 => {
                 report.boundary_edges += 1;
@@ -174,18 +178,9 @@ pub fn topology(mesh: &TriMesh) -> Topology {
     loop_roots.dedup();
     report.boundary_loops = loop_roots.len();
 
-    // Components and used vertices.
+    // Components: triangles connected through shared edges (as CGAL and MeshLab count them).
+    report.components = valid.iter().filter(|&&t| face_uf.find(t) == t).count();
     let mut used = vec![false; n];
-    let mut uf = UnionFind::new(n);
-    for &t in &valid {
-        let [a, b, c] = mesh.triangles[t as usize];
-        used[a as usize] = true;
-        used[b as usize] = true;
-        used[c as usize] = true;
-        uf.union(a, b);
-        uf.union(a, c);
-    }
-    // A vertex used only by degenerate triangles still counts as used.
     for t in &mesh.triangles {
         for &v in t {
             used[v as usize] = true;
@@ -193,7 +188,6 @@ pub fn topology(mesh: &TriMesh) -> Topology {
     }
     let used_count = used.iter().filter(|&&u| u).count();
     report.unused_vertices = n - used_count;
-    report.components = (0..n as u32).filter(|&v| used[v as usize] && uf.find(v) == v).count();
 
     // Vertex manifoldness from each vertex's link.
     let bad_vertices = non_manifold_vertices(mesh, &valid);
@@ -325,6 +319,7 @@ mod tests {
         let t = topology(&two);
         assert!(t.closed && t.edge_manifold);
         assert!(!t.vertex_manifold);
+        assert_eq!(t.components, 2, "touching at a vertex does not join components");
         assert_eq!(t.offenders.non_manifold_vertices, vec![0]);
         // A fin: three triangles on one edge.
         let mut fin = tetra();

@@ -6,9 +6,9 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 venv="$here/.venv"
-if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import vtk, pymeshlab" 2>/dev/null; then
+if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import vtk, pymeshlab, CGAL, igl" 2>/dev/null; then
   python3 -m venv "$venv"
   "$venv/bin/pip" install --quiet --disable-pip-version-check -r "$here/requirements.txt"
 fi
 cargo build --release --quiet -p isolab-experiments --bin isolab
-"$venv/bin/python" "$here/check_mesh.py" --isolab "$root/target/release/isolab" --models "$root/models"
+"$venv/bin/python" "$here/reference.py" live --isolab "$root/target/release/isolab"

@@ -1,0 +1,319 @@
+"""Reference values from the libraries people trust, for isolab's metrics.
+
+Libraries (pinned in requirements.txt):
+- CGAL (Python package `cgal`, Polygon_mesh_processing on Polyhedron_3): volume, area, closed,
+  outward orientation, self-intersecting face pairs;
+- pymeshlab: topological measures (genus, components, boundary and non-manifold edges), per-face
+  aspect ratio (meshlab's default `2A / l_max^2`, the reciprocal of the CGAL/OpenMesh ratio),
+  Hausdorff distance (vertex sampling, its default);
+- VTK: vtkMeshQuality triangle AspectRatio (Verdict) and tetrahedron MinAngle, AspectRatio and
+  RadiusRatio. Verdict's MinAngle takes the angle between face normals that are not consistently
+  oriented, so at edges 02 and 13 it measures 180 degrees minus the dihedral angle: the goldens
+  keep what it says, and the test reproduces that quirk explicitly;
+- libigl: all six dihedral angles of each tetrahedron (the true ones).
+
+Every library gets the identical mesh: vertices are parsed as isolab parses them (v/f lines, fans)
+and rounded to float32, as isolab stores them.
+
+Modes:
+  golden  write tests/reference/golden/*.json (and the isolab meshes they measure, in
+          tests/reference/meshes/), which `cargo test` compares our metrics against;
+  live    recompute the references for the committed golden meshes (catching a drift in the
+          libraries), and for meshes the current isolab writes, compared with `isolab metrics`
+          (catching a drift in isolab). Ends with 'N passed, M failed'; exits 1 on any failure.
+"""
+import argparse
+import json
+import os
+import struct
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+MODELS = ["stanford-bunny", "spot", "fandisk", "rocker-arm", "cheburashka", "teapot"]
+# isolab meshes measured for the goldens: (name, field, resolution)
+EXTRACTED = [("mc-sphere-64", "sphere", 64), ("mc-torus-64", "torus", 64), ("mc-bunny-64", "models/stanford-bunny.obj", 64)]
+# Hausdorff pairs: (name, sampled mesh, target mesh)
+HAUSDORFF = [("mc-bunny-64", "stanford-bunny")]
+
+
+def read_obj(path):
+    verts, faces = [], []
+    with open(path, encoding="utf-8", errors="replace") as f:
+        for line in f:
+            w = line.split("#")[0].split()
+            if not w:
+                continue
+            if w[0] == "v":
+                verts.append([float(x) for x in w[1:4]])
+            elif w[0] == "f":
+                idx = []
+                for t in w[1:]:
+                    i = int(t.split("/")[0])
+                    idx.append(i - 1 if i > 0 else len(verts) + i)
+                for k in range(1, len(idx) - 1):
+                    faces.append([idx[0], idx[k], idx[k + 1]])
+    return np.array(verts, dtype=np.float32).astype(np.float64), np.array(faces, dtype=np.int64)
+
+
+def read_ply(path):
+    data = open(path, "rb").read()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    header = data[:end].decode()
+    nv = nf = nprops = 0
+    in_vertex = False
+    for line in header.splitlines():
+        w = line.split()
+        if w[:2] == ["element", "vertex"]:
+            nv, in_vertex = int(w[2]), True
+        elif w[:2] == ["element", "face"]:
+            nf, in_vertex = int(w[2]), False
+        elif w and w[0] == "property" and in_vertex:
+            nprops += 1
+    verts = np.frombuffer(data, dtype="<f4", count=nv * nprops, offset=end).reshape(nv, nprops)[:, :3]
+    at = end + nv * nprops * 4
+    faces = np.empty((nf, 3), dtype=np.int64)
+    for i in range(nf):
+        n = data[at]
+        faces[i] = struct.unpack_from("<3i", data, at + 1)
+        at += 1 + 4 * n
+    return verts.astype(np.float64), faces
+
+
+def read_mesh(path):
+    return read_ply(path) if path.endswith(".ply") else read_obj(path)
+
+
+def cgal_measures(verts, faces):
+    from CGAL import CGAL_Polygon_mesh_processing as P
+    from CGAL.CGAL_Kernel import Point_3
+    from CGAL.CGAL_Polyhedron_3 import Polyhedron_3
+
+    pts, polys = P.Point_3_Vector(), P.Polygon_Vector()
+    for v in verts:
+        pts.append(Point_3(float(v[0]), float(v[1]), float(v[2])))
+    for f in faces:
+        iv = P.Int_Vector()
+        for i in f:
+            iv.append(int(i))
+        polys.append(iv)
+    mesh = Polyhedron_3()
+    P.polygon_soup_to_polygon_mesh(pts, polys, mesh)
+    pairs = []
+    P.self_intersections(mesh, pairs)
+    closed = mesh.is_closed()
+    out = {"closed": closed, "area": P.area(mesh), "self_intersections": len(pairs)}
+    if closed:
+        out["volume"] = P.volume(mesh)
+        out["outward"] = P.is_outward_oriented(mesh)
+    return out
+
+
+def meshlab_measures(verts, faces):
+    import pymeshlab
+
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=verts, face_matrix=faces.astype(np.int32)))
+    topo = ms.get_topological_measures()
+    ms.compute_scalar_by_aspect_ratio_per_face()
+    aspect = ms.current_mesh().face_scalar_array()
+    return {
+        "genus": topo["genus"],
+        "components": topo["connected_components_number"],
+        "boundary_edges": topo["boundary_edges"],
+        "non_manifold_edges": topo["non_two_manifold_edges"],
+        "non_manifold_vertices": topo["non_two_manifold_vertices"],
+        "two_manifold": topo["is_mesh_two_manifold"],
+        "meshlab_aspect_mean": float(np.mean(aspect)),
+    }
+
+
+def meshlab_hausdorff(sampled, target):
+    import pymeshlab
+
+    ms = pymeshlab.MeshSet()
+    for verts, faces in (target, sampled):
+        ms.add_mesh(pymeshlab.Mesh(vertex_matrix=verts, face_matrix=faces.astype(np.int32)))
+    h = ms.get_hausdorff_distance(sampledmesh=1, targetmesh=0)
+    return {"samples": h["n_samples"], "max": h["max"], "mean": h["mean"], "rms": h["RMS"]}
+
+
+def vtk_polydata(verts, faces):
+    import vtk
+    from vtk.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
+
+    points = vtk.vtkPoints()
+    points.SetData(numpy_to_vtk(np.ascontiguousarray(verts), deep=True))
+    cells = vtk.vtkCellArray()
+    conn = np.hstack([np.full((len(faces), 1), 3), faces]).astype(np.int64).ravel()
+    cells.ImportLegacyFormat(numpy_to_vtkIdTypeArray(conn, deep=True))
+    poly = vtk.vtkPolyData()
+    poly.SetPoints(points)
+    poly.SetPolys(cells)
+    return poly
+
+
+def vtk_measures(verts, faces):
+    import vtk
+    from vtk.util.numpy_support import vtk_to_numpy
+
+    q = vtk.vtkMeshQuality()
+    q.SetInputData(vtk_polydata(verts, faces))
+    q.SetTriangleQualityMeasureToAspectRatio()
+    q.Update()
+    a = vtk_to_numpy(q.GetOutput().GetCellData().GetArray("Quality"))
+    a = a[np.isfinite(a) & (a < 1e300)]
+    return {"aspect_mean": float(a.mean()), "aspect_max": float(a.max())}
+
+
+def reference_tets():
+    """A jittered Kuhn-split 3x3x3 block of cubes (deterministic), measured by VTK."""
+    import vtk
+    from vtk.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+
+    rng = np.random.default_rng(7)
+    n = 4
+    grid = np.array([[x, y, z] for z in range(n) for y in range(n) for x in range(n)], dtype=np.float64)
+    grid += rng.uniform(-0.2, 0.2, grid.shape)
+    grid = grid.astype(np.float32).astype(np.float64)
+    idx = lambda x, y, z: x + n * (y + n * z)
+    tets = []
+    paths = [(0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)]
+    for z in range(n - 1):
+        for y in range(n - 1):
+            for x in range(n - 1):
+                for path in paths:
+                    c = [x, y, z]
+                    vs = [idx(*c)]
+                    for axis in path:
+                        c[axis] += 1
+                        vs.append(idx(*c))
+                    a, b, cc, d = (grid[v] for v in vs)
+                    if np.dot(np.cross(b - a, cc - a), d - a) < 0:
+                        vs[2], vs[3] = vs[3], vs[2]
+                    tets.append(vs)
+    ug = vtk.vtkUnstructuredGrid()
+    pts = vtk.vtkPoints()
+    pts.SetData(numpy_to_vtk(grid, deep=True))
+    ug.SetPoints(pts)
+    for t in tets:
+        ug.InsertNextCell(vtk.VTK_TETRA, 4, t)
+    out = {}
+    for name, setter in [("min_dihedral_deg", "SetTetQualityMeasureToMinAngle"), ("aspect_ratio", "SetTetQualityMeasureToAspectRatio"),
+                         ("radius_ratio", "SetTetQualityMeasureToRadiusRatio")]:
+        q = vtk.vtkMeshQuality()
+        q.SetInputData(ug)
+        getattr(q, setter)()
+        q.Update()
+        out[name] = vtk_to_numpy(q.GetOutput().GetCellData().GetArray("Quality")).tolist()
+    import igl
+
+    theta, _ = igl.dihedral_angles(grid, np.array(tets, dtype=np.int64))
+    return {"positions": grid.tolist(), "tetrahedra": tets, "vtk": out, "igl_dihedral_deg": np.degrees(theta).tolist()}
+
+
+def measure(verts, faces):
+    return {"vertices": len(verts), "triangles": len(faces), "cgal": cgal_measures(verts, faces),
+            "meshlab": meshlab_measures(verts, faces), "vtk": vtk_measures(verts, faces)}
+
+
+def extract(isolab, field, resolution, path):
+    spec = os.path.join(ROOT, field) if field.endswith(".obj") else field
+    subprocess.run([isolab, "extract", "-a", "marching-cubes", "-f", spec, "-r", str(resolution), "-o", path, "-m", path + ".json"],
+                   check=True, stdout=subprocess.DEVNULL)
+
+
+def golden(isolab):
+    os.makedirs(os.path.join(HERE, "golden"), exist_ok=True)
+    os.makedirs(os.path.join(HERE, "meshes"), exist_ok=True)
+    paths = {m: os.path.join(ROOT, "models", m + ".obj") for m in MODELS}
+    for name, field, res in EXTRACTED:
+        path = os.path.join(HERE, "meshes", name + ".ply")
+        extract(isolab, field, res, path)
+        os.remove(path + ".json")
+        paths[name] = path
+    for name, path in paths.items():
+        verts, faces = read_mesh(path)
+        g = {"mesh": os.path.relpath(path, ROOT), **measure(verts, faces)}
+        for sampled, target in HAUSDORFF:
+            if sampled == name:
+                g["hausdorff_to"] = {"target": os.path.relpath(paths[target], ROOT), **meshlab_hausdorff((verts, faces), read_mesh(paths[target]))}
+        json.dump(g, open(os.path.join(HERE, "golden", name + ".json"), "w"), indent=1)
+        print("golden", name)
+    json.dump(reference_tets(), open(os.path.join(HERE, "golden", "tets-kuhn-jittered.json"), "w"))
+    print("golden tets-kuhn-jittered")
+
+
+class Checks:
+    def __init__(self):
+        self.passed = self.failed = 0
+
+    def __call__(self, name, ok, detail):
+        if ok:
+            self.passed += 1
+            print(f"ok    {name}: {detail}")
+        else:
+            self.failed += 1
+            print(f"FAIL  {name}: {detail}")
+
+
+def close(a, b, rel):
+    return abs(a - b) <= rel * max(abs(a), abs(b), 1e-300)
+
+
+def live(isolab):
+    check = Checks()
+    # 1. The libraries still say what the committed goldens say.
+    for file in sorted(os.listdir(os.path.join(HERE, "golden"))):
+        if file.startswith("tets"):
+            continue
+        g = json.load(open(os.path.join(HERE, "golden", file)))
+        now = measure(*read_mesh(os.path.join(ROOT, g["mesh"])))
+        for lib in ("cgal", "meshlab", "vtk"):
+            for k, v in g[lib].items():
+                same = close(now[lib][k], v, 1e-9) if isinstance(v, float) else now[lib][k] == v
+                check(f"golden {file} {lib}.{k}", same, f"committed {v} now {now[lib][k]}")
+    # 2. Meshes the current isolab writes: our metrics against the libraries, live.
+    cases = [("sphere", 48, 0), ("torus", 48, 1), ("csg", 64, 0), ("asteroid", 64, 0), ("models/rocker-arm.obj", 96, 1),
+             ("models/stanford-bunny.obj", 64, 0)]
+    with tempfile.TemporaryDirectory() as tmp:
+        for field, res, genus in cases:
+            path = os.path.join(tmp, "m.ply")
+            extract(isolab, field, res, path)
+            ours = json.loads(subprocess.run([isolab, "metrics", path], check=True, capture_output=True).stdout)
+            ref = measure(*read_mesh(path))
+            name = f"{os.path.basename(field)}@{res}"
+            check(name, ours["vertices"] == ref["vertices"] and ours["triangles"] == ref["triangles"],
+                  f"counts ours {ours['vertices']}/{ours['triangles']} ref {ref['vertices']}/{ref['triangles']}")
+            check(name, close(ours["volume"], ref["cgal"]["volume"], 1e-6), f"volume ours {ours['volume']:.9f} cgal {ref['cgal']['volume']:.9f}")
+            check(name, close(ours["area"], ref["cgal"]["area"], 1e-6), f"area ours {ours['area']:.9f} cgal {ref['cgal']['area']:.9f}")
+            check(name, ours["closed"] == ref["cgal"]["closed"] and ours["outward"] == ref["cgal"]["outward"], f"closed/outward ours {ours['closed']}/{ours['outward']}")
+            check(name, ours["self_intersections"]["count"] == ref["cgal"]["self_intersections"],
+                  f"self-intersections ours {ours['self_intersections']['count']} cgal {ref['cgal']['self_intersections']}")
+            check(name, ours["genus"] == ref["meshlab"]["genus"] == genus and ours["components"] == ref["meshlab"]["components"],
+                  f"genus ours {ours['genus']} meshlab {ref['meshlab']['genus']} expected {genus}; components {ours['components']}/{ref['meshlab']['components']}")
+            check(name, ours["boundary_edges"] == ref["meshlab"]["boundary_edges"] and ours["non_manifold_edges"] == ref["meshlab"]["non_manifold_edges"],
+                  f"boundary/non-manifold edges ours {ours['boundary_edges']}/{ours['non_manifold_edges']}")
+            check(name, close(ours["aspect_ratio"]["mean"], ref["vtk"]["aspect_mean"], 1e-6) and close(ours["aspect_ratio"]["max"], ref["vtk"]["aspect_max"], 1e-6),
+                  f"Verdict aspect ours {ours['aspect_ratio']['mean']:.6f}/{ours['aspect_ratio']['max']:.4f} vtk {ref['vtk']['aspect_mean']:.6f}/{ref['vtk']['aspect_max']:.4f}")
+    print(f"{check.passed} passed, {check.failed} failed")
+    return check.failed == 0
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("mode", choices=["golden", "live"])
+    ap.add_argument("--isolab", default=os.path.join(ROOT, "target", "release", "isolab"))
+    args = ap.parse_args()
+    if args.mode == "golden":
+        golden(args.isolab)
+    else:
+        sys.exit(0 if live(args.isolab) else 1)
+
+
+if __name__ == "__main__":
+    main()

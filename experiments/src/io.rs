@@ -51,7 +51,7 @@ pub enum IoError {
         vertices: usize,
     },
     /// The output extension is not one we write.
-    #[error("cannot write '{path}': unknown extension, use .obj or .ply")]
+    #[error("cannot write '{path}': unknown extension (meshes: .obj or .ply; pictures: .png or .gif)")]
     UnknownFormat {
         /// The file.
         path: PathBuf,

@@ -4,6 +4,8 @@
 //! ([`io`]), the one-call pipeline the CLI and experiments share ([`run`]), and the binaries
 //! `isolab` (the CLI) and `report` (regenerates `report/`).
 
+pub mod experiment;
+pub mod figures;
 pub mod io;
 pub mod report;
 pub mod run;

@@ -177,3 +177,38 @@ fn unwritable_outputs_fail_and_leave_no_file() {
         isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "8", "-o", dir.path().join("s.stl").to_str().unwrap()]);
     assert_clean_failure(&o, 1, &["unknown extension"]);
 }
+
+#[test]
+fn render_writes_png_and_gif_pictures() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = dir.path().join("t.ply");
+    assert!(isolab(&[
+        "extract",
+        "-a",
+        "marching-cubes",
+        "-f",
+        "torus",
+        "-r",
+        "16",
+        "-o",
+        mesh.to_str().unwrap(),
+        "-m",
+        dir.path().join("t.json").to_str().unwrap()
+    ])
+    .status
+    .success());
+    let png = dir.path().join("t.png");
+    let o = isolab(&["render", mesh.to_str().unwrap(), "-o", png.to_str().unwrap(), "--wireframe", "--size", "64"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(&std::fs::read(&png).unwrap()[1..4], b"PNG");
+    let gif = dir.path().join("t.gif");
+    let o = isolab(&["render", mesh.to_str().unwrap(), "-o", gif.to_str().unwrap(), "--smooth", "--size", "32"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(&std::fs::read(&gif).unwrap()[0..3], b"GIF");
+    assert_clean_failure(
+        &isolab(&["render", mesh.to_str().unwrap(), "-o", dir.path().join("t.bmp").to_str().unwrap()]),
+        1,
+        &["unknown extension"],
+    );
+    assert_clean_failure(&isolab(&["render", "missing.obj", "-o", png.to_str().unwrap()]), 2, &["missing.obj"]);
+}

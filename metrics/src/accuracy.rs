@@ -2,33 +2,39 @@
 
 use isolab_algorithms::{Field, TriMesh};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Signed volume `Σ a·(b×c) / 6` over triangles (divergence theorem); exact for a closed mesh,
 /// positive when it is outward.
 pub fn signed_volume(mesh: &TriMesh) -> f64 {
-    mesh.triangles
-        .par_iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3());
-            a.dot(b.cross(c)) / 6.0
-        })
-        .sum()
+    deterministic_sum(&mesh.triangles, |t| {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3());
+        a.dot(b.cross(c)) / 6.0
+    })
+}
+
+/// Sums `f` over `items` in parallel with a fixed chunking and order, so the result is the same
+/// bit for bit on every run (rayon's adaptive splitting would change the rounding).
+pub fn deterministic_sum<T: Sync>(items: &[T], f: impl Fn(&T) -> f64 + Sync) -> f64 {
+    let partial: Vec<f64> = items.par_chunks(4096).map(|c| c.iter().map(&f).sum::<f64>()).collect();
+    partial.iter().sum()
+}
+
+/// Reads a JSON `null` (how serde_json writes NaN) back as NaN.
+pub fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 /// Total triangle area.
 pub fn surface_area(mesh: &TriMesh) -> f64 {
-    mesh.triangles
-        .par_iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3());
-            0.5 * (b - a).cross(c - a).length()
-        })
-        .sum()
+    deterministic_sum(&mesh.triangles, |t| {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3());
+        0.5 * (b - a).cross(c - a).length()
+    })
 }
 
 /// Distance of vertices to the level set (`surface_distance` in the metrics JSON).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct DistanceStats {
     /// Mean over vertices (ideal 0).
     pub mean: f64,
@@ -42,18 +48,14 @@ pub fn surface_distance(mesh: &TriMesh, field: &dyn Field, iso: f32) -> Distance
     if mesh.positions.is_empty() {
         return DistanceStats::default();
     }
-    let (sum, max) = mesh
-        .positions
-        .par_iter()
-        .map(|&p| f64::from(field.distance_to_surface(p, iso)))
-        .fold(|| (0.0, 0.0f64), |(s, m), d| (s + d, m.max(d)))
-        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1.max(b.1)));
-    DistanceStats { mean: sum / mesh.positions.len() as f64, max }
+    let distances: Vec<f64> = mesh.positions.par_iter().map(|&p| f64::from(field.distance_to_surface(p, iso))).collect();
+    let sum = deterministic_sum(&distances, |&d| d);
+    DistanceStats { mean: sum / mesh.positions.len() as f64, max: distances.iter().copied().fold(0.0, f64::max) }
 }
 
 /// One direction of a Hausdorff distance: distances from sample points of one mesh to the
 /// closest point of the other.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct OneSided {
     /// Sample points used.
     pub samples: usize,
@@ -66,7 +68,7 @@ pub struct OneSided {
 }
 
 /// Two-sided Hausdorff distance between meshes `a` and `b`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Hausdorff {
     /// From `a`'s samples to `b`.
     pub a_to_b: OneSided,
@@ -104,11 +106,10 @@ fn one_sided(points: &[glam::Vec3], target: &isolab_algorithms::bvh::TriangleBvh
     if points.is_empty() || target.is_empty() {
         return OneSided::default();
     }
-    let (sum, sq, max) = points
-        .par_iter()
-        .map(|&p| target.closest_point(p).map_or(0.0, |(_, d2)| f64::from(d2).sqrt()))
-        .fold(|| (0.0, 0.0, 0.0f64), |(s, q, m), d| (s + d, q + d * d, m.max(d)))
-        .reduce(|| (0.0, 0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1, a.2.max(b.2)));
+    let distances: Vec<f64> =
+        points.par_iter().map(|&p| target.closest_point(p).map_or(0.0, |(_, d2)| f64::from(d2).sqrt())).collect();
+    let (sum, sq) = (deterministic_sum(&distances, |&d| d), deterministic_sum(&distances, |&d| d * d));
+    let max = distances.iter().copied().fold(0.0, f64::max);
     let n = points.len() as f64;
     OneSided { samples: points.len(), mean: sum / n, rms: (sq / n).sqrt(), max }
 }
@@ -125,7 +126,7 @@ pub fn hausdorff(a: &TriMesh, b: &TriMesh, sampling: Sampling) -> Hausdorff {
 }
 
 /// Angle between the mesh's vertex normals and the field's gradient.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct NormalDeviation {
     /// Mean angle, degrees (ideal 0).
     pub mean_deg: f64,

@@ -1,9 +1,9 @@
 //! Fixed-bin histograms for quality distributions.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// A histogram with equal bins over `[min, max)`, plus counts below and above.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Histogram {
     /// Lower edge of the first bin.
     pub min: f64,

@@ -17,13 +17,13 @@ use isolab_algorithms::bvh::TriangleBvh;
 use isolab_algorithms::{Aabb, TriMesh};
 use rayon::prelude::*;
 use robust::{orient2d, orient3d, Coord, Coord3D};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// At most this many intersecting pairs are listed.
 pub const MAX_LISTED_PAIRS: usize = 100;
 
 /// Self-intersection report.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SelfIntersections {
     /// Intersecting triangle pairs (ideal 0).
     pub count: usize,

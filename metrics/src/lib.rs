@@ -30,10 +30,10 @@ pub use tet_quality::{tet_quality, TetQuality};
 pub use topology::{topology, Topology};
 
 use isolab_algorithms::{Field, TriMesh};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Mean, standard deviation and maximum of a quantity.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
     /// Arithmetic mean.
     pub mean: f64,
@@ -65,7 +65,7 @@ impl Summary {
 }
 
 /// Quality distributions (aspect ratio over [1, 5) in 40 bins; min angle over [0, 60) in 30).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct QualityHistograms {
     /// Verdict aspect ratio of each non-degenerate triangle.
     pub aspect_ratio: Histogram,
@@ -85,7 +85,7 @@ impl QualityHistograms {
 }
 
 /// Everything measured on one triangle mesh: the core of the metrics JSON.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct MeshMetrics {
     /// Vertices (including unused ones).
     pub vertices: usize,
@@ -103,8 +103,10 @@ pub struct MeshMetrics {
     /// Pairs of triangles that intersect (ideal 0).
     pub self_intersections: SelfIntersections,
     /// Signed volume (divergence theorem); positive for a closed outward mesh.
+    #[serde(deserialize_with = "accuracy::nan_if_null")]
     pub volume: f64,
     /// Total area.
+    #[serde(deserialize_with = "accuracy::nan_if_null")]
     pub area: f64,
     /// Distance of vertices to the true surface, where the field is known.
     #[serde(skip_serializing_if = "Option::is_none")]

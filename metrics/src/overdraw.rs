@@ -13,7 +13,7 @@
 
 use glam::{Vec2, Vec3};
 use isolab_algorithms::TriMesh;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Camera: orthographic, looking along `-direction` (from the `direction` side of the mesh), the
 /// mesh's bounding box fitted to the image with a 5% margin.
@@ -34,7 +34,7 @@ impl Default for View {
 }
 
 /// Quad overshading report.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Overdraw {
     /// Image width.
     pub width: u32,

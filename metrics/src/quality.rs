@@ -14,7 +14,7 @@
 use crate::Summary;
 use isolab_algorithms::TriMesh;
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Shape of one non-degenerate triangle.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -60,7 +60,7 @@ pub fn triangle_shape(a: glam::Vec3, b: glam::Vec3, c: glam::Vec3) -> Option<Tri
 }
 
 /// Verdict aspect ratio summary (the metrics JSON's `aspect_ratio`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct AspectSummary {
     /// Mean (ideal 1).
     pub mean: f64,
@@ -71,7 +71,7 @@ pub struct AspectSummary {
 }
 
 /// CGAL aspect ratio summary (`aspect_ratio_cgal`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct CgalAspectSummary {
     /// Mean (ideal 1.1547).
     pub mean: f64,
@@ -80,7 +80,7 @@ pub struct CgalAspectSummary {
 }
 
 /// Shape statistics over the non-degenerate triangles of a mesh.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct TriangleQuality {
     /// Verdict aspect ratio.
     pub aspect_ratio: AspectSummary,

@@ -14,7 +14,7 @@ use crate::Summary;
 use glam::{DVec3, Vec3};
 use isolab_algorithms::TetMesh;
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Shape of one tetrahedron.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -78,7 +78,7 @@ pub fn tet_shape(p: [Vec3; 4]) -> TetShape {
 }
 
 /// Min and max (the metrics JSON's `dihedral_deg`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct MinMax {
     /// Smallest.
     pub min: f64,
@@ -87,7 +87,7 @@ pub struct MinMax {
 }
 
 /// Quality statistics of a tetrahedral mesh.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct TetQuality {
     /// Tetrahedra.
     pub tetrahedra: usize,

@@ -16,13 +16,13 @@
 
 use isolab_algorithms::TriMesh;
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// At most this many offenders of each kind are listed.
 pub const MAX_LISTED: usize = 100;
 
 /// Topology report.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Topology {
     /// No boundary edges (ideal: true for a surface inside the domain).
     pub closed: bool,
@@ -57,7 +57,7 @@ pub struct Topology {
 }
 
 /// The first [`MAX_LISTED`] offenders of each kind.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Offenders {
     /// Boundary edges as vertex pairs.
     pub boundary_edges: Vec<[u32; 2]>,

@@ -203,3 +203,32 @@ fn closed_fields_are_watertight_and_open_ones_only_open_at_the_domain() {
         }
     }
 }
+
+#[test]
+fn samples_exactly_at_the_iso_value_give_no_zero_area_triangles_or_touching() {
+    use isolab_algorithms::extractors::marching_cubes::OnIsoSamples;
+    // The gyroid is exactly zero on whole planes of grid points.
+    let field = fields::builtin("gyroid", Default::default()).unwrap();
+    let s = Samples::sample_cubic(field.clone(), Grid::covering(&field.domain(), 33).unwrap(), 0.0).unwrap();
+    assert!(s.values().iter().filter(|&&v| v == 0.0).count() > 100, "the test needs samples exactly at the iso-value");
+    let separate = extract(&MarchingCubes::default(), &s);
+    assert_eq!(isolab_metrics::triangle_quality(&separate.surface).degenerate_triangles, 0);
+    assert_eq!(isolab_metrics::self_intersections(&separate.surface).count, 0);
+    let exact = extract(&MarchingCubes::new(McOptions { on_iso: OnIsoSamples::Exact, ..Default::default() }), &s);
+    assert!(isolab_metrics::triangle_quality(&exact.surface).degenerate_triangles > 0, "exact interpolation shows the problem");
+    assert_eq!(exact.surface.triangles.len(), separate.surface.triangles.len());
+    // Separated vertices stay within 1e-4 of the spacing of the exact ones.
+    let spacing = s.grid().spacing;
+    for (a, b) in exact.surface.positions.iter().zip(&separate.surface.positions) {
+        assert!(a.distance(*b) <= 1.01e-4 * spacing, "{a} {b}");
+    }
+}
+
+#[test]
+fn marching_cubes_output_does_not_self_intersect_on_the_builtin_fields() {
+    for name in ["sphere", "torus", "gyroid", "asteroid", "terrain", "csg", "thin"] {
+        let out = run(&RunConfig::new("marching-cubes", name, 40)).unwrap();
+        let si = isolab_metrics::self_intersections(&out.extraction.surface);
+        assert_eq!(si.count, 0, "{name}: {:?}", si.pairs);
+    }
+}

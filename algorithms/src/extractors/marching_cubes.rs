@@ -19,8 +19,9 @@
 //! with normals toward increasing `f`. Output is identical whether run serially or in parallel.
 //!
 //! **Non-guarantees.** The topology is that of the table's face rule, not of the trilinear
-//! interpolant (see the asymptotic decider for that); triangles may be arbitrarily thin or even
-//! degenerate (zero area) where a sample equals the iso-value.
+//! interpolant (see the asymptotic decider for that); triangles may be arbitrarily thin. Samples
+//! exactly at the iso-value would give coincident vertices; by default vertices keep 1e-4 of the
+//! spacing from the edge ends instead ([`OnIsoSamples`]), so no triangle has zero area.
 //!
 //! **Costs.** One read of every sample for the row pass, then work proportional to the rows and
 //! cells near the surface. Memory: five `nx * ny` index layers per slab task plus the output.
@@ -71,6 +72,27 @@ pub enum Parallelism {
     Serial,
 }
 
+/// What to do with samples exactly at the iso-value.
+///
+/// Such a sample counts as outside, and every crossing edge that ends at it would put its vertex
+/// exactly on it: several distinct vertices at one point, zero-area triangles, and triangles of
+/// neighbouring cells touching there (self-intersections, as CGAL counts them). This happens on
+/// real data: the gyroid is exactly zero on whole planes of grid points.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum OnIsoSamples {
+    /// Keep every vertex at least [`MIN_EDGE_FRACTION`] of the spacing away from both ends of its
+    /// edge, as if such samples were a hair above the iso-value (default).
+    #[default]
+    Separate,
+    /// Interpolate exactly, as VTK and scikit-image do (for side-by-side equivalence tests).
+    Exact,
+}
+
+/// Smallest distance of a vertex from an edge's ends, as a fraction of the spacing, under
+/// [`OnIsoSamples::Separate`]: far enough that `f32` positions stay distinct up to grids of
+/// about 10^4 samples per side.
+pub const MIN_EDGE_FRACTION: f32 = 1e-4;
+
 /// Options for [`MarchingCubes`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct McOptions {
@@ -78,6 +100,8 @@ pub struct McOptions {
     pub normals: NormalSource,
     /// Parallelism (default [`Parallelism::Rayon`]).
     pub parallelism: Parallelism,
+    /// Samples exactly at the iso-value (default [`OnIsoSamples::Separate`]).
+    pub on_iso: OnIsoSamples,
 }
 
 /// Marching cubes on a cubic grid. Keeps its scratch buffers between calls, so re-meshing the same
@@ -163,6 +187,8 @@ struct Ctx<'a> {
     iso: f32,
     rows: &'a [Row],
     sample_normals: bool,
+    /// Clamp of the interpolation parameter to `[t_min, 1 - t_min]`.
+    t_min: f32,
 }
 
 impl Ctx<'_> {
@@ -202,7 +228,7 @@ impl Ctx<'_> {
         b[axis] += 1;
         let g = &self.grid;
         let (va, vb) = (self.values[g.index(a[0], a[1], a[2])], self.values[g.index(b[0], b[1], b[2])]);
-        let t = (self.iso - va) / (vb - va);
+        let t = ((self.iso - va) / (vb - va)).clamp(self.t_min, 1.0 - self.t_min);
         let mut p = g.position(a[0], a[1], a[2]);
         p[axis] += t * g.spacing;
         let index = mesh.positions.len() as u32;
@@ -398,7 +424,11 @@ impl Extractor for MarchingCubes {
         let start = Instant::now();
         let mut rows = self.rows.lock().unwrap_or_else(|e| e.into_inner());
         classify_rows(samples.values(), nx, samples.iso(), &mut rows);
-        let ctx = Ctx { values: samples.values(), grid, iso: samples.iso(), rows: &rows, sample_normals };
+        let t_min = match self.options.on_iso {
+            OnIsoSamples::Separate => MIN_EDGE_FRACTION,
+            OnIsoSamples::Exact => 0.0,
+        };
+        let ctx = Ctx { values: samples.values(), grid, iso: samples.iso(), rows: &rows, sample_normals, t_min };
         let row_time = start.elapsed();
 
         let slab_cells = nz - 1;

@@ -61,6 +61,23 @@ enum Command {
         /// The mesh file.
         file: PathBuf,
     },
+    /// Render a mesh file (.obj or .ply) to a PNG picture, or a turntable GIF.
+    Render {
+        /// The mesh file.
+        file: PathBuf,
+        /// Output image: .png (one view) or .gif (a turntable).
+        #[arg(long, short)]
+        output: PathBuf,
+        /// Smooth shading instead of flat.
+        #[arg(long)]
+        smooth: bool,
+        /// Draw triangle edges.
+        #[arg(long)]
+        wireframe: bool,
+        /// Width and height in pixels.
+        #[arg(long, default_value_t = 480, value_parser = clap::value_parser!(u32).range(16..=4096))]
+        size: u32,
+    },
 }
 
 fn parse_dims(text: &str) -> Result<[usize; 3], String> {
@@ -106,6 +123,7 @@ fn main() -> ExitCode {
                 println!("{}", serde_json::to_string_pretty(&m).unwrap_or_default());
             })
             .map_err(|e| (2, e.to_string())),
+        Command::Render { file, output, smooth, wireframe, size } => render(&file, &output, smooth, wireframe, size),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -114,6 +132,31 @@ fn main() -> ExitCode {
             ExitCode::from(code as u8)
         }
     }
+}
+
+fn render(
+    file: &std::path::Path,
+    output: &std::path::Path,
+    smooth: bool,
+    wireframe: bool,
+    size: u32,
+) -> Result<(), (i32, String)> {
+    use isolab_experiments::figures::render::{self, RenderOptions, Shading};
+    let mesh = io::read_mesh(file).map_err(|e| (2, e.to_string()))?;
+    let opts = RenderOptions {
+        width: size,
+        height: size,
+        shading: if smooth { Shading::Smooth } else { Shading::Flat },
+        wireframe,
+        ..Default::default()
+    };
+    let ext = output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let result = match ext.as_deref() {
+        Some("png") => render::save_png(output, &render::render(&mesh, &opts)),
+        Some("gif") => render::save_turntable(output, &mesh, &opts, 36, 8),
+        _ => Err(io::IoError::UnknownFormat { path: output.to_path_buf() }),
+    };
+    result.map_err(|e| (1, e.to_string()))
 }
 
 fn extract(config: &RunConfig, output: Option<PathBuf>, metrics: Option<PathBuf>) -> Result<(), RunError> {

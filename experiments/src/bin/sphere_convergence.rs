@@ -1,0 +1,4 @@
+//! Runs the `sphere_convergence` experiment and reassembles `report/REPORT.md`.
+fn main() -> std::process::ExitCode {
+    isolab_experiments::experiment::run_and_assemble("sphere_convergence")
+}

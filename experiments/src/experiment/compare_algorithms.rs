@@ -1,0 +1,356 @@
+//! `compare_algorithms`: every registered extractor on every built-in field and shipped model at
+//! three resolutions: counts, quality, topology, accuracy, time and quad overshading; a table, a
+//! quality-against-cost scatter plot, aspect-ratio and angle histograms, and rendered images.
+
+use super::{measure, model_path, ms, Context, Experiment, ExperimentError, Measured};
+use crate::figures::color_of;
+use crate::figures::plot::{self, HistogramPlot, Scale, Series, Style, XyPlot};
+use crate::figures::render::{render, save_png, save_turntable, side_by_side, RenderOptions, Shading};
+use crate::report::markdown_table;
+use crate::run::{lattice_for, load_field, RunConfig};
+use isolab_algorithms::{extractors, fields, Samples};
+use isolab_metrics::Histogram;
+use serde::{Deserialize, Serialize};
+
+/// The experiment.
+pub struct CompareAlgorithms;
+
+const NAME: &str = "compare_algorithms";
+/// Samples along the longest side for built-in fields.
+pub const FIELD_LEVELS: [usize; 3] = [32, 64, 128];
+/// Samples along the longest side for shipped models.
+pub const MODEL_LEVELS: [usize; 3] = [48, 96, 144];
+/// Shipped models measured.
+pub const MODELS: [&str; 6] = ["stanford-bunny", "spot", "fandisk", "rocker-arm", "cheburashka", "teapot"];
+/// The field shown turning.
+const TURNTABLE_FIELD: &str = "asteroid";
+
+#[derive(Serialize, Deserialize)]
+struct Data {
+    field_levels: Vec<usize>,
+    model_levels: Vec<usize>,
+    repeats: usize,
+    rows: Vec<Measured>,
+    /// (algorithm, field, image path relative to the report)
+    images: Vec<(String, String, String)>,
+    /// (algorithm, path) of turntable GIFs and flat/smooth pairs.
+    turntables: Vec<(String, String)>,
+    pairs: Vec<(String, String)>,
+    scatter: String,
+    overshading: String,
+    histograms: Vec<String>,
+}
+
+fn inputs() -> Vec<(String, String, [usize; 3])> {
+    let mut v: Vec<(String, String, [usize; 3])> =
+        fields::registry().iter().map(|f| (f.name.to_owned(), f.name.to_owned(), FIELD_LEVELS)).collect();
+    v.extend(MODELS.iter().map(|m| (m.to_string(), model_path(m), MODEL_LEVELS)));
+    v
+}
+
+impl Experiment for CompareAlgorithms {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
+        let dir = ctx.figure_dir(NAME)?;
+        let extractors = extractors::registry();
+        let inputs = inputs();
+        let bar = ctx.bar(NAME, (inputs.len() * 3 * extractors.len()) as u64);
+        let mut data = Data {
+            field_levels: FIELD_LEVELS.to_vec(),
+            model_levels: MODEL_LEVELS.to_vec(),
+            repeats: ctx.repeats,
+            rows: Vec::new(),
+            images: Vec::new(),
+            turntables: Vec::new(),
+            pairs: Vec::new(),
+            scatter: String::new(),
+            overshading: String::new(),
+            histograms: Vec::new(),
+        };
+        for (name, spec, levels) in &inputs {
+            let field = load_field(spec, fields::DEFAULT_SEED)?;
+            for (level, &resolution) in levels.iter().enumerate() {
+                let lattice = lattice_for(field.as_ref(), &RunConfig::new("", spec, resolution))?;
+                let samples = Samples::sample(field.clone(), lattice, 0.0).map_err(crate::run::RunError::from)?;
+                for extractor in &extractors {
+                    bar.set_message(format!("{} {name} {resolution}", extractor.name()));
+                    let (row, out) = measure(extractor.as_ref(), &field, &samples, ctx.repeats)?;
+                    if level == 0 {
+                        let path = dir.join(format!("{}-{name}.png", extractor.name()));
+                        let opts = RenderOptions {
+                            width: 360,
+                            height: 360,
+                            wireframe: true,
+                            color: tint(extractor.name()),
+                            ..Default::default()
+                        };
+                        save_png(&path, &render(&out.surface, &opts))?;
+                        data.images.push((extractor.name().into(), name.clone(), ctx.link(&path)));
+                        if name == TURNTABLE_FIELD {
+                            let gif = dir.join(format!("{}-{name}-turntable.gif", extractor.name()));
+                            save_turntable(&gif, &out.surface, &RenderOptions { width: 240, height: 240, ..opts }, 24, 12)?;
+                            data.turntables.push((extractor.name().into(), ctx.link(&gif)));
+                            let pair = dir.join(format!("{}-{name}-flat-smooth.png", extractor.name()));
+                            let smooth =
+                                render(&out.surface, &RenderOptions { shading: Shading::Smooth, wireframe: false, ..opts });
+                            save_png(&pair, &side_by_side(&render(&out.surface, &opts), &smooth))?;
+                            data.pairs.push((extractor.name().into(), ctx.link(&pair)));
+                        }
+                    }
+                    data.rows.push(row);
+                    bar.inc(1);
+                }
+            }
+        }
+        bar.finish_with_message("done");
+        figures(ctx, &dir, &mut data)?;
+        ctx.write_data(NAME, &data)
+    }
+
+    fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
+        let data: Data = ctx.read_data(NAME)?;
+        Ok(section(&data))
+    }
+}
+
+/// The algorithm's colour as a surface tint (lightened palette colour).
+fn tint(name: &str) -> [f32; 3] {
+    let (r, g, b) = color_of(name);
+    [r, g, b].map(|c| 0.45 + 0.55 * f32::from(c) / 255.0)
+}
+
+fn middle(data: &Data) -> impl Iterator<Item = &Measured> {
+    let (f, m) = (data.field_levels[1], data.model_levels[1]);
+    data.rows.iter().filter(move |r| {
+        let is_field = fields::registry().iter().any(|x| x.name == r.field);
+        let level = if is_field { f } else { m };
+        // Rows record the largest dimension, which is the requested resolution.
+        r.resolution == level
+    })
+}
+
+fn figures(ctx: &Context, dir: &std::path::Path, data: &mut Data) -> Result<(), ExperimentError> {
+    let algorithms: Vec<&'static str> = extractors::registry().iter().map(|e| e.name()).collect();
+    let series = |f: &dyn Fn(&Measured) -> (f64, f64)| -> Vec<Series> {
+        algorithms
+            .iter()
+            .map(|a| Series {
+                label: a.to_string(),
+                color: color_of(a),
+                points: middle(data).filter(|r| r.algorithm == *a).map(f).collect(),
+            })
+            .collect()
+    };
+    let scatter = XyPlot {
+        title: "Quality against cost (every field and model, middle resolution)".into(),
+        x_label: "extraction time, ms (median)".into(),
+        y_label: "mean Verdict aspect ratio (1 is ideal)".into(),
+        x_scale: Scale::Log,
+        y_scale: Scale::Log,
+        style: Style::Scatter,
+        series: series(&|r| (r.extraction_ms, r.metrics.quality.aspect_ratio.mean)),
+    };
+    let stem = dir.join("quality-vs-cost");
+    plot::xy(&stem, &scatter).map_err(ExperimentError::Figure)?;
+    let scatter_link = ctx.link(&stem.with_extension("svg"));
+    let over = XyPlot {
+        title: "Rendering cost: quad overshading against triangle count".into(),
+        x_label: "triangles".into(),
+        y_label: "shader invocations per covered pixel (1 is ideal)".into(),
+        x_scale: Scale::Log,
+        y_scale: Scale::Linear,
+        style: Style::Scatter,
+        series: series(&|r| (r.metrics.triangles as f64, r.metrics.overdraw.overshading)),
+    };
+    let stem = dir.join("overshading");
+    plot::xy(&stem, &over).map_err(ExperimentError::Figure)?;
+    let over_link = ctx.link(&stem.with_extension("svg"));
+    let mut histogram_links = Vec::new();
+    for (key, title, x_label) in [
+        ("aspect", "Verdict aspect ratio of all triangles (middle resolution)", "aspect ratio"),
+        ("min-angle", "Smallest angle of all triangles (middle resolution)", "degrees"),
+    ] {
+        let plot = HistogramPlot {
+            title: title.into(),
+            x_label: x_label.into(),
+            series: algorithms
+                .iter()
+                .filter_map(|a| {
+                    let hists = middle(data).filter(|r| r.algorithm == *a).map(|r| match key {
+                        "aspect" => &r.metrics.histograms.aspect_ratio,
+                        _ => &r.metrics.histograms.min_angle_deg,
+                    });
+                    merge(hists).map(|h| (a.to_string(), color_of(a), h))
+                })
+                .collect(),
+        };
+        let stem = dir.join(format!("histogram-{key}"));
+        plot::histogram(&stem, &plot).map_err(ExperimentError::Figure)?;
+        histogram_links.push(ctx.link(&stem.with_extension("svg")));
+    }
+    data.scatter = scatter_link;
+    data.overshading = over_link;
+    data.histograms = histogram_links;
+    Ok(())
+}
+
+/// Sums histograms with the same bins.
+fn merge<'a>(mut hists: impl Iterator<Item = &'a Histogram>) -> Option<Histogram> {
+    let mut acc = hists.next()?.clone();
+    for h in hists {
+        for (a, b) in acc.counts.iter_mut().zip(&h.counts) {
+            *a += b;
+        }
+        acc.below += h.below;
+        acc.above += h.above;
+    }
+    Some(acc)
+}
+
+fn yes(b: bool) -> &'static str {
+    if b {
+        "yes"
+    } else {
+        "**no**"
+    }
+}
+
+fn section(data: &Data) -> String {
+    let mut s = String::from("## Comparing the algorithms (`compare_algorithms`)\n\n");
+    s.push_str(&format!(
+        "Every registered extractor on every built-in field (at {:?} samples along the longest side) and every shipped model \
+         (at {:?}), sampled once per resolution. Extraction time is the median of {} runs on the same samples. Meshes of the \
+         gyroid and the terrain are cut by the domain, so they are open there by design. Distances are in grid spacings `h`; \
+         *normal dev.* is the mean angle between vertex normals and the field's gradient; *overshading* is pixel-shader \
+         invocations per covered pixel when GPUs shade 2x2 quads (1024x1024, early depth test; 1 is ideal).\n\n",
+        data.field_levels, data.model_levels, data.repeats
+    ));
+    s.push_str("### At the middle resolution\n\n");
+    let rows: Vec<Vec<String>> = middle(data)
+        .map(|r| {
+            let m = &r.metrics;
+            let t = &m.topology;
+            vec![
+                r.algorithm.clone(),
+                r.field.clone(),
+                format!("{}x{}x{}", r.dims[0], r.dims[1], r.dims[2]),
+                m.triangles.to_string(),
+                yes(t.closed).into(),
+                yes(t.edge_manifold && t.vertex_manifold && t.oriented).into(),
+                format!("{} / {}", t.euler, t.genus.map_or("-".into(), |g| g.to_string())),
+                m.self_intersections.count.to_string(),
+                format!("{:.2} / {:.0}", m.quality.aspect_ratio.mean, m.quality.aspect_ratio.max),
+                format!("{:.2}", m.quality.min_angle_deg),
+                m.surface_distance.map_or("-".into(), |d| format!("{:.4}", d.mean / r.spacing)),
+                m.normal_deviation.map_or("-".into(), |d| format!("{:.2}°", d.mean_deg)),
+                r.analytic_volume.map_or("-".into(), |v| format!("{:+.3}%", 100.0 * (m.volume - v) / v)),
+                format!("{:.2}", m.overdraw.overshading),
+                ms(r.extraction_ms),
+            ]
+        })
+        .collect();
+    s.push_str(&markdown_table(
+        &[
+            "algorithm",
+            "field",
+            "samples",
+            "triangles",
+            "closed",
+            "manifold + oriented",
+            "χ / genus",
+            "self-int.",
+            "aspect mean / max",
+            "min angle",
+            "dist / h",
+            "normal dev.",
+            "volume err.",
+            "overshading",
+            "extract ms",
+        ],
+        &rows,
+    ));
+    s.push_str("\n### Every resolution\n\n");
+    let rows: Vec<Vec<String>> = data
+        .rows
+        .iter()
+        .map(|r| {
+            let m = &r.metrics;
+            vec![
+                r.algorithm.clone(),
+                r.field.clone(),
+                r.resolution.to_string(),
+                m.triangles.to_string(),
+                yes(m.topology.is_watertight_manifold()).into(),
+                m.topology.components.to_string(),
+                m.topology.genus.map_or("-".into(), |g| g.to_string()),
+                format!("{:.2}", m.quality.aspect_ratio.mean),
+                format!("{:.2}", m.overdraw.overshading),
+                format!("{:.1}", r.sampling_ms),
+                ms(r.extraction_ms),
+                format!("{:.1}", m.triangles as f64 / (r.extraction_ms / 1e3).max(1e-12) / 1e6),
+            ]
+        })
+        .collect();
+    s.push_str(&markdown_table(
+        &[
+            "algorithm",
+            "field",
+            "resolution",
+            "triangles",
+            "watertight",
+            "components",
+            "genus",
+            "aspect mean",
+            "overshading",
+            "sampling ms",
+            "extract ms",
+            "M tri/s",
+        ],
+        &rows,
+    ));
+    s.push_str(&format!(
+        "\n### Figures\n\n![quality against cost]({})\n\n![overshading]({})\n\n",
+        data.scatter, data.overshading
+    ));
+    for h in &data.histograms {
+        s.push_str(&format!("![histogram]({h})\n\n"));
+    }
+    s.push_str("### Pictures (lowest resolution, flat shading with wireframe)\n\n");
+    let algorithms: Vec<String> = {
+        let mut a: Vec<String> = data.images.iter().map(|i| i.0.clone()).collect();
+        a.dedup();
+        a
+    };
+    let mut header = vec!["field".to_string()];
+    header.extend(algorithms.iter().cloned());
+    let fields_seen: Vec<String> = {
+        let mut f: Vec<String> = Vec::new();
+        for i in &data.images {
+            if !f.contains(&i.1) {
+                f.push(i.1.clone());
+            }
+        }
+        f
+    };
+    let rows: Vec<Vec<String>> = fields_seen
+        .iter()
+        .map(|f| {
+            let mut row = vec![f.clone()];
+            for a in &algorithms {
+                row.push(
+                    data.images.iter().find(|i| &i.0 == a && &i.1 == f).map_or("-".into(), |i| format!("![{a} {f}]({})", i.2)),
+                );
+            }
+            row
+        })
+        .collect();
+    let header_refs: Vec<&str> = header.iter().map(String::as_str).collect();
+    s.push_str(&markdown_table(&header_refs, &rows));
+    for ((a, gif), (_, pair)) in data.turntables.iter().zip(&data.pairs) {
+        s.push_str(&format!("\n{a} on the {TURNTABLE_FIELD}: turntable and flat (wireframe) against smooth shading\n\n![{a} turntable]({gif}) ![{a} flat and smooth]({pair})\n"));
+    }
+    s
+}

@@ -38,6 +38,7 @@ struct Data {
     pairs: Vec<(String, String)>,
     scatter: String,
     overshading: String,
+    bars: String,
     histograms: Vec<String>,
 }
 
@@ -68,6 +69,7 @@ impl Experiment for CompareAlgorithms {
             pairs: Vec::new(),
             scatter: String::new(),
             overshading: String::new(),
+            bars: String::new(),
             histograms: Vec::new(),
         };
         for (name, spec, levels) in &inputs {
@@ -168,6 +170,27 @@ fn figures(ctx: &Context, dir: &std::path::Path, data: &mut Data) -> Result<(), 
     let stem = dir.join("overshading");
     plot::xy(&stem, &over).map_err(ExperimentError::Figure)?;
     let over_link = ctx.link(&stem.with_extension("svg"));
+    let categories: Vec<String> = {
+        let mut c: Vec<String> = Vec::new();
+        for r in middle(data) {
+            if !c.contains(&r.field) {
+                c.push(r.field.clone());
+            }
+        }
+        c
+    };
+    let per_field = |a: &str, f: &dyn Fn(&Measured) -> f64| -> Vec<f64> {
+        categories.iter().map(|c| middle(data).find(|r| r.algorithm == a && &r.field == c).map_or(f64::NAN, f)).collect()
+    };
+    let chart = plot::BarChart {
+        title: "Triangles per mesh (middle resolution)".into(),
+        y_label: "triangles".into(),
+        categories: categories.clone(),
+        series: algorithms.iter().map(|a| (a.to_string(), color_of(a), per_field(a, &|r| r.metrics.triangles as f64))).collect(),
+    };
+    let stem = dir.join("triangles");
+    plot::bars(&stem, &chart).map_err(ExperimentError::Figure)?;
+    let bars_link = ctx.link(&stem.with_extension("svg"));
     let mut histogram_links = Vec::new();
     for (key, title, x_label) in [
         ("aspect", "Verdict aspect ratio of all triangles (middle resolution)", "aspect ratio"),
@@ -192,6 +215,7 @@ fn figures(ctx: &Context, dir: &std::path::Path, data: &mut Data) -> Result<(), 
         histogram_links.push(ctx.link(&stem.with_extension("svg")));
     }
     data.scatter = scatter_link;
+    data.bars = bars_link;
     data.overshading = over_link;
     data.histograms = histogram_links;
     Ok(())
@@ -312,8 +336,8 @@ fn section(data: &Data) -> String {
         &rows,
     ));
     s.push_str(&format!(
-        "\n### Figures\n\n![quality against cost]({})\n\n![overshading]({})\n\n",
-        data.scatter, data.overshading
+        "\n### Figures\n\n![quality against cost]({})\n\n![overshading]({})\n\n![triangles]({})\n\n",
+        data.scatter, data.overshading, data.bars
     ));
     for h in &data.histograms {
         s.push_str(&format!("![histogram]({h})\n\n"));

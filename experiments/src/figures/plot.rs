@@ -204,6 +204,84 @@ impl HistogramPlot {
     }
 }
 
+/// A grouped bar chart: one group per category, one bar per series in each group.
+#[derive(Clone, Debug)]
+pub struct BarChart {
+    /// Title.
+    pub title: String,
+    /// Y axis label.
+    pub y_label: String,
+    /// Category names along x.
+    pub categories: Vec<String>,
+    /// Label, colour and one value per category of each series.
+    pub series: Vec<(String, (u8, u8, u8), Vec<f64>)>,
+}
+
+fn draw_bars<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart_spec: &BarChart) -> Result<(), String> {
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    root.fill(&WHITE).map_err(err)?;
+    let n = chart_spec.categories.len().max(1);
+    let k = chart_spec.series.len().max(1);
+    let top =
+        chart_spec.series.iter().flat_map(|s| s.2.iter().copied()).filter(|v| v.is_finite()).fold(0.0, f64::max).max(1e-12) * 1.1;
+    let mut chart = ChartBuilder::on(root)
+        .caption(&chart_spec.title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(70)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0.0..n as f64, 0.0..top)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(0)
+        .y_desc(&chart_spec.y_label)
+        .label_style(("sans-serif", 13))
+        .axis_desc_style(("sans-serif", 15))
+        .y_label_formatter(&|v| label(*v, Scale::Linear))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(err)?;
+    let width = 0.8 / k as f64;
+    for (j, (name, color, values)) in chart_spec.series.iter().enumerate() {
+        let color = RGBColor(color.0, color.1, color.2);
+        chart
+            .draw_series(values.iter().enumerate().filter(|(_, v)| v.is_finite()).map(|(i, &v)| {
+                let x0 = i as f64 + 0.1 + j as f64 * width;
+                Rectangle::new([(x0, 0.0), (x0 + width * 0.92, v)], color.filled())
+            }))
+            .map_err(err)?
+            .label(name)
+            .legend(move |(x, y)| Rectangle::new([(x + 2, y - 5), (x + 12, y + 5)], color.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(RGBColor(180, 180, 180))
+        .label_font(("sans-serif", 13))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(err)?;
+    // Category names under their groups, turned to fit.
+    let style = TextStyle::from(("sans-serif", 13).into_font()).transform(FontTransform::Rotate270).color(&BLACK);
+    for (i, c) in chart_spec.categories.iter().enumerate() {
+        let (px, py) = chart.backend_coord(&(i as f64 + 0.5, 0.0));
+        root.draw(&Text::new(c.clone(), (px - 7, py + 8 + 7 * c.len() as i32), style.clone())).map_err(err)?;
+    }
+    root.present().map_err(err)
+}
+
+/// Writes a bar chart as `<stem>.svg` and `<stem>.png`.
+pub fn bars(stem: &Path, chart: &BarChart) -> Result<(), String> {
+    write_both(stem, |path, svg| {
+        if svg {
+            draw_bars(&SVGBackend::new(path, SIZE).into_drawing_area(), chart)
+        } else {
+            draw_bars(&BitMapBackend::new(path, SIZE).into_drawing_area(), chart)
+        }
+    })
+}
+
 /// Writes `<stem>.svg` and `<stem>.png` (800x520) through temporary files.
 fn write_both(stem: &Path, draw: impl Fn(&Path, bool) -> Result<(), String>) -> Result<(), String> {
     init_fonts();
@@ -263,6 +341,25 @@ mod tests {
         let png = std::fs::read(stem.with_extension("png")).unwrap();
         assert_eq!(&png[1..4], b"PNG");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2, "no temporary files left");
+    }
+
+    #[test]
+    fn bar_chart_names_its_categories() {
+        let dir = tempfile::tempdir().unwrap();
+        let stem = dir.path().join("bars");
+        let chart = BarChart {
+            title: "triangles".into(),
+            y_label: "count".into(),
+            categories: vec!["sphere".into(), "torus".into()],
+            series: vec![
+                ("marching-cubes".into(), (1, 2, 3), vec![10.0, 20.0]),
+                ("other".into(), (4, 5, 6), vec![5.0, f64::NAN]),
+            ],
+        };
+        bars(&stem, &chart).unwrap();
+        let svg = std::fs::read_to_string(stem.with_extension("svg")).unwrap();
+        assert!(svg.contains("sphere") && svg.contains("torus") && svg.contains("other"));
+        assert!(stem.with_extension("png").exists());
     }
 
     #[test]

@@ -222,15 +222,12 @@ pub fn side_by_side(left: &Image, right: &Image) -> Image {
 /// Writes a PNG atomically.
 pub fn save_png(path: &Path, image: &Image) -> Result<(), crate::io::IoError> {
     crate::io::write_atomic(path, |w| {
-        image::write_buffer_with_format(
-            w,
-            &image.rgb,
-            image.width,
-            image.height,
-            image::ExtendedColorType::Rgb8,
-            image::ImageFormat::Png,
-        )
-        .map_err(std::io::Error::other)
+        let mut encoder = png::Encoder::new(w, image.width, image.height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header().map_err(std::io::Error::other)?;
+        writer.write_image_data(&image.rgb).map_err(std::io::Error::other)?;
+        writer.finish().map_err(std::io::Error::other)
     })
 }
 

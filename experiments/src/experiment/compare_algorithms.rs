@@ -186,7 +186,14 @@ fn figures(ctx: &Context, dir: &std::path::Path, data: &mut Data) -> Result<(), 
         title: "Triangles per mesh (middle resolution)".into(),
         y_label: "triangles".into(),
         categories: categories.clone(),
-        series: algorithms.iter().map(|a| (a.to_string(), color_of(a), per_field(a, &|r| r.metrics.triangles as f64))).collect(),
+        series: algorithms
+            .iter()
+            .map(|a| plot::BarSeries {
+                label: a.to_string(),
+                color: color_of(a),
+                values: per_field(a, &|r| r.metrics.triangles as f64),
+            })
+            .collect(),
     };
     let stem = dir.join("triangles");
     plot::bars(&stem, &chart).map_err(ExperimentError::Figure)?;

@@ -213,8 +213,19 @@ pub struct BarChart {
     pub y_label: String,
     /// Category names along x.
     pub categories: Vec<String>,
-    /// Label, colour and one value per category of each series.
-    pub series: Vec<(String, (u8, u8, u8), Vec<f64>)>,
+    /// One bar per category in each series.
+    pub series: Vec<BarSeries>,
+}
+
+/// One series of a bar chart.
+#[derive(Clone, Debug)]
+pub struct BarSeries {
+    /// Legend label.
+    pub label: String,
+    /// Colour.
+    pub color: (u8, u8, u8),
+    /// One value per category (NaN: no bar).
+    pub values: Vec<f64>,
 }
 
 fn draw_bars<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart_spec: &BarChart) -> Result<(), String> {
@@ -223,7 +234,8 @@ fn draw_bars<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart_spec: &Bar
     let n = chart_spec.categories.len().max(1);
     let k = chart_spec.series.len().max(1);
     let top =
-        chart_spec.series.iter().flat_map(|s| s.2.iter().copied()).filter(|v| v.is_finite()).fold(0.0, f64::max).max(1e-12) * 1.1;
+        chart_spec.series.iter().flat_map(|s| s.values.iter().copied()).filter(|v| v.is_finite()).fold(0.0, f64::max).max(1e-12)
+            * 1.1;
     let mut chart = ChartBuilder::on(root)
         .caption(&chart_spec.title, ("sans-serif", 20))
         .margin(12)
@@ -243,7 +255,7 @@ fn draw_bars<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart_spec: &Bar
         .draw()
         .map_err(err)?;
     let width = 0.8 / k as f64;
-    for (j, (name, color, values)) in chart_spec.series.iter().enumerate() {
+    for (j, BarSeries { label: name, color, values }) in chart_spec.series.iter().enumerate() {
         let color = RGBColor(color.0, color.1, color.2);
         chart
             .draw_series(values.iter().enumerate().filter(|(_, v)| v.is_finite()).map(|(i, &v)| {
@@ -352,8 +364,8 @@ mod tests {
             y_label: "count".into(),
             categories: vec!["sphere".into(), "torus".into()],
             series: vec![
-                ("marching-cubes".into(), (1, 2, 3), vec![10.0, 20.0]),
-                ("other".into(), (4, 5, 6), vec![5.0, f64::NAN]),
+                BarSeries { label: "marching-cubes".into(), color: (1, 2, 3), values: vec![10.0, 20.0] },
+                BarSeries { label: "other".into(), color: (4, 5, 6), values: vec![5.0, f64::NAN] },
             ],
         };
         bars(&stem, &chart).unwrap();

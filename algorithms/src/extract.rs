@@ -14,6 +14,8 @@ pub struct StageTimes {
     pub vertex: Duration,
     /// Geometry pass: triangles or tetrahedra.
     pub geometry: Duration,
+    /// Vertex smoothing or relaxation inside the extractor (surface nets' constrained smoothing).
+    pub smoothing: Duration,
     /// Vertex normals.
     pub normals: Duration,
     /// Post-processes (edge collapse, relaxation, smoothing).
@@ -21,9 +23,9 @@ pub struct StageTimes {
 }
 
 impl StageTimes {
-    /// Extraction only: vertex + geometry + normals.
+    /// Extraction only: vertex + geometry + smoothing + normals.
     pub fn extraction(&self) -> Duration {
-        self.vertex + self.geometry + self.normals
+        self.vertex + self.geometry + self.smoothing + self.normals
     }
 
     /// Everything: sampling + extraction + post.

@@ -34,7 +34,9 @@ pub mod fields;
 pub mod geometry;
 pub mod lattice;
 pub mod mesh;
+pub mod options;
 pub mod samples;
+pub mod sign_rows;
 pub mod tables;
 
 pub use extract::{ExtractError, Extraction, Extractor, PostProcess, StageTimes, Stats};
@@ -42,6 +44,7 @@ pub use field::{Field, FieldError};
 pub use geometry::Aabb;
 pub use lattice::{Grid, Lattice, LatticeError};
 pub use mesh::{TetMesh, TriMesh};
+pub use options::{OptionError, Options};
 pub use samples::{SampleError, Samples};
 
 /// Re-exported so that users of the library name the same vector type.

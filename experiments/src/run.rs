@@ -3,7 +3,8 @@
 
 use crate::io::{self, IoError};
 use isolab_algorithms::{
-    extractors, fields, ExtractError, Extraction, Field, FieldError, Grid, Lattice, LatticeError, SampleError, Samples,
+    extractors, fields, ExtractError, Extraction, Field, FieldError, Grid, Lattice, LatticeError, OptionError, Options,
+    SampleError, Samples,
 };
 use isolab_metrics::MeshMetrics;
 use serde::Serialize;
@@ -40,6 +41,8 @@ pub struct RunConfig {
     pub seed: i32,
     /// Post-processes to apply in order.
     pub post: Vec<String>,
+    /// Algorithm options by name (`smoothing`, `iterations`, ...).
+    pub options: Options,
 }
 
 impl RunConfig {
@@ -54,6 +57,7 @@ impl RunConfig {
             iso: 0.0,
             seed: fields::DEFAULT_SEED,
             post: Vec::new(),
+            options: Options::new(),
         }
     }
 }
@@ -69,6 +73,9 @@ pub enum RunError {
         /// Valid names.
         valid: String,
     },
+    /// An algorithm option is unknown or out of range.
+    #[error(transparent)]
+    Option(#[from] OptionError),
     /// No post-process has that name.
     #[error("unknown post-process '{name}'; valid post-processes: {valid}")]
     UnknownPost {
@@ -113,7 +120,10 @@ impl RunError {
     /// 2 for an unknown name (usage error), 1 otherwise.
     pub fn exit_code(&self) -> i32 {
         match self {
-            RunError::UnknownAlgorithm { .. } | RunError::UnknownPost { .. } | RunError::Field(FieldError::Unknown { .. }) => 2,
+            RunError::UnknownAlgorithm { .. }
+            | RunError::UnknownPost { .. }
+            | RunError::Option(_)
+            | RunError::Field(FieldError::Unknown { .. }) => 2,
             _ => 1,
         }
     }
@@ -241,7 +251,7 @@ pub struct RunOutcome {
 
 /// Samples, extracts, post-processes and measures.
 pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
-    let extractor = extractors::by_name(&config.algorithm)
+    let extractor = extractors::build(&config.algorithm, &config.options)?
         .ok_or_else(|| RunError::UnknownAlgorithm { name: config.algorithm.clone(), valid: extractors::names() })?;
     let posts = config
         .post

@@ -212,3 +212,19 @@ fn render_writes_png_and_gif_pictures() {
     );
     assert_clean_failure(&isolab(&["render", "missing.obj", "-o", png.to_str().unwrap()]), 2, &["missing.obj"]);
 }
+
+#[test]
+fn algorithm_options_are_checked_and_named() {
+    let o = isolab(&["extract", "-a", "surface-nets", "-f", "sphere", "-r", "16", "--smoothing", "spring", "--iterations", "3"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = isolab(&["extract", "-a", "surface-nets", "-f", "sphere", "-r", "16", "--iterations", "-2"]);
+    assert_clean_failure(&o, 2, &["surface-nets", "'iterations'", "negative"]);
+    let o = isolab(&["extract", "-a", "surface-nets", "-f", "sphere", "-r", "16", "--set", "damping=3"]);
+    assert_clean_failure(&o, 2, &["'damping'", "[0, 1]"]);
+    let o = isolab(&["extract", "-a", "surface-nets", "-f", "sphere", "-r", "16", "--smoothing", "magic"]);
+    assert_clean_failure(&o, 2, &["'smoothing'", "none, elastic, spring, implicit"]);
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "16", "--smoothing", "elastic"]);
+    assert_clean_failure(&o, 2, &["marching-cubes does not take option 'smoothing'"]);
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "16", "--set", "novalue"]);
+    assert_clean_failure(&o, 2, &["NAME=VALUE"]);
+}

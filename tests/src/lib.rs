@@ -30,18 +30,33 @@ pub fn extract(extractor: &dyn Extractor, samples: &Samples) -> Extraction {
     out
 }
 
+/// What orientation a test demands beyond consistency.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Orientation {
+    /// Consistent and outward (positive volume).
+    Outward,
+    /// Consistent only (smoothing may collapse a one-sample feature to zero or negative volume).
+    Consistent,
+}
+
 /// The invariant checker every extractor test ends with: closed, edge- and vertex-manifold,
 /// consistently oriented, outward, no unused vertex, every index in range, and an even Euler
 /// characteristic no larger than twice the components (a union of closed orientable surfaces).
 /// Panics with the topology report on failure; returns it otherwise.
 pub fn assert_closed_manifold(mesh: &TriMesh, what: &str) -> Topology {
+    assert_closed_manifold_with(mesh, what, Orientation::Outward)
+}
+
+/// [`assert_closed_manifold`] with a choice of orientation demand.
+pub fn assert_closed_manifold_with(mesh: &TriMesh, what: &str, orientation: Orientation) -> Topology {
     let n = mesh.positions.len() as u32;
     assert!(mesh.triangles.iter().flatten().all(|&i| i < n), "{what}: index out of range");
     let t = topology(mesh);
     if mesh.triangles.is_empty() {
         return t;
     }
-    assert!(t.is_watertight_manifold() && t.outward && t.unused_vertices == 0, "{what}: {t:#?}");
+    let outward_ok = orientation == Orientation::Consistent || t.outward;
+    assert!(t.is_watertight_manifold() && outward_ok && t.unused_vertices == 0, "{what}: {t:#?}");
     assert!(t.euler % 2 == 0 && t.euler <= 2 * t.components as i64, "{what}: euler {} with {} components", t.euler, t.components);
     t
 }

@@ -40,6 +40,7 @@ use crate::extract::{ExtractError, Extraction, Extractor};
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
 use crate::samples::Samples;
+use crate::sign_rows::{classify_rows, span, Row};
 use crate::tables::marching_cubes::TABLE;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -104,6 +105,35 @@ pub struct McOptions {
     pub on_iso: OnIsoSamples,
 }
 
+/// One line for listings.
+pub const DESCRIPTION: &str = "Lorensen & Cline 1987: 256-case cube table, one vertex per crossing edge, linear interpolation";
+
+/// Options by name: `normals` (auto, field, samples, faces, none), `parallelism` (rayon, serial),
+/// `on-iso` (separate, exact).
+pub const OPTION_NAMES: &[&str] = &["normals", "parallelism", "on-iso"];
+
+/// Builds marching cubes from named options.
+pub fn from_options(options: &crate::options::Options) -> Result<Box<dyn Extractor>, crate::options::OptionError> {
+    let mut r = options.reader("marching-cubes", OPTION_NAMES);
+    let normals = r.choice(
+        "normals",
+        NormalSource::Auto,
+        &[
+            ("auto", NormalSource::Auto),
+            ("field", NormalSource::FieldGradient),
+            ("samples", NormalSource::SampleGradient),
+            ("faces", NormalSource::FaceAverage),
+            ("none", NormalSource::None),
+        ],
+    )?;
+    let parallelism =
+        r.choice("parallelism", Parallelism::Rayon, &[("rayon", Parallelism::Rayon), ("serial", Parallelism::Serial)])?;
+    let on_iso =
+        r.choice("on-iso", OnIsoSamples::Separate, &[("separate", OnIsoSamples::Separate), ("exact", OnIsoSamples::Exact)])?;
+    r.finish()?;
+    Ok(Box::new(MarchingCubes::new(McOptions { normals, parallelism, on_iso })))
+}
+
 /// Marching cubes on a cubic grid. Keeps its scratch buffers between calls, so re-meshing the same
 /// size of grid allocates nothing once the output has grown.
 #[derive(Default)]
@@ -125,28 +155,6 @@ impl MarchingCubes {
 const EXTERN: u32 = 1 << 31;
 /// Cells per slab task below which the whole grid is one slab.
 const MIN_CELLS_PER_SLAB: usize = 32 * 32 * 32;
-
-/// Sign-change summary of one x-row of samples.
-#[derive(Clone, Copy, Debug, Default)]
-struct Row {
-    /// First and last x whose inside/outside state differs from sample 0's; `first > last` when
-    /// the row is uniform.
-    first: u32,
-    last: u32,
-    /// State of sample 0.
-    inside: bool,
-}
-
-/// The inclusive x-range of samples where rows may differ from one another, or `None`.
-fn span(rows: &[Row], nx: usize) -> Option<(usize, usize)> {
-    let inside = rows[0].inside;
-    if rows.iter().any(|r| r.inside != inside) {
-        return Some((0, nx - 1));
-    }
-    let first = rows.iter().map(|r| r.first).min().unwrap_or(u32::MAX);
-    let last = rows.iter().map(|r| r.last).max().unwrap_or(0);
-    (first <= last).then_some((first as usize, last as usize))
-}
 
 #[derive(Default)]
 struct Scratch {
@@ -366,22 +374,6 @@ impl Ctx<'_> {
     }
 }
 
-fn classify_rows(values: &[f32], nx: usize, iso: f32, rows: &mut Vec<Row>) {
-    rows.clear();
-    rows.resize(values.len() / nx, Row::default());
-    rows.par_iter_mut().zip(values.par_chunks(nx)).for_each(|(row, v)| {
-        let inside = v[0] < iso;
-        let first = v.iter().position(|&s| (s < iso) != inside);
-        *row = match first {
-            None => Row { first: u32::MAX, last: 0, inside },
-            Some(f) => {
-                let last = v.iter().rposition(|&s| (s < iso) != inside).unwrap_or(f);
-                Row { first: f as u32, last: last as u32, inside }
-            }
-        };
-    });
-}
-
 /// Resolves a slab-local index to a global one.
 #[inline]
 fn resolve(i: u32, offset: u32, below: Option<(&Scratch, u32)>) -> u32 {
@@ -400,7 +392,7 @@ impl Extractor for MarchingCubes {
     }
 
     fn description(&self) -> &'static str {
-        "Lorensen & Cline 1987: 256-case cube table, one vertex per crossing edge, linear interpolation"
+        DESCRIPTION
     }
 
     fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {

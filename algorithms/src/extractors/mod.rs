@@ -1,21 +1,51 @@
 //! The extractor and post-process registries: one line per algorithm.
 //!
 //! Adding an algorithm: write `extractors/<name>.rs` with a type implementing
-//! [`Extractor`](crate::Extractor) (module doc: paper, summary, guarantees, costs), declare the
-//! module below, and add one line to [`registry`].
+//! [`Extractor`](crate::Extractor) (module doc: paper, summary, guarantees, costs) and a
+//! `from_options` constructor, declare the module below, and add one line to [`INFOS`].
 
 pub mod marching_cubes;
+pub mod surface_nets;
 
 pub use marching_cubes::MarchingCubes;
+pub use surface_nets::SurfaceNets;
 
 use crate::extract::{Extractor, PostProcess};
+use crate::options::{OptionError, Options};
 
-/// Every extractor, built from its default options, in the order the report lists them.
+/// How to build an extractor: its name, one line, and a constructor from options.
+pub struct ExtractorInfo {
+    /// Stable kebab-case name.
+    pub name: &'static str,
+    /// One line saying what it does.
+    pub description: &'static str,
+    /// The options it takes (`--set NAME=VALUE`).
+    pub options: &'static [&'static str],
+    /// Builds it; unknown or bad options are errors naming the option.
+    pub make: fn(&Options) -> Result<Box<dyn Extractor>, OptionError>,
+}
+
+/// Every extractor, in the order the report lists them.
+pub const INFOS: &[ExtractorInfo] = &[
+    // Lorensen & Cline 1987: the 256-case cube table, one vertex per crossing edge.
+    ExtractorInfo {
+        name: "marching-cubes",
+        description: marching_cubes::DESCRIPTION,
+        options: marching_cubes::OPTION_NAMES,
+        make: marching_cubes::from_options,
+    },
+    // Gibson 1998: one vertex per surface cell, quads across crossing edges, constrained smoothing.
+    ExtractorInfo {
+        name: "surface-nets",
+        description: surface_nets::DESCRIPTION,
+        options: surface_nets::OPTION_NAMES,
+        make: surface_nets::from_options,
+    },
+];
+
+/// Every extractor, built from its default options.
 pub fn registry() -> Vec<Box<dyn Extractor>> {
-    vec![
-        // Lorensen & Cline 1987: the 256-case cube table, one vertex per crossing edge.
-        Box::new(MarchingCubes::default()),
-    ]
+    INFOS.iter().filter_map(|i| (i.make)(&Options::new()).ok()).collect()
 }
 
 /// Every post-process (mesh -> mesh filters usable after any extractor).
@@ -23,9 +53,14 @@ pub fn post_processes() -> Vec<Box<dyn PostProcess>> {
     Vec::new()
 }
 
-/// The extractor called `name`, or `None`.
+/// The extractor called `name` with default options, or `None`.
 pub fn by_name(name: &str) -> Option<Box<dyn Extractor>> {
-    registry().into_iter().find(|e| e.name() == name)
+    build(name, &Options::new()).ok().flatten()
+}
+
+/// The extractor called `name` built with `options`: `Ok(None)` when no extractor has that name.
+pub fn build(name: &str, options: &Options) -> Result<Option<Box<dyn Extractor>>, OptionError> {
+    INFOS.iter().find(|i| i.name == name).map(|i| (i.make)(options)).transpose()
 }
 
 /// The post-process called `name`, or `None`.
@@ -35,7 +70,7 @@ pub fn post_by_name(name: &str) -> Option<Box<dyn PostProcess>> {
 
 /// Comma-separated names of all extractors (for error messages).
 pub fn names() -> String {
-    registry().iter().map(|e| e.name()).collect::<Vec<_>>().join(", ")
+    INFOS.iter().map(|e| e.name).collect::<Vec<_>>().join(", ")
 }
 
 /// Comma-separated names of all post-processes (for error messages).

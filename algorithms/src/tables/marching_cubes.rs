@@ -57,6 +57,11 @@ pub struct Case {
     pub count: u8,
     /// Triangles as edge numbers; the first `count` are used.
     pub triangles: [[u8; 3]; MAX_TRIANGLES],
+    /// Number of separate surface pieces (polygons) in the cell.
+    pub polygons: u8,
+    /// Which polygon each crossing edge belongs to (`u8::MAX` for edges that do not cross).
+    /// Dual methods use it to give each piece its own vertex.
+    pub edge_polygon: [u8; 12],
 }
 
 impl Case {
@@ -159,6 +164,8 @@ pub fn generate_case(case: u8, rule: impl Fn(u8, usize) -> FaceRule) -> Case {
     let mut triangles = [[0u8; 3]; MAX_TRIANGLES];
     let mut count = 0;
     let mut visited = 0u16;
+    let mut polygons = 0u8;
+    let mut edge_polygon = [u8::MAX; 12];
     for start in 0..12u8 {
         if edge_mask >> start & 1 == 0 || visited >> start & 1 == 1 {
             continue;
@@ -168,14 +175,16 @@ pub fn generate_case(case: u8, rule: impl Fn(u8, usize) -> FaceRule) -> Case {
         while visited >> e & 1 == 0 {
             visited |= 1 << e;
             polygon.push(e);
+            edge_polygon[e as usize] = polygons;
             e = next[e as usize];
         }
+        polygons += 1;
         for t in triangulate(&polygon).expect("every polygon has a triangulation without face-crossing diagonals") {
             triangles[count] = t;
             count += 1;
         }
     }
-    Case { edge_mask, count: count as u8, triangles }
+    Case { edge_mask, count: count as u8, triangles, polygons, edge_polygon }
 }
 
 /// Whether cube edges `a` and `b` lie on a common face.
@@ -261,6 +270,23 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn polygons_cover_the_crossing_edges() {
+        for (c, case) in TABLE.iter().enumerate() {
+            for e in 0..12 {
+                let crosses = case.edge_mask >> e & 1 == 1;
+                assert_eq!(case.edge_polygon[e] != u8::MAX, crosses, "case {c} edge {e}");
+                assert!(!crosses || case.edge_polygon[e] < case.polygons);
+            }
+            // Every triangle's edges belong to one polygon.
+            for t in case.triangles() {
+                assert!(t.iter().all(|&e| case.edge_polygon[e as usize] == case.edge_polygon[t[0] as usize]));
+            }
+        }
+        assert_eq!(TABLE[5].polygons, 2);
+        assert_eq!(TABLE[250].polygons, 1);
     }
 
     #[test]

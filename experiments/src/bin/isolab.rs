@@ -49,6 +49,15 @@ enum Command {
         /// Post-process to apply (repeatable).
         #[arg(long)]
         post: Vec<String>,
+        /// Surface nets smoothing: none, elastic, spring or implicit (shorthand for --set smoothing=...).
+        #[arg(long)]
+        smoothing: Option<String>,
+        /// Smoothing iterations (shorthand for --set iterations=N).
+        #[arg(long, allow_negative_numbers = true)]
+        iterations: Option<String>,
+        /// Any algorithm option, NAME=VALUE (repeatable; see the algorithm's module documentation).
+        #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_option)]
+        set: Vec<(String, String)>,
         /// Write the mesh (.obj or .ply).
         #[arg(long, short)]
         output: Option<PathBuf>,
@@ -80,6 +89,12 @@ enum Command {
     },
 }
 
+fn parse_option(text: &str) -> Result<(String, String), String> {
+    text.split_once('=')
+        .map(|(k, v)| (k.trim().to_owned(), v.trim().to_owned()))
+        .ok_or_else(|| format!("'{text}': expected NAME=VALUE"))
+}
+
 fn parse_dims(text: &str) -> Result<[usize; 3], String> {
     let parts: Vec<&str> = text.split([',', 'x']).collect();
     let dims: Vec<usize> =
@@ -88,9 +103,12 @@ fn parse_dims(text: &str) -> Result<[usize; 3], String> {
 }
 
 fn list() {
-    println!("algorithms:");
-    for e in extractors::registry() {
-        println!("  {:<34} {}", e.name(), e.description());
+    println!("algorithms (options: --set NAME=VALUE):");
+    for e in extractors::INFOS {
+        println!("  {:<34} {}", e.name, e.description);
+        if !e.options.is_empty() {
+            println!("  {:<34} options: {}", "", e.options.join(", "));
+        }
     }
     println!("post-processes:");
     let posts = extractors::post_processes();
@@ -113,8 +131,31 @@ fn main() -> ExitCode {
             list();
             Ok(())
         }
-        Command::Extract { algorithm, field, resolution, dims, lattice, iso, seed, post, output, metrics } => {
-            let config = RunConfig { algorithm, field, resolution, dims, lattice, iso, seed, post };
+        Command::Extract {
+            algorithm,
+            field,
+            resolution,
+            dims,
+            lattice,
+            iso,
+            seed,
+            post,
+            smoothing,
+            iterations,
+            set,
+            output,
+            metrics,
+        } => {
+            let mut options = isolab_algorithms::Options::new();
+            for (k, v) in set
+                .iter()
+                .map(|(k, v)| (k.as_str(), v.as_str()))
+                .chain(smoothing.as_deref().map(|v| ("smoothing", v)))
+                .chain(iterations.as_deref().map(|v| ("iterations", v)))
+            {
+                options.set(k, v);
+            }
+            let config = RunConfig { algorithm, field, resolution, dims, lattice, iso, seed, post, options };
             extract(&config, output, metrics).map_err(|e| (e.exit_code(), e.to_string()))
         }
         Command::Metrics { file } => io::read_mesh(&file)

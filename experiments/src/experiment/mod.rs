@@ -7,6 +7,7 @@
 
 pub mod compare_algorithms;
 pub mod sphere_convergence;
+pub mod surface_nets_smoothing;
 
 use crate::io::{write_atomic, IoError};
 use crate::run::RunError;
@@ -117,7 +118,11 @@ pub trait Experiment: Send + Sync {
 
 /// Every experiment, in report order.
 pub fn all() -> Vec<Box<dyn Experiment>> {
-    vec![Box::new(compare_algorithms::CompareAlgorithms), Box::new(sphere_convergence::SphereConvergence)]
+    vec![
+        Box::new(compare_algorithms::CompareAlgorithms),
+        Box::new(sphere_convergence::SphereConvergence),
+        Box::new(surface_nets_smoothing::SurfaceNetsSmoothing),
+    ]
 }
 
 /// Writes `REPORT.md` from every experiment's data (a missing data file is noted, not fatal).

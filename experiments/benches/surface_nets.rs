@@ -19,10 +19,18 @@ fn side_by_side(c: &mut Criterion) {
             let grid = Grid::covering(&field.domain(), n).unwrap();
             let samples = Samples::sample_cubic(field.clone(), grid, 0.0).unwrap();
             let plain = SurfaceNets::new(SnOptions { smoothing: Smoothing::None, ..Default::default() });
+            let serial = SurfaceNets::new(SnOptions {
+                smoothing: Smoothing::None,
+                parallelism: Parallelism::Serial,
+                ..Default::default()
+            });
             let smoothed = SurfaceNets::default();
             let mut out = Extraction::default();
             group.bench_with_input(BenchmarkId::new(format!("isolab/{name}"), n), &samples, |b, s| {
                 b.iter(|| plain.extract(black_box(s), &mut out).unwrap())
+            });
+            group.bench_with_input(BenchmarkId::new(format!("isolab-serial/{name}"), n), &samples, |b, s| {
+                b.iter(|| serial.extract(black_box(s), &mut out).unwrap())
             });
             group.bench_with_input(BenchmarkId::new(format!("isolab-elastic/{name}"), n), &samples, |b, s| {
                 b.iter(|| smoothed.extract(black_box(s), &mut out).unwrap())

@@ -112,3 +112,29 @@ fn normals_follow_the_field_gradient() {
         assert!(d.mean_deg < 1.0 && d.max_deg < 5.0, "{smoothing:?}: {d:?}");
     }
 }
+
+#[test]
+fn parallel_slabs_join_exactly_like_one_slab_on_a_rough_field() {
+    use isolab_algorithms::extractors::marching_cubes::Parallelism;
+    // Many slabs on a rough field: every slab boundary is crowded with quads.
+    let f = fields::builtin("asteroid", Default::default()).unwrap();
+    let grid = Grid::covering(&f.domain(), 97).unwrap();
+    let mut s = Samples::sample_cubic(f.clone(), grid, 0.0).unwrap();
+    let [nx, ny, nz] = grid.dims;
+    for z in 0..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                let ripple = 0.004 * ((x * 7 + y * 13 + z * 29) % 11) as f32 - 0.02;
+                s.values_mut()[grid.index(x, y, z)] += ripple;
+            }
+        }
+    }
+    for smoothing in [Smoothing::None, Smoothing::Elastic] {
+        let parallel = extract(&nets(smoothing), &s);
+        let serial =
+            extract(&SurfaceNets::new(SnOptions { smoothing, parallelism: Parallelism::Serial, ..Default::default() }), &s);
+        assert_eq!(parallel.surface, serial.surface, "{smoothing:?}: slabs must join to the very same mesh");
+        let t = isolab_metrics::topology(&parallel.surface);
+        assert!(t.closed && t.misoriented_edges == 0, "{t:?}");
+    }
+}

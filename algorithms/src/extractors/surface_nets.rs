@@ -28,11 +28,16 @@
 //!
 //! **Guarantees (topology).** Because each piece of surface has its own vertex and the cube table
 //! resolves ambiguous faces alike in both cells, the net is closed (where it stays inside the
-//! grid), edge- and vertex-manifold and oriented for any finite samples; the tests check all 256
-//! cube patterns and random fields.
+//! grid) and consistently wound, and it is manifold on all 256 cube patterns, on random smooth
+//! fields and on the built-in closed fields (the tests check each). Slabs of cell layers run in
+//! parallel and join into exactly the mesh one slab would give.
 //!
-//! **Non-guarantees.** Smoothing shrinks convex shapes (reported as volume change); vertices of two
-//! pieces sharing a cell may come close together.
+//! **Non-guarantees.** One configuration stays non-manifold: a piece of surface that rings an
+//! ambiguous face (inside corners joined around the face through both cells, an outside passage
+//! through it) has one vertex on each side of the face, and the four quads of the face's crossing
+//! edges all share the net edge between those two vertices. It needs features below the cell size
+//! (rough fields show it; the report counts it). Smoothing shrinks convex shapes (reported as
+//! volume change), and spring or implicit smoothing can fold a one-sample feature flat.
 //!
 //! Vertex normals are the gradient of the cell's trilinear interpolant at the vertex (no field
 //! evaluation, as game engines and `fast-surface-nets` do).
@@ -52,6 +57,7 @@
 //! ```
 
 use crate::extract::{ExtractError, Extraction, Extractor};
+use crate::extractors::marching_cubes::Parallelism;
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
 use crate::options::{OptionError, Options};
@@ -98,6 +104,8 @@ pub struct SnOptions {
     pub damping: f32,
     /// Implicit: diffusion time per step, in (0, 100].
     pub time_step: f32,
+    /// Slabs of cell layers in parallel, or one on the calling thread.
+    pub parallelism: Parallelism,
 }
 
 impl Default for SnOptions {
@@ -110,12 +118,14 @@ impl Default for SnOptions {
             stiffness: 0.5,
             damping: 0.4,
             time_step: 1.0,
+            parallelism: Parallelism::Rayon,
         }
     }
 }
 
 /// Option names for [`from_options`].
-pub const OPTION_NAMES: &[&str] = &["smoothing", "iterations", "strength", "decay", "stiffness", "damping", "time-step"];
+pub const OPTION_NAMES: &[&str] =
+    &["smoothing", "iterations", "strength", "decay", "stiffness", "damping", "time-step", "parallelism"];
 
 /// Builds surface nets from named options.
 pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError> {
@@ -139,6 +149,7 @@ pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError
         stiffness: r.number("stiffness", d.stiffness, 1e-6, 1.0)?,
         damping: r.number("damping", d.damping, 0.0, 1.0)?,
         time_step: r.number("time-step", d.time_step, 1e-6, 100.0)?,
+        parallelism: r.choice("parallelism", d.parallelism, &[("rayon", Parallelism::Rayon), ("serial", Parallelism::Serial)])?,
     };
     r.finish()?;
     Ok(Box::new(SurfaceNets::new(o)))
@@ -155,11 +166,6 @@ pub struct SurfaceNets {
 #[derive(Default)]
 struct Scratch {
     rows: Vec<Row>,
-    /// First vertex index and sign case of each cell in the previous and current cell layers.
-    prev: Vec<u32>,
-    cur: Vec<u32>,
-    prev_case: Vec<u8>,
-    cur_case: Vec<u8>,
     /// Lower corner of each vertex's cell (the smoothing constraint).
     cell_min: Vec<Vec3>,
     /// Net edges (quad sides) as vertex pairs, then the adjacency in CSR form.
@@ -168,16 +174,54 @@ struct Scratch {
     adjacency: Vec<u32>,
     work: Vec<Vec3>,
     velocity: Vec<Vec3>,
+    /// One per slab task.
+    slabs: Vec<Slab>,
+}
+
+/// Set on vertex indices that refer to the slab below's last cell layer until slabs are joined.
+const EXTERN: u32 = 1 << 31;
+/// Cells per slab task below which the whole grid is one slab.
+const MIN_CELLS_PER_SLAB: usize = 32 * 32 * 32;
+
+/// A slab of cell layers meshed on its own.
+#[derive(Default)]
+struct Slab {
+    /// First vertex index and sign case of each cell in the previous and current cell layers.
+    prev: Vec<u32>,
+    cur: Vec<u32>,
+    prev_case: Vec<u8>,
+    cur_case: Vec<u8>,
+    mesh: TriMesh,
+    cell_min: Vec<Vec3>,
+    links: Vec<(u32, u32)>,
+    /// The slab below's last cell layer, recomputed here so quads can refer to it.
+    ghost: TriMesh,
+    ghost_min: Vec<Vec3>,
+    /// Index of the first vertex of this slab's last cell layer.
+    last_layer_start: u32,
+    vertex_time: std::time::Duration,
+    geometry_time: std::time::Duration,
+}
+
+impl Slab {
+    fn bytes(&self) -> usize {
+        4 * (self.prev.capacity() + self.cur.capacity())
+            + self.prev_case.capacity()
+            + self.cur_case.capacity()
+            + self.mesh.capacity_bytes()
+            + self.ghost.capacity_bytes()
+            + 12 * (self.cell_min.capacity() + self.ghost_min.capacity())
+            + 8 * self.links.capacity()
+    }
 }
 
 impl Scratch {
     fn bytes(&self) -> usize {
         self.rows.capacity() * std::mem::size_of::<Row>()
-            + 4 * (self.prev.capacity() + self.cur.capacity() + self.adjacency_start.capacity() + self.adjacency.capacity())
-            + self.prev_case.capacity()
-            + self.cur_case.capacity()
+            + 4 * (self.adjacency_start.capacity() + self.adjacency.capacity())
             + 12 * (self.cell_min.capacity() + self.work.capacity() + self.velocity.capacity())
             + 8 * self.links.capacity()
+            + self.slabs.iter().map(Slab::bytes).sum::<usize>()
     }
 }
 
@@ -208,7 +252,15 @@ impl Ctx<'_> {
     /// Vertices of the surface cells in cell layer `z`: one per separate piece of surface in the
     /// cell (the polygons of its marching cubes case), at the mean of that piece's edge crossings.
     /// `base` gets each cell's first vertex index and `cases` its sign case.
-    fn cell_vertices(&self, z: usize, base: &mut [u32], cases: &mut [u8], mesh: &mut TriMesh, cell_min: &mut Vec<Vec3>) {
+    fn cell_vertices(
+        &self,
+        z: usize,
+        tag: u32,
+        base: &mut [u32],
+        cases: &mut [u8],
+        mesh: &mut TriMesh,
+        cell_min: &mut Vec<Vec3>,
+    ) {
         let [nx, ny, _] = self.grid.dims;
         let (sx, sxy) = (nx, nx * ny);
         for y in 0..ny - 1 {
@@ -244,7 +296,7 @@ impl Ctx<'_> {
                     counts[piece as usize] += 1.0;
                 }
                 let min = self.grid.position(x, y, z);
-                base[c] = mesh.positions.len() as u32;
+                base[c] = tag | mesh.positions.len() as u32;
                 for p in 0..entry.polygons as usize {
                     let local = sums[p] / counts[p];
                     mesh.positions.push(min + local * self.grid.spacing);
@@ -257,11 +309,13 @@ impl Ctx<'_> {
 
     /// Quads for the crossing edges whose four cells lie in cell layers `z - 1` (`prev`) and `z`
     /// (`cur`): x- and y-edges of sample layer `z` (when `z > 0`) and z-edges from sample layer `z`.
+    #[allow(clippy::too_many_arguments)]
     fn quads(
         &self,
         z: usize,
         prev: (&[u32], &[u8]),
         cur: (&[u32], &[u8]),
+        ghost: &[Vec3],
         mesh: &mut TriMesh,
         links: Option<&mut Vec<(u32, u32)>>,
     ) {
@@ -273,11 +327,12 @@ impl Ctx<'_> {
             layer.0[c] + u32::from(TABLE[layer.1[c] as usize].edge_polygon[e])
         };
         let positions = &mesh.positions;
+        let at = |i: u32| if i & EXTERN == 0 { positions[i as usize] } else { ghost[(i & !EXTERN) as usize] };
         let mut links = links;
         let mut emit = |c: [u32; 4], flip: bool, triangles: &mut Vec<[u32; 3]>| {
             let [c00, c10, c11, c01] = c;
-            let d0 = positions[c00 as usize].distance_squared(positions[c11 as usize]);
-            let d1 = positions[c10 as usize].distance_squared(positions[c01 as usize]);
+            let d0 = at(c00).distance_squared(at(c11));
+            let d1 = at(c10).distance_squared(at(c01));
             let (t0, t1) = if d0 <= d1 { ([c00, c10, c11], [c00, c11, c01]) } else { ([c10, c11, c01], [c10, c01, c00]) };
             for t in [t0, t1] {
                 triangles.push(if flip { [t[0], t[2], t[1]] } else { t });
@@ -334,6 +389,59 @@ impl Ctx<'_> {
             }
         }
         mesh.triangles = triangles;
+    }
+}
+
+impl Ctx<'_> {
+    /// Meshes cell layers `z0..z1` into `s.mesh`, referring to the layer below `z0` (owned by the
+    /// slab below) through `EXTERN`-tagged indices into a recomputed ghost layer.
+    fn slab(&self, z0: usize, z1: usize, links: bool, s: &mut Slab) {
+        let [nx, ny, _] = self.grid.dims;
+        let layer = (nx - 1) * (ny - 1);
+        for b in [&mut s.prev, &mut s.cur] {
+            if b.len() < layer {
+                b.resize(layer, 0);
+            }
+        }
+        for b in [&mut s.prev_case, &mut s.cur_case] {
+            if b.len() < layer {
+                b.resize(layer, 0);
+            }
+        }
+        s.mesh.clear();
+        s.ghost.clear();
+        s.cell_min.clear();
+        s.ghost_min.clear();
+        s.links.clear();
+        s.vertex_time = std::time::Duration::ZERO;
+        s.geometry_time = std::time::Duration::ZERO;
+        if z0 > 0 {
+            let t = Instant::now();
+            self.cell_vertices(z0 - 1, EXTERN, &mut s.prev, &mut s.prev_case, &mut s.ghost, &mut s.ghost_min);
+            s.vertex_time += t.elapsed();
+        }
+        for z in z0..z1 {
+            let a = Instant::now();
+            s.last_layer_start = s.mesh.positions.len() as u32;
+            self.cell_vertices(z, 0, &mut s.cur, &mut s.cur_case, &mut s.mesh, &mut s.cell_min);
+            let b = Instant::now();
+            let link_buffer = links.then_some(&mut s.links);
+            self.quads(z, (&s.prev, &s.prev_case), (&s.cur, &s.cur_case), &s.ghost.positions, &mut s.mesh, link_buffer);
+            s.geometry_time += b.elapsed();
+            s.vertex_time += b - a;
+            std::mem::swap(&mut s.prev, &mut s.cur);
+            std::mem::swap(&mut s.prev_case, &mut s.cur_case);
+        }
+    }
+}
+
+/// Resolves a slab-local index: tagged ones name the slab below's last layer.
+#[inline]
+fn resolve(i: u32, offset: u32, below: u32) -> u32 {
+    if i & EXTERN == 0 {
+        i + offset
+    } else {
+        below + (i & !EXTERN)
     }
 }
 
@@ -511,36 +619,65 @@ impl Extractor for SurfaceNets {
         let s = &mut *guard;
         let t0 = Instant::now();
         classify_rows(samples.values(), nx, samples.iso(), &mut s.rows);
+        let row_time = t0.elapsed();
         let ctx = Ctx { values: samples.values(), grid, iso: samples.iso(), rows: &s.rows };
-        let layer = (nx - 1) * (ny - 1);
-        for b in [&mut s.prev, &mut s.cur] {
-            if b.len() < layer {
-                b.resize(layer, 0);
-            }
-        }
-        for b in [&mut s.prev_case, &mut s.cur_case] {
-            if b.len() < layer {
-                b.resize(layer, 0);
-            }
-        }
-        s.cell_min.clear();
-        s.links.clear();
         let smoothing = self.options.smoothing != Smoothing::None && self.options.iterations > 0;
-        let (mut vertex_time, mut geometry_time) = (t0.elapsed(), std::time::Duration::ZERO);
-        for z in 0..nz - 1 {
-            let a = Instant::now();
-            ctx.cell_vertices(z, &mut s.cur, &mut s.cur_case, &mut out.surface, &mut s.cell_min);
-            let b = Instant::now();
-            let links = smoothing.then_some(&mut s.links);
-            ctx.quads(z, (&s.prev, &s.prev_case), (&s.cur, &s.cur_case), &mut out.surface, links);
-            geometry_time += b.elapsed();
-            vertex_time += b - a;
-            std::mem::swap(&mut s.prev, &mut s.cur);
-            std::mem::swap(&mut s.prev_case, &mut s.cur_case);
+        let cell_layers = nz - 1;
+        let tasks = match self.options.parallelism {
+            Parallelism::Serial => 1,
+            Parallelism::Rayon => {
+                (grid.cell_count() / MIN_CELLS_PER_SLAB).clamp(1, 4 * rayon::current_num_threads()).min(cell_layers)
+            }
+        };
+        while s.slabs.len() < tasks {
+            s.slabs.push(Slab::default());
         }
-        if out.surface.positions.len() >= u32::MAX as usize {
+        let slabs = &mut s.slabs[..tasks];
+        let t_slabs = Instant::now();
+        if tasks == 1 {
+            std::mem::swap(&mut slabs[0].mesh, &mut out.surface);
+            std::mem::swap(&mut slabs[0].cell_min, &mut s.cell_min);
+            std::mem::swap(&mut slabs[0].links, &mut s.links);
+            ctx.slab(0, cell_layers, smoothing, &mut slabs[0]);
+            std::mem::swap(&mut slabs[0].mesh, &mut out.surface);
+            std::mem::swap(&mut slabs[0].cell_min, &mut s.cell_min);
+            std::mem::swap(&mut slabs[0].links, &mut s.links);
+        } else {
+            slabs.par_iter_mut().enumerate().for_each(|(t, slab)| {
+                ctx.slab(t * cell_layers / tasks, (t + 1) * cell_layers / tasks, smoothing, slab);
+            });
+        }
+        let slab_wall = t_slabs.elapsed();
+        let t_join = Instant::now();
+        if tasks > 1 {
+            let mut offsets = Vec::with_capacity(tasks + 1);
+            offsets.push(0usize);
+            for slab in slabs.iter() {
+                offsets.push(offsets[offsets.len() - 1] + slab.mesh.positions.len());
+            }
+            if offsets[tasks] >= EXTERN as usize {
+                return Err(ExtractError::TooLarge { algorithm: "surface-nets", vertices: offsets[tasks] });
+            }
+            s.cell_min.clear();
+            s.links.clear();
+            for (t, slab) in slabs.iter().enumerate() {
+                let offset = offsets[t] as u32;
+                let below = if t > 0 { offsets[t - 1] as u32 + slabs[t - 1].last_layer_start } else { 0 };
+                out.surface.positions.extend_from_slice(&slab.mesh.positions);
+                out.surface.normals.extend_from_slice(&slab.mesh.normals);
+                out.surface.triangles.extend(slab.mesh.triangles.iter().map(|tri| tri.map(|i| resolve(i, offset, below))));
+                s.cell_min.extend_from_slice(&slab.cell_min);
+                s.links.extend(slab.links.iter().map(|&(a, b)| (resolve(a, offset, below), resolve(b, offset, below))));
+            }
+        } else if out.surface.positions.len() >= EXTERN as usize {
             return Err(ExtractError::TooLarge { algorithm: "surface-nets", vertices: out.surface.positions.len() });
         }
+        let join_time = t_join.elapsed();
+        let (cpu_v, cpu_g) =
+            slabs.iter().fold((0.0, 0.0), |(v, g), sl| (v + sl.vertex_time.as_secs_f64(), g + sl.geometry_time.as_secs_f64()));
+        let share = if cpu_v + cpu_g > 0.0 { cpu_v / (cpu_v + cpu_g) } else { 0.5 };
+        let vertex_time = row_time + slab_wall.mul_f64(share);
+        let geometry_time = slab_wall.mul_f64(1.0 - share) + join_time;
         out.stats.times.vertex = vertex_time;
         out.stats.times.geometry = geometry_time;
         out.stats.active_cells = out.surface.positions.len();

@@ -10,7 +10,7 @@ pub fn model(name: &str) -> String {
 }
 
 /// Samples on a unit-spaced cubic grid of `dims`, from a closure of the integer coordinates.
-pub fn grid_samples(dims: [usize; 3], value: impl Fn(usize, usize, usize) -> f32) -> Samples {
+pub fn grid_samples(dims: [usize; 3], mut value: impl FnMut(usize, usize, usize) -> f32) -> Samples {
     let grid = Grid { origin: Vec3::ZERO, spacing: 1.0, dims };
     let mut values = Vec::with_capacity(grid.len());
     for z in 0..dims[2] {

@@ -34,6 +34,13 @@ pub const INFOS: &[ExtractorInfo] = &[
         options: marching_cubes::OPTION_NAMES,
         make: marching_cubes::from_options,
     },
+    // Nielson & Hamann 1991: marching cubes whose ambiguous faces follow the trilinear interpolant.
+    ExtractorInfo {
+        name: "marching-cubes-decider",
+        description: marching_cubes::DECIDER_DESCRIPTION,
+        options: marching_cubes::OPTION_NAMES,
+        make: marching_cubes::decider_from_options,
+    },
     // Gibson 1998: one vertex per surface cell, quads across crossing edges, constrained smoothing.
     ExtractorInfo {
         name: "surface-nets",

@@ -58,6 +58,7 @@
 
 use crate::extract::{ExtractError, Extraction, Extractor};
 use crate::extractors::marching_cubes::Parallelism;
+use crate::geometry::trilinear_gradient;
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
 use crate::options::{OptionError, Options};
@@ -443,18 +444,6 @@ fn resolve(i: u32, offset: u32, below: u32) -> u32 {
     } else {
         below + (i & !EXTERN)
     }
-}
-
-/// Gradient of the trilinear interpolant of a cell's corner values `c` (table corner order) at
-/// local coordinates `q` in `[0, 1]^3`.
-fn trilinear_gradient(c: &[f32; 8], q: Vec3) -> Vec3 {
-    let (u, v, w) = (q.x, q.y, q.z);
-    let (iu, iv, iw) = (1.0 - u, 1.0 - v, 1.0 - w);
-    Vec3::new(
-        iv * iw * (c[1] - c[0]) + v * iw * (c[2] - c[3]) + iv * w * (c[5] - c[4]) + v * w * (c[6] - c[7]),
-        iu * iw * (c[3] - c[0]) + u * iw * (c[2] - c[1]) + iu * w * (c[7] - c[4]) + u * w * (c[6] - c[5]),
-        iu * iv * (c[4] - c[0]) + u * iv * (c[5] - c[1]) + iu * v * (c[7] - c[3]) + u * v * (c[6] - c[2]),
-    )
 }
 
 /// Builds the net's adjacency (CSR) from the quad sides.

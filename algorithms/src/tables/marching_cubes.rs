@@ -62,6 +62,10 @@ pub struct Case {
     /// Which polygon each crossing edge belongs to (`u8::MAX` for edges that do not cross).
     /// Dual methods use it to give each piece its own vertex.
     pub edge_polygon: [u8; 12],
+    /// Bit `p` set when polygon `p` is fanned around an interior vertex at the mean of its edge
+    /// crossings, referred to in `triangles` as `12 + p` (only some joined ambiguous faces need
+    /// it; the default table never does).
+    pub interior: u8,
 }
 
 impl Case {
@@ -75,6 +79,42 @@ impl Case {
 /// corner `c` is inside (`f < iso`).
 pub static TABLE: LazyLock<[Case; 256]> =
     LazyLock::new(|| std::array::from_fn(|c| generate_case(c as u8, |_, _| FaceRule::SeparateInside)));
+
+/// Bit `f` set when face `f` of the case is ambiguous (two diagonal corners inside, two outside).
+pub static AMBIGUOUS_FACES: LazyLock<[u8; 256]> = LazyLock::new(|| {
+    std::array::from_fn(|c| {
+        (0..6).fold(0u8, |mask, f| {
+            let cyc = FACES[f].0;
+            let inside = |k: usize| c >> cyc[k] & 1 == 1;
+            let ambiguous = inside(0) == inside(2) && inside(1) == inside(3) && inside(0) != inside(1);
+            mask | (u8::from(ambiguous) << f)
+        })
+    })
+});
+
+/// Tables for every choice on the ambiguous faces: entry `case * 64 + joins`, where bit `f` of
+/// `joins` set means face `f` joins its inside corners ([`FaceRule::JoinInside`]) and clear means
+/// it separates them. Bits of unambiguous faces are ignored. Used with the asymptotic decider.
+pub static FACE_CHOICE_TABLE: LazyLock<Vec<Case>> = LazyLock::new(|| {
+    (0..256 * 64)
+        .map(|i| {
+            let (case, joins) = ((i / 64) as u8, (i % 64) as u8);
+            generate_case(case, |_, f| if joins >> f & 1 == 1 { FaceRule::JoinInside } else { FaceRule::SeparateInside })
+        })
+        .collect()
+});
+
+/// The asymptotic decider (Nielson & Hamann 1991, "The asymptotic decider: resolving the ambiguity
+/// in marching cubes", DOI 10.1109/VISUAL.1991.175782) on an ambiguous face with corner values
+/// `v` (in the face's cyclic order, minus the iso-value): the bilinear interpolant's saddle value
+/// `(v0 v2 - v1 v3) / (v0 + v2 - v1 - v3)`; the inside corners are joined across the face when it
+/// is inside (negative). Both cells of a face compute it from the same four values in the same
+/// order, so they always agree.
+pub fn decider_joins_inside(v: [f64; 4]) -> bool {
+    let num = v[0] * v[2] - v[1] * v[3];
+    let den = v[0] + v[2] - v[1] - v[3];
+    den != 0.0 && num / den < 0.0
+}
 
 fn edge_between(a: u8, b: u8) -> u8 {
     EDGES.iter().position(|&(p, q)| (p, q) == (a, b) || (p, q) == (b, a)).expect("adjacent corners") as u8
@@ -166,6 +206,7 @@ pub fn generate_case(case: u8, rule: impl Fn(u8, usize) -> FaceRule) -> Case {
     let mut visited = 0u16;
     let mut polygons = 0u8;
     let mut edge_polygon = [u8::MAX; 12];
+    let mut interior = 0u8;
     for start in 0..12u8 {
         if edge_mask >> start & 1 == 0 || visited >> start & 1 == 1 {
             continue;
@@ -178,18 +219,24 @@ pub fn generate_case(case: u8, rule: impl Fn(u8, usize) -> FaceRule) -> Case {
             edge_polygon[e as usize] = polygons;
             e = next[e as usize];
         }
+        let piece = polygons;
         polygons += 1;
-        for t in triangulate(&polygon).expect("every polygon has a triangulation without face-crossing diagonals") {
+        let triangulation = triangulate(&polygon).unwrap_or_else(|| {
+            interior |= 1 << piece;
+            let centre = 12 + piece;
+            (0..polygon.len()).map(|k| [polygon[k], polygon[(k + 1) % polygon.len()], centre]).collect()
+        });
+        for t in triangulation {
             triangles[count] = t;
             count += 1;
         }
     }
-    Case { edge_mask, count: count as u8, triangles, polygons, edge_polygon }
+    Case { edge_mask, count: count as u8, triangles, polygons, edge_polygon, interior }
 }
 
-/// Whether cube edges `a` and `b` lie on a common face.
-fn share_face(a: u8, b: u8) -> bool {
-    FACES.iter().any(|(cyc, _)| {
+/// The face cube edges `a` and `b` both lie on, if any (two edges share at most one face).
+fn common_face(a: u8, b: u8) -> Option<usize> {
+    FACES.iter().position(|(cyc, _)| {
         let on = |e: u8| {
             let (p, q) = EDGES[e as usize];
             cyc.contains(&p) && cyc.contains(&q)
@@ -198,12 +245,25 @@ fn share_face(a: u8, b: u8) -> bool {
     })
 }
 
+/// Whether cube edges `a` and `b` lie on a common face.
+fn share_face(a: u8, b: u8) -> bool {
+    common_face(a, b).is_some()
+}
+
 /// Triangulates a polygon of edge vertices so that no diagonal joins two vertices on a common cube
 /// face. Such a diagonal would lie on (or cut through) the face, where the neighbouring cell may
 /// place its own edge between the same two vertices: the edge would then have four triangles.
 /// Among the valid triangulations, the first found trying fans early is taken.
 fn triangulate(polygon: &[u8]) -> Option<Vec<[u8; 3]>> {
-    fn rec(p: &[u8], out: &mut Vec<[u8; 3]>) -> bool {
+    // First no diagonal on any face; failing that (some joined ambiguous faces need one), diagonals
+    // only on the cell's upper faces (z = 1, y = 1, x = 1). A neighbour meets such a face as its
+    // lower face, where it never draws one, so no edge can gain four triangles.
+    triangulate_with(polygon, &|a, b| !share_face(a, b))
+        .or_else(|| triangulate_with(polygon, &|a, b| common_face(a, b).is_none_or(|f| f % 2 == 1)))
+}
+
+fn triangulate_with(polygon: &[u8], allowed: &dyn Fn(u8, u8) -> bool) -> Option<Vec<[u8; 3]>> {
+    fn rec(p: &[u8], out: &mut Vec<[u8; 3]>, allowed: &dyn Fn(u8, u8) -> bool) -> bool {
         let n = p.len();
         if n < 3 {
             return true;
@@ -211,14 +271,14 @@ fn triangulate(polygon: &[u8]) -> Option<Vec<[u8; 3]>> {
         // The triangle on edge (p[0], p[n-1]) has apex p[k]; its two other sides are diagonals
         // unless they are polygon edges.
         for k in (1..n - 1).rev() {
-            let ok_left = k == 1 || !share_face(p[0], p[k]);
-            let ok_right = k == n - 2 || !share_face(p[k], p[n - 1]);
+            let ok_left = k == 1 || allowed(p[0], p[k]);
+            let ok_right = k == n - 2 || allowed(p[k], p[n - 1]);
             if !(ok_left && ok_right) {
                 continue;
             }
             let mark = out.len();
             out.push([p[0], p[k], p[n - 1]]);
-            if rec(&p[..=k], out) && rec(&p[k..], out) {
+            if rec(&p[..=k], out, allowed) && rec(&p[k..], out, allowed) {
                 return true;
             }
             out.truncate(mark);
@@ -226,7 +286,7 @@ fn triangulate(polygon: &[u8]) -> Option<Vec<[u8; 3]>> {
         false
     }
     let mut out = Vec::with_capacity(polygon.len() - 2);
-    rec(polygon, &mut out).then_some(out)
+    rec(polygon, &mut out, allowed).then_some(out)
 }
 
 #[cfg(test)]
@@ -287,6 +347,30 @@ mod tests {
         }
         assert_eq!(TABLE[5].polygons, 2);
         assert_eq!(TABLE[250].polygons, 1);
+    }
+
+    #[test]
+    fn every_face_choice_gives_a_consistent_table() {
+        for i in 0..256 * 64 {
+            let case = &FACE_CHOICE_TABLE[i];
+            let c = i / 64;
+            assert_eq!(case.edge_mask, TABLE[c].edge_mask, "case {c}");
+            if i % 64 == 0 {
+                assert_eq!(case, &TABLE[c]);
+            }
+        }
+        assert!(TABLE.iter().all(|c| c.interior == 0), "the default table needs no interior vertex");
+        // Case 5 (corners 0 and 2 inside): the bottom face (face 0) is ambiguous.
+        assert_eq!(AMBIGUOUS_FACES[5], 1);
+        assert_eq!(FACE_CHOICE_TABLE[5 * 64].polygons, 2);
+        assert_eq!(FACE_CHOICE_TABLE[5 * 64 + 1].polygons, 1, "joined: one tube");
+    }
+
+    #[test]
+    fn decider_follows_the_saddle() {
+        // Inside corners 0 and 2 strongly inside: the saddle is inside, they join.
+        assert!(decider_joins_inside([-1.0, 0.5, -1.0, 0.5]));
+        assert!(!decider_joins_inside([-0.5, 1.0, -0.5, 1.0]));
     }
 
     #[test]

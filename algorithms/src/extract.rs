@@ -96,6 +96,12 @@ pub enum ExtractError {
         /// Lattices it supports.
         supported: &'static str,
     },
+    /// The algorithm needs the field itself (gradients), and the samples do not carry it.
+    #[error("{algorithm} needs the field's gradient (Hermite data), but these samples carry no field; sample a field instead of raw values")]
+    NeedsField {
+        /// Algorithm name.
+        algorithm: &'static str,
+    },
     /// The output would not fit 32-bit indices.
     #[error("{algorithm}: output too large for 32-bit indices ({vertices} vertices)")]
     TooLarge {

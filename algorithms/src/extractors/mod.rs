@@ -4,9 +4,11 @@
 //! [`Extractor`](crate::Extractor) (module doc: paper, summary, guarantees, costs) and a
 //! `from_options` constructor, declare the module below, and add one line to [`INFOS`].
 
+pub mod dual_contouring;
 pub mod marching_cubes;
 pub mod surface_nets;
 
+pub use dual_contouring::DualContouring;
 pub use marching_cubes::MarchingCubes;
 pub use surface_nets::SurfaceNets;
 
@@ -47,6 +49,13 @@ pub const INFOS: &[ExtractorInfo] = &[
         description: surface_nets::DESCRIPTION,
         options: surface_nets::OPTION_NAMES,
         make: surface_nets::from_options,
+    },
+    // Ju et al. 2002: the dual structure with vertices at the minimum of the quadric error.
+    ExtractorInfo {
+        name: "dual-contouring",
+        description: dual_contouring::DESCRIPTION,
+        options: dual_contouring::OPTION_NAMES,
+        make: dual_contouring::from_options,
     },
 ];
 

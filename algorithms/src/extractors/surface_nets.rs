@@ -156,11 +156,29 @@ pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError
     Ok(Box::new(SurfaceNets::new(o)))
 }
 
+/// Where a dual vertex goes inside its cell.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Placement {
+    /// The mean of its piece's edge crossings (surface nets).
+    #[default]
+    MassPoint,
+    /// The minimum of the quadric error of its crossings and the field's normals there
+    /// ([`crate::extractors::dual_contouring`]); needs samples that carry their field.
+    Qef {
+        /// Relative singular value cut-off of the truncated SVD.
+        tolerance: f32,
+        /// Keep the vertex inside its cell.
+        clamp: bool,
+    },
+}
+
 /// Surface nets on a cubic grid. Keeps its scratch buffers between calls.
 #[derive(Default)]
 pub struct SurfaceNets {
     /// The options.
     pub options: SnOptions,
+    placement: Placement,
+    label: Option<&'static str>,
     scratch: Mutex<Scratch>,
 }
 
@@ -229,7 +247,12 @@ impl Scratch {
 impl SurfaceNets {
     /// Surface nets with `options`.
     pub fn new(options: SnOptions) -> Self {
-        Self { options, scratch: Mutex::new(Scratch::default()) }
+        Self { options, placement: Placement::MassPoint, label: None, scratch: Mutex::new(Scratch::default()) }
+    }
+
+    /// The dual engine with another vertex placement, reporting as `label` (dual contouring).
+    pub fn with_placement(options: SnOptions, placement: Placement, label: &'static str) -> Self {
+        Self { options, placement, label: Some(label), scratch: Mutex::new(Scratch::default()) }
     }
 }
 
@@ -238,6 +261,8 @@ struct Ctx<'a> {
     grid: Grid,
     iso: f32,
     rows: &'a [Row],
+    placement: Placement,
+    field: Option<&'a dyn crate::field::Field>,
 }
 
 impl Ctx<'_> {
@@ -284,6 +309,8 @@ impl Ctx<'_> {
                 let entry = &TABLE[case as usize];
                 let mut sums = [Vec3::ZERO; 4];
                 let mut counts = [0.0f32; 4];
+                let mut crossings = [(0u8, Vec3::ZERO); 12];
+                let mut n = 0;
                 for (e, &(a, b)) in EDGES.iter().enumerate() {
                     let piece = entry.edge_polygon[e];
                     if piece == u8::MAX {
@@ -293,15 +320,38 @@ impl Ctx<'_> {
                     let t = (self.iso - va) / (vb - va);
                     let pa = Vec3::from(CORNERS[a as usize].map(f32::from));
                     let pb = Vec3::from(CORNERS[b as usize].map(f32::from));
-                    sums[piece as usize] += pa + (pb - pa) * t;
+                    let p = pa + (pb - pa) * t;
+                    sums[piece as usize] += p;
                     counts[piece as usize] += 1.0;
+                    crossings[n] = (piece, p);
+                    n += 1;
                 }
                 let min = self.grid.position(x, y, z);
                 base[c] = tag | mesh.positions.len() as u32;
                 for p in 0..entry.polygons as usize {
-                    let local = sums[p] / counts[p];
+                    let local = match (self.placement, self.field) {
+                        (Placement::Qef { tolerance, clamp }, Some(field)) => {
+                            let mut pts = [Vec3::ZERO; 12];
+                            let mut nrm = [Vec3::ZERO; 12];
+                            let mut k = 0;
+                            for &(piece, q) in &crossings[..n] {
+                                if piece as usize == p {
+                                    pts[k] = q;
+                                    nrm[k] = field.gradient(min + q * self.grid.spacing).normalize_or_zero();
+                                    k += 1;
+                                }
+                            }
+                            let x = crate::extractors::dual_contouring::solve_qef(&pts[..k], &nrm[..k], tolerance);
+                            if clamp {
+                                x.clamp(Vec3::ZERO, Vec3::ONE)
+                            } else {
+                                x
+                            }
+                        }
+                        _ => sums[p] / counts[p],
+                    };
                     mesh.positions.push(min + local * self.grid.spacing);
-                    mesh.normals.push(trilinear_gradient(&v, local).normalize_or_zero());
+                    mesh.normals.push(trilinear_gradient(&v, local.clamp(Vec3::ZERO, Vec3::ONE)).normalize_or_zero());
                     cell_min.push(min);
                 }
             }
@@ -586,7 +636,7 @@ fn implicit_step(x: &[Vec3], start: &[u32], adjacency: &[u32], t: f32) -> Vec<Ve
 
 impl Extractor for SurfaceNets {
     fn name(&self) -> &'static str {
-        "surface-nets"
+        self.label.unwrap_or("surface-nets")
     }
 
     fn description(&self) -> &'static str {
@@ -609,7 +659,11 @@ impl Extractor for SurfaceNets {
         let t0 = Instant::now();
         classify_rows(samples.values(), nx, samples.iso(), &mut s.rows);
         let row_time = t0.elapsed();
-        let ctx = Ctx { values: samples.values(), grid, iso: samples.iso(), rows: &s.rows };
+        let field = samples.field().map(|f| f.as_ref());
+        if matches!(self.placement, Placement::Qef { .. }) && field.is_none() {
+            return Err(ExtractError::NeedsField { algorithm: self.name() });
+        }
+        let ctx = Ctx { values: samples.values(), grid, iso: samples.iso(), rows: &s.rows, placement: self.placement, field };
         let smoothing = self.options.smoothing != Smoothing::None && self.options.iterations > 0;
         let cell_layers = nz - 1;
         let tasks = match self.options.parallelism {

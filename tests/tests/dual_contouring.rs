@@ -4,28 +4,13 @@
 use isolab_algorithms::{extractors, fields, Extraction, Grid, Lattice, Samples, Vec3};
 use isolab_tests::assert_closed_manifold;
 
-/// The box corners of `csg` that the sphere does not bite away.
-fn csg_corners() -> Vec<Vec3> {
-    let mut v = Vec::new();
-    for x in [-0.25f32, 0.25] {
-        for y in [-0.25f32, 0.25] {
-            for z in [-0.25f32, 0.25] {
-                if (x, y, z) != (0.25, 0.25, 0.25) {
-                    v.push(Vec3::new(x, y, z));
-                }
-            }
-        }
-    }
-    v
-}
-
 fn worst_corner_distance(algorithm: &str, resolution: usize) -> f32 {
     let f = fields::builtin("csg", Default::default()).unwrap();
     let grid = Grid::covering(&f.domain(), resolution).unwrap();
     let s = Samples::sample_cubic(f.clone(), grid, 0.0).unwrap();
     let mut out = Extraction::default();
     extractors::by_name(algorithm).unwrap().extract(&s, &mut out).unwrap();
-    csg_corners()
+    fields::Csg::sharp_corners()
         .iter()
         .map(|c| out.surface.positions.iter().map(|p| p.distance(*c)).fold(f32::INFINITY, f32::min))
         .fold(0.0, f32::max)

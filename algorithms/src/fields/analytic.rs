@@ -154,6 +154,24 @@ fn cylinder_sdf(p: Vec3, centre: Vec3, axis: usize, radius: f32, half_height: f3
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Csg;
 
+impl Csg {
+    /// The box's corners that survive the sphere's bite: exact sharp corners of the surface, the
+    /// ground truth for feature-preserving extractors.
+    pub fn sharp_corners() -> Vec<Vec3> {
+        let mut corners = Vec::with_capacity(7);
+        for x in [-0.25f32, 0.25] {
+            for y in [-0.25f32, 0.25] {
+                for z in [-0.25f32, 0.25] {
+                    if (x, y, z) != (0.25, 0.25, 0.25) {
+                        corners.push(Vec3::new(x, y, z));
+                    }
+                }
+            }
+        }
+        corners
+    }
+}
+
 impl Field for Csg {
     fn name(&self) -> &str {
         "csg"

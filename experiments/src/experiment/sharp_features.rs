@@ -31,20 +31,6 @@ struct Data {
     images: Vec<(String, String)>,
 }
 
-fn corners() -> Vec<Vec3> {
-    let mut v = Vec::new();
-    for x in [-0.25f32, 0.25] {
-        for y in [-0.25f32, 0.25] {
-            for z in [-0.25f32, 0.25] {
-                if (x, y, z) != (0.25, 0.25, 0.25) {
-                    v.push(Vec3::new(x, y, z));
-                }
-            }
-        }
-    }
-    v
-}
-
 impl Experiment for SharpFeatures {
     fn name(&self) -> &'static str {
         NAME
@@ -62,7 +48,7 @@ impl Experiment for SharpFeatures {
             for e in &all {
                 let mut out = Extraction::default();
                 e.extract(&samples, &mut out)?;
-                let d: Vec<f64> = corners()
+                let d: Vec<f64> = fields::Csg::sharp_corners()
                     .iter()
                     .map(|c| {
                         f64::from(

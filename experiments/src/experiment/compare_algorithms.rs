@@ -241,6 +241,70 @@ fn merge<'a>(mut hists: impl Iterator<Item = &'a Histogram>) -> Option<Histogram
     Some(acc)
 }
 
+/// One row per algorithm over every input at the middle resolution: what a terrain engineer
+/// choosing a mesher looks at first.
+fn summary(data: &Data) -> String {
+    let mut algorithms: Vec<String> = Vec::new();
+    for r in middle(data) {
+        if !algorithms.contains(&r.algorithm) {
+            algorithms.push(r.algorithm.clone());
+        }
+    }
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        if v.is_empty() {
+            f64::NAN
+        } else {
+            v[v.len() / 2]
+        }
+    };
+    let first = algorithms.first().cloned().unwrap_or_default();
+    let triangles_of = |a: &str| -> f64 { middle(data).filter(|r| r.algorithm == a).map(|r| r.metrics.triangles as f64).sum() };
+    let reference = triangles_of(&first).max(1.0);
+    let rows: Vec<Vec<String>> = algorithms
+        .iter()
+        .map(|a| {
+            let rows: Vec<&Measured> = middle(data).filter(|r| &r.algorithm == a).collect();
+            let manifold = rows.iter().filter(|r| {
+                let t = &r.metrics.topology;
+                t.edge_manifold && t.vertex_manifold && t.oriented
+            });
+            vec![
+                a.clone(),
+                rows.len().to_string(),
+                format!("{}/{}", manifold.count(), rows.len()),
+                rows.iter().map(|r| r.metrics.self_intersections.count).sum::<usize>().to_string(),
+                format!("{:.2}", median(rows.iter().map(|r| r.metrics.quality.aspect_ratio.mean).collect())),
+                format!("{:.1}", median(rows.iter().map(|r| r.metrics.quality.min_angle_deg).collect())),
+                format!(
+                    "{:.3}",
+                    median(rows.iter().map(|r| r.metrics.surface_distance.map_or(f64::NAN, |d| d.mean / r.spacing)).collect())
+                ),
+                format!("{:.2}", median(rows.iter().map(|r| r.metrics.overdraw.overshading).collect())),
+                format!("{:.2}", triangles_of(a) / reference),
+                ms(median(rows.iter().map(|r| r.extraction_ms).collect())),
+            ]
+        })
+        .collect();
+    let mut s = markdown_table(
+        &[
+            "algorithm",
+            "inputs",
+            "manifold + oriented",
+            "self-int. pairs (all)",
+            "median aspect mean",
+            "median min angle",
+            "median dist / h",
+            "median overshading",
+            format!("triangles vs {first}").as_str(),
+            "median extract ms",
+        ],
+        &rows,
+    );
+    s.push_str("\nMedians are over the inputs (so one bad field does not hide the rest); the triangle ratio sums every input.\n");
+    s
+}
+
 fn yes(b: bool) -> &'static str {
     if b {
         "yes"
@@ -259,7 +323,9 @@ fn section(data: &Data) -> String {
          invocations per covered pixel when GPUs shade 2x2 quads (1024x1024, early depth test; 1 is ideal).\n\n",
         data.field_levels, data.model_levels, data.repeats
     ));
-    s.push_str("### At the middle resolution\n\n");
+    s.push_str("### At a glance (middle resolution, every field and model)\n\n");
+    s.push_str(&summary(data));
+    s.push_str("\n### At the middle resolution\n\n");
     let rows: Vec<Vec<String>> = middle(data)
         .map(|r| {
             let m = &r.metrics;

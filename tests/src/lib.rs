@@ -60,3 +60,32 @@ pub fn assert_closed_manifold_with(mesh: &TriMesh, what: &str, orientation: Orie
     assert!(t.euler % 2 == 0 && t.euler <= 2 * t.components as i64, "{what}: euler {} with {} components", t.euler, t.components);
     t
 }
+
+/// A smooth random field on an `n^3` unit grid: Gaussian blobs `(x, y, z, radius)` in `[0, 1]^3`
+/// summed and subtracted from `threshold` (inside where the blobs are dense), forced outside on the
+/// border so the surface is closed.
+pub fn blob_field(n: usize, blobs: &[(f32, f32, f32, f32)], threshold: f32) -> Samples {
+    grid_samples([n, n, n], |x, y, z| {
+        if x == 0 || y == 0 || z == 0 || x == n - 1 || y == n - 1 || z == n - 1 {
+            return 1.0;
+        }
+        let p = Vec3::new(x as f32, y as f32, z as f32) / (n - 1) as f32;
+        let density: f32 =
+            blobs.iter().map(|&(bx, by, bz, r)| (-(p - Vec3::new(bx, by, bz)).length_squared() / (r * r)).exp()).sum();
+        threshold - density
+    })
+}
+
+/// A 4x4x4 grid whose inner 2x2x2 block carries cube pattern `case` (bit `c` set: table corner `c`
+/// inside) with values from `value(corner, inside)`, and whose outer layer is outside.
+pub fn embedded_case(case: u8, value: impl Fn(usize, bool) -> f32) -> Samples {
+    grid_samples([4, 4, 4], |x, y, z| {
+        let inner = (1..=2).contains(&x) && (1..=2).contains(&y) && (1..=2).contains(&z);
+        if !inner {
+            return 1.0;
+        }
+        // Table corner numbering: 0 (0,0,0) 1 (1,0,0) 2 (1,1,0) 3 (0,1,0), +4 for z = 1.
+        let corner = [0, 1, 3, 2][(x - 1) + 2 * (y - 1)] + 4 * (z - 1);
+        value(corner, case >> corner & 1 == 1)
+    })
+}

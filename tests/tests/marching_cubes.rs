@@ -4,32 +4,15 @@
 use isolab_algorithms::extractors::marching_cubes::{MarchingCubes, McOptions, Parallelism};
 use isolab_algorithms::{fields, Grid, Samples};
 use isolab_experiments::run::{run, RunConfig};
-use isolab_tests::{assert_closed_manifold, extract, grid_samples};
+use isolab_tests::{assert_closed_manifold, blob_field, extract, grid_samples};
 use proptest::prelude::*;
 
 fn serial() -> MarchingCubes {
     MarchingCubes::new(McOptions { parallelism: Parallelism::Serial, ..Default::default() })
 }
 
-/// A 4x4x4 grid whose inner 2x2x2 block carries `case` (bit set = inside) with the given
-/// magnitudes, and whose outer layer is outside, so the surface is closed.
 fn embedded_case(case: u8, magnitude: impl Fn(usize) -> f32) -> Samples {
-    grid_samples([4, 4, 4], |x, y, z| {
-        let inner = (1..=2).contains(&x) && (1..=2).contains(&y) && (1..=2).contains(&z);
-        if !inner {
-            return 1.0;
-        }
-        // Corner numbering of the table: 0 (0,0,0) 1 (1,0,0) 2 (1,1,0) 3 (0,1,0), +4 for z = 1.
-        let (cx, cy, cz) = (x - 1, y - 1, z - 1);
-        let corner = [0, 1, 3, 2][cx + 2 * cy] + 4 * cz;
-        let inside = case >> corner & 1 == 1;
-        let m = magnitude(corner);
-        if inside {
-            -m
-        } else {
-            m
-        }
-    })
+    isolab_tests::embedded_case(case, |corner, inside| if inside { -magnitude(corner) } else { magnitude(corner) })
 }
 
 #[test]
@@ -65,19 +48,6 @@ fn components_of_inside_corners(case: u8) -> u32 {
         }
     }
     (0..8u8).filter(|&c| case >> c & 1 == 1 && root(&mut parent, c) == c).count() as u32
-}
-
-/// A smooth random field: a few Gaussian blobs minus a threshold, forced outside on the border.
-fn blob_field(n: usize, blobs: &[(f32, f32, f32, f32)], threshold: f32) -> Samples {
-    grid_samples([n, n, n], |x, y, z| {
-        if x == 0 || y == 0 || z == 0 || x == n - 1 || y == n - 1 || z == n - 1 {
-            return 1.0;
-        }
-        let p = glam::Vec3::new(x as f32, y as f32, z as f32) / (n - 1) as f32;
-        let density: f32 =
-            blobs.iter().map(|&(bx, by, bz, r)| (-(p - glam::Vec3::new(bx, by, bz)).length_squared() / (r * r)).exp()).sum();
-        threshold - density
-    })
 }
 
 proptest! {

@@ -3,7 +3,7 @@
 
 use isolab_algorithms::extractors::surface_nets::{Smoothing, SnOptions, SurfaceNets};
 use isolab_algorithms::{fields, Grid, Samples};
-use isolab_tests::{assert_closed_manifold, assert_closed_manifold_with, extract, grid_samples, Orientation};
+use isolab_tests::{assert_closed_manifold, assert_closed_manifold_with, blob_field, extract, Orientation};
 use proptest::prelude::*;
 
 const ALL: [Smoothing; 4] = [Smoothing::None, Smoothing::Elastic, Smoothing::Spring, Smoothing::Implicit];
@@ -12,20 +12,11 @@ fn nets(smoothing: Smoothing) -> SurfaceNets {
     SurfaceNets::new(SnOptions { smoothing, ..Default::default() })
 }
 
-/// A 4x4x4 grid whose inner 2x2x2 block carries `case`, outside elsewhere.
 fn embedded_case(case: u8) -> Samples {
-    grid_samples([4, 4, 4], |x, y, z| {
-        let inner = (1..=2).contains(&x) && (1..=2).contains(&y) && (1..=2).contains(&z);
-        if !inner {
-            return 1.0;
-        }
-        let corner = [0, 1, 3, 2][(x - 1) + 2 * (y - 1)] + 4 * (z - 1);
-        if case >> corner & 1 == 1 {
-            -1.0 - 0.1 * corner as f32
-        } else {
-            1.0 + 0.07 * corner as f32
-        }
-    })
+    isolab_tests::embedded_case(
+        case,
+        |corner, inside| if inside { -1.0 - 0.1 * corner as f32 } else { 1.0 + 0.07 * corner as f32 },
+    )
 }
 
 #[test]
@@ -54,14 +45,7 @@ proptest! {
         blobs in prop::collection::vec((0.1f32..0.9, 0.1f32..0.9, 0.1f32..0.9, 0.05f32..0.4), 1..6),
         threshold in 0.2f32..0.9,
     ) {
-        let s = grid_samples([n, n, n], |x, y, z| {
-            if x == 0 || y == 0 || z == 0 || x == n - 1 || y == n - 1 || z == n - 1 {
-                return 1.0;
-            }
-            let p = glam::Vec3::new(x as f32, y as f32, z as f32) / (n - 1) as f32;
-            let d: f32 = blobs.iter().map(|&(bx, by, bz, r)| (-(p - glam::Vec3::new(bx, by, bz)).length_squared() / (r * r)).exp()).sum();
-            threshold - d
-        });
+        let s = blob_field(n, &blobs, threshold);
         let out = extract(&nets(Smoothing::Elastic), &s);
         assert_closed_manifold(&out.surface, "blob field");
     }

@@ -46,6 +46,7 @@
 //! ```
 
 use crate::extract::{ExtractError, Extraction, Extractor};
+use crate::extractors::slabs::EXTERN;
 use crate::geometry::trilinear_gradient;
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
@@ -198,11 +199,6 @@ impl MarchingCubes {
         Self { options, ..Self::default() }
     }
 }
-
-/// Set on vertex indices that refer to the slab below's top layer until the slabs are joined.
-const EXTERN: u32 = 1 << 31;
-/// Cells per slab task below which the whole grid is one slab.
-const MIN_CELLS_PER_SLAB: usize = 32 * 32 * 32;
 
 #[derive(Default)]
 struct Scratch {
@@ -524,12 +520,7 @@ impl Extractor for MarchingCubes {
         let row_time = start.elapsed();
 
         let slab_cells = nz - 1;
-        let tasks = match self.options.parallelism {
-            Parallelism::Serial => 1,
-            Parallelism::Rayon => {
-                (grid.cell_count() / MIN_CELLS_PER_SLAB).clamp(1, 4 * rayon::current_num_threads()).min(slab_cells)
-            }
-        };
+        let tasks = crate::extractors::slabs::task_count(self.options.parallelism, grid.cell_count(), slab_cells);
         let mut pool = self.pool.lock().unwrap_or_else(|e| e.into_inner());
         while pool.len() < tasks {
             pool.push(Scratch::default());

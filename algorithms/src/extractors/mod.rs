@@ -6,6 +6,7 @@
 
 pub mod dual_contouring;
 pub mod marching_cubes;
+mod slabs;
 pub mod surface_nets;
 
 pub use dual_contouring::DualContouring;

@@ -58,6 +58,7 @@
 
 use crate::extract::{ExtractError, Extraction, Extractor};
 use crate::extractors::marching_cubes::Parallelism;
+use crate::extractors::slabs::EXTERN;
 use crate::geometry::trilinear_gradient;
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
@@ -193,14 +194,10 @@ struct Scratch {
     adjacency: Vec<u32>,
     work: Vec<Vec3>,
     velocity: Vec<Vec3>,
+    velocity_next: Vec<Vec3>,
     /// One per slab task.
     slabs: Vec<Slab>,
 }
-
-/// Set on vertex indices that refer to the slab below's last cell layer until slabs are joined.
-const EXTERN: u32 = 1 << 31;
-/// Cells per slab task below which the whole grid is one slab.
-const MIN_CELLS_PER_SLAB: usize = 32 * 32 * 32;
 
 /// A slab of cell layers meshed on its own.
 #[derive(Default)]
@@ -238,7 +235,7 @@ impl Scratch {
     fn bytes(&self) -> usize {
         self.rows.capacity() * std::mem::size_of::<Row>()
             + 4 * (self.adjacency_start.capacity() + self.adjacency.capacity())
-            + 12 * (self.cell_min.capacity() + self.work.capacity() + self.velocity.capacity())
+            + 12 * (self.cell_min.capacity() + self.work.capacity() + self.velocity.capacity() + self.velocity_next.capacity())
             + 8 * self.links.capacity()
             + self.slabs.iter().map(Slab::bytes).sum::<usize>()
     }
@@ -556,24 +553,21 @@ impl SurfaceNets {
                 s.velocity.clear();
                 s.velocity.resize(n, Vec3::ZERO);
                 for _ in 0..o.iterations {
+                    s.work.resize(n, Vec3::ZERO);
+                    s.velocity_next.resize(n, Vec3::ZERO);
                     let velocity = &s.velocity;
-                    let next: Vec<(Vec3, Vec3)> = (0..n)
-                        .into_par_iter()
-                        .map(|i| {
-                            let p = positions[i];
-                            let target = neighbour_mean(i, positions, start, adjacency).unwrap_or(p);
-                            let v = velocity[i] * (1.0 - o.damping) + (target - p) * o.stiffness;
-                            let moved = p + v;
-                            let clamped = clamp_to_cell(moved, cell_min[i], h);
-                            // A wall stops motion into it (no bounce).
-                            let v = Vec3::select(moved.cmpne(clamped), Vec3::ZERO, v);
-                            (clamped, v)
-                        })
-                        .collect();
-                    for (i, (p, v)) in next.into_iter().enumerate() {
-                        positions[i] = p;
-                        s.velocity[i] = v;
-                    }
+                    s.work.par_iter_mut().zip(s.velocity_next.par_iter_mut()).enumerate().for_each(|(i, (next_p, next_v))| {
+                        let p = positions[i];
+                        let target = neighbour_mean(i, positions, start, adjacency).unwrap_or(p);
+                        let v = velocity[i] * (1.0 - o.damping) + (target - p) * o.stiffness;
+                        let moved = p + v;
+                        let clamped = clamp_to_cell(moved, cell_min[i], h);
+                        // A wall stops motion into it (no bounce).
+                        *next_v = Vec3::select(moved.cmpne(clamped), Vec3::ZERO, v);
+                        *next_p = clamped;
+                    });
+                    positions.copy_from_slice(&s.work);
+                    std::mem::swap(&mut s.velocity, &mut s.velocity_next);
                 }
             }
             Smoothing::Implicit => {
@@ -666,12 +660,7 @@ impl Extractor for SurfaceNets {
         let ctx = Ctx { values: samples.values(), grid, iso: samples.iso(), rows: &s.rows, placement: self.placement, field };
         let smoothing = self.options.smoothing != Smoothing::None && self.options.iterations > 0;
         let cell_layers = nz - 1;
-        let tasks = match self.options.parallelism {
-            Parallelism::Serial => 1,
-            Parallelism::Rayon => {
-                (grid.cell_count() / MIN_CELLS_PER_SLAB).clamp(1, 4 * rayon::current_num_threads()).min(cell_layers)
-            }
-        };
+        let tasks = crate::extractors::slabs::task_count(self.options.parallelism, grid.cell_count(), cell_layers);
         while s.slabs.len() < tasks {
             s.slabs.push(Slab::default());
         }

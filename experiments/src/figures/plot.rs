@@ -2,6 +2,7 @@
 //! as SVG and PNG with text drawn from an embedded font (DejaVu Sans), so no system font is needed.
 //! Log axes plot `log10` of the data on a linear axis labelled with powers of ten.
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
@@ -107,6 +108,19 @@ fn padded(lo: f64, hi: f64) -> (f64, f64) {
     (lo - 0.06 * span, hi + 0.06 * span)
 }
 
+/// The legend, in the same place and style on every chart.
+fn draw_legend<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(RGBColor(180, 180, 180))
+        .label_font(("sans-serif", 13))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+}
+
 fn draw_xy<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, plot: &XyPlot) -> Result<(), String> {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(err)?;
@@ -156,14 +170,7 @@ fn draw_xy<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, plot: &XyPlot) -> 
             .label(&s.label)
             .legend(move |(x, y)| Circle::new((x + 8, y), 5, color.filled()));
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(RGBColor(180, 180, 180))
-        .label_font(("sans-serif", 13))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(err)?;
+    draw_legend(&mut chart).map_err(err)?;
     root.present().map_err(err)
 }
 
@@ -266,14 +273,7 @@ fn draw_bars<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart_spec: &Bar
             .label(name)
             .legend(move |(x, y)| Rectangle::new([(x + 2, y - 5), (x + 12, y + 5)], color.filled()));
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(RGBColor(180, 180, 180))
-        .label_font(("sans-serif", 13))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(err)?;
+    draw_legend(&mut chart).map_err(err)?;
     // Category names under their groups, turned to fit.
     let style = TextStyle::from(("sans-serif", 13).into_font()).transform(FontTransform::Rotate270).color(&BLACK);
     for (i, c) in chart_spec.categories.iter().enumerate() {

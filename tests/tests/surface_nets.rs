@@ -36,6 +36,52 @@ fn all_256_cube_patterns_give_closed_manifold_nets() {
     }
 }
 
+/// Every sign pattern of two cells sharing a face (12 samples), inside an outside border: the
+/// ring faces ([`isolab_algorithms::tables::marching_cubes::RING_FACES`]) of both cells are the
+/// case a single vertex per piece would pinch.
+#[test]
+fn all_two_cell_patterns_give_closed_manifold_nets() {
+    for pattern in 0..1u32 << 12 {
+        let s = isolab_tests::grid_samples([5, 4, 4], |x, y, z| {
+            let inner = (1..=3).contains(&x) && (1..=2).contains(&y) && (1..=2).contains(&z);
+            if !inner {
+                return 1.0;
+            }
+            let bit = (x - 1) + 3 * ((y - 1) + 2 * (z - 1));
+            if pattern >> bit & 1 == 1 {
+                -1.0 - 0.03 * bit as f32
+            } else {
+                1.0 + 0.05 * bit as f32
+            }
+        });
+        for smoothing in [Smoothing::None, Smoothing::Elastic] {
+            let out = extract(&nets(smoothing), &s);
+            assert_closed_manifold(&out.surface, &format!("two-cell pattern {pattern:#x} {smoothing:?}"));
+        }
+    }
+}
+
+/// The configuration the random-field test found (a passage across a face, wrapped by one piece
+/// of surface in each cell): the face's inside corners are joined and the net stays manifold.
+#[test]
+fn a_passage_wrapped_on_both_sides_of_a_face_stays_manifold() {
+    let blobs = [
+        (0.568_652_2, 0.898_271_6, 0.480_821, 0.065_573_76),
+        (0.519_932_7, 0.688_283_6, 0.794_322_8, 0.306_671_2),
+        (0.552_438_6, 0.897_726_2, 0.302_814_75, 0.129_707_77),
+        (0.216_456_12, 0.700_530_65, 0.315_334_17, 0.384_558_32),
+    ];
+    let s = blob_field(7, &blobs, 0.870_097);
+    for smoothing in ALL {
+        let out = extract(&nets(smoothing), &s);
+        let orientation = match smoothing {
+            Smoothing::None | Smoothing::Elastic => Orientation::Outward,
+            Smoothing::Spring | Smoothing::Implicit => Orientation::Consistent,
+        };
+        assert_closed_manifold_with(&out.surface, &format!("{smoothing:?}"), orientation);
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 500, failure_persistence: None, ..ProptestConfig::default() })]
 
@@ -48,6 +94,15 @@ proptest! {
         let s = blob_field(n, &blobs, threshold);
         let out = extract(&nets(Smoothing::Elastic), &s);
         assert_closed_manifold(&out.surface, "blob field");
+    }
+
+    #[test]
+    fn random_sign_patterns_give_closed_manifold_nets(values in prop::collection::vec(-1.0f32..1.0, 6 * 6 * 6)) {
+        let s = isolab_tests::grid_samples([8, 8, 8], |x, y, z| {
+            if x == 0 || y == 0 || z == 0 || x == 7 || y == 7 || z == 7 { 1.0 } else { values[(x - 1) + 6 * ((y - 1) + 6 * (z - 1))] }
+        });
+        let out = extract(&nets(Smoothing::None), &s);
+        assert_closed_manifold(&out.surface, "white noise");
     }
 }
 

@@ -28,16 +28,21 @@
 //!
 //! **Guarantees (topology).** Because each piece of surface has its own vertex and the cube table
 //! resolves ambiguous faces alike in both cells, the net is closed (where it stays inside the
-//! grid) and consistently wound, and it is manifold on all 256 cube patterns, on random smooth
-//! fields and on the built-in closed fields (the tests check each). Slabs of cell layers run in
-//! parallel and join into exactly the mesh one slab would give.
+//! grid) and consistently wound. One configuration of the plain table would still pinch: a piece
+//! of surface that wraps an outside passage across an ambiguous face (the face's inside corners
+//! joined through the cell's other faces) on *both* sides of the face gives a two-vertex tube, and
+//! the four quads of the face's edges share one net edge. Such a face
+//! ([`crate::tables::marching_cubes::RING_FACES`] in both cells) is resolved the other way in both
+//! cells (its inside corners joined), which splits the passage into two pieces per cell and
+//! changes no other face (the joined corners were already connected). Tests: all 256 cube
+//! patterns, all 4096 patterns of two cells sharing a face, random smooth and white-noise fields,
+//! the built-in closed fields. Slabs of cell layers run in parallel and join into exactly the mesh
+//! one slab would give.
 //!
-//! **Non-guarantees.** One configuration stays non-manifold: a piece of surface that rings an
-//! ambiguous face (inside corners joined around the face through both cells, an outside passage
-//! through it) has one vertex on each side of the face, and the four quads of the face's crossing
-//! edges all share the net edge between those two vertices. It needs features below the cell size
-//! (rough fields show it; the report counts it). Smoothing shrinks convex shapes (reported as
-//! volume change), and spring or implicit smoothing can fold a one-sample feature flat.
+//! **Non-guarantees.** Smoothing shrinks convex shapes (reported as volume change), and spring or
+//! implicit smoothing can fold a one-sample feature flat. Vertices at the mean of their crossings
+//! never leave their cell, but adjacent quads can still intersect on rough fields (the report
+//! counts self-intersections).
 //!
 //! Vertex normals are the gradient of the cell's trilinear interpolant at the vertex (no field
 //! evaluation, as game engines and `fast-surface-nets` do).
@@ -65,7 +70,7 @@ use crate::mesh::TriMesh;
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
 use crate::sign_rows::{classify_rows, span, Row};
-use crate::tables::marching_cubes::{CORNERS, EDGES, TABLE};
+use crate::tables::marching_cubes::{opposite_face, Case, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, RING_FACES, TABLE};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::Mutex;
@@ -205,8 +210,8 @@ struct Slab {
     /// First vertex index and sign case of each cell in the previous and current cell layers.
     prev: Vec<u32>,
     cur: Vec<u32>,
-    prev_case: Vec<u8>,
-    cur_case: Vec<u8>,
+    prev_case: Vec<u16>,
+    cur_case: Vec<u16>,
     mesh: TriMesh,
     cell_min: Vec<Vec3>,
     links: Vec<(u32, u32)>,
@@ -272,15 +277,45 @@ impl Ctx<'_> {
         self.rows[y + self.grid.dims[1] * z]
     }
 
+    /// The sign case of cell `(x, y, z)` (bit `c` set: table corner `c` inside).
+    fn cell_case(&self, x: usize, y: usize, z: usize) -> u8 {
+        let [nx, ny, _] = self.grid.dims;
+        let i = self.grid.index(x, y, z);
+        CORNERS.iter().enumerate().fold(0u8, |case, (bit, c)| {
+            let k = i + c[0] as usize + nx * (c[1] as usize + ny * c[2] as usize);
+            case | u8::from(self.inside(k)) << bit
+        })
+    }
+
+    /// The faces of cell `(x, y, z)` whose inside corners are joined: the ring faces
+    /// ([`RING_FACES`]) that are ring faces of the neighbouring cell too. Both cells of a face
+    /// compute the same answer.
+    fn joined_faces(&self, case: u8, x: usize, y: usize, z: usize) -> u8 {
+        let rings = RING_FACES[case as usize];
+        if rings == 0 {
+            return 0;
+        }
+        let cells = self.grid.dims.map(|n| n as isize - 1);
+        (0..6).filter(|&f| rings >> f & 1 == 1).fold(0u8, |joins, f| {
+            let d = FACES[f].1;
+            let n = [x as isize + d[0] as isize, y as isize + d[1] as isize, z as isize + d[2] as isize];
+            if (0..3).any(|k| n[k] < 0 || n[k] >= cells[k]) {
+                return joins;
+            }
+            let other = self.cell_case(n[0] as usize, n[1] as usize, n[2] as usize);
+            joins | u8::from(RING_FACES[other as usize] >> opposite_face(f) & 1 == 1) << f
+        })
+    }
+
     /// Vertices of the surface cells in cell layer `z`: one per separate piece of surface in the
     /// cell (the polygons of its marching cubes case), at the mean of that piece's edge crossings.
-    /// `base` gets each cell's first vertex index and `cases` its sign case.
+    /// `base` gets each cell's first vertex index and `cases` its [`table_entry`] code.
     fn cell_vertices(
         &self,
         z: usize,
         tag: u32,
         base: &mut [u32],
-        cases: &mut [u8],
+        cases: &mut [u16],
         mesh: &mut TriMesh,
         cell_min: &mut Vec<Vec3>,
     ) {
@@ -299,11 +334,13 @@ impl Ctx<'_> {
                     case |= u8::from(value < self.iso) << bit;
                 }
                 let c = x + (nx - 1) * y;
-                cases[c] = case;
                 if case == 0 || case == 255 {
+                    cases[c] = u16::from(case) << 6;
                     continue;
                 }
-                let entry = &TABLE[case as usize];
+                let code = u16::from(case) << 6 | u16::from(self.joined_faces(case, x, y, z));
+                cases[c] = code;
+                let entry = table_entry(code);
                 let mut sums = [Vec3::ZERO; 4];
                 let mut counts = [0.0f32; 4];
                 let mut crossings = [(0u8, Vec3::ZERO); 12];
@@ -361,8 +398,8 @@ impl Ctx<'_> {
     fn quads(
         &self,
         z: usize,
-        prev: (&[u32], &[u8]),
-        cur: (&[u32], &[u8]),
+        prev: (&[u32], &[u16]),
+        cur: (&[u32], &[u16]),
         ghost: &[Vec3],
         mesh: &mut TriMesh,
         links: Option<&mut Vec<(u32, u32)>>,
@@ -370,9 +407,9 @@ impl Ctx<'_> {
         let [nx, ny, _] = self.grid.dims;
         let cx = nx - 1;
         // The vertex of the piece of surface that crosses local edge `e` of a cell.
-        let cell = |layer: (&[u32], &[u8]), x: usize, y: usize, e: usize| {
+        let cell = |layer: (&[u32], &[u16]), x: usize, y: usize, e: usize| {
             let c = x + cx * y;
-            layer.0[c] + u32::from(TABLE[layer.1[c] as usize].edge_polygon[e])
+            layer.0[c] + u32::from(table_entry(layer.1[c]).edge_polygon[e])
         };
         let positions = &mesh.positions;
         let at = |i: u32| if i & EXTERN == 0 { positions[i as usize] } else { ghost[(i & !EXTERN) as usize] };
@@ -480,6 +517,17 @@ impl Ctx<'_> {
             std::mem::swap(&mut s.prev, &mut s.cur);
             std::mem::swap(&mut s.prev_case, &mut s.cur_case);
         }
+    }
+}
+
+/// The table entry for a cell code `case << 6 | joined faces`: the default table unless a face
+/// is joined.
+#[inline]
+fn table_entry(code: u16) -> &'static Case {
+    if code & 63 == 0 {
+        &TABLE[(code >> 6) as usize]
+    } else {
+        &FACE_CHOICE_TABLE[code as usize]
     }
 }
 

@@ -92,6 +92,35 @@ pub static AMBIGUOUS_FACES: LazyLock<[u8; 256]> = LazyLock::new(|| {
     })
 });
 
+/// Bit `f` set when face `f` of the case is ambiguous and, in the default table, both of its
+/// segments lie on one polygon: the inside corners the face separates are joined through the
+/// cell's other faces, so one piece of surface wraps the outside passage across the face. A dual
+/// method with one vertex per piece pinches that passage when the cell on the other side of the
+/// face does the same; [`crate::extractors::surface_nets`] then joins the face's inside corners
+/// in both cells instead. That changes no other face's status: the joined corners were already
+/// connected.
+pub static RING_FACES: LazyLock<[u8; 256]> = LazyLock::new(|| {
+    std::array::from_fn(|c| {
+        let entry = &TABLE[c];
+        (0..6).fold(0u8, |mask, f| {
+            let pieces = face_edges(f).map(|e| entry.edge_polygon[e as usize]);
+            let ring = AMBIGUOUS_FACES[c] >> f & 1 == 1 && pieces.iter().all(|&p| p == pieces[0]);
+            mask | (u8::from(ring) << f)
+        })
+    })
+});
+
+/// The four edges of face `f`, in the face's cyclic order.
+pub fn face_edges(f: usize) -> [u8; 4] {
+    let cyc = FACES[f].0;
+    std::array::from_fn(|k| edge_between(cyc[k], cyc[(k + 1) % 4]))
+}
+
+/// The face of the neighbouring cell that coincides with face `f` (the one with opposite normal).
+pub fn opposite_face(f: usize) -> usize {
+    f ^ 1
+}
+
 /// Tables for every choice on the ambiguous faces: entry `case * 64 + joins`, where bit `f` of
 /// `joins` set means face `f` joins its inside corners ([`FaceRule::JoinInside`]) and clear means
 /// it separates them. Bits of unambiguous faces are ignored. Used with the asymptotic decider.

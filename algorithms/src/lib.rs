@@ -38,6 +38,7 @@ pub mod options;
 pub mod samples;
 pub mod sign_rows;
 pub mod tables;
+pub mod tetrahedral;
 
 pub use extract::{ExtractError, Extraction, Extractor, PostProcess, StageTimes, Stats};
 pub use field::{Field, FieldError};

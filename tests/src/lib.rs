@@ -23,6 +23,29 @@ pub fn grid_samples(dims: [usize; 3], mut value: impl FnMut(usize, usize, usize)
     Samples::from_values(Lattice::Cubic(grid), values, 0.0).expect("finite values")
 }
 
+/// Samples on a unit-spaced cubic grid (`bcc = false`) or BCC lattice (`bcc = true`: the corner
+/// grid of `dims` plus its cell centres) from a closure of **doubled** integer coordinates: corner
+/// `(x, y, z)` is `(2x, 2y, 2z)`, the centre of cell `(x, y, z)` is `(2x+1, 2y+1, 2z+1)`.
+pub fn lattice_samples(bcc: bool, dims: [usize; 3], mut value: impl FnMut([i32; 3]) -> f32) -> Samples {
+    let grid = Grid { origin: Vec3::ZERO, spacing: 1.0, dims };
+    let mut values = Vec::new();
+    let mut fill = |g: &Grid, odd: i32| {
+        for z in 0..g.dims[2] {
+            for y in 0..g.dims[1] {
+                for x in 0..g.dims[0] {
+                    values.push(value([2 * x as i32 + odd, 2 * y as i32 + odd, 2 * z as i32 + odd]));
+                }
+            }
+        }
+    };
+    fill(&grid, 0);
+    if bcc {
+        fill(&grid.centres(), 1);
+    }
+    let lattice = if bcc { Lattice::Bcc(grid) } else { Lattice::Cubic(grid) };
+    Samples::from_values(lattice, values, 0.0).expect("finite values")
+}
+
 /// Runs `extractor` on `samples`.
 pub fn extract(extractor: &dyn Extractor, samples: &Samples) -> Extraction {
     let mut out = Extraction::default();

@@ -6,11 +6,15 @@
 
 pub mod dual_contouring;
 pub mod marching_cubes;
+pub mod marching_tetrahedra;
+pub mod regularised_marching_tetrahedra;
 mod slabs;
 pub mod surface_nets;
 
 pub use dual_contouring::DualContouring;
 pub use marching_cubes::MarchingCubes;
+pub use marching_tetrahedra::MarchingTetrahedra;
+pub use regularised_marching_tetrahedra::RegularisedMarchingTetrahedra;
 pub use surface_nets::SurfaceNets;
 
 use crate::extract::{Extractor, PostProcess};
@@ -57,6 +61,20 @@ pub const INFOS: &[ExtractorInfo] = &[
         description: dual_contouring::DESCRIPTION,
         options: dual_contouring::OPTION_NAMES,
         make: dual_contouring::from_options,
+    },
+    // Payne & Toga 1990: the 16-case tetrahedron table on a BCC lattice or Kuhn-split cubes.
+    ExtractorInfo {
+        name: "marching-tetrahedra",
+        description: marching_tetrahedra::DESCRIPTION,
+        options: marching_tetrahedra::OPTION_NAMES,
+        make: marching_tetrahedra::from_options,
+    },
+    // Treece et al. 1999 / Costen 2026: marching tetrahedra with integrated vertex clustering.
+    ExtractorInfo {
+        name: "regularised-marching-tetrahedra",
+        description: regularised_marching_tetrahedra::DESCRIPTION,
+        options: regularised_marching_tetrahedra::OPTION_NAMES,
+        make: regularised_marching_tetrahedra::from_options,
     },
 ];
 

@@ -51,67 +51,75 @@ impl TriMesh {
 
 /// The vertices where `mesh` is not a consistently oriented 2-manifold (with boundary): ends of
 /// edges with more than two triangles or two triangles wound the same way, and vertices whose
-/// triangles form more than one fan. Sorted, without repeats. O(triangles log triangles); used by
-/// extractors that repair their own output (regularised marching tetrahedra's guard), so it lives
-/// here rather than in the metrics crate, which lists the offenders for reports.
+/// triangles form more than one fan. Sorted, without repeats. O(triangles) with no hashing or
+/// sorting of edges: each vertex's link (the opposite edges of its triangles, directed by the
+/// winding) must be one simple path or cycle. Used by extractors that repair their own output
+/// (regularised marching tetrahedra's guard); the metrics crate lists offenders for reports.
 pub fn manifold_defects(mesh: &TriMesh) -> Vec<u32> {
+    let n = mesh.positions.len();
+    // Triangles around each vertex (counting sort).
+    let mut start = vec![0u32; n + 1];
+    for t in &mesh.triangles {
+        for &v in t {
+            start[v as usize + 1] += 1;
+        }
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut links = vec![(0u32, 0u32); 3 * mesh.triangles.len()];
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let v = t[k] as usize;
+            links[fill[v] as usize] = (t[(k + 1) % 3], t[(k + 2) % 3]);
+            fill[v] += 1;
+        }
+    }
     let mut bad = Vec::new();
-    // Edges: sorted (low, high, forward?) triples.
-    let mut edges: Vec<(u32, u32, bool)> = Vec::with_capacity(3 * mesh.triangles.len());
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            edges.push((a.min(b), a.max(b), a < b));
-        }
-    }
-    edges.sort_unstable();
-    for group in edges.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
-        if group.len() > 2 || (group.len() == 2 && group[0].2 == group[1].2) {
-            bad.extend([group[0].0, group[0].1]);
-        }
-    }
-    // Fans: the link of each vertex (the opposite edges of its triangles) must be one path or one cycle.
-    let mut incident: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * mesh.triangles.len());
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            incident.push((t[k], t[(k + 1) % 3], t[(k + 2) % 3]));
-        }
-    }
-    incident.sort_unstable();
-    let mut link: Vec<u32> = Vec::new();
-    let mut parent: Vec<usize> = Vec::new();
-    for fan in incident.chunk_by(|x, y| x.0 == y.0) {
-        link.clear();
-        for &(_, a, b) in fan {
-            link.extend([a, b]);
-        }
-        link.sort_unstable();
-        link.dedup();
-        parent.clear();
-        parent.extend(0..link.len());
-        fn root(parent: &mut [usize], mut i: usize) -> usize {
-            while parent[i] != i {
-                parent[i] = parent[parent[i]];
-                i = parent[i];
-            }
-            i
-        }
-        let mut components = link.len();
-        for &(_, a, b) in fan {
-            let (ia, ib) = (link.binary_search(&a).unwrap_or(0), link.binary_search(&b).unwrap_or(0));
-            let (ra, rb) = (root(&mut parent, ia), root(&mut parent, ib));
-            if ra != rb {
-                parent[ra] = rb;
-                components -= 1;
-            }
-        }
-        if components > 1 {
-            bad.push(fan[0].0);
+    for v in 0..n {
+        let link = &links[start[v] as usize..start[v + 1] as usize];
+        if let Some(others) = link_defects(link) {
+            bad.push(v as u32);
+            bad.extend(others);
         }
     }
     bad.sort_unstable();
     bad.dedup();
     bad
+}
+
+/// Checks one vertex's link, given as directed edges `a -> b` (one per incident triangle
+/// `(v, a, b)`): `None` when it is one simple path or cycle, otherwise the link vertices at
+/// fault (an edge `v-a` with more than two triangles or two alike-wound ones), possibly empty
+/// when the fault is a second fan.
+fn link_defects(link: &[(u32, u32)]) -> Option<Vec<u32>> {
+    let mut faulty = Vec::new();
+    for (i, &(a, b)) in link.iter().enumerate() {
+        for &(c, d) in &link[i + 1..] {
+            if a == c {
+                faulty.push(a);
+            }
+            if b == d {
+                faulty.push(b);
+            }
+        }
+    }
+    if !faulty.is_empty() {
+        return Some(faulty);
+    }
+    // Each link vertex is now the tail and the head of at most one edge: one component?
+    let start = link.iter().position(|&(a, _)| link.iter().all(|&(_, d)| d != a)).unwrap_or(0);
+    let mut at = link.get(start)?.0;
+    let mut walked = 0;
+    while let Some(&(_, b)) = link.iter().find(|&&(a, _)| a == at) {
+        walked += 1;
+        at = b;
+        if walked > link.len() || at == link[start].0 {
+            break;
+        }
+    }
+    (walked != link.len()).then(Vec::new)
 }
 
 /// A tetrahedral mesh. Tetrahedra `[a, b, c, d]` have positive orientation:

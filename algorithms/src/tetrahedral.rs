@@ -298,6 +298,8 @@ impl Clustering for NoClustering {
 pub struct TetScratch {
     base: Vec<u32>,
     slots: Vec<u64>,
+    /// Samples with a sign change on one of their edges.
+    touch: Vec<bool>,
     /// Samples whose crossings must not merge (set by a repairing caller).
     no_merge: Vec<bool>,
     /// The sample that made each vertex, and how many crossings it merged.
@@ -307,24 +309,11 @@ pub struct TetScratch {
 impl TetScratch {
     /// Bytes held.
     pub fn bytes(&self) -> usize {
-        self.base.capacity() * 4 + self.slots.capacity() * 8 + self.no_merge.capacity() + self.owner.capacity() * 8
-    }
-
-    /// Lets every sample merge again.
-    pub fn allow_all_merging(&mut self) {
-        self.no_merge.iter_mut().for_each(|b| *b = false);
-    }
-
-    /// Forbids merging at the sample that made `vertex` of the last extraction, if that vertex
-    /// merged two or more crossings. Returns whether anything changed.
-    pub fn unmerge_vertex(&mut self, vertex: u32) -> bool {
-        match self.owner.get(vertex as usize) {
-            Some(&(sample, members)) if members > 1 && !self.no_merge[sample as usize] => {
-                self.no_merge[sample as usize] = true;
-                true
-            }
-            _ => false,
-        }
+        self.base.capacity() * 4
+            + self.slots.capacity() * 8
+            + self.touch.capacity()
+            + self.no_merge.capacity()
+            + self.owner.capacity() * 8
     }
 
     /// Samples currently forbidden to merge.
@@ -364,10 +353,9 @@ impl Addresser {
 
     /// Doubled coordinates of flat sample `i`.
     fn coords(&self, i: usize) -> [i32; 3] {
-        let (g, i, odd) = if i < self.corners.len() {
-            (&self.corners, i, 0)
-        } else {
-            (self.centres.as_ref().unwrap(), i - self.corners.len(), 1)
+        let (g, i, odd) = match &self.centres {
+            Some(c) if i >= self.corners.len() => (c, i - self.corners.len(), 1),
+            _ => (&self.corners, i, 0),
         };
         let [nx, ny, _] = g.dims;
         [(i % nx) as i32 * 2 + odd, ((i / nx) % ny) as i32 * 2 + odd, (i / (nx * ny)) as i32 * 2 + odd]
@@ -375,6 +363,66 @@ impl Addresser {
 
     fn position(&self, q: [i32; 3]) -> Vec3 {
         self.corners.origin + Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) * (0.5 * self.corners.spacing)
+    }
+}
+
+/// One of the lattice's cubic grids (corners, or BCC centres) and the constant index offsets of
+/// the neighbours of its interior samples.
+struct Part {
+    /// 0 for corners, 1 for centres (added to doubled coordinates).
+    odd: i32,
+    /// First flat index and samples per axis.
+    start: usize,
+    dims: [usize; 3],
+    /// The other grid (BCC), or this one again.
+    cross_start: usize,
+    cross_dims: [usize; 3],
+    /// Per direction: whether the neighbour is in the other grid, and its index offset from
+    /// `(x, y, z)` in that grid's order.
+    offsets: [(bool, isize); DIRECTIONS],
+}
+
+impl Part {
+    /// The grid and index offset of the sample at doubled offset `d` from one of this grid's
+    /// samples, in the same form as [`Part::offsets`].
+    fn offset_of(&self, d: [i32; 3]) -> (bool, isize) {
+        let cross = d[0] & 1 != 0;
+        let shift = |c: i32| {
+            if !cross {
+                c / 2
+            } else if self.odd == 0 {
+                (c - 1) / 2
+            } else {
+                (c + 1) / 2
+            }
+        };
+        let (a, b, c) = (shift(d[0]) as isize, shift(d[1]) as isize, shift(d[2]) as isize);
+        let gd = if cross { self.cross_dims } else { self.dims };
+        (cross, a + gd[0] as isize * (b + gd[1] as isize * c))
+    }
+}
+
+struct Layout {
+    parts: Vec<Part>,
+}
+
+impl Layout {
+    fn new(at: &Addresser, topo: &TetTopology) -> Layout {
+        let mut grids = vec![(0, 0usize, at.corners.dims)];
+        if let Some(c) = &at.centres {
+            grids.push((1, at.corners.len(), c.dims));
+        }
+        let parts = grids
+            .iter()
+            .map(|&(odd, start, dims)| {
+                let other = grids.iter().find(|g| g.0 != odd).copied().unwrap_or((odd, start, dims));
+                let mut part =
+                    Part { odd, start, dims, cross_start: other.1, cross_dims: other.2, offsets: [(false, 0); DIRECTIONS] };
+                part.offsets = topo.directions.map(|d| part.offset_of(d));
+                part
+            })
+            .collect();
+        Layout { parts }
     }
 }
 
@@ -420,132 +468,289 @@ pub fn extract_tetrahedral(
     scratch.base.resize(n, 0);
     scratch.slots.clear();
     scratch.slots.resize(n, 0);
+    scratch.touch.clear();
+    scratch.touch.resize(n, false);
     scratch.no_merge.resize(n, false);
     scratch.owner.clear();
+    let layout = Layout::new(&at, topo);
     let mesh = &mut out.surface;
-    for i in 0..n {
-        let q = at.coords(i);
-        let vi = values[i];
-        let inside = vi < iso;
-        let mut star = Star { nearby: 0, neighbours: 0, crossings: [Vec3::ZERO; DIRECTIONS] };
-        for (k, d) in topo.directions.iter().enumerate() {
-            let Some(j) = at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]]) else { continue };
-            star.neighbours |= 1 << k;
-            let vj = values[j];
-            if (vj < iso) != inside && owns(i, vi, j, vj, iso) {
-                star.nearby |= 1 << k;
-                let s = (iso - vi) / (vj - vi);
-                let d = Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * (0.5 * at.corners.spacing);
-                star.crossings[k] = at.position(q) + d * s;
+    let half = 0.5 * at.corners.spacing;
+    let steps: [Vec3; DIRECTIONS] = topo.directions.map(|d| Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * half);
+    for part in &layout.parts {
+        let [dx, dy, dz] = part.dims;
+        for z in 0..dz {
+            for y in 0..dy {
+                let row_interior = (1..dy.saturating_sub(1)).contains(&y) && (1..dz.saturating_sub(1)).contains(&z);
+                let row_same = part.start + dx * (y + dy * z);
+                let row_cross = part.cross_start + part.cross_dims[0] * (y + part.cross_dims[1] * z);
+                for x in 0..dx {
+                    let i = row_same + x;
+                    let vi = values[i];
+                    let inside = vi < iso;
+                    let interior = row_interior && x >= 1 && x + 1 < dx;
+                    let q = [2 * x as i32 + part.odd, 2 * y as i32 + part.odd, 2 * z as i32 + part.odd];
+                    let neighbour = |k: usize| -> Option<usize> {
+                        if interior {
+                            let (cross, off) = part.offsets[k];
+                            Some(((if cross { row_cross + x } else { i }) as isize + off) as usize)
+                        } else {
+                            let d = topo.directions[k];
+                            at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]])
+                        }
+                    };
+                    // First the flags only; positions for the rare samples that own a crossing.
+                    let (mut nearby, mut neighbours, mut touch) = (0u16, 0u16, false);
+                    for k in 0..DIRECTIONS {
+                        let Some(j) = neighbour(k) else { continue };
+                        neighbours |= 1 << k;
+                        let vj = values[j];
+                        if (vj < iso) != inside {
+                            touch = true;
+                            if owns(i, vi, j, vj, iso) {
+                                nearby |= 1 << k;
+                            }
+                        }
+                    }
+                    scratch.touch[i] = touch;
+                    if nearby == 0 {
+                        continue;
+                    }
+                    let mut star = Star { nearby, neighbours, crossings: [Vec3::ZERO; DIRECTIONS] };
+                    let origin = at.position(q);
+                    let mut bits = nearby;
+                    while bits != 0 {
+                        let k = bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        let vj = values[neighbour(k).expect("flagged neighbours exist")];
+                        star.crossings[k] = origin + steps[k] * ((iso - vi) / (vj - vi));
+                    }
+                    let islands =
+                        if scratch.no_merge[i] { NoClustering.islands(&star, topo) } else { clustering.islands(&star, topo) };
+                    let base = mesh.positions.len();
+                    if base + islands.count as usize > u32::MAX as usize {
+                        return Err(ExtractError::TooLarge {
+                            algorithm: "marching tetrahedra",
+                            vertices: base + islands.count as usize,
+                        });
+                    }
+                    scratch.base[i] = base as u32;
+                    let mut sums = [Vec3::ZERO; DIRECTIONS];
+                    let mut members = [0u32; DIRECTIONS];
+                    let mut packed = 0u64;
+                    let mut bits = star.nearby;
+                    while bits != 0 {
+                        let k = bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        let s = islands.slot[k];
+                        sums[s as usize] += star.crossings[k];
+                        members[s as usize] += 1;
+                        packed |= u64::from(s) << (4 * k);
+                    }
+                    scratch.slots[i] = packed;
+                    for s in 0..islands.count as usize {
+                        let mean = sums[s] / members[s] as f32;
+                        mesh.positions.push(clustering.place(mean, members[s], field, iso));
+                        scratch.owner.push((i as u32, members[s].min(255) as u8));
+                    }
+                }
             }
-        }
-        if star.nearby == 0 {
-            continue;
-        }
-        let islands = if scratch.no_merge[i] { NoClustering.islands(&star, topo) } else { clustering.islands(&star, topo) };
-        let base = mesh.positions.len();
-        if base + islands.count as usize > u32::MAX as usize {
-            return Err(ExtractError::TooLarge { algorithm: "marching tetrahedra", vertices: base + islands.count as usize });
-        }
-        scratch.base[i] = base as u32;
-        let mut sums = [Vec3::ZERO; DIRECTIONS];
-        let mut members = [0u32; DIRECTIONS];
-        let mut packed = 0u64;
-        for k in 0..DIRECTIONS {
-            if star.nearby >> k & 1 == 1 {
-                let s = islands.slot[k];
-                sums[s as usize] += star.crossings[k];
-                members[s as usize] += 1;
-                packed |= u64::from(s) << (4 * k);
-            }
-        }
-        scratch.slots[i] = packed;
-        for s in 0..islands.count as usize {
-            let mean = sums[s] / members[s] as f32;
-            mesh.positions.push(clustering.place(mean, members[s], field, iso));
-            scratch.owner.push((i as u32, members[s].min(255) as u8));
         }
     }
     out.stats.times.vertex = t.elapsed();
 
-    // Geometry pass.
+    out.stats.times.vertex = t.elapsed();
+    let counts = geometry_pass(samples, scratch, out);
+    let t = Instant::now();
+    out.surface.compute_face_weighted_normals();
+    out.stats.times.normals = t.elapsed();
+    Ok(counts)
+}
+
+/// The geometry pass (Algorithm 3) over the vertex indices in `scratch`, replacing
+/// `out.surface.triangles`; sets the geometry time and the counts in `out.stats`.
+pub fn geometry_pass(samples: &Samples, scratch: &TetScratch, out: &mut Extraction) -> TetCounts {
+    let lattice = *samples.lattice();
+    let topo = topology(TetKind::of(&lattice));
+    let at = Addresser::new(&lattice);
+    let layout = Layout::new(&at, topo);
+    let values = samples.values();
+    let iso = samples.iso();
+    out.surface.triangles.clear();
     let t = Instant::now();
     let mut counts = TetCounts::default();
     let vertex_of = |a: usize, va: f32, b: usize, vb: f32, dir_ab: u8| -> u32 {
         let (o, k) = if owns(a, va, b, vb, iso) { (a, dir_ab) } else { (b, dir_ab ^ 1) };
         scratch.base[o] + ((scratch.slots[o] >> (4 * k)) & 0xf) as u32
     };
-    let anchors: Box<dyn Iterator<Item = [i32; 3]>> = match topo.kind {
-        TetKind::Bcc => {
-            let [cx, cy, cz] = at.corners.dims.map(|d| d as i32 - 1);
-            Box::new(
-                (0..cz).flat_map(move |z| (0..cy).flat_map(move |y| (0..cx).map(move |x| [2 * x + 1, 2 * y + 1, 2 * z + 1]))),
-            )
-        }
-        TetKind::Kuhn => {
-            let [cx, cy, cz] = at.corners.dims.map(|d| d as i32 - 1);
-            Box::new((0..cz).flat_map(move |z| (0..cy).flat_map(move |y| (0..cx).map(move |x| [2 * x, 2 * y, 2 * z]))))
-        }
+    // Anchors: BCC cell centres (every tetrahedron around a centre contains it), or cubes' low
+    // corners (every Kuhn tetrahedron of a cube contains it). An anchor with no sign change on
+    // its edges has no surface in any of its tetrahedra.
+    let anchor_part = match topo.kind {
+        TetKind::Bcc => &layout.parts[1],
+        TetKind::Kuhn => &layout.parts[0],
     };
+    let anchor_dims = match topo.kind {
+        TetKind::Bcc => anchor_part.dims,
+        TetKind::Kuhn => anchor_part.dims.map(|d| d - 1),
+    };
+    counts.total = match topo.kind {
+        TetKind::Bcc => {
+            let d = anchor_dims;
+            4 * ((d[0].saturating_sub(1)) * d[1] * d[2]
+                + d[0] * d[1].saturating_sub(1) * d[2]
+                + d[0] * d[1] * d[2].saturating_sub(1))
+        }
+        TetKind::Kuhn => 6 * anchor_dims.iter().product::<usize>(),
+    };
+    let template_offsets: Vec<[(bool, isize); 4]> = topo.templates.iter().map(|t| t.map(|d| anchor_part.offset_of(d))).collect();
     let triangles = &mut out.surface.triangles;
     let positions = &out.surface.positions;
-    for anchor in anchors {
-        for (t, template) in topo.templates.iter().enumerate() {
-            let mut idx = [0usize; 4];
-            let mut valid = true;
-            for (v, off) in idx.iter_mut().zip(template) {
-                match at.index([anchor[0] + off[0], anchor[1] + off[1], anchor[2] + off[2]]) {
-                    Some(i) => *v = i,
-                    None => {
-                        valid = false;
-                        break;
-                    }
+    let [ax, ay, az] = anchor_dims;
+    let [dx, dy, _] = anchor_part.dims;
+    for z in 0..az {
+        for y in 0..ay {
+            let row_same = anchor_part.start + dx * (y + dy * z);
+            let row_cross = anchor_part.cross_start + anchor_part.cross_dims[0] * (y + anchor_part.cross_dims[1] * z);
+            // BCC: every template exists when the anchor's +x, +y, +z neighbours do.
+            let row_full = topo.kind == TetKind::Kuhn || (y + 1 < ay && z + 1 < az);
+            for x in 0..ax {
+                let i = row_same + x;
+                if !scratch.touch[i] {
+                    continue;
                 }
-            }
-            if !valid {
-                continue;
-            }
-            counts.total += 1;
-            let v = idx.map(|i| values[i]);
-            let case = (0..4).fold(0usize, |c, k| c | usize::from(v[k] < iso) << k);
-            let entry = &MT_TABLE[case];
-            if entry.count == 0 {
-                continue;
-            }
-            counts.active += 1;
-            let dirs = &topo.edge_directions[t];
-            let mut ids = [0u32; 4];
-            for (k, &(a, b)) in entry.edges[..entry.count as usize].iter().enumerate() {
-                let (a, b) = (a as usize, b as usize);
-                ids[k] = vertex_of(idx[a], v[a], idx[b], v[b], dirs[a][b]);
-            }
-            if entry.count == 3 {
-                push_triangle([ids[0], ids[1], ids[2]], triangles, &mut counts.discarded);
-            } else {
-                let [a, b, c, d] = ids;
-                let along_ac = if a == c {
-                    true
-                } else if b == d {
-                    false
-                } else {
-                    let p = |i: u32| positions[i as usize];
-                    p(a).distance_squared(p(c)) <= p(b).distance_squared(p(d))
-                };
-                let halves = if along_ac { [[a, b, c], [a, c, d]] } else { [[a, b, d], [b, c, d]] };
-                for h in halves {
-                    push_triangle(h, triangles, &mut counts.discarded);
+                let full = row_full && (topo.kind == TetKind::Kuhn || x + 1 < ax);
+                let q = [2 * x as i32 + anchor_part.odd, 2 * y as i32 + anchor_part.odd, 2 * z as i32 + anchor_part.odd];
+                for (t, offsets) in template_offsets.iter().enumerate() {
+                    let idx = if full {
+                        offsets.map(|(cross, off)| ((if cross { row_cross + x } else { i }) as isize + off) as usize)
+                    } else {
+                        let template = &topo.templates[t];
+                        let mut idx = [0usize; 4];
+                        let mut valid = true;
+                        for (v, d) in idx.iter_mut().zip(template) {
+                            match at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]]) {
+                                Some(j) => *v = j,
+                                None => valid = false,
+                            }
+                        }
+                        if !valid {
+                            continue;
+                        }
+                        idx
+                    };
+                    let v = idx.map(|i| values[i]);
+                    let case = usize::from(v[0] < iso)
+                        | usize::from(v[1] < iso) << 1
+                        | usize::from(v[2] < iso) << 2
+                        | usize::from(v[3] < iso) << 3;
+                    let entry = &MT_TABLE[case];
+                    if entry.count == 0 {
+                        continue;
+                    }
+                    counts.active += 1;
+                    let dirs = &topo.edge_directions[t];
+                    let mut ids = [0u32; 4];
+                    for (k, &(a, b)) in entry.edges[..entry.count as usize].iter().enumerate() {
+                        let (a, b) = (a as usize, b as usize);
+                        ids[k] = vertex_of(idx[a], v[a], idx[b], v[b], dirs[a][b]);
+                    }
+                    if entry.count == 3 {
+                        push_triangle([ids[0], ids[1], ids[2]], triangles, &mut counts.discarded);
+                    } else {
+                        let [a, b, c, d] = ids;
+                        let along_ac = if a == c {
+                            true
+                        } else if b == d {
+                            false
+                        } else {
+                            let p = |i: u32| positions[i as usize];
+                            p(a).distance_squared(p(c)) <= p(b).distance_squared(p(d))
+                        };
+                        let halves = if along_ac { [[a, b, c], [a, c, d]] } else { [[a, b, d], [b, c, d]] };
+                        for h in halves {
+                            push_triangle(h, triangles, &mut counts.discarded);
+                        }
+                    }
                 }
             }
         }
     }
     out.stats.times.geometry = t.elapsed();
-
-    let t = Instant::now();
-    out.surface.compute_face_weighted_normals();
-    out.stats.times.normals = t.elapsed();
     out.stats.discarded_triangles = counts.discarded;
     out.stats.active_cells = counts.active;
-    Ok(counts)
+    counts
+}
+
+/// Forbids merging at the samples that made the merged vertices among `vertices`, gives each of
+/// their crossings its own new vertex, and runs the geometry pass again. Returns whether anything
+/// changed. The old merged vertices stay in `out.surface.positions`, unreferenced, until
+/// [`finish_repair`].
+pub fn unmerge_and_regenerate(samples: &Samples, scratch: &mut TetScratch, out: &mut Extraction, vertices: &[u32]) -> bool {
+    let lattice = *samples.lattice();
+    let topo = topology(TetKind::of(&lattice));
+    let at = Addresser::new(&lattice);
+    let values = samples.values();
+    let iso = samples.iso();
+    let mut changed = false;
+    for &v in vertices {
+        let Some(&(sample, members)) = scratch.owner.get(v as usize) else { continue };
+        let i = sample as usize;
+        if members < 2 || scratch.no_merge[i] {
+            continue;
+        }
+        scratch.no_merge[i] = true;
+        changed = true;
+        let q = at.coords(i);
+        let (vi, base) = (values[i], out.surface.positions.len() as u32);
+        let mut packed = 0u64;
+        let mut slot = 0u64;
+        for (k, d) in topo.directions.iter().enumerate() {
+            let Some(j) = at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]]) else { continue };
+            let vj = values[j];
+            if (vj < iso) != (vi < iso) && owns(i, vi, j, vj, iso) {
+                let step = Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * (0.5 * at.corners.spacing);
+                out.surface.positions.push(at.position(q) + step * ((iso - vi) / (vj - vi)));
+                scratch.owner.push((sample, 1));
+                packed |= slot << (4 * k);
+                slot += 1;
+            }
+        }
+        scratch.base[i] = base;
+        scratch.slots[i] = packed;
+    }
+    if changed {
+        let time = out.stats.times.geometry;
+        geometry_pass(samples, scratch, out);
+        out.stats.times.geometry += time;
+    }
+    changed
+}
+
+/// After repairs: drops vertices no triangle uses (renumbering the rest in order) and
+/// recomputes the normals.
+pub fn finish_repair(out: &mut Extraction) {
+    let t = Instant::now();
+    let mesh = &mut out.surface;
+    let mut used = vec![u32::MAX; mesh.positions.len()];
+    for t in &mesh.triangles {
+        for &v in t {
+            used[v as usize] = 0;
+        }
+    }
+    let mut next = 0u32;
+    for (v, u) in used.iter_mut().enumerate() {
+        if *u == 0 {
+            *u = next;
+            mesh.positions[next as usize] = mesh.positions[v];
+            next += 1;
+        }
+    }
+    mesh.positions.truncate(next as usize);
+    for t in &mut mesh.triangles {
+        *t = t.map(|v| used[v as usize]);
+    }
+    mesh.compute_face_weighted_normals();
+    out.stats.times.normals = t.elapsed();
 }
 
 #[inline]

@@ -102,6 +102,12 @@ pub enum ExtractError {
         /// Algorithm name.
         algorithm: &'static str,
     },
+    /// A surface post-process after an extractor that made no surface.
+    #[error("{post} needs a triangle surface, but the extractor produced only a tetrahedral volume; drop --post {post}")]
+    NoSurface {
+        /// Post-process name.
+        post: &'static str,
+    },
     /// The output would not fit 32-bit indices.
     #[error("{algorithm}: output too large for 32-bit indices ({vertices} vertices)")]
     TooLarge {

@@ -35,6 +35,7 @@ pub mod geometry;
 pub mod lattice;
 pub mod mesh;
 pub mod options;
+pub mod post;
 pub mod samples;
 pub mod sign_rows;
 pub mod tables;

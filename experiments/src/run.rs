@@ -257,7 +257,7 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
         .post
         .iter()
         .map(|p| {
-            extractors::post_by_name(p).ok_or_else(|| RunError::UnknownPost { name: p.clone(), valid: extractors::post_names() })
+            extractors::build_post(p)?.ok_or_else(|| RunError::UnknownPost { name: p.clone(), valid: extractors::post_names() })
         })
         .collect::<Result<Vec<_>, _>>()?;
     if !config.iso.is_finite() {

@@ -107,7 +107,33 @@ fn unknown_names_exit_2_and_list_the_valid_ones() {
     let o = isolab(&["extract", "-a", "marching-cubes", "-f", "spere"]);
     assert_clean_failure(&o, 2, &["unknown field 'spere'", "sphere", "terrain"]);
     let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "--post", "nope"]);
-    assert_clean_failure(&o, 2, &["unknown post-process 'nope'"]);
+    assert_clean_failure(&o, 2, &["unknown post-process 'nope'", "edge-collapse", "edge-collapse-safe"]);
+}
+
+#[test]
+fn tetrahedral_options_are_checked() {
+    let o = isolab(&["extract", "-a", "marching-tetrahedra", "-f", "sphere", "-r", "16", "--lattice", "tet"]);
+    assert_clean_failure(&o, 2, &["tet", "cubic", "bcc"]);
+    for spec in ["edge-collapse:threshold=0", "edge-collapse-safe:threshold=-0.5"] {
+        let o = isolab(&["extract", "-a", "marching-tetrahedra", "-f", "sphere", "-r", "16", "--post", spec]);
+        assert_clean_failure(&o, 2, &["threshold", "(0, 100]"]);
+    }
+    let o = isolab(&["extract", "-a", "regularised-marching-tetrahedra", "-f", "sphere", "-r", "16", "--set", "guard=maybe"]);
+    assert_clean_failure(&o, 2, &["guard", "true, false"]);
+    let o = isolab(&[
+        "extract",
+        "-a",
+        "marching-tetrahedra",
+        "-f",
+        "sphere",
+        "-r",
+        "16",
+        "--lattice",
+        "bcc",
+        "--post",
+        "edge-collapse-safe",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
 }
 
 #[test]

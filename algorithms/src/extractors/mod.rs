@@ -19,6 +19,7 @@ pub use surface_nets::SurfaceNets;
 
 use crate::extract::{Extractor, PostProcess};
 use crate::options::{OptionError, Options};
+use crate::post::edge_collapse;
 
 /// How to build an extractor: its name, one line, and a constructor from options.
 pub struct ExtractorInfo {
@@ -83,9 +84,57 @@ pub fn registry() -> Vec<Box<dyn Extractor>> {
     INFOS.iter().filter_map(|i| (i.make)(&Options::new()).ok()).collect()
 }
 
-/// Every post-process (mesh -> mesh filters usable after any extractor).
+/// How to build a post-process: its name, one line, and a constructor from options.
+pub struct PostInfo {
+    /// Stable kebab-case name (the CLI's `--post NAME` or `--post NAME:OPTION=VALUE,...`).
+    pub name: &'static str,
+    /// One line saying what it does.
+    pub description: &'static str,
+    /// The options it takes.
+    pub options: &'static [&'static str],
+    /// Builds it; unknown or bad options are errors naming the option.
+    pub make: fn(&Options) -> Result<Box<dyn PostProcess>, OptionError>,
+}
+
+/// Every post-process, one line each.
+pub const POST_INFOS: &[PostInfo] = &[
+    // Costen 2026, section 2.6: merge short edges in one sweep, drop degenerate triangles.
+    PostInfo {
+        name: "edge-collapse",
+        description: edge_collapse::PAPER_DESCRIPTION,
+        options: edge_collapse::PAPER_OPTION_NAMES,
+        make: edge_collapse::paper_from_options,
+    },
+    // Shortest-first collapse under the link condition and a normal test.
+    PostInfo {
+        name: "edge-collapse-safe",
+        description: edge_collapse::SAFE_DESCRIPTION,
+        options: edge_collapse::SAFE_OPTION_NAMES,
+        make: edge_collapse::safe_from_options,
+    },
+];
+
+/// Every post-process with default options.
 pub fn post_processes() -> Vec<Box<dyn PostProcess>> {
-    Vec::new()
+    POST_INFOS.iter().filter_map(|i| (i.make)(&Options::new()).ok()).collect()
+}
+
+/// The post-process a CLI spec names: `NAME` or `NAME:OPTION=VALUE,OPTION=VALUE`. `Ok(None)` when
+/// no post-process has that name; a malformed option list is an error naming it.
+pub fn build_post(spec: &str) -> Result<Option<Box<dyn PostProcess>>, OptionError> {
+    let (name, list) = spec.split_once(':').unwrap_or((spec, ""));
+    let Some(info) = POST_INFOS.iter().find(|i| i.name == name.trim()) else { return Ok(None) };
+    let mut options = Options::new();
+    for item in list.split(',').filter(|s| !s.trim().is_empty()) {
+        let (k, v) = item.split_once('=').ok_or_else(|| OptionError::BadValue {
+            algorithm: info.name,
+            option: item.trim().to_owned(),
+            value: String::new(),
+            reason: "options are written OPTION=VALUE".into(),
+        })?;
+        options.set(k.trim(), v.trim());
+    }
+    (info.make)(&options).map(Some)
 }
 
 /// The extractor called `name` with default options, or `None`.
@@ -98,9 +147,9 @@ pub fn build(name: &str, options: &Options) -> Result<Option<Box<dyn Extractor>>
     INFOS.iter().find(|i| i.name == name).map(|i| (i.make)(options)).transpose()
 }
 
-/// The post-process called `name`, or `None`.
+/// The post-process called `name` with default options, or `None`.
 pub fn post_by_name(name: &str) -> Option<Box<dyn PostProcess>> {
-    post_processes().into_iter().find(|p| p.name() == name)
+    build_post(name).ok().flatten()
 }
 
 /// Comma-separated names of all extractors (for error messages).

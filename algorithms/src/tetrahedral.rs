@@ -433,6 +433,19 @@ fn owns(a: usize, va: f32, b: usize, vb: f32, iso: f32) -> bool {
     da < db || (da == db && a < b)
 }
 
+/// Tetrahedra in the lattice: six per cube (Kuhn); four per pair of neighbouring cell centres
+/// (BCC, about twelve per cell).
+pub fn tetrahedron_count(lattice: &Lattice) -> usize {
+    let cells = lattice.grid().dims.map(|d| d.saturating_sub(1));
+    match lattice {
+        Lattice::Cubic(_) => 6 * cells.iter().product::<usize>(),
+        Lattice::Bcc(_) => {
+            let [a, b, c] = cells;
+            4 * (a.saturating_sub(1) * b * c + a * b.saturating_sub(1) * c + a * b * c.saturating_sub(1))
+        }
+    }
+}
+
 /// Counts of the geometry pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TetCounts {

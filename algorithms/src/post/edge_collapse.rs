@@ -219,6 +219,10 @@ fn rebuild(mesh: &mut TriMesh, position: &[Vec3], map: &[u32]) {
     mesh.normals.clear();
 }
 
+/// A triangle whose doubled area is below this fraction of its longest edge squared (an altitude
+/// under 5% of that edge) is a sliver: its normal is not held fixed by the flip tests.
+const SLIVER: f32 = 0.05;
+
 /// Closed parts with this many vertices or fewer are not simplified further.
 pub const MIN_PART: usize = 8;
 
@@ -262,21 +266,21 @@ pub fn collapse_safe(mesh: &mut TriMesh, limit: f32, target: usize, min_cos: f32
     for &p in &part {
         part_size[p as usize] += 1;
     }
-    // Boundary vertices: on an edge with one triangle.
+    // Boundary vertices: on an edge with one triangle (or on a non-manifold edge: left alone too).
     let mut boundary = vec![false; n];
-    {
-        let mut directed: Vec<(u32, u32)> = tris.iter().flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]).collect();
-        directed.sort_unstable();
-        for &(a, b) in &directed {
-            if directed.binary_search(&(b, a)).is_err() {
-                boundary[a as usize] = true;
-                boundary[b as usize] = true;
-            }
+    let mut all_edges: Vec<(u32, u32)> =
+        tris.iter().flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]).map(|(a, b)| (a.min(b), a.max(b))).collect();
+    all_edges.sort_unstable();
+    for group in all_edges.chunk_by(|x, y| x == y) {
+        if group.len() != 2 {
+            boundary[group[0].0 as usize] = true;
+            boundary[group[0].1 as usize] = true;
         }
     }
+    all_edges.dedup();
     let key = |d: f32| Reverse(d.to_bits());
     let mut heap: BinaryHeap<(Reverse<u32>, u32, u32, u32, u32)> = BinaryHeap::new();
-    for (a, b) in edges_of(mesh) {
+    for &(a, b) in &all_edges {
         let d = position[a as usize].distance(position[b as usize]);
         if d < limit {
             heap.push((key(d), a, b, 0, 0));
@@ -297,16 +301,25 @@ pub fn collapse_safe(mesh: &mut TriMesh, limit: f32, target: usize, min_cos: f32
             continue;
         }
         // Triangles on the edge, and the link condition.
-        let shared: Vec<u32> = fan[ai].iter().copied().filter(|&t| alive[t as usize] && tris[t as usize].contains(&b)).collect();
-        if shared.len() != 2 {
+        let mut shared = [u32::MAX; 2];
+        let mut count = 0;
+        for &t in &fan[ai] {
+            if alive[t as usize] && tris[t as usize].contains(&b) {
+                if count < 2 {
+                    shared[count] = t;
+                }
+                count += 1;
+            }
+        }
+        if count != 2 {
             continue;
         }
         ring(ai, &fan, &tris, &alive, &mut neighbours_a);
         ring(bi, &fan, &tris, &alive, &mut neighbours_b);
-        let common: Vec<u32> = neighbours_a.iter().copied().filter(|w| neighbours_b.binary_search(w).is_ok()).collect();
-        let opposite: Vec<u32> =
-            shared.iter().map(|&t| tris[t as usize].iter().copied().find(|&w| w != a && w != b).unwrap_or(a)).collect();
-        if common.len() != 2 || !opposite.iter().all(|o| common.contains(o)) {
+        let common = neighbours_a.iter().filter(|w| neighbours_b.contains(w)).count();
+        let opposite = shared.map(|t| tris[t as usize].iter().copied().find(|&w| w != a && w != b).unwrap_or(a));
+        // Link condition: the endpoints share exactly the two opposite vertices.
+        if common != 2 || opposite[0] == opposite[1] {
             continue;
         }
         let degree = |v: u32| fan[v as usize].iter().filter(|&&t| alive[t as usize]).count();
@@ -323,7 +336,11 @@ pub fn collapse_safe(mesh: &mut TriMesh, limit: f32, target: usize, min_cos: f32
                 let n0 = (p[1] - p[0]).cross(p[2] - p[0]);
                 let n1 = (q[1] - q[0]).cross(q[2] - q[0]);
                 let (l0, l1) = (n0.length(), n1.length());
-                l1 > 1e-12 * l0.max(1e-30) && n0.dot(n1) >= min_cos * l0 * l1 && n1.dot(original[t as usize]) >= 0.0
+                // A sliver's normal says little: only its replacement's non-degeneracy counts.
+                let longest =
+                    (p[1] - p[0]).length_squared().max((p[2] - p[1]).length_squared()).max((p[0] - p[2]).length_squared());
+                let sliver = l0 < SLIVER * longest;
+                l1 > 1e-12 * l0.max(1e-30) && (sliver || (n0.dot(n1) >= min_cos * l0 * l1 && n1.dot(original[t as usize]) >= 0.0))
             })
         });
         if !turns_ok {
@@ -337,8 +354,11 @@ pub fn collapse_safe(mesh: &mut TriMesh, limit: f32, target: usize, min_cos: f32
         position[ai] = target_position;
         removed[bi] = true;
         part_size[part[ai] as usize] -= 1;
-        let moved: Vec<u32> = fan[bi].iter().copied().filter(|&t| alive[t as usize]).collect();
-        for t in moved {
+        let moved = std::mem::take(&mut fan[bi]);
+        for &t in &moved {
+            if !alive[t as usize] {
+                continue;
+            }
             for w in tris[t as usize].iter_mut() {
                 if *w == b {
                     *w = a;
@@ -362,16 +382,18 @@ pub fn collapse_safe(mesh: &mut TriMesh, limit: f32, target: usize, min_cos: f32
     rebuild(mesh, &position, &map);
 }
 
-/// The vertices sharing a live triangle with `v`, sorted.
+/// The vertices sharing a live triangle with `v`, each once (fans are small: a linear test).
 fn ring(v: usize, fan: &[Vec<u32>], tris: &[[u32; 3]], alive: &[bool], out: &mut Vec<u32>) {
     out.clear();
     for &t in &fan[v] {
         if alive[t as usize] {
-            out.extend(tris[t as usize].iter().copied().filter(|&w| w as usize != v));
+            for &w in &tris[t as usize] {
+                if w as usize != v && !out.contains(&w) {
+                    out.push(w);
+                }
+            }
         }
     }
-    out.sort_unstable();
-    out.dedup();
 }
 
 #[cfg(test)]

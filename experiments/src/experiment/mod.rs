@@ -6,6 +6,7 @@
 //! two-line binary in `src/bin/` calling [`run_and_assemble`].
 
 pub mod compare_algorithms;
+pub mod costen_table;
 pub mod sharp_features;
 pub mod sphere_convergence;
 pub mod surface_nets_smoothing;
@@ -124,6 +125,7 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(sphere_convergence::SphereConvergence),
         Box::new(surface_nets_smoothing::SurfaceNetsSmoothing),
         Box::new(sharp_features::SharpFeatures),
+        Box::new(costen_table::CostenTable),
     ]
 }
 

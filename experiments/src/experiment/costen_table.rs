@@ -1,0 +1,531 @@
+//! `costen_table`: the RMT paper's benchmark (`../shared/papers/costen-2026-rmt-terrain.txt`,
+//! Appendices A and B, Figs. 21-27) regenerated: three objects (sphere, asteroid, Stanford bunny)
+//! × two lattices (BCC `b`, simple cubic `s`) × three clusterings (`u` none: plain marching
+//! tetrahedra; `i` integrated: regularised marching tetrahedra as published; `p` post-processed:
+//! marching tetrahedra then the paper's edge collapse), at 50 cells a side (bunny 75 × 40 × 56),
+//! with the paper's numbers beside ours, and two rows per object and lattice the paper does not
+//! have: `i+` (our RMT defaults: boundary merging and the manifold guard) and `p+` (the
+//! topology-safe edge collapse). Every configuration runs `repeats` times, interleaved, and times
+//! are medians.
+
+use super::{model_path, Context, Experiment, ExperimentError};
+use crate::figures::plot::{self, BarChart, BarSeries};
+use crate::figures::render::{render, save_png, side_by_side, RenderOptions, Shading};
+use crate::report::{markdown_table, median};
+use isolab_algorithms::extract::PostProcess;
+use isolab_algorithms::extractors::regularised_marching_tetrahedra::{RegularisedMarchingTetrahedra, RmtOptions};
+use isolab_algorithms::extractors::MarchingTetrahedra;
+use isolab_algorithms::mesh::manifold_defects;
+use isolab_algorithms::post::EdgeCollapse;
+use isolab_algorithms::tetrahedral::tetrahedron_count;
+use isolab_algorithms::{fields, Extraction, Extractor, Field, Grid, Lattice, Samples, Vec3};
+use isolab_metrics::MeshMetrics;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+use std::time::Duration;
+
+/// The experiment.
+pub struct CostenTable;
+
+const NAME: &str = "costen_table";
+
+/// The paper's objects: id prefix, our field, and its sample counts (50 cells = 51 samples).
+const OBJECTS: [(&str, &str, [usize; 3]); 3] =
+    [("ss", "sphere", [51, 51, 51]), ("as", "asteroid", [51, 51, 51]), ("bs", "stanford-bunny", [76, 41, 57])];
+
+/// Clusterings: the paper's three, then ours.
+const METHODS: [&str; 5] = ["u", "i", "p", "i+", "p+"];
+
+/// The paper's Appendix B, one row per configuration: id, T_total, T_sampling, T_vertex,
+/// T_geometry (seconds), N_tetrahedra, N_vertices, N_triangles, N_discarded, B_lattice, B_edges,
+/// B_vertices, B_indices, F_tetrahedra (%), F_discard (%), AR_mean, AR_sd.
+type PaperRow = (&'static str, f64, f64, f64, f64, u64, u64, u64, u64, u64, u64, u64, u64, f64, f64, f64, f64);
+
+#[rustfmt::skip]
+const PAPER: [PaperRow; 18] = [
+    ("ss_bu", 0.0178, 0.00703, 0.00696, 0.00308, 160992, 50865, 101720, 0, 1114048, 16153696, 1220760, 1220640, 10.52, 0.0, 775.93, 12057.93),
+    ("ss_bi", 0.0182, 0.00712, 0.00748, 0.00288, 160992, 13605, 27200, 105086, 1114048, 16153696, 326520, 326400, 10.52, 79.44, 2.16, 58.67),
+    ("ss_bp", 0.0596, 0.01122, 0.00637, 0.0412, 160992, 13074, 26144, 75576, 1114048, 16153696, 313776, 313728, 10.52, 74.30, 1.23, 0.21),
+    ("ss_su", 0.0118, 0.0066, 0.00314, 0.00179, 70104, 35098, 70192, 0, 530604, 7693758, 842352, 842304, 9.347, 0.0, 1207.37, 15880.64),
+    ("ss_si", 0.0122, 0.00657, 0.00363, 0.00175, 70104, 9296, 18588, 72356, 530604, 7693758, 223104, 223056, 9.347, 79.56, 1.34, 0.28),
+    ("ss_sp", 0.0403, 0.0108, 0.0031, 0.0261, 70104, 10685, 21366, 48826, 530604, 7693758, 256440, 256392, 9.347, 69.56, 1.38, 0.32),
+    ("as_bu", 0.0288, 0.0203, 0.00625, 0.00144, 72240, 22550, 45096, 0, 1114048, 16153696, 541200, 541152, 4.722, 0.0, 5.81, 78.56),
+    ("as_bi", 0.0294, 0.0206, 0.00668, 0.00142, 72240, 6012, 12020, 46530, 1114048, 16153696, 144288, 144240, 4.722, 79.47, 1.16, 0.15),
+    ("as_bp", 0.0458, 0.0215, 0.00623, 0.0174, 72240, 5665, 11326, 33770, 1114048, 16153696, 135960, 135912, 4.722, 74.88, 1.23, 0.21),
+    ("as_su", 0.0166, 0.0123, 0.00288, 0.00113, 31572, 15840, 31676, 0, 530604, 7693758, 380160, 380112, 4.210, 0.0, 6.53, 106.34),
+    ("as_si", 0.0172, 0.0125, 0.00323, 0.00115, 31572, 4172, 8340, 32743, 530604, 7693758, 100128, 100080, 4.210, 79.70, 1.33, 0.28),
+    ("as_sp", 0.0306, 0.0159, 0.00283, 0.0115, 31572, 4697, 9390, 22286, 530604, 7693758, 112728, 112680, 4.210, 70.36, 1.39, 0.32),
+    ("bs_bu", 10.0, 10.0, 0.01, 0.00229, 122808, 37332, 74660, 0, 1487640, 21570780, 895968, 895920, 5.980, 0.0, 9.43, 522.45),
+    ("bs_bi", 9.9, 9.89, 0.0112, 0.0022, 122808, 10256, 20508, 77111, 1487640, 21570780, 246144, 246096, 5.980, 78.99, 1.17, 0.16),
+    ("bs_bp", 10.0, 9.96, 0.0101, 0.0297, 122808, 9669, 19334, 55326, 1487640, 21570780, 232056, 232008, 5.980, 74.10, 1.24, 0.21),
+    ("bs_su", 5.96, 5.95, 0.00391, 0.00161, 50910, 25384, 50764, 0, 710448, 10301496, 609216, 609168, 5.051, 0.0, 7.89, 187.63),
+    ("bs_si", 5.98, 5.97, 0.00467, 0.00168, 50910, 6579, 13154, 52610, 710448, 10301496, 157896, 157848, 5.051, 79.99, 1.35, 0.28),
+    ("bs_sp", 5.86, 5.83, 0.00404, 0.0182, 50910, 7616, 15228, 35536, 710448, 10301496, 182784, 182736, 5.051, 70.00, 1.39, 0.32),
+];
+
+/// One configuration, measured.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Row {
+    /// The paper's id (`as_bi`), ours with a `+`.
+    pub id: String,
+    /// Field name.
+    pub field: String,
+    /// `bcc` or `cubic`.
+    pub lattice: String,
+    /// Samples per axis of the corner grid.
+    pub dims: [usize; 3],
+    /// Grid spacing h.
+    pub spacing: f64,
+    /// Median times, ms.
+    pub t_sampling: f64,
+    /// Vertex pass.
+    pub t_vertex: f64,
+    /// Geometry pass (with the guard's checks for `i+`).
+    pub t_geometry: f64,
+    /// Normals.
+    pub t_normals: f64,
+    /// Edge collapse (`p`, `p+`).
+    pub t_post: f64,
+    /// Tetrahedra with a sign change.
+    pub n_tetrahedra: usize,
+    /// Tetrahedra in the lattice.
+    pub total_tetrahedra: usize,
+    /// Vertices.
+    pub n_vertices: usize,
+    /// Triangles.
+    pub n_triangles: usize,
+    /// Triangles discarded (repeated vertex, or removed by the collapse).
+    pub n_discarded: usize,
+    /// Samples × 4 bytes.
+    pub b_lattice: usize,
+    /// Per-sample scratch bytes (the paper's per-edge flags and indices).
+    pub b_edges: usize,
+    /// Vertices × 24 bytes (position and normal).
+    pub b_vertices: usize,
+    /// Triangles × 12 bytes.
+    pub b_indices: usize,
+    /// Triangles removed against plain marching tetrahedra on the same lattice, fraction.
+    pub removed: f64,
+    /// Vertices where the mesh is not a consistently wound manifold.
+    pub defects: usize,
+    /// Every metric of the mesh.
+    pub metrics: MeshMetrics,
+}
+
+/// One side-by-side picture.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Picture {
+    /// What it shows.
+    pub caption: String,
+    /// Path relative to the report.
+    pub path: String,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Data {
+    repeats: usize,
+    rows: Vec<Row>,
+    pictures: Vec<Picture>,
+}
+
+fn load(name: &str) -> Result<Arc<dyn Field>, ExperimentError> {
+    Ok(if name == "stanford-bunny" {
+        crate::run::load_field(&model_path(name), fields::DEFAULT_SEED)?
+    } else {
+        fields::builtin(name, Default::default()).map_err(crate::run::RunError::from)?
+    })
+}
+
+/// Extracts with method `m` (one of [`METHODS`]).
+fn run_method(m: &str, samples: &Samples, out: &mut Extraction) -> Result<usize, ExperimentError> {
+    let rmt = |options| RegularisedMarchingTetrahedra { options };
+    match m {
+        "u" | "p" | "p+" => MarchingTetrahedra.extract(samples, out)?,
+        "i" => rmt(RmtOptions::paper()).extract(samples, out)?,
+        _ => rmt(RmtOptions::default()).extract(samples, out)?,
+    }
+    let scratch = out.stats.buffer_bytes.saturating_sub(out.surface.capacity_bytes() + out.volume.capacity_bytes());
+    match m {
+        "p" => EdgeCollapse::paper(isolab_algorithms::post::edge_collapse::DEFAULT_THRESHOLD).apply(samples, out)?,
+        "p+" => EdgeCollapse::safe(isolab_algorithms::post::edge_collapse::DEFAULT_THRESHOLD).apply(samples, out)?,
+        _ => {}
+    }
+    Ok(scratch)
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+impl Experiment for CostenTable {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
+        let dir = ctx.figure_dir(NAME)?;
+        let repeats = ctx.repeats;
+        let bar = ctx.bar(NAME, (OBJECTS.len() * 2 * repeats) as u64 + 3);
+        let mut rows = Vec::new();
+        for (prefix, name, dims) in OBJECTS {
+            let field = load(name)?;
+            for (code, bcc) in [("b", true), ("s", false)] {
+                let grid = Grid::with_dims(&field.domain(), dims).map_err(crate::run::RunError::from)?;
+                let lattice = if bcc { Lattice::Bcc(grid) } else { Lattice::Cubic(grid) };
+                // Interleaved repeats: sample, then every method once, per round.
+                let mut times: Vec<[Vec<Duration>; 5]> = METHODS.iter().map(|_| Default::default()).collect();
+                let mut sampling = Vec::new();
+                let mut last: Vec<(Extraction, usize)> = Vec::new();
+                for r in 0..repeats {
+                    let samples = Samples::sample(field.clone(), lattice, 0.0).map_err(crate::run::RunError::from)?;
+                    sampling.push(samples.sampling_time());
+                    for (k, m) in METHODS.iter().enumerate() {
+                        let mut out = Extraction::default();
+                        let scratch = run_method(m, &samples, &mut out)?;
+                        let t = out.stats.times;
+                        for (slot, d) in times[k].iter_mut().zip([t.vertex, t.geometry, t.normals, t.post, t.extraction()]) {
+                            slot.push(d);
+                        }
+                        if r + 1 == repeats {
+                            last.push((out, scratch));
+                        }
+                    }
+                    bar.inc(1);
+                }
+                let unmerged = last[0].0.surface.triangles.len().max(1);
+                for (k, (m, (out, scratch))) in METHODS.iter().zip(last).enumerate() {
+                    let [v, g, n, p, _] = times[k].clone().map(median);
+                    let metrics = MeshMetrics::measure(&out.surface, Some((field.as_ref(), 0.0)));
+                    rows.push(Row {
+                        id: format!("{prefix}_{code}{m}"),
+                        field: name.into(),
+                        lattice: lattice.kind().into(),
+                        dims,
+                        spacing: f64::from(grid.spacing),
+                        t_sampling: ms(median(sampling.clone())),
+                        t_vertex: ms(v),
+                        t_geometry: ms(g),
+                        t_normals: ms(n),
+                        t_post: ms(p),
+                        n_tetrahedra: out.stats.active_cells,
+                        total_tetrahedra: tetrahedron_count(&lattice),
+                        n_vertices: out.surface.positions.len(),
+                        n_triangles: out.surface.triangles.len(),
+                        n_discarded: out.stats.discarded_triangles,
+                        b_lattice: lattice.sample_count() * 4,
+                        b_edges: scratch,
+                        b_vertices: out.surface.positions.len() * 24,
+                        b_indices: out.surface.triangles.len() * 12,
+                        removed: 1.0 - out.surface.triangles.len() as f64 / unmerged as f64,
+                        defects: manifold_defects(&out.surface).len(),
+                        metrics,
+                    });
+                }
+            }
+        }
+        let pictures = pictures(ctx, &dir)?;
+        bar.inc(3);
+        charts(&dir, &rows)?;
+        bar.finish();
+        ctx.write_data(NAME, &Data { repeats, rows, pictures })
+    }
+
+    fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
+        let data: Data = ctx.read_data(NAME)?;
+        Ok(section(ctx, &data))
+    }
+}
+
+/// Figs. 21-23: bunny at the benchmark resolution, a low-resolution sphere, a medium-resolution
+/// asteroid; BCC, integrated clustering (our defaults); flat shading with the wireframe beside
+/// smooth shading.
+fn pictures(ctx: &Context, dir: &std::path::Path) -> Result<Vec<Picture>, ExperimentError> {
+    let mut pictures = Vec::new();
+    for (name, dims, label) in [
+        ("stanford-bunny", [76, 41, 57], "Stanford bunny, 75 × 40 × 56 cells (Fig. 21)"),
+        ("sphere", [17, 17, 17], "sphere, 16³ cells (Fig. 22)"),
+        ("asteroid", [51, 51, 51], "asteroid, 50³ cells (Fig. 23)"),
+    ] {
+        let field = load(name)?;
+        let grid = Grid::with_dims(&field.domain(), dims).map_err(crate::run::RunError::from)?;
+        let samples = Samples::sample(field, Lattice::Bcc(grid), 0.0).map_err(crate::run::RunError::from)?;
+        let mut out = Extraction::default();
+        RegularisedMarchingTetrahedra::default().extract(&samples, &mut out)?;
+        let view = if name == "stanford-bunny" { Vec3::new(0.3, 0.35, 1.0) } else { Vec3::new(1.0, 0.75, 1.35) };
+        let opts = |shading, wireframe| RenderOptions { width: 360, height: 360, shading, wireframe, view, ..Default::default() };
+        let image =
+            side_by_side(&render(&out.surface, &opts(Shading::Flat, true)), &render(&out.surface, &opts(Shading::Smooth, false)));
+        let path = dir.join(format!("{name}-bcc-rmt.png"));
+        save_png(&path, &image)?;
+        pictures.push(Picture {
+            caption: format!("{label}: flat shading with wireframe, and smooth shading"),
+            path: ctx.link(&path),
+        });
+    }
+    Ok(pictures)
+}
+
+/// Figs. 25-27: triangles, pass times and mean aspect ratio of every configuration.
+fn charts(dir: &std::path::Path, rows: &[Row]) -> Result<(), ExperimentError> {
+    let paper_rows: Vec<&Row> = rows.iter().filter(|r| !r.id.ends_with('+')).collect();
+    let categories: Vec<String> = paper_rows.iter().map(|r| r.id.clone()).collect();
+    let paper = |id: &str| PAPER.iter().find(|p| p.0 == id);
+    let ours = (40, 110, 180);
+    let theirs = (200, 120, 40);
+    let series = |label: &str, color, values: Vec<f64>| BarSeries { label: label.into(), color, values };
+    let charts = [
+        (
+            "triangles",
+            BarChart {
+                title: "Triangles per configuration (Fig. 25)".into(),
+                y_label: "triangles".into(),
+                categories: categories.clone(),
+                series: vec![
+                    series("isolab", ours, paper_rows.iter().map(|r| r.n_triangles as f64).collect()),
+                    series("paper", theirs, paper_rows.iter().map(|r| paper(&r.id).map_or(f64::NAN, |p| p.7 as f64)).collect()),
+                ],
+            },
+        ),
+        (
+            "pass-times",
+            BarChart {
+                title: "Vertex and geometry pass, median ms (Fig. 26)".into(),
+                y_label: "ms".into(),
+                categories: categories.clone(),
+                series: vec![
+                    series("isolab vertex", ours, paper_rows.iter().map(|r| r.t_vertex).collect()),
+                    series(
+                        "isolab geometry + collapse",
+                        (120, 170, 220),
+                        paper_rows.iter().map(|r| r.t_geometry + r.t_post).collect(),
+                    ),
+                    series(
+                        "paper vertex",
+                        theirs,
+                        paper_rows.iter().map(|r| paper(&r.id).map_or(f64::NAN, |p| p.3 * 1e3)).collect(),
+                    ),
+                    series(
+                        "paper geometry",
+                        (240, 190, 120),
+                        paper_rows.iter().map(|r| paper(&r.id).map_or(f64::NAN, |p| p.4 * 1e3)).collect(),
+                    ),
+                ],
+            },
+        ),
+        (
+            "aspect-ratio",
+            BarChart {
+                title: "Mean aspect ratio, log10 (Fig. 27)".into(),
+                y_label: "log10 mean Verdict aspect ratio".into(),
+                categories,
+                series: vec![
+                    series("isolab", ours, paper_rows.iter().map(|r| r.metrics.quality.aspect_ratio.mean.log10()).collect()),
+                    series("paper", theirs, paper_rows.iter().map(|r| paper(&r.id).map_or(f64::NAN, |p| p.15.log10())).collect()),
+                ],
+            },
+        ),
+    ];
+    for (stem, chart) in charts {
+        plot::bars(&dir.join(stem), &chart).map_err(ExperimentError::Figure)?;
+    }
+    Ok(())
+}
+
+fn pct(x: f64) -> String {
+    format!("{:.1}%", 100.0 * x)
+}
+
+fn num(x: f64) -> String {
+    if x.abs() >= 100.0 {
+        format!("{x:.0}")
+    } else if x.abs() >= 10.0 {
+        format!("{x:.1}")
+    } else {
+        format!("{x:.2}")
+    }
+}
+
+/// "ours (paper)" or "ours" when the paper has no such row.
+fn pair(ours: String, paper: Option<String>) -> String {
+    match paper {
+        Some(p) => format!("{ours} ({p})"),
+        None => ours,
+    }
+}
+
+fn f_discard(r: &Row) -> f64 {
+    r.n_discarded as f64 / (r.n_discarded + r.n_triangles).max(1) as f64
+}
+
+fn section(ctx: &Context, data: &Data) -> String {
+    let mut md = String::from("## Regularised marching tetrahedra: the paper's benchmark (`costen_table`)\n\n");
+    md.push_str(&format!(
+        "Appendix B of Costen (2026) regenerated: 3 objects × 2 lattices (`b` BCC, `s` simple cubic, six tetrahedra per cube) × \
+         3 clusterings (`u` none, `i` integrated as published, `p` plain marching tetrahedra then the paper's edge collapse at \
+         0.5 h), at 50 cells a side (bunny 75 × 40 × 56), {} interleaved runs each, medians. Each cell reads **ours (paper)**. \
+         Rows `i+` are our RMT defaults (boundary samples merge; the manifold guard repairs what the local graph test misses), \
+         rows `p+` the topology-safe edge collapse; the paper has neither. The objects are ours: a sphere of radius 0.4 in the unit \
+         cube, our asteroid (a noise-displaced sphere, not the paper's), the bunny as a signed-distance field of the shipped \
+         model; so counts compare in kind, not digit for digit. Times are from a shared 2-core machine (the paper: an i7-11700, \
+         sampling on 16 threads), B_edges is our per-sample scratch (14 bytes: vertex base, 4-bit slots, two flags; the paper \
+         stores 58). F_discard is the paper's definition, discarded / (discarded + kept); `removed` is 1 − triangles / \
+         triangles of `u`.\n\n",
+        data.repeats
+    ));
+    let paper = |id: &str| PAPER.iter().find(|p| p.0 == id);
+    let rows = &data.rows;
+    md.push_str("### Counts\n\n");
+    let body: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            let p = paper(&r.id);
+            vec![
+                r.id.clone(),
+                pair(r.n_tetrahedra.to_string(), p.map(|p| p.5.to_string())),
+                pair(r.n_vertices.to_string(), p.map(|p| p.6.to_string())),
+                pair(r.n_triangles.to_string(), p.map(|p| p.7.to_string())),
+                pair(r.n_discarded.to_string(), p.map(|p| p.8.to_string())),
+                pair(pct(f_discard(r)), p.map(|p| format!("{:.1}%", p.14))),
+                pct(r.removed),
+                pair(pct(r.n_tetrahedra as f64 / r.total_tetrahedra.max(1) as f64), p.map(|p| format!("{:.2}%", p.13))),
+            ]
+        })
+        .collect();
+    md.push_str(&markdown_table(
+        &["ID", "N_tetrahedra", "N_vertices", "N_triangles", "N_discarded", "F_discard", "removed", "F_tetrahedra"],
+        &body,
+    ));
+    md.push_str("\n### Times (ms)\n\n");
+    let body: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            let p = paper(&r.id);
+            let total = r.t_sampling + r.t_vertex + r.t_geometry + r.t_normals + r.t_post;
+            vec![
+                r.id.clone(),
+                pair(num(total), p.map(|p| num(p.1 * 1e3))),
+                pair(num(r.t_sampling), p.map(|p| num(p.2 * 1e3))),
+                pair(num(r.t_vertex), p.map(|p| num(p.3 * 1e3))),
+                pair(num(r.t_geometry + r.t_post), p.map(|p| num(p.4 * 1e3))),
+                num(r.t_post),
+                format!(
+                    "{:.0}% / {:.0}% / {:.0}%",
+                    100.0 * r.t_sampling / total,
+                    100.0 * r.t_vertex / total,
+                    100.0 * (r.t_geometry + r.t_post) / total
+                ),
+            ]
+        })
+        .collect();
+    md.push_str(&markdown_table(
+        &[
+            "ID",
+            "T_total",
+            "T_sampling",
+            "T_vertex",
+            "T_geometry (+ collapse)",
+            "of which collapse",
+            "F_sampling / F_vertex / F_geometry",
+        ],
+        &body,
+    ));
+    md.push_str("\n### Memory and triangle quality\n\n");
+    let body: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            let p = paper(&r.id);
+            let q = &r.metrics.quality.aspect_ratio;
+            vec![
+                r.id.clone(),
+                pair(r.b_lattice.to_string(), p.map(|p| p.9.to_string())),
+                pair(r.b_edges.to_string(), p.map(|p| p.10.to_string())),
+                pair(r.b_vertices.to_string(), p.map(|p| p.11.to_string())),
+                pair(r.b_indices.to_string(), p.map(|p| p.12.to_string())),
+                pair(num(q.mean), p.map(|p| num(p.15))),
+                pair(num(q.sd), p.map(|p| num(p.16))),
+                format!("{:.1}°", r.metrics.quality.min_angle_deg),
+            ]
+        })
+        .collect();
+    md.push_str(&markdown_table(
+        &["ID", "B_lattice", "B_edges", "B_vertices", "B_indices", "AR_mean", "AR_sd", "min angle"],
+        &body,
+    ));
+    md.push_str("\n### What the paper did not measure\n\n");
+    let body: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            let m = &r.metrics;
+            let h = r.metrics.surface_distance.as_ref().map_or("-".into(), |d| format!("{:.3} h", d.mean / r.spacing));
+            vec![
+                r.id.clone(),
+                if m.topology.closed { "yes" } else { "**no**" }.into(),
+                if m.topology.is_watertight_manifold() { "yes".into() } else { format!("**no** ({} vertices)", r.defects) },
+                m.topology.euler.to_string(),
+                m.self_intersections.count.to_string(),
+                h,
+                format!("{:.2}", m.overdraw.overshading),
+            ]
+        })
+        .collect();
+    md.push_str(&markdown_table(
+        &[
+            "ID",
+            "closed",
+            "manifold",
+            "Euler",
+            "self-intersecting pairs",
+            "mean vertex distance to the surface",
+            "quad overshading",
+        ],
+        &body,
+    ));
+    md.push_str(&summary(rows));
+    md.push_str("\n| | | |\n|---|---|---|\n| ![triangles](figures/costen_table/triangles.png) | ![pass times](figures/costen_table/pass-times.png) | ![aspect ratio](figures/costen_table/aspect-ratio.png) |\n\n");
+    for p in &data.pictures {
+        md.push_str(&format!("![{0}]({1})\n\n_{0}_\n\n", p.caption, p.path));
+    }
+    let _ = ctx;
+    md
+}
+
+/// The paper's headline figures, recomputed from our rows.
+fn summary(rows: &[Row]) -> String {
+    let mean = |suffix: &str, f: &dyn Fn(&Row) -> f64| {
+        let v: Vec<f64> = rows.iter().filter(|r| r.id.ends_with(suffix)).map(f).collect();
+        v.iter().sum::<f64>() / v.len().max(1) as f64
+    };
+    let range = |suffix: &str| {
+        let v: Vec<f64> = rows.iter().filter(|r| r.id.ends_with(suffix)).map(|r| r.metrics.quality.aspect_ratio.mean).collect();
+        (v.iter().copied().fold(f64::INFINITY, f64::min), v.iter().copied().fold(0.0, f64::max))
+    };
+    let broken =
+        |suffix: &str| rows.iter().filter(|r| r.id.ends_with(suffix) && !r.metrics.topology.is_watertight_manifold()).count();
+    let (ui, ua) = range("u");
+    let (ii, ia) = range("i");
+    let (pi, pa) = range("p");
+    let (gi, ga) = range("i+");
+    format!(
+        "\n**Headline numbers, ours against the paper's.** Integrated clustering discards on average {} of candidate triangles \
+         (the paper: 79.53%) and keeps {} fewer triangles than plain marching tetrahedra (the paper's own counts give 72.5-73.3%); \
+         the paper's edge collapse: {} discarded (paper: 72.20%), {} fewer. Mean aspect ratio: unmerged {:.2}-{:.0} (paper \
+         5.81-1207), integrated {:.2}-{:.2} (paper 1.16-2.16), post-processed {:.2}-{:.2} (paper 1.23-1.39), our guarded RMT \
+         {:.2}-{:.2}. Non-manifold outputs: {} of 6 `i` rows, {} of 6 `p` rows, {} of 6 `i+` rows and {} of 6 `p+` rows.\n",
+        pct(mean("i", &f_discard)),
+        pct(mean("i", &|r| r.removed)),
+        pct(mean("p", &f_discard)),
+        pct(mean("p", &|r| r.removed)),
+        ui,
+        ua,
+        ii,
+        ia,
+        pi,
+        pa,
+        gi,
+        ga,
+        broken("i"),
+        broken("p"),
+        broken("i+"),
+        broken("p+"),
+    )
+}

@@ -7,5 +7,6 @@
 pub mod experiment;
 pub mod figures;
 pub mod io;
+pub mod peers;
 pub mod report;
 pub mod run;

@@ -121,11 +121,138 @@ pub struct Picture {
     pub path: String,
 }
 
+/// Our RMT against `ferreus_rmt` on one object (BCC, same spacing), medians of interleaved runs.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PeerRow {
+    /// Field name.
+    pub field: String,
+    /// Grid spacing.
+    pub spacing: f64,
+    /// Ours: sampling plus extraction, ms.
+    pub ours_total_ms: f64,
+    /// Ours: extraction only, ms.
+    pub ours_extraction_ms: f64,
+    /// Field evaluations we make (every lattice sample).
+    pub ours_evaluations: usize,
+    /// Theirs: `build_isosurface`, field evaluations included, ms.
+    pub theirs_ms: f64,
+    /// Field evaluations they make.
+    pub theirs_evaluations: usize,
+    /// Whether their triangles had to be flipped to face outward.
+    pub theirs_flipped: bool,
+    /// Our mesh's metrics.
+    pub ours: MeshMetrics,
+    /// Their mesh's metrics.
+    pub theirs: MeshMetrics,
+}
+
 #[derive(Serialize, Deserialize)]
 struct Data {
     repeats: usize,
     rows: Vec<Row>,
     pictures: Vec<Picture>,
+    #[serde(default)]
+    peers: Vec<PeerRow>,
+}
+
+/// Our guarded RMT and `ferreus_rmt` on the paper's three objects, alternating, `repeats` times.
+fn against_ferreus(repeats: usize) -> Result<Vec<PeerRow>, ExperimentError> {
+    let mut rows = Vec::new();
+    for (_, name, dims) in OBJECTS {
+        let field = load(name)?;
+        let grid = Grid::with_dims(&field.domain(), dims).map_err(crate::run::RunError::from)?;
+        let lattice = Lattice::Bcc(grid);
+        let (mut ours_total, mut ours_extraction, mut theirs) = (Vec::new(), Vec::new(), Vec::new());
+        let mut last = None;
+        for _ in 0..repeats {
+            let t = std::time::Instant::now();
+            let samples = Samples::sample(field.clone(), lattice, 0.0).map_err(crate::run::RunError::from)?;
+            let mut out = Extraction::default();
+            RegularisedMarchingTetrahedra::default().extract(&samples, &mut out)?;
+            ours_total.push(t.elapsed());
+            ours_extraction.push(out.stats.times.extraction());
+            let seeds = crate::peers::seeds_from(&out.surface, 500);
+            let run = crate::peers::ferreus_rmt(field.as_ref(), &grid.bounds(), grid.spacing, 0.0, &seeds);
+            theirs.push(run.time);
+            last = Some((out, run));
+        }
+        let Some((out, run)) = last else { continue };
+        rows.push(PeerRow {
+            field: name.into(),
+            spacing: f64::from(grid.spacing),
+            ours_total_ms: ms(median(ours_total)),
+            ours_extraction_ms: ms(median(ours_extraction)),
+            ours_evaluations: lattice.sample_count(),
+            theirs_ms: ms(median(theirs)),
+            theirs_evaluations: run.evaluations,
+            theirs_flipped: run.flipped,
+            ours: MeshMetrics::measure(&out.surface, Some((field.as_ref(), 0.0))),
+            theirs: MeshMetrics::measure(&run.mesh, Some((field.as_ref(), 0.0))),
+        });
+    }
+    Ok(rows)
+}
+
+fn peer_section(rows: &[PeerRow]) -> String {
+    if rows.is_empty() {
+        return String::new();
+    }
+    let mut md = String::from(
+        "\n### Against `ferreus_rmt`\n\nThe `ferreus_rmt` crate (0.1, Maptek) is an independent regularised marching tetrahedra \
+         that follows the surface from seed points (here every 500th vertex of our mesh) instead of sampling the whole volume, \
+         on Treece's stacked-plane lattice at the same spacing. Both evaluate the field in parallel; its time includes its field \
+         evaluations, so compare it with our sampling + extraction. Same field, same spacing, runs alternating, medians.\n\n",
+    );
+    let body: Vec<Vec<String>> = rows
+        .iter()
+        .flat_map(|r| {
+            let line = |who: &str, time: String, evals: usize, m: &MeshMetrics| {
+                let q = &m.quality;
+                vec![
+                    format!("{} / {who}", r.field),
+                    time,
+                    evals.to_string(),
+                    m.triangles.to_string(),
+                    format!("{:.3}", q.aspect_ratio.mean),
+                    format!("{:.2}", q.aspect_ratio.sd),
+                    format!("{:.1}°", q.min_angle_deg),
+                    if m.topology.is_watertight_manifold() { "yes".into() } else { "**no**".into() },
+                    m.self_intersections.count.to_string(),
+                    m.surface_distance.as_ref().map_or("-".into(), |d| format!("{:.3} h", d.mean / r.spacing)),
+                ]
+            };
+            [
+                line(
+                    "isolab",
+                    format!("{} ({} extraction)", num(r.ours_total_ms), num(r.ours_extraction_ms)),
+                    r.ours_evaluations,
+                    &r.ours,
+                ),
+                line(
+                    if r.theirs_flipped { "ferreus_rmt (flipped)" } else { "ferreus_rmt" },
+                    num(r.theirs_ms),
+                    r.theirs_evaluations,
+                    &r.theirs,
+                ),
+            ]
+        })
+        .collect();
+    md.push_str(&markdown_table(
+        &[
+            "object / implementation",
+            "ms",
+            "field evaluations",
+            "triangles",
+            "AR mean",
+            "AR sd",
+            "min angle",
+            "closed manifold",
+            "self-intersections",
+            "mean distance",
+        ],
+        &body,
+    ));
+    md
 }
 
 fn load(name: &str) -> Result<Arc<dyn Field>, ExperimentError> {
@@ -167,6 +294,7 @@ impl Experiment for CostenTable {
         let repeats = ctx.repeats;
         let bar = ctx.bar(NAME, (OBJECTS.len() * 2 * repeats) as u64 + 3);
         let mut rows = Vec::new();
+        let mut closeups = Vec::new();
         for (prefix, name, dims) in OBJECTS {
             let field = load(name)?;
             for (code, bcc) in [("b", true), ("s", false)] {
@@ -193,6 +321,12 @@ impl Experiment for CostenTable {
                     bar.inc(1);
                 }
                 let unmerged = last[0].0.surface.triangles.len().max(1);
+                for (m, (out, _)) in METHODS.iter().zip(&last) {
+                    let id = format!("{prefix}_{code}{m}");
+                    if let Some(picture) = defect_closeup(ctx, &dir, &id, &out.surface, grid.spacing)? {
+                        closeups.push(picture);
+                    }
+                }
                 for (k, (m, (out, scratch))) in METHODS.iter().zip(last).enumerate() {
                     let [v, g, n, p, _] = times[k].clone().map(median);
                     let metrics = MeshMetrics::measure(&out.surface, Some((field.as_ref(), 0.0)));
@@ -223,11 +357,13 @@ impl Experiment for CostenTable {
                 }
             }
         }
-        let pictures = pictures(ctx, &dir)?;
+        let mut pictures = pictures(ctx, &dir)?;
+        pictures.extend(closeups);
         bar.inc(3);
         charts(&dir, &rows)?;
+        let peers = against_ferreus(repeats)?;
         bar.finish();
-        ctx.write_data(NAME, &Data { repeats, rows, pictures })
+        ctx.write_data(NAME, &Data { repeats, rows, pictures, peers })
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
@@ -237,8 +373,7 @@ impl Experiment for CostenTable {
 }
 
 /// Figs. 21-23: bunny at the benchmark resolution, a low-resolution sphere, a medium-resolution
-/// asteroid; BCC, integrated clustering (our defaults); flat shading with the wireframe beside
-/// smooth shading.
+/// asteroid; BCC, integrated clustering (our defaults); flat shading beside smooth shading.
 fn pictures(ctx: &Context, dir: &std::path::Path) -> Result<Vec<Picture>, ExperimentError> {
     let mut pictures = Vec::new();
     for (name, dims, label) in [
@@ -263,6 +398,54 @@ fn pictures(ctx: &Context, dir: &std::path::Path) -> Result<Vec<Picture>, Experi
         });
     }
     Ok(pictures)
+}
+
+/// A close-up of the first place where `mesh` is not manifold: the triangles within three
+/// spacings of the defect, seen along their mean normal, with the wireframe. `None` when the mesh
+/// is manifold.
+fn defect_closeup(
+    ctx: &Context,
+    dir: &std::path::Path,
+    id: &str,
+    mesh: &isolab_algorithms::TriMesh,
+    spacing: f32,
+) -> Result<Option<Picture>, ExperimentError> {
+    let defects = manifold_defects(mesh);
+    let Some(&v) = defects.first() else { return Ok(None) };
+    let centre = mesh.positions[v as usize];
+    let near = |t: &[u32; 3]| t.iter().any(|&i| mesh.positions[i as usize].distance(centre) < 3.0 * spacing);
+    let mut crop = isolab_algorithms::TriMesh {
+        positions: mesh.positions.clone(),
+        normals: Vec::new(),
+        triangles: mesh.triangles.iter().copied().filter(near).collect(),
+    };
+    crop.compute_face_weighted_normals();
+    let normal = crop.triangles.iter().fold(Vec3::ZERO, |n, t| {
+        let p = t.map(|i| crop.positions[i as usize]);
+        n + (p[1] - p[0]).cross(p[2] - p[0])
+    });
+    let used: std::collections::BTreeSet<u32> = crop.triangles.iter().flatten().copied().collect();
+    let remap: std::collections::BTreeMap<u32, u32> = used.iter().enumerate().map(|(k, &i)| (i, k as u32)).collect();
+    crop.positions = used.iter().map(|&i| mesh.positions[i as usize]).collect();
+    crop.triangles = crop.triangles.iter().map(|t| t.map(|i| remap[&i])).collect();
+    crop.compute_face_weighted_normals();
+    let opts = RenderOptions {
+        width: 320,
+        height: 320,
+        wireframe: true,
+        view: normal.normalize_or(Vec3::Z) + Vec3::new(0.2, 0.3, 0.1),
+        color: [0.8, 0.3, 0.3],
+        ..Default::default()
+    };
+    let path = dir.join(format!("defect-{id}.png"));
+    save_png(&path, &render(&crop, &opts))?;
+    Ok(Some(Picture {
+        caption: format!(
+            "{id}: where it is not manifold ({} vertices at fault; close-up within 3 h of the first)",
+            defects.len()
+        ),
+        path: ctx.link(&path),
+    }))
 }
 
 /// Figs. 25-27: triangles, pass times and mean aspect ratio of every configuration.
@@ -481,6 +664,7 @@ fn section(ctx: &Context, data: &Data) -> String {
         &body,
     ));
     md.push_str(&summary(rows));
+    md.push_str(&peer_section(&data.peers));
     md.push_str("\n| | | |\n|---|---|---|\n| ![triangles](figures/costen_table/triangles.png) | ![pass times](figures/costen_table/pass-times.png) | ![aspect ratio](figures/costen_table/aspect-ratio.png) |\n\n");
     for p in &data.pictures {
         md.push_str(&format!("![{0}]({1})\n\n_{0}_\n\n", p.caption, p.path));
@@ -508,7 +692,7 @@ fn summary(rows: &[Row]) -> String {
     format!(
         "\n**Headline numbers, ours against the paper's.** Integrated clustering discards on average {} of candidate triangles \
          (the paper: 79.53%) and keeps {} fewer triangles than plain marching tetrahedra (the paper's own counts give 72.5-73.3%); \
-         the paper's edge collapse: {} discarded (paper: 72.20%), {} fewer. Mean aspect ratio: unmerged {:.2}-{:.0} (paper \
+         the paper's edge collapse: {} discarded (paper: 72.20%), {} fewer. Mean aspect ratio: unmerged {:.2}-{:.2} (paper \
          5.81-1207), integrated {:.2}-{:.2} (paper 1.16-2.16), post-processed {:.2}-{:.2} (paper 1.23-1.39), our guarded RMT \
          {:.2}-{:.2}. Non-manifold outputs: {} of 6 `i` rows, {} of 6 `p` rows, {} of 6 `i+` rows and {} of 6 `p+` rows.\n",
         pct(mean("i", &f_discard)),

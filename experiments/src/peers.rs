@@ -1,0 +1,78 @@
+//! Peer implementations run in this process on the same field, for side-by-side comparisons.
+//!
+//! - [`ferreus_rmt`]: the `ferreus_rmt` crate (Maptek, MIT), an independent regularised marching
+//!   tetrahedra that follows the surface from seed points instead of sampling the whole volume.
+//!   It evaluates the field itself (in batches; we evaluate each batch in parallel, as our own
+//!   sampling is), so its time is comparable with our sampling plus extraction.
+
+use glam::Vec3;
+use isolab_algorithms::geometry::Aabb;
+use isolab_algorithms::{Field, TriMesh};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+
+/// One `ferreus_rmt` run.
+pub struct FerreusRun {
+    /// Its mesh (wound like ours: counter-clockwise seen from outside).
+    pub mesh: TriMesh,
+    /// Wall time of `build_isosurface`, field evaluations included.
+    pub time: Duration,
+    /// Field evaluations it asked for.
+    pub evaluations: usize,
+    /// Whether its triangles came wound the other way and were flipped to compare.
+    pub flipped: bool,
+}
+
+/// Runs `ferreus_rmt::build_isosurface` with its plain averaging clustering (the paper's) on
+/// `field` over `domain` at lattice spacing `spacing`, seeded at `seeds`, leaving the surface open
+/// at the domain boundary.
+pub fn ferreus_rmt(field: &dyn Field, domain: &Aabb, spacing: f32, iso: f32, seeds: &[Vec3]) -> FerreusRun {
+    use faer::{Mat, MatRef};
+    let evaluations = AtomicUsize::new(0);
+    let mut f = |pts: MatRef<'_, f64>| -> Mat<f64> {
+        let n = pts.nrows();
+        evaluations.fetch_add(n, Ordering::Relaxed);
+        let points: Vec<Vec3> = (0..n).map(|r| Vec3::new(pts[(r, 0)] as f32, pts[(r, 1)] as f32, pts[(r, 2)] as f32)).collect();
+        let values: Vec<f64> = points.par_iter().map(|&p| f64::from(field.value(p))).collect();
+        Mat::from_fn(n, 1, |r, _| values[r])
+    };
+    let seeds = Mat::from_fn(seeds.len(), 3, |r, c| f64::from(seeds[r][c]));
+    let extents = [domain.min.x, domain.min.y, domain.min.z, domain.max.x, domain.max.y, domain.max.z].map(f64::from);
+    let t = Instant::now();
+    let mesh = ferreus_rmt::build_isosurface(
+        seeds.as_ref(),
+        &extents,
+        f64::from(spacing),
+        f64::from(iso),
+        &mut f,
+        None,
+        ferreus_rmt::ClusterMethod::Average,
+        ferreus_rmt::BoundaryClosure::None,
+        None,
+    );
+    let time = t.elapsed();
+    let positions: Vec<Vec3> = (0..mesh.vertices.nrows())
+        .map(|r| Vec3::new(mesh.vertices[(r, 0)] as f32, mesh.vertices[(r, 1)] as f32, mesh.vertices[(r, 2)] as f32))
+        .collect();
+    let mut triangles: Vec<[u32; 3]> = (0..mesh.facets.nrows())
+        .map(|r| [mesh.facets[(r, 0)] as u32, mesh.facets[(r, 1)] as u32, mesh.facets[(r, 2)] as u32])
+        .collect();
+    let mut out = TriMesh { positions, normals: Vec::new(), triangles: Vec::new() };
+    out.triangles.clone_from(&triangles);
+    let flipped = isolab_metrics::signed_volume(&out) < 0.0;
+    if flipped {
+        for t in &mut triangles {
+            t.swap(1, 2);
+        }
+        out.triangles = triangles;
+    }
+    out.compute_face_weighted_normals();
+    FerreusRun { mesh: out, time, evaluations: evaluations.into_inner(), flipped }
+}
+
+/// Seed points for a surface-following peer: every `stride`-th vertex of a mesh of the same
+/// surface (one per 500 vertices at least one), so every component gets a seed.
+pub fn seeds_from(mesh: &TriMesh, stride: usize) -> Vec<Vec3> {
+    mesh.positions.iter().step_by(stride.max(1)).copied().collect()
+}

@@ -270,8 +270,8 @@ pub trait Clustering: Sync {
     fn islands(&self, star: &Star, topology: &TetTopology) -> Islands;
 
     /// Final position of a vertex merged from `members` crossings with mean `mean`, on the level
-    /// set `iso` of `field` when the samples carry one.
-    fn place(&self, mean: Vec3, _members: u32, _field: Option<&dyn Field>, _iso: f32) -> Vec3 {
+    /// set `iso` of `field` when the samples carry one; `spacing` is the grid spacing.
+    fn place(&self, mean: Vec3, _members: u32, _field: Option<&dyn Field>, _iso: f32, _spacing: f32) -> Vec3 {
         mean
     }
 }
@@ -562,7 +562,7 @@ pub fn extract_tetrahedral(
                     scratch.slots[i] = packed;
                     for s in 0..islands.count as usize {
                         let mean = sums[s] / members[s] as f32;
-                        mesh.positions.push(clustering.place(mean, members[s], field, iso));
+                        mesh.positions.push(clustering.place(mean, members[s], field, iso, at.corners.spacing));
                         scratch.owner.push((i as u32, members[s].min(255) as u8));
                     }
                 }

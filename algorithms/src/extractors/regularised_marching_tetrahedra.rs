@@ -23,7 +23,8 @@
 //! grid-boundary edges stay exactly as plain marching tetrahedra makes them.
 //!
 //! Option `project=newton` moves each merged vertex onto the level set with Newton steps along the
-//! field gradient (`x -= (f(x) - iso) ∇f / |∇f|²`, at most three),
+//! field gradient (`x -= (f(x) - iso) ∇f / |∇f|²`, at most three, never farther than half a spacing from the mean,
+//! kept only if the residual drops),
 //! when the samples carry their field.
 //!
 //! **What we add** (both can be switched off; [`RmtOptions::paper`] is the algorithm as
@@ -190,16 +191,20 @@ impl Clustering for RmtOptions {
         Islands { count: n, slot }
     }
 
-    fn place(&self, mean: Vec3, members: u32, field: Option<&dyn Field>, iso: f32) -> Vec3 {
+    fn place(&self, mean: Vec3, members: u32, field: Option<&dyn Field>, iso: f32, spacing: f32) -> Vec3 {
         match (self.projection, field) {
-            (Projection::Newton, Some(f)) if members > 1 => newton(f, mean, iso),
+            (Projection::Newton, Some(f)) if members > 1 => newton(f, mean, iso, 0.5 * spacing),
             _ => mean,
         }
     }
 }
 
-/// Up to three Newton steps from `p` toward `f = iso` along the gradient.
-fn newton(field: &dyn Field, mut p: Vec3, iso: f32) -> Vec3 {
+/// Up to three Newton steps from `start` toward `f = iso` along the gradient. The vertex stays
+/// within `reach` of `start` and only moves if the residual drops (a distance field's gradient
+/// can point anywhere near its medial axis); otherwise `start` is kept.
+fn newton(field: &dyn Field, start: Vec3, iso: f32, reach: f32) -> Vec3 {
+    let r0 = (field.value(start) - iso).abs();
+    let mut p = start;
     for _ in 0..3 {
         let r = field.value(p) - iso;
         let g = field.gradient(p);
@@ -207,9 +212,17 @@ fn newton(field: &dyn Field, mut p: Vec3, iso: f32) -> Vec3 {
         if g2.is_nan() || g2 <= 1e-20 || r == 0.0 {
             break;
         }
-        p -= g * (r / g2);
+        let next = p - g * (r / g2);
+        if !next.is_finite() || next.distance(start) > reach {
+            break;
+        }
+        p = next;
     }
-    p
+    if (field.value(p) - iso).abs() < r0 {
+        p
+    } else {
+        start
+    }
 }
 
 impl Extractor for RegularisedMarchingTetrahedra {

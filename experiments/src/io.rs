@@ -285,6 +285,29 @@ pub fn read_mesh(path: &Path) -> Result<TriMesh, IoError> {
     }
 }
 
+/// Writes sampled values as raw little-endian f32 in the lattice's index order (x fastest; a BCC
+/// lattice's corner grid, then its centres) to `path`, and `path.json` with `lattice`, `dims`,
+/// `origin`, `spacing` and `iso`, so a peer library can read the very same samples.
+pub fn write_samples(path: &Path, samples: &isolab_algorithms::Samples) -> Result<(), IoError> {
+    write_atomic(path, |w| {
+        for v in samples.values() {
+            w.write_all(&v.to_le_bytes())?;
+        }
+        Ok(())
+    })?;
+    let g = samples.grid();
+    let header = serde_json::json!({
+        "lattice": samples.lattice().kind(),
+        "dims": g.dims,
+        "origin": g.origin.to_array(),
+        "spacing": g.spacing,
+        "iso": samples.iso(),
+    });
+    let mut json = path.as_os_str().to_owned();
+    json.push(".json");
+    write_atomic(Path::new(&json), |w| serde_json::to_writer_pretty(&mut *w, &header).map_err(std::io::Error::other))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -243,6 +243,8 @@ pub struct RunReport {
 
 /// The outcome of a run: the meshes and their report.
 pub struct RunOutcome {
+    /// The samples it extracted from.
+    pub samples: Samples,
     /// What the extractor produced.
     pub extraction: Extraction,
     /// The metrics JSON.
@@ -301,7 +303,7 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
         analytic_area: field.analytic_area(config.iso),
         metrics,
     };
-    Ok(RunOutcome { extraction, report })
+    Ok(RunOutcome { samples, extraction, report })
 }
 
 /// Writes any serializable value as pretty JSON, atomically.

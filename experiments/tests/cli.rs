@@ -254,3 +254,33 @@ fn algorithm_options_are_checked_and_named() {
     let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "16", "--set", "novalue"]);
     assert_clean_failure(&o, 2, &["NAME=VALUE"]);
 }
+
+#[test]
+fn samples_out_writes_the_raw_grid_and_its_header() {
+    let dir = tempfile::tempdir().unwrap();
+    let raw = dir.path().join("g.raw");
+    let o = isolab(&[
+        "extract",
+        "-a",
+        "marching-cubes",
+        "-f",
+        "terrain",
+        "--dims",
+        "9,5,7",
+        "-m",
+        "/dev/null",
+        "--samples-out",
+        raw.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bytes = std::fs::read(&raw).unwrap();
+    assert_eq!(bytes.len(), 9 * 5 * 7 * 4);
+    let header = json(&dir.path().join("g.raw.json"));
+    assert_eq!(header["dims"], serde_json::json!([9, 5, 7]));
+    assert_eq!(header["lattice"], "cubic");
+    // The first value is the field at the origin corner.
+    let first = f32::from_le_bytes(bytes[..4].try_into().unwrap());
+    assert!(first.is_finite());
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "8", "--samples-out", "/no/such/dir/g.raw"]);
+    assert_clean_failure(&o, 1, &["/no/such/dir/g.raw"]);
+}

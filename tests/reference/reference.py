@@ -10,7 +10,16 @@ Libraries (pinned in requirements.txt):
   RadiusRatio. Verdict's MinAngle takes the angle between face normals that are not consistently
   oriented, so at edges 02 and 13 it measures 180 degrees minus the dihedral angle: the goldens
   keep what it says, and the test reproduces that quirk explicitly;
-- libigl: all six dihedral angles of each tetrahedron (the true ones).
+- libigl: all six dihedral angles of each tetrahedron (the true ones);
+- marching cubes equivalence: VTK's vtkFlyingEdges3D and scikit-image's marching cubes (Lorensen
+  and Lewiner) run on the very grid isolab sampled (`isolab extract --samples-out`, raw f32), and
+  their meshes are compared with isolab's `marching-cubes --set on-iso=exact`: the same vertex
+  set (each vertex within 1e-5 of the spacing of one of the other's: the meshes are stored in
+  float32, whose spacing at |x| = 0.5 is 3.8e-6 of a 64^3 grid's spacing, so 1e-6 h cannot be
+  resolved), the same polygon in every cell (tables triangulate polygons differently) except in
+  cells where correct tables may disagree (a corner exactly at the iso-value, an ambiguous face or
+  an ambiguous interior: counted by reason, any other cell named as a failure), and equal area and
+  volume where no cell differs.
 
 Every library gets the identical mesh: vertices are parsed as isolab parses them (v/f lines, fans)
 and rounded to float32, as isolab stores them.
@@ -37,6 +46,8 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 MODELS = ["stanford-bunny", "spot", "fandisk", "rocker-arm", "cheburashka", "teapot"]
 # isolab meshes measured for the goldens: (name, field, resolution)
 EXTRACTED = [("mc-sphere-64", "sphere", 64), ("mc-torus-64", "torus", 64), ("mc-bunny-64", "models/stanford-bunny.obj", 64)]
+# Marching cubes equivalence cases: (field, resolution)
+EQUIVALENCE = [("sphere", 64), ("gyroid", 64), ("asteroid", 64), ("models/stanford-bunny.obj", 64)]
 # Hausdorff pairs: (name, sampled mesh, target mesh)
 HAUSDORFF = [("mc-bunny-64", "stanford-bunny")]
 
@@ -227,6 +238,159 @@ def extract(isolab, field, resolution, path):
                    check=True, stdout=subprocess.DEVNULL)
 
 
+def load_grid(raw):
+    h = json.load(open(raw + ".json"))
+    nx, ny, nz = h["dims"]
+    vol = np.fromfile(raw, dtype="<f4").reshape(nz, ny, nx)
+    return vol, np.array(h["origin"], dtype=np.float64), float(h["spacing"]), float(h["iso"])
+
+
+def vtk_flying_edges(vol, origin, h, iso):
+    import vtk
+    from vtk.util import numpy_support
+    nz, ny, nx = vol.shape
+    img = vtk.vtkImageData()
+    img.SetDimensions(nx, ny, nz)
+    img.SetSpacing(h, h, h)
+    img.SetOrigin(*origin)
+    img.GetPointData().SetScalars(numpy_support.numpy_to_vtk(vol.ravel(order="C"), deep=True, array_type=vtk.VTK_FLOAT))
+    fe = vtk.vtkFlyingEdges3D()
+    fe.SetInputData(img)
+    fe.SetValue(0, iso)
+    fe.ComputeNormalsOff()
+    fe.ComputeGradientsOff()
+    fe.ComputeScalarsOff()
+    fe.Update()
+    out = fe.GetOutput()
+    verts = numpy_support.vtk_to_numpy(out.GetPoints().GetData()).astype(np.float64)
+    faces = numpy_support.vtk_to_numpy(out.GetPolys().GetConnectivityArray()).reshape(-1, 3)
+    return verts, faces
+
+
+def skimage_marching_cubes(vol, origin, h, iso, method):
+    from skimage import measure
+    v, f, _, _ = measure.marching_cubes(vol, level=iso, spacing=(h, h, h), method=method)
+    return v[:, ::-1].astype(np.float64) + origin, np.asarray(f)
+
+
+def area_volume(verts, faces):
+    a, b, c = verts[faces[:, 0]], verts[faces[:, 1]], verts[faces[:, 2]]
+    cross = np.cross(b - a, c - a)
+    return float(0.5 * np.linalg.norm(cross, axis=1).sum()), float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
+
+
+def cell_polygons(verts_grid, faces, ids):
+    """The mesh as a set of (cell, polygon) pairs: triangles grouped by the cell holding their
+    centroid, joined into polygons through shared edges, each polygon the frozenset of its vertex
+    ids (`ids` renames vertices). Tables triangulate a polygon differently (VTK and scikit-image
+    use Lorensen's diagonals, isolab's avoid diagonals on cube faces); the polygons themselves are
+    what marching cubes defines."""
+    by_cell = {}
+    for t in faces:
+        cell = tuple(int(c) for c in np.floor(verts_grid[list(t)].mean(axis=0)))
+        by_cell.setdefault(cell, []).append([int(ids[v]) for v in t])
+    out = set()
+    for cell, tris in by_cell.items():
+        parent = list(range(len(tris)))
+
+        def root(i):
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+        edge_owner = {}
+        for k, t in enumerate(tris):
+            for a, b in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0])):
+                e = (min(a, b), max(a, b))
+                if e in edge_owner:
+                    parent[root(k)] = root(edge_owner[e])
+                else:
+                    edge_owner[e] = k
+        polys = {}
+        for k, t in enumerate(tris):
+            polys.setdefault(root(k), set()).update(t)
+        out |= {(cell, frozenset(p)) for p in polys.values()}
+    return out
+
+
+def why_cell_differs(vol, cell, iso):
+    """Why two correct marching cubes may disagree in `cell`: 'on-iso' (a corner at the iso-value,
+    or a crossing within 1e-4 of a sample: vertices that coincide or cannot be told apart),
+    'ambiguous-face' (a face with diagonal corners inside: each table resolves it its own way),
+    'ambiguous-interior' (two inside, or two outside, corners on a body diagonal: Lewiner's MC33
+    tunnels), or 'unexplained'."""
+    x, y, z = cell
+    nz, ny, nx = vol.shape
+    if not (0 <= x < nx - 1 and 0 <= y < ny - 1 and 0 <= z < nz - 1):
+        return "unexplained"
+    c = vol[z:z + 2, y:y + 2, x:x + 2]
+    # Triangles are filed by centroid, so a polygon lying in a cube face may be filed next door:
+    # look at the block of cells around. A crossing within the matching tolerance of a sample
+    # makes vertices that cannot be told apart (a corner at, or within a float of, the iso-value).
+    block = vol[max(z - 1, 0):z + 3, max(y - 1, 0):y + 3, max(x - 1, 0):x + 3].astype(np.float64) - iso
+    if (block == 0).any():
+        return "on-iso"
+    for axis in range(3):
+        a, b = np.moveaxis(block, axis, 0)[:-1], np.moveaxis(block, axis, 0)[1:]
+        cross = (a < 0) != (b < 0)
+        t = np.where(cross, a / np.where(cross, a - b, 1.0), 0.5)
+        if (np.minimum(t, 1 - t)[cross] < 1e-4).any():
+            return "on-iso"
+    inside = c < iso
+    faces = [inside[0], inside[1], inside[:, 0], inside[:, 1], inside[:, :, 0], inside[:, :, 1]]
+    if any(f[0, 0] == f[1, 1] and f[0, 1] == f[1, 0] and f[0, 0] != f[0, 1] for f in faces):
+        return "ambiguous-face"
+    for side in (True, False):
+        pts = np.argwhere(inside == side)
+        if len(pts) == 2 and np.abs(pts[0] - pts[1]).sum() == 3:
+            return "ambiguous-interior"
+    return "unexplained"
+
+
+def compare_meshes(ours, theirs, origin, h, vol=None, iso=0.0, tol=1e-5):
+    """Vertex sets matched within `tol` grid spacings both ways; per-cell polygons compared (see
+    `cell_polygons`); differing cells named."""
+    from scipy.spatial import cKDTree
+    (ov, of), (tv, tf) = ours, theirs
+    og, tg = (ov - origin) / h, (tv - origin) / h
+    d_ot, to_theirs = cKDTree(tg).query(og)
+    d_to, _ = cKDTree(og).query(tg)
+    unmatched = int((d_ot > tol).sum() + (d_to > tol).sum())
+    differing = cell_polygons(og, of, to_theirs) ^ cell_polygons(tg, tf, np.arange(len(tg)))
+    cells = {cell for cell, _ in differing}
+    cells |= {tuple(int(c) for c in np.floor(og[i])) for i in np.where(d_ot > tol)[0]}
+    area, volume = area_volume(tv, tf)
+    reasons = {}
+    for cell in cells:
+        why = why_cell_differs(vol, cell, iso) if vol is not None else "unexplained"
+        reasons.setdefault(why, []).append(cell)
+    return {"vertices": len(tv), "triangles": len(tf), "unmatched_vertices": unmatched, "differing_cells": len(cells),
+            "why": {k: len(v) for k, v in sorted(reasons.items())}, "unexplained_cells": sorted(reasons.get("unexplained", []))[:10],
+            "max_vertex_distance_h": float(max(d_ot.max(initial=0.0), d_to.max(initial=0.0))), "area": area, "volume": abs(volume),
+            "cells": sorted(cells)[:10]}
+
+
+def mc_equivalence(isolab, tmp):
+    """Per case: isolab's counts, area and volume, and each peer's comparison with it."""
+    results = {}
+    for field, res in EQUIVALENCE:
+        spec = os.path.join(ROOT, field) if field.endswith(".obj") else field
+        mesh, raw = os.path.join(tmp, "eq.ply"), os.path.join(tmp, "eq.raw")
+        subprocess.run([isolab, "extract", "-a", "marching-cubes", "-f", spec, "-r", str(res), "--set", "on-iso=exact", "-o", mesh,
+                        "--samples-out", raw, "-m", mesh + ".json"], check=True, stdout=subprocess.DEVNULL)
+        ov, of = read_mesh(mesh)
+        ov, of = np.asarray(ov, dtype=np.float64), np.asarray(of)
+        vol, origin, h, iso = load_grid(raw)
+        area, volume = area_volume(ov, of)
+        case = {"field": field, "resolution": res, "isolab": {"vertices": len(ov), "triangles": len(of), "area": area, "volume": volume}}
+        for name, peer in [("vtkFlyingEdges3D", vtk_flying_edges(vol, origin, h, iso)),
+                           ("skimage-lorensen", skimage_marching_cubes(vol, origin, h, iso, "lorensen")),
+                           ("skimage-lewiner", skimage_marching_cubes(vol, origin, h, iso, "lewiner"))]:
+            case[name] = compare_meshes((ov, of), peer, origin, h, vol, iso)
+        results[f"{os.path.basename(field)}@{res}"] = case
+    return results
+
+
 def golden(isolab):
     os.makedirs(os.path.join(HERE, "golden"), exist_ok=True)
     os.makedirs(os.path.join(HERE, "meshes"), exist_ok=True)
@@ -246,6 +410,9 @@ def golden(isolab):
         print("golden", name)
     json.dump(reference_tets(), open(os.path.join(HERE, "golden", "tets-kuhn-jittered.json"), "w"))
     print("golden tets-kuhn-jittered")
+    with tempfile.TemporaryDirectory() as tmp:
+        json.dump(mc_equivalence(isolab, tmp), open(os.path.join(HERE, "golden", "mc-equivalence.json"), "w"), indent=1)
+    print("golden mc-equivalence")
 
 
 class Checks:
@@ -269,7 +436,7 @@ def live(isolab):
     check = Checks()
     # 1. The libraries still say what the committed goldens say.
     for file in sorted(os.listdir(os.path.join(HERE, "golden"))):
-        if file.startswith("tets"):
+        if file.startswith("tets") or file.startswith("mc-equivalence"):
             continue
         g = json.load(open(os.path.join(HERE, "golden", file)))
         now = measure(*read_mesh(os.path.join(ROOT, g["mesh"])))
@@ -300,6 +467,23 @@ def live(isolab):
                   f"boundary/non-manifold edges ours {ours['boundary_edges']}/{ours['non_manifold_edges']}")
             check(name, close(ours["aspect_ratio"]["mean"], ref["vtk"]["aspect_mean"], 1e-6) and close(ours["aspect_ratio"]["max"], ref["vtk"]["aspect_max"], 1e-6),
                   f"Verdict aspect ours {ours['aspect_ratio']['mean']:.6f}/{ours['aspect_ratio']['max']:.4f} vtk {ref['vtk']['aspect_mean']:.6f}/{ref['vtk']['aspect_max']:.4f}")
+    # 3. Marching cubes equivalence with VTK and scikit-image on the grids isolab samples.
+    with tempfile.TemporaryDirectory() as tmp:
+        for key, case in mc_equivalence(isolab, tmp).items():
+            ours = case["isolab"]
+            for peer in ("vtkFlyingEdges3D", "skimage-lorensen", "skimage-lewiner"):
+                p = case[peer]
+                check(f"{key} {peer}", p["unmatched_vertices"] == 0 and p["vertices"] == ours["vertices"],
+                      f"vertices ours {ours['vertices']} peer {p['vertices']}, unmatched {p['unmatched_vertices']}, "
+                      f"max distance {p['max_vertex_distance_h']:.2e} h, cells {p['cells']}")
+                check(f"{key} {peer}", not p["unexplained_cells"],
+                      f"triangles ours {ours['triangles']} peer {p['triangles']}; cells whose polygons differ: {p['differing_cells']} "
+                      f"{p['why']}; unexplained {p['unexplained_cells']}")
+                # Different diagonals of a non-planar polygon change area and volume a little.
+                rel = 1e-5 if p["differing_cells"] == 0 else 1e-3
+                closed = case["field"] != "gyroid"  # the gyroid is cut by the domain: no volume
+                check(f"{key} {peer}", close(p["area"], ours["area"], rel) and (not closed or close(p["volume"], abs(ours["volume"]), rel)),
+                      f"area {ours['area']:.9f}/{p['area']:.9f} volume {abs(ours['volume']):.9f}/{p['volume']:.9f} (to {rel:g})")
     print(f"{check.passed} passed, {check.failed} failed")
     return check.failed == 0
 

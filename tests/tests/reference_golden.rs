@@ -23,7 +23,10 @@ fn goldens() -> Vec<(String, Value)> {
     let mut out: Vec<(String, Value)> = std::fs::read_dir(&dir)
         .expect("golden directory")
         .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "json") && !p.file_name().unwrap().to_string_lossy().starts_with("tets"))
+        .filter(|p| {
+            let name = p.file_name().unwrap().to_string_lossy();
+            p.extension().is_some_and(|e| e == "json") && !name.starts_with("tets") && !name.starts_with("mc-equivalence")
+        })
         .map(|p| {
             (
                 p.file_stem().unwrap().to_string_lossy().into_owned(),
@@ -164,5 +167,45 @@ fn tetrahedron_metrics_match_vtk() {
         assert!(s.min_dihedral_deg <= v + 1e-9, "tet {i}: the true minimum is never above VTK's");
         assert!(rel_close(s.aspect_ratio, a, 1e-6), "tet {i}: aspect {} vs VTK {a}", s.aspect_ratio);
         assert!(rel_close(s.radius_ratio, r, 1e-6), "tet {i}: radius ratio {} vs VTK {r}", s.radius_ratio);
+    }
+}
+
+/// Our marching cubes on the grids VTK's vtkFlyingEdges3D and scikit-image's marching cubes
+/// (Lorensen and Lewiner) meshed in `tests/reference/golden/mc-equivalence.json`: the same vertex
+/// and triangle counts, and area and volume within 1e-5 (1e-3 where some cell's polygons differ,
+/// which the live check allows only in cells with an ambiguous face or a corner at the iso-value;
+/// different diagonals of the same polygon move area and volume a little).
+#[test]
+fn marching_cubes_matches_vtk_and_scikit_image() {
+    use isolab_experiments::run::{run, RunConfig};
+    let golden: Value =
+        serde_json::from_str(&std::fs::read_to_string(root().join("tests/reference/golden/mc-equivalence.json")).unwrap())
+            .unwrap();
+    let cases = golden.as_object().unwrap();
+    assert_eq!(cases.len(), 4);
+    for (key, case) in cases {
+        let field = case["field"].as_str().unwrap();
+        let spec = if field.ends_with(".obj") { root().join(field).to_string_lossy().into_owned() } else { field.to_owned() };
+        let mut config = RunConfig::new("marching-cubes", &spec, case["resolution"].as_u64().unwrap() as usize);
+        config.options.set("on-iso", "exact");
+        let out = run(&config).unwrap();
+        let mesh = &out.extraction.surface;
+        let area = isolab_metrics::surface_area(mesh);
+        let volume = isolab_metrics::signed_volume(mesh).abs();
+        for peer in ["vtkFlyingEdges3D", "skimage-lorensen", "skimage-lewiner"] {
+            let p = &case[peer];
+            assert_eq!(mesh.positions.len() as u64, p["vertices"].as_u64().unwrap(), "{key} {peer}: vertices");
+            assert_eq!(mesh.triangles.len() as u64, p["triangles"].as_u64().unwrap(), "{key} {peer}: triangles");
+            assert_eq!(p["unexplained_cells"].as_array().unwrap().len(), 0, "{key} {peer}: {}", p["unexplained_cells"]);
+            let rel = if p["differing_cells"].as_u64().unwrap() == 0 { 1e-5 } else { 1e-3 };
+            assert!(rel_close(area, p["area"].as_f64().unwrap(), rel), "{key} {peer}: area {area} vs {}", p["area"]);
+            if field != "gyroid" {
+                assert!(
+                    rel_close(volume, p["volume"].as_f64().unwrap(), rel),
+                    "{key} {peer}: volume {volume} vs {}",
+                    p["volume"]
+                );
+            }
+        }
     }
 }

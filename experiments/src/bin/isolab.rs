@@ -64,6 +64,10 @@ enum Command {
         /// Write the metrics JSON here (printed to stdout when absent).
         #[arg(long, short)]
         metrics: Option<PathBuf>,
+        /// Write the sampled grid: raw little-endian f32, x fastest (`PATH`), and its dims, origin,
+        /// spacing and iso as JSON (`PATH.json`), for running a peer library on the same samples.
+        #[arg(long)]
+        samples_out: Option<PathBuf>,
     },
     /// Print the metrics JSON of a mesh file (.obj or .ply).
     Metrics {
@@ -145,6 +149,7 @@ fn main() -> ExitCode {
             set,
             output,
             metrics,
+            samples_out,
         } => {
             let mut options = isolab_algorithms::Options::new();
             for (k, v) in set
@@ -156,7 +161,7 @@ fn main() -> ExitCode {
                 options.set(k, v);
             }
             let config = RunConfig { algorithm, field, resolution, dims, lattice, iso, seed, post, options };
-            extract(&config, output, metrics).map_err(|e| (e.exit_code(), e.to_string()))
+            extract(&config, output, metrics, samples_out).map_err(|e| (e.exit_code(), e.to_string()))
         }
         Command::Metrics { file } => io::read_mesh(&file)
             .map(|mesh| {
@@ -200,9 +205,14 @@ fn render(
     result.map_err(|e| (1, e.to_string()))
 }
 
-fn extract(config: &RunConfig, output: Option<PathBuf>, metrics: Option<PathBuf>) -> Result<(), RunError> {
+fn extract(
+    config: &RunConfig,
+    output: Option<PathBuf>,
+    metrics: Option<PathBuf>,
+    samples_out: Option<PathBuf>,
+) -> Result<(), RunError> {
     // Refuse unwritable outputs before spending time on extraction.
-    for path in output.iter().chain(metrics.iter()) {
+    for path in output.iter().chain(metrics.iter()).chain(samples_out.iter()) {
         let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
         if !dir.is_dir() {
             return Err(io::IoError::Write {
@@ -220,6 +230,9 @@ fn extract(config: &RunConfig, output: Option<PathBuf>, metrics: Option<PathBuf>
     let outcome = run(config)?;
     if let Some(path) = &output {
         io::write_mesh(path, &outcome.extraction.surface)?;
+    }
+    if let Some(path) = &samples_out {
+        io::write_samples(path, &outcome.samples)?;
     }
     match &metrics {
         Some(path) => write_json(path, &outcome.report)?,

@@ -265,6 +265,7 @@ struct Ctx<'a> {
     rows: &'a [Row],
     placement: Placement,
     field: Option<&'a dyn crate::field::Field>,
+    tables: Tables,
 }
 
 impl Ctx<'_> {
@@ -291,7 +292,7 @@ impl Ctx<'_> {
     /// ([`RING_FACES`]) that are ring faces of the neighbouring cell too. Both cells of a face
     /// compute the same answer.
     fn joined_faces(&self, case: u8, x: usize, y: usize, z: usize) -> u8 {
-        let rings = RING_FACES[case as usize];
+        let rings = self.tables.rings[case as usize];
         if rings == 0 {
             return 0;
         }
@@ -303,13 +304,13 @@ impl Ctx<'_> {
                 return joins;
             }
             let other = self.cell_case(n[0] as usize, n[1] as usize, n[2] as usize);
-            joins | u8::from(RING_FACES[other as usize] >> opposite_face(f) & 1 == 1) << f
+            joins | u8::from(self.tables.rings[other as usize] >> opposite_face(f) & 1 == 1) << f
         })
     }
 
     /// Vertices of the surface cells in cell layer `z`: one per separate piece of surface in the
     /// cell (the polygons of its marching cubes case), at the mean of that piece's edge crossings.
-    /// `base` gets each cell's first vertex index and `cases` its [`table_entry`] code.
+    /// `base` gets each cell's first vertex index and `cases` its [`Tables::entry`] code.
     fn cell_vertices(
         &self,
         z: usize,
@@ -340,7 +341,7 @@ impl Ctx<'_> {
                 }
                 let code = u16::from(case) << 6 | u16::from(self.joined_faces(case, x, y, z));
                 cases[c] = code;
-                let entry = table_entry(code);
+                let entry = self.tables.entry(code);
                 let mut sums = [Vec3::ZERO; 4];
                 let mut counts = [0.0f32; 4];
                 let mut crossings = [(0u8, Vec3::ZERO); 12];
@@ -406,10 +407,11 @@ impl Ctx<'_> {
     ) {
         let [nx, ny, _] = self.grid.dims;
         let cx = nx - 1;
+        let tables = self.tables;
         // The vertex of the piece of surface that crosses local edge `e` of a cell.
         let cell = |layer: (&[u32], &[u16]), x: usize, y: usize, e: usize| {
             let c = x + cx * y;
-            layer.0[c] + u32::from(table_entry(layer.1[c]).edge_polygon[e])
+            layer.0[c] + u32::from(tables.entry(layer.1[c]).edge_polygon[e])
         };
         let positions = &mesh.positions;
         let at = |i: u32| if i & EXTERN == 0 { positions[i as usize] } else { ghost[(i & !EXTERN) as usize] };
@@ -520,14 +522,27 @@ impl Ctx<'_> {
     }
 }
 
-/// The table entry for a cell code `case << 6 | joined faces`: the default table unless a face
-/// is joined.
-#[inline]
-fn table_entry(code: u16) -> &'static Case {
-    if code & 63 == 0 {
-        &TABLE[(code >> 6) as usize]
-    } else {
-        &FACE_CHOICE_TABLE[code as usize]
+/// The cube tables, dereferenced once per pass instead of once per lookup.
+#[derive(Clone, Copy)]
+struct Tables {
+    default: &'static [Case; 256],
+    rings: &'static [u8; 256],
+}
+
+impl Tables {
+    fn get() -> Tables {
+        Tables { default: &TABLE, rings: &RING_FACES }
+    }
+
+    /// The table entry for a cell code `case << 6 | joined faces`: the default table unless a
+    /// face is joined (rare: only at faces wrapped on both sides).
+    #[inline]
+    fn entry(&self, code: u16) -> &'static Case {
+        if code & 63 == 0 {
+            &self.default[(code >> 6) as usize]
+        } else {
+            &FACE_CHOICE_TABLE[code as usize]
+        }
     }
 }
 
@@ -705,7 +720,15 @@ impl Extractor for SurfaceNets {
         if matches!(self.placement, Placement::Qef { .. }) && field.is_none() {
             return Err(ExtractError::NeedsField { algorithm: self.name() });
         }
-        let ctx = Ctx { values: samples.values(), grid, iso: samples.iso(), rows: &s.rows, placement: self.placement, field };
+        let ctx = Ctx {
+            values: samples.values(),
+            grid,
+            iso: samples.iso(),
+            rows: &s.rows,
+            placement: self.placement,
+            field,
+            tables: Tables::get(),
+        };
         let smoothing = self.options.smoothing != Smoothing::None && self.options.iterations > 0;
         let cell_layers = nz - 1;
         let tasks = crate::extractors::slabs::task_count(self.options.parallelism, grid.cell_count(), cell_layers);

@@ -7,6 +7,8 @@
 
 pub mod compare_algorithms;
 pub mod costen_table;
+pub mod decimation;
+pub mod peers;
 pub mod sharp_features;
 pub mod sphere_convergence;
 pub mod surface_nets_smoothing;
@@ -126,6 +128,8 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(surface_nets_smoothing::SurfaceNetsSmoothing),
         Box::new(sharp_features::SharpFeatures),
         Box::new(costen_table::CostenTable),
+        Box::new(peers::Peers),
+        Box::new(decimation::Decimation),
     ]
 }
 

@@ -12,6 +12,7 @@ pub mod peers;
 pub mod sharp_features;
 pub mod sphere_convergence;
 pub mod surface_nets_smoothing;
+pub mod svoboda_timing;
 
 use crate::io::{write_atomic, IoError};
 use crate::run::RunError;
@@ -130,6 +131,7 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(costen_table::CostenTable),
         Box::new(peers::Peers),
         Box::new(decimation::Decimation),
+        Box::new(svoboda_timing::SvobodaTiming),
     ]
 }
 

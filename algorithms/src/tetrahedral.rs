@@ -53,6 +53,7 @@ use crate::extract::{ExtractError, Extraction};
 use crate::field::Field;
 use crate::lattice::{Grid, Lattice};
 use crate::samples::Samples;
+use crate::sign_rows::{classify_rows, span, Row};
 use glam::Vec3;
 use std::sync::LazyLock;
 use std::time::Instant;
@@ -426,6 +427,31 @@ impl Layout {
     }
 }
 
+/// For samples of each parity (corners 0, BCC centres 1): the rows their neighbours lie in, as
+/// (in the other grid?, y offset, z offset) of grid row indices, the sample's own row included.
+fn row_neighbours(topo: &TetTopology) -> [Vec<(bool, isize, isize)>; 2] {
+    std::array::from_fn(|odd| {
+        let mut out = vec![(false, 0, 0)];
+        for d in topo.directions {
+            let cross = d[0] & 1 != 0;
+            let shift = |c: i32| -> isize {
+                (if !cross {
+                    c / 2
+                } else if odd == 0 {
+                    (c - 1) / 2
+                } else {
+                    (c + 1) / 2
+                }) as isize
+            };
+            let r = (cross, shift(d[1]), shift(d[2]));
+            if !out.contains(&r) {
+                out.push(r);
+            }
+        }
+        out
+    })
+}
+
 /// Whether the crossing on edge `(a, b)` belongs to `a`: it lies nearer `a` (ties: lower index).
 #[inline]
 fn owns(a: usize, va: f32, b: usize, vb: f32, iso: f32) -> bool {
@@ -477,26 +503,55 @@ pub fn extract_tetrahedral(
     // Vertex pass.
     let t = Instant::now();
     let n = values.len();
-    scratch.base.clear();
-    scratch.base.resize(n, 0);
-    scratch.slots.clear();
-    scratch.slots.resize(n, 0);
-    scratch.touch.clear();
-    scratch.touch.resize(n, false);
-    scratch.no_merge.resize(n, false);
+    // Base and slots are read only for samples that own a crossing, which this pass writes, so a
+    // reused scratch is not cleared; a new one is allocated zeroed (the OS maps zero pages lazily,
+    // so only pages near the surface are ever touched).
+    if scratch.base.len() < n {
+        scratch.base = vec![0; n];
+        scratch.slots = vec![0; n];
+    }
+    if scratch.touch.len() < n {
+        scratch.touch = vec![false; n];
+    } else {
+        scratch.touch[..n].fill(false);
+    }
+    if scratch.no_merge.len() < n {
+        scratch.no_merge = vec![false; n];
+    }
     scratch.owner.clear();
     let layout = Layout::new(&at, topo);
     let mesh = &mut out.surface;
     let half = 0.5 * at.corners.spacing;
     let steps: [Vec3; DIRECTIONS] = topo.directions.map(|d| Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * half);
+    // Row summaries of both grids: a row whose neighbouring rows (in both grids) all share its
+    // state has no crossing and is skipped without loading its neighbours.
+    let mut rows: Vec<Vec<Row>> = Vec::with_capacity(layout.parts.len());
     for part in &layout.parts {
+        let mut r = Vec::new();
+        let len = part.dims.iter().product::<usize>();
+        classify_rows(&values[part.start..part.start + len], part.dims[0], iso, &mut r);
+        rows.push(r);
+    }
+    let row_offsets = row_neighbours(topo);
+    let mut near: Vec<Row> = Vec::with_capacity(16);
+    for (p, part) in layout.parts.iter().enumerate() {
         let [dx, dy, dz] = part.dims;
+        let other = if layout.parts.len() > 1 { 1 - p } else { p };
         for z in 0..dz {
             for y in 0..dy {
+                near.clear();
+                for &(cross, oy, oz) in &row_offsets[part.odd as usize] {
+                    let (g, dims) = if cross { (other, part.cross_dims) } else { (p, part.dims) };
+                    let (ry, rz) = (y as isize + oy, z as isize + oz);
+                    if ry >= 0 && rz >= 0 && (ry as usize) < dims[1] && (rz as usize) < dims[2] {
+                        near.push(rows[g][ry as usize + dims[1] * rz as usize]);
+                    }
+                }
+                let Some((lo, hi)) = span(&near, dx.max(part.cross_dims[0])) else { continue };
                 let row_interior = (1..dy.saturating_sub(1)).contains(&y) && (1..dz.saturating_sub(1)).contains(&z);
                 let row_same = part.start + dx * (y + dy * z);
                 let row_cross = part.cross_start + part.cross_dims[0] * (y + part.cross_dims[1] * z);
-                for x in 0..dx {
+                for x in lo.saturating_sub(1)..(hi + 2).min(dx) {
                     let i = row_same + x;
                     let vi = values[i];
                     let inside = vi < iso;

@@ -125,8 +125,21 @@ pub fn parse_obj(text: &str, path: &Path, coordinates: Coordinates) -> Result<Tr
 
 /// Writes `path` atomically: `write` fills a temporary file beside it, which is renamed over
 /// `path` only when everything succeeded; on any failure the temporary file is removed.
+///
+/// A path that exists and is not a regular file (`/dev/null`, a FIFO, a terminal) is written
+/// directly: renaming over it would replace the device with a file. (Writing `-m /dev/null`
+/// once did exactly that here, and every later reader of `/dev/null` on the machine got our
+/// JSON, the compiler's probes included.)
 pub fn write_atomic(path: &Path, write: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>) -> Result<(), IoError> {
     let err = |source| IoError::Write { path: path.into(), source };
+    if std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+        let result = (|| {
+            let mut w = BufWriter::new(std::fs::OpenOptions::new().write(true).open(path)?);
+            write(&mut w)?;
+            w.flush()
+        })();
+        return result.map_err(err);
+    }
     let name = path.file_name().ok_or_else(|| err(std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file name")))?;
     let mut tmp_name = std::ffi::OsString::from(".");
     tmp_name.push(name);
@@ -311,6 +324,15 @@ pub fn write_samples(path: &Path, samples: &isolab_algorithms::Samples) -> Resul
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[cfg(unix)]
+    #[test]
+    fn writing_to_dev_null_keeps_it_a_device() {
+        use std::os::unix::fs::FileTypeExt;
+        write_atomic(Path::new("/dev/null"), |w| w.write_all(b"{}")).unwrap();
+        let kind = std::fs::metadata("/dev/null").unwrap().file_type();
+        assert!(kind.is_char_device(), "/dev/null was replaced by a regular file");
+    }
 
     #[test]
     fn obj_errors_name_the_line() {

@@ -9,6 +9,15 @@ pub fn model(name: &str) -> String {
     format!("{}/../models/{name}", env!("CARGO_MANIFEST_DIR"))
 }
 
+/// A built-in field by name, or a shipped model (`name.obj`) as a signed-distance field.
+pub fn object_field(name: &str) -> std::sync::Arc<dyn isolab_algorithms::Field> {
+    if name.ends_with(".obj") {
+        isolab_experiments::run::load_field(&model(name), Default::default()).expect("shipped model")
+    } else {
+        isolab_algorithms::fields::builtin(name, Default::default()).expect("built-in field")
+    }
+}
+
 /// Samples on a unit-spaced cubic grid of `dims`, from a closure of the integer coordinates.
 pub fn grid_samples(dims: [usize; 3], mut value: impl FnMut(usize, usize, usize) -> f32) -> Samples {
     let grid = Grid { origin: Vec3::ZERO, spacing: 1.0, dims };

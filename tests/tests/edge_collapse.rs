@@ -4,16 +4,12 @@
 use isolab_algorithms::extract::{Extraction, PostProcess};
 use isolab_algorithms::extractors::{build_post, MarchingTetrahedra};
 use isolab_algorithms::post::EdgeCollapse;
-use isolab_algorithms::{fields, Grid, Lattice, Samples, TetMesh};
+use isolab_algorithms::{Grid, Lattice, Samples, TetMesh};
 use isolab_tests::{assert_closed_manifold, extract, lattice_samples};
 use proptest::prelude::*;
 
 fn sampled(name: &str, bcc: bool, dims: [usize; 3]) -> Samples {
-    let field = if name.ends_with(".obj") {
-        isolab_experiments::run::load_field(&isolab_tests::model(name), Default::default()).unwrap()
-    } else {
-        fields::builtin(name, Default::default()).unwrap()
-    };
+    let field = isolab_tests::object_field(name);
     let grid = Grid::with_dims(&field.domain(), dims).unwrap();
     Samples::sample(field, if bcc { Lattice::Bcc(grid) } else { Lattice::Cubic(grid) }, 0.0).unwrap()
 }

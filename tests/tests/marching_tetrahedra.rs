@@ -5,7 +5,7 @@
 use isolab_algorithms::extractors::regularised_marching_tetrahedra::{RegularisedMarchingTetrahedra, RmtOptions};
 use isolab_algorithms::extractors::MarchingTetrahedra;
 use isolab_algorithms::tetrahedral::{topology, TetKind, DIRECTIONS};
-use isolab_algorithms::{fields, mesh::manifold_defects, Extractor, Grid, Lattice, Samples};
+use isolab_algorithms::{mesh::manifold_defects, Extractor, Grid, Lattice, Samples};
 use isolab_tests::{assert_closed_manifold, extract, lattice_samples};
 use proptest::prelude::*;
 
@@ -94,11 +94,7 @@ proptest! {
 }
 
 fn sampled(name: &str, bcc: bool, dims: Option<[usize; 3]>, resolution: usize) -> Samples {
-    let field = if name.ends_with(".obj") {
-        isolab_experiments::run::load_field(&isolab_tests::model(name), Default::default()).unwrap()
-    } else {
-        fields::builtin(name, Default::default()).unwrap()
-    };
+    let field = isolab_tests::object_field(name);
     let grid = match dims {
         Some(d) => Grid::with_dims(&field.domain(), d).unwrap(),
         None => Grid::covering(&field.domain(), resolution).unwrap(),

@@ -8,7 +8,7 @@
 //! topology-safe edge collapse). Every configuration runs `repeats` times, interleaved, and times
 //! are medians.
 
-use super::{model_path, Context, Experiment, ExperimentError};
+use super::{load_object, Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, BarChart, BarSeries};
 use crate::figures::render::{render, save_png, side_by_side, RenderOptions, Shading};
 use crate::report::{markdown_table, median};
@@ -18,10 +18,9 @@ use isolab_algorithms::extractors::MarchingTetrahedra;
 use isolab_algorithms::mesh::manifold_defects;
 use isolab_algorithms::post::EdgeCollapse;
 use isolab_algorithms::tetrahedral::tetrahedron_count;
-use isolab_algorithms::{fields, Extraction, Extractor, Field, Grid, Lattice, Samples, Vec3};
+use isolab_algorithms::{Extraction, Extractor, Grid, Lattice, Samples, Vec3};
 use isolab_metrics::MeshMetrics;
 use serde::{Deserialize, Serialize};
-use std::sync::Arc;
 use std::time::Duration;
 
 /// The experiment.
@@ -177,7 +176,7 @@ fn projection(repeats: usize) -> Result<Vec<ProjectionRow>, ExperimentError> {
     use isolab_algorithms::extractors::regularised_marching_tetrahedra::Projection;
     let mut rows = Vec::new();
     for (_, name, dims) in OBJECTS {
-        let field = load(name)?;
+        let field = load_object(name)?;
         let grid = Grid::with_dims(&field.domain(), dims).map_err(crate::run::RunError::from)?;
         let samples = Samples::sample(field.clone(), Lattice::Bcc(grid), 0.0).map_err(crate::run::RunError::from)?;
         let measure = |projection| -> Result<(MeshMetrics, f64), ExperimentError> {
@@ -252,7 +251,7 @@ fn projection_section(rows: &[ProjectionRow]) -> String {
 fn against_ferreus(repeats: usize) -> Result<Vec<PeerRow>, ExperimentError> {
     let mut rows = Vec::new();
     for (_, name, dims) in OBJECTS {
-        let field = load(name)?;
+        let field = load_object(name)?;
         let grid = Grid::with_dims(&field.domain(), dims).map_err(crate::run::RunError::from)?;
         let lattice = Lattice::Bcc(grid);
         let (mut ours_total, mut ours_extraction, mut theirs) = (Vec::new(), Vec::new(), Vec::new());
@@ -348,14 +347,6 @@ fn peer_section(rows: &[PeerRow]) -> String {
     md
 }
 
-fn load(name: &str) -> Result<Arc<dyn Field>, ExperimentError> {
-    Ok(if name == "stanford-bunny" {
-        crate::run::load_field(&model_path(name), fields::DEFAULT_SEED)?
-    } else {
-        fields::builtin(name, Default::default()).map_err(crate::run::RunError::from)?
-    })
-}
-
 /// Extracts with method `m` (one of [`METHODS`]).
 fn run_method(m: &str, samples: &Samples, out: &mut Extraction) -> Result<usize, ExperimentError> {
     let rmt = |options| RegularisedMarchingTetrahedra { options };
@@ -389,7 +380,7 @@ impl Experiment for CostenTable {
         let mut rows = Vec::new();
         let mut closeups = Vec::new();
         for (prefix, name, dims) in OBJECTS {
-            let field = load(name)?;
+            let field = load_object(name)?;
             for (code, bcc) in [("b", true), ("s", false)] {
                 let grid = Grid::with_dims(&field.domain(), dims).map_err(crate::run::RunError::from)?;
                 let lattice = if bcc { Lattice::Bcc(grid) } else { Lattice::Cubic(grid) };
@@ -475,7 +466,7 @@ fn pictures(ctx: &Context, dir: &std::path::Path) -> Result<Vec<Picture>, Experi
         ("sphere", [17, 17, 17], "sphere, 16³ cells (Fig. 22)"),
         ("asteroid", [51, 51, 51], "asteroid, 50³ cells (Fig. 23)"),
     ] {
-        let field = load(name)?;
+        let field = load_object(name)?;
         let grid = Grid::with_dims(&field.domain(), dims).map_err(crate::run::RunError::from)?;
         let samples = Samples::sample(field, Lattice::Bcc(grid), 0.0).map_err(crate::run::RunError::from)?;
         let mut out = Extraction::default();

@@ -9,15 +9,14 @@
 //! the report says so.
 
 use super::peers::PythonPeers;
-use super::{model_path, Context, Experiment, ExperimentError};
+use super::{load_object, Context, Experiment, ExperimentError};
 use crate::report::{markdown_table, median};
 use isolab_algorithms::extract::PostProcess;
 use isolab_algorithms::extractors::MarchingTetrahedra;
 use isolab_algorithms::post::EdgeCollapse;
-use isolab_algorithms::{fields, Extraction, Extractor, Field, Grid, Lattice, Samples, TriMesh};
+use isolab_algorithms::{Extraction, Extractor, Grid, Lattice, Samples, TriMesh};
 use isolab_metrics::{hausdorff, triangle_quality, Sampling};
 use serde::{Deserialize, Serialize};
-use std::sync::Arc;
 use std::time::Duration;
 
 /// The experiment.
@@ -56,14 +55,6 @@ struct Data {
     repeats: usize,
     rows: Vec<Row>,
     skipped: Vec<String>,
-}
-
-fn load(name: &str) -> Result<Arc<dyn Field>, ExperimentError> {
-    Ok(if name == "stanford-bunny" {
-        crate::run::load_field(&model_path(name), fields::DEFAULT_SEED)?
-    } else {
-        fields::builtin(name, Default::default()).map_err(crate::run::RunError::from)?
-    })
 }
 
 fn row(object: &str, input: &TriMesh, target: usize, decimator: &str, mesh: &TriMesh, times: Vec<Duration>, h: f32) -> Row {
@@ -108,7 +99,7 @@ impl Experiment for Decimation {
         let bar = ctx.bar(NAME, OBJECTS.len() as u64);
         let mut rows = Vec::new();
         for (name, dims) in OBJECTS {
-            let field = load(name)?;
+            let field = load_object(name)?;
             let grid = Grid::with_dims(&field.domain(), dims).map_err(crate::run::RunError::from)?;
             let samples = Samples::sample(field, Lattice::Bcc(grid), 0.0).map_err(crate::run::RunError::from)?;
             let mut mt = Extraction::default();

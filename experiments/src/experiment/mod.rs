@@ -190,6 +190,16 @@ pub fn model_path(name: &str) -> String {
     format!("{}/../models/{name}.obj", env!("CARGO_MANIFEST_DIR"))
 }
 
+/// A built-in field by name, or a shipped model by its file stem (`stanford-bunny`) as a
+/// signed-distance field: the objects the paper reproductions use.
+pub fn load_object(name: &str) -> Result<Arc<dyn Field>, ExperimentError> {
+    if std::path::Path::new(&model_path(name)).exists() {
+        Ok(crate::run::load_field(&model_path(name), isolab_algorithms::fields::DEFAULT_SEED)?)
+    } else {
+        Ok(isolab_algorithms::fields::builtin(name, Default::default()).map_err(crate::run::RunError::from)?)
+    }
+}
+
 /// One extractor on one set of samples: median extraction time and every metric.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Measured {

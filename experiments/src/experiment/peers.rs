@@ -113,25 +113,17 @@ impl PythonPeers {
 
     /// One timed run: (ms, vertices, triangles).
     fn run(&mut self, raw: &Path, peer: &str, threads: usize) -> Result<(f64, usize, usize), String> {
-        let request = serde_json::json!({"raw": raw, "peer": peer, "threads": threads});
-        writeln!(self.stdin, "{request}").map_err(|e| e.to_string())?;
-        self.stdin.flush().map_err(|e| e.to_string())?;
-        let mut line = String::new();
-        self.stdout.read_line(&mut line).map_err(|e| e.to_string())?;
-        let v: serde_json::Value = serde_json::from_str(&line).map_err(|e| format!("{line:?}: {e}"))?;
-        if let Some(e) = v.get("error") {
-            return Err(e.to_string());
-        }
-        let n = |k: &str| v[k].as_u64().unwrap_or(0) as usize;
-        Ok((v["ms"].as_f64().unwrap_or(f64::NAN), n("vertices"), n("triangles")))
+        self.request(&serde_json::json!({"raw": raw, "peer": peer, "threads": threads}))
     }
-}
 
-impl PythonPeers {
     /// pymeshlab's quadric edge collapse of `mesh` to `target` faces into `out`: (ms, vertices,
     /// triangles).
     pub(crate) fn decimate(&mut self, mesh: &Path, target: usize, out: &Path) -> Result<(f64, usize, usize), String> {
-        let request = serde_json::json!({"peer": "pymeshlab-quadric", "mesh": mesh, "target": target, "out": out});
+        self.request(&serde_json::json!({"peer": "pymeshlab-quadric", "mesh": mesh, "target": target, "out": out}))
+    }
+
+    /// Sends one request line and reads its answer: (ms, vertices, triangles), or the peer's error.
+    fn request(&mut self, request: &serde_json::Value) -> Result<(f64, usize, usize), String> {
         writeln!(self.stdin, "{request}").map_err(|e| e.to_string())?;
         self.stdin.flush().map_err(|e| e.to_string())?;
         let mut line = String::new();

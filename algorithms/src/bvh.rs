@@ -93,6 +93,11 @@ impl TriangleBvh {
         self.closest(p)
     }
 
+    /// The triangles, in tree order.
+    pub fn triangles(&self) -> &[[Vec3; 3]] {
+        &self.triangles
+    }
+
     /// Number of triangles.
     pub fn len(&self) -> usize {
         self.triangles.len()

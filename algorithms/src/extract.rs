@@ -51,6 +51,10 @@ pub struct Stats {
     pub active_cells: usize,
     /// Bytes of output buffers plus scratch buffers held at the end.
     pub buffer_bytes: usize,
+    /// Iterative extractors: whether they met their stopping condition (`None`: not iterative).
+    pub converged: Option<bool>,
+    /// Things the user should know about the input or the result (an open input surface, ...).
+    pub warnings: Vec<String>,
 }
 
 /// The output of an extractor: a reusable buffer. [`Extraction::clear`] keeps capacity so
@@ -108,6 +112,14 @@ pub enum ExtractError {
         /// Post-process name.
         post: &'static str,
     },
+    /// The input cannot be meshed with these settings (a spacing larger than the model, ...).
+    #[error("{algorithm}: {reason}")]
+    BadInput {
+        /// Algorithm name.
+        algorithm: &'static str,
+        /// What is wrong, naming the input and the setting.
+        reason: String,
+    },
     /// The output would not fit 32-bit indices.
     #[error("{algorithm}: output too large for 32-bit indices ({vertices} vertices)")]
     TooLarge {
@@ -132,6 +144,12 @@ pub trait Extractor: Send + Sync {
 
     /// One line saying what it does.
     fn description(&self) -> &'static str;
+
+    /// Whether its main output is a tetrahedral volume (whose boundary is the surface) rather
+    /// than an isosurface: experiments about isosurface accuracy leave such extractors out.
+    fn produces_volume(&self) -> bool {
+        false
+    }
 
     /// Extracts from `samples` into `out`, which is cleared first (keeping capacity).
     fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError>;

@@ -46,6 +46,12 @@ pub trait Field: Send + Sync {
         }
     }
 
+    /// The triangles whose level set this field is, when it is a mesh field (a surface `S` that
+    /// algorithms like `bcc-sculpt` test against exactly).
+    fn surface_mesh(&self) -> Option<&crate::bvh::TriangleBvh> {
+        None
+    }
+
     /// The analytic volume enclosed by the level set `iso` within the default domain, where known.
     fn analytic_volume(&self, _iso: f32) -> Option<f64> {
         None

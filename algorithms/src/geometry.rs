@@ -1,6 +1,6 @@
 //! Small geometric helpers shared by fields, lattices and extractors.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 /// An axis-aligned bounding box.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -136,6 +136,32 @@ pub fn trilinear_gradient(c: &[f32; 8], q: Vec3) -> Vec3 {
         iu * iw * (c[3] - c[0]) + u * iw * (c[2] - c[1]) + iu * w * (c[7] - c[4]) + u * w * (c[6] - c[5]),
         iu * iv * (c[4] - c[0]) + u * iv * (c[5] - c[1]) + iu * v * (c[7] - c[3]) + u * v * (c[6] - c[2]),
     )
+}
+
+/// The six dihedral angles of a tetrahedron, degrees, in edge order 01, 02, 03, 12, 13, 23.
+pub fn dihedral_angles(p: [Vec3; 4]) -> [f64; 6] {
+    let p = p.map(|v| v.as_dvec3());
+    const EDGES: [(usize, usize, usize, usize); 6] =
+        [(0, 1, 2, 3), (0, 2, 1, 3), (0, 3, 1, 2), (1, 2, 0, 3), (1, 3, 0, 2), (2, 3, 0, 1)];
+    EDGES.map(|(i, j, k, l)| {
+        let e = (p[j] - p[i]).normalize_or_zero();
+        let project = |v: DVec3| v - e * v.dot(e);
+        let (u, w) = (project(p[k] - p[i]), project(p[l] - p[i]));
+        let c = u.dot(w) / (u.length() * w.length());
+        if c.is_finite() {
+            c.clamp(-1.0, 1.0).acos().to_degrees()
+        } else {
+            0.0
+        }
+    })
+}
+
+/// Circumcentre of a tetrahedron (`None` when it is flat).
+pub fn circumcentre(p: [DVec3; 4]) -> Option<DVec3> {
+    let (u, v, w) = (p[1] - p[0], p[2] - p[0], p[3] - p[0]);
+    let det = u.dot(v.cross(w));
+    let c = (u.length_squared() * v.cross(w) + v.length_squared() * w.cross(u) + w.length_squared() * u.cross(v)) / (2.0 * det);
+    (det != 0.0 && c.is_finite()).then(|| p[0] + c)
 }
 
 #[cfg(test)]

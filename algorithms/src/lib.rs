@@ -36,6 +36,7 @@ pub mod lattice;
 pub mod mesh;
 pub mod options;
 pub mod post;
+pub mod predicates;
 pub mod samples;
 pub mod sign_rows;
 pub mod tables;

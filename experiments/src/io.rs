@@ -167,6 +167,32 @@ pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<(), IoError> {
     }
 }
 
+/// Writes tetrahedra as a legacy ASCII VTK unstructured grid (cell type 10), which ParaView,
+/// VisIt, meshio and VTK itself open.
+pub fn write_vtk_tets(path: &Path, mesh: &isolab_algorithms::TetMesh) -> Result<(), IoError> {
+    write_atomic(path, |w| {
+        writeln!(w, "# vtk DataFile Version 3.0\nisolab tetrahedra\nASCII\nDATASET UNSTRUCTURED_GRID")?;
+        writeln!(w, "POINTS {} float", mesh.positions.len())?;
+        for p in &mesh.positions {
+            writeln!(w, "{} {} {}", p.x, p.y, p.z)?;
+        }
+        writeln!(w, "CELLS {} {}", mesh.tetrahedra.len(), 5 * mesh.tetrahedra.len())?;
+        for t in &mesh.tetrahedra {
+            writeln!(w, "4 {} {} {} {}", t[0], t[1], t[2], t[3])?;
+        }
+        writeln!(w, "CELL_TYPES {}", mesh.tetrahedra.len())?;
+        for _ in &mesh.tetrahedra {
+            writeln!(w, "10")?;
+        }
+        Ok(())
+    })
+}
+
+/// The path of the tetrahedra written beside a surface output: the same stem with `.vtk`.
+pub fn tetrahedra_path(surface: &Path) -> std::path::PathBuf {
+    surface.with_extension("vtk")
+}
+
 /// OBJ text: `v`, `vn` (when normals exist) and `f` lines, 1-based.
 pub fn write_obj(w: &mut impl Write, mesh: &TriMesh) -> std::io::Result<()> {
     writeln!(w, "# isolab: {} vertices, {} triangles", mesh.positions.len(), mesh.triangles.len())?;

@@ -6,7 +6,7 @@ use isolab_algorithms::{
     extractors, fields, ExtractError, Extraction, Field, FieldError, Grid, Lattice, LatticeError, OptionError, Options,
     SampleError, Samples,
 };
-use isolab_metrics::MeshMetrics;
+use isolab_metrics::{volume_metrics, MeshMetrics, VolumeMetrics};
 use serde::Serialize;
 use std::path::Path;
 use std::sync::Arc;
@@ -236,6 +236,13 @@ pub struct RunReport {
     /// Analytic area, where known.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub analytic_area: Option<f64>,
+    /// Tetrahedral-mesh measures (volume extractors: `dihedral_deg`, `boundary_distance`,
+    /// `volume_ratio`, `encloses`, `converged`).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub volume_mesh: Option<VolumeMetrics>,
+    /// What the extractor warned about (an open input surface, non-convergence).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     /// Mesh measures.
     #[serde(flatten)]
     pub metrics: MeshMetrics,
@@ -275,6 +282,8 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
         post.apply(&samples, &mut extraction)?;
     }
     let metrics = MeshMetrics::measure(&extraction.surface, Some((field.as_ref(), config.iso)));
+    let volume_mesh =
+        volume_metrics(&extraction.volume, &extraction.surface, Some((field.as_ref(), config.iso)), extraction.stats.converged);
     let t = extraction.stats.times;
     let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
     let report = RunReport {
@@ -301,6 +310,8 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
         triangles_per_second: extraction.stats.triangles as f64 / t.extraction().as_secs_f64().max(1e-9),
         analytic_volume: field.analytic_volume(config.iso),
         analytic_area: field.analytic_area(config.iso),
+        volume_mesh,
+        warnings: extraction.stats.warnings.clone(),
         metrics,
     };
     Ok(RunOutcome { samples, extraction, report })

@@ -284,3 +284,55 @@ fn samples_out_writes_the_raw_grid_and_its_header() {
     let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "8", "--samples-out", "/no/such/dir/g.raw"]);
     assert_clean_failure(&o, 1, &["/no/such/dir/g.raw"]);
 }
+
+#[test]
+fn bcc_sculpt_writes_tetrahedra_beside_the_surface_and_its_metrics() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = dir.path().join("spot.obj");
+    let metrics = dir.path().join("spot.json");
+    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/spot.obj");
+    let o = isolab(&[
+        "extract",
+        "-a",
+        "bcc-sculpt",
+        "-f",
+        model,
+        "-r",
+        "12",
+        "--set",
+        "cells=6",
+        "--offset-ratio",
+        "0.8",
+        "--perturbations",
+        "1",
+        "-o",
+        mesh.to_str().unwrap(),
+        "-m",
+        metrics.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m = json(&metrics);
+    for key in ["tetrahedra", "dihedral_deg", "boundary_distance", "volume_ratio", "encloses", "converged"] {
+        assert!(m.get(key).is_some(), "{key} missing from the metrics JSON");
+    }
+    assert_eq!(m["encloses"], true);
+    let vtk = std::fs::read_to_string(dir.path().join("spot.vtk")).unwrap();
+    let cells = format!("CELLS {} ", m["tetrahedra"]);
+    assert!(vtk.starts_with("# vtk DataFile") && vtk.contains(&cells), "tetrahedra written beside the surface");
+}
+
+#[test]
+fn bcc_sculpt_refuses_impossible_settings_by_name() {
+    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/spot.obj");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["extract", "-a", "bcc-sculpt", "-f", model, "-r", "8"];
+        args.extend_from_slice(extra);
+        isolab(&args)
+    };
+    assert_clean_failure(&run(&["--spacing", "100"]), 1, &["spacing 100", "larger than 'spot'"]);
+    assert_clean_failure(&run(&["--offset-ratio", "0"]), 2, &["offset-ratio", "above 0"]);
+    assert_clean_failure(&run(&["--offset-ratio", "-0.5"]), 2, &["offset-ratio"]);
+    assert_clean_failure(&run(&["--perturbations", "0"]), 2, &["perturbations", "at least 1"]);
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "8", "--spacing", "1"]);
+    assert_clean_failure(&o, 2, &["marching-cubes does not take option 'spacing'"]);
+}

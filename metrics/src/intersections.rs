@@ -12,11 +12,12 @@
 //!
 //! Degenerate triangles (repeated index or zero area) are skipped: the topology report counts them.
 
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use isolab_algorithms::bvh::TriangleBvh;
+use isolab_algorithms::predicates::{dominant_axis, o2, o3};
+pub use isolab_algorithms::predicates::{segment_meets_triangle, triangles_meet};
 use isolab_algorithms::{Aabb, TriMesh};
 use rayon::prelude::*;
-use robust::{orient2d, orient3d, Coord, Coord3D};
 use serde::{Deserialize, Serialize};
 
 /// At most this many intersecting pairs are listed.
@@ -29,86 +30,6 @@ pub struct SelfIntersections {
     pub count: usize,
     /// The first [`MAX_LISTED_PAIRS`] pairs, as triangle indices `[i, j]` with `i < j`, sorted.
     pub pairs: Vec<[u32; 2]>,
-}
-
-fn c3(p: Vec3) -> Coord3D<f64> {
-    Coord3D { x: f64::from(p.x), y: f64::from(p.y), z: f64::from(p.z) }
-}
-
-fn o3(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> i8 {
-    let v = orient3d(c3(a), c3(b), c3(c), c3(d));
-    (v > 0.0) as i8 - (v < 0.0) as i8
-}
-
-/// Drops the coordinate along `axis` for 2D tests in a plane.
-fn c2(p: Vec3, axis: usize) -> Coord<f64> {
-    let (u, v) = match axis {
-        0 => (p.y, p.z),
-        1 => (p.z, p.x),
-        _ => (p.x, p.y),
-    };
-    Coord { x: f64::from(u), y: f64::from(v) }
-}
-
-fn o2(a: Vec3, b: Vec3, c: Vec3, axis: usize) -> i8 {
-    let v = orient2d(c2(a, axis), c2(b, axis), c2(c, axis));
-    (v > 0.0) as i8 - (v < 0.0) as i8
-}
-
-/// The axis a triangle's plane is least parallel to (the one to drop for 2D tests).
-fn dominant_axis(t: &[Vec3; 3]) -> usize {
-    let n: DVec3 = (t[1] - t[0]).as_dvec3().cross((t[2] - t[0]).as_dvec3()).abs();
-    if n.x >= n.y && n.x >= n.z {
-        0
-    } else if n.y >= n.z {
-        1
-    } else {
-        2
-    }
-}
-
-fn same_sign_or_zero(a: i8, b: i8, c: i8) -> bool {
-    (a >= 0 && b >= 0 && c >= 0) || (a <= 0 && b <= 0 && c <= 0)
-}
-
-/// Closed 2D segment-segment intersection.
-fn segments_meet_2d(p: Vec3, q: Vec3, a: Vec3, b: Vec3, axis: usize) -> bool {
-    let (d1, d2) = (o2(a, b, p, axis), o2(a, b, q, axis));
-    let (d3, d4) = (o2(p, q, a, axis), o2(p, q, b, axis));
-    if d1 * d2 < 0 && d3 * d4 < 0 {
-        return true;
-    }
-    let on = |x: Vec3, s: Vec3, e: Vec3| {
-        let (cx, cs, ce) = (c2(x, axis), c2(s, axis), c2(e, axis));
-        cx.x >= cs.x.min(ce.x) && cx.x <= cs.x.max(ce.x) && cx.y >= cs.y.min(ce.y) && cx.y <= cs.y.max(ce.y)
-    };
-    (d1 == 0 && on(p, a, b)) || (d2 == 0 && on(q, a, b)) || (d3 == 0 && on(a, p, q)) || (d4 == 0 && on(b, p, q))
-}
-
-/// Closed 2D point-in-triangle.
-fn point_in_triangle_2d(p: Vec3, t: &[Vec3; 3], axis: usize) -> bool {
-    same_sign_or_zero(o2(t[0], t[1], p, axis), o2(t[1], t[2], p, axis), o2(t[2], t[0], p, axis))
-}
-
-/// Whether the closed segment `pq` meets the closed triangle `t`.
-pub fn segment_meets_triangle(p: Vec3, q: Vec3, t: &[Vec3; 3]) -> bool {
-    let (s1, s2) = (o3(t[0], t[1], t[2], p), o3(t[0], t[1], t[2], q));
-    if s1 == s2 && s1 != 0 {
-        return false;
-    }
-    if s1 == 0 && s2 == 0 {
-        let axis = dominant_axis(t);
-        return point_in_triangle_2d(p, t, axis)
-            || point_in_triangle_2d(q, t, axis)
-            || (0..3).any(|k| segments_meet_2d(p, q, t[k], t[(k + 1) % 3], axis));
-    }
-    same_sign_or_zero(o3(p, q, t[0], t[1]), o3(p, q, t[1], t[2]), o3(p, q, t[2], t[0]))
-}
-
-/// Whether two closed triangles with no shared vertex meet.
-pub fn triangles_meet(a: &[Vec3; 3], b: &[Vec3; 3]) -> bool {
-    (0..3).any(|k| segment_meets_triangle(a[k], a[(k + 1) % 3], b))
-        || (0..3).any(|k| segment_meets_triangle(b[k], b[(k + 1) % 3], a))
 }
 
 /// Triangles `(s, a, b)` and `(s, c, d)` sharing only vertex `s`: do they meet elsewhere?

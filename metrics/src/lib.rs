@@ -17,6 +17,7 @@ pub mod overdraw;
 pub mod quality;
 pub mod tet_quality;
 pub mod topology;
+pub mod volume_mesh;
 
 pub use accuracy::{
     hausdorff, normal_deviation, signed_volume, surface_area, surface_distance, DistanceStats, Hausdorff, NormalDeviation,
@@ -28,6 +29,7 @@ pub use overdraw::{quad_overdraw, Overdraw, View};
 pub use quality::{triangle_quality, TriangleQuality};
 pub use tet_quality::{tet_quality, TetQuality};
 pub use topology::{topology, Topology};
+pub use volume_mesh::{volume_metrics, VolumeMetrics};
 
 use isolab_algorithms::{Field, TriMesh};
 use serde::{Deserialize, Serialize};

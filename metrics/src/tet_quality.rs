@@ -11,7 +11,8 @@
 //!   (`(b-a)×(c-a)·(d-a) > 0`).
 
 use crate::Summary;
-use glam::{DVec3, Vec3};
+use glam::Vec3;
+use isolab_algorithms::geometry::circumcentre;
 use isolab_algorithms::TetMesh;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -33,23 +34,7 @@ pub struct TetShape {
     pub radius_edge_ratio: f64,
 }
 
-/// The six dihedral angles of a tetrahedron, degrees, in edge order 01, 02, 03, 12, 13, 23.
-pub fn dihedral_angles(p: [Vec3; 4]) -> [f64; 6] {
-    let p = p.map(|v| v.as_dvec3());
-    const EDGES: [(usize, usize, usize, usize); 6] =
-        [(0, 1, 2, 3), (0, 2, 1, 3), (0, 3, 1, 2), (1, 2, 0, 3), (1, 3, 0, 2), (2, 3, 0, 1)];
-    EDGES.map(|(i, j, k, l)| {
-        let e = (p[j] - p[i]).normalize_or_zero();
-        let project = |v: DVec3| v - e * v.dot(e);
-        let (u, w) = (project(p[k] - p[i]), project(p[l] - p[i]));
-        let c = u.dot(w) / (u.length() * w.length());
-        if c.is_finite() {
-            c.clamp(-1.0, 1.0).acos().to_degrees()
-        } else {
-            0.0
-        }
-    })
-}
+pub use isolab_algorithms::geometry::dihedral_angles;
 
 /// The shape of tetrahedron `p`.
 pub fn tet_shape(p: [Vec3; 4]) -> TetShape {
@@ -60,9 +45,7 @@ pub fn tet_shape(p: [Vec3; 4]) -> TetShape {
     let faces = [[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]];
     let area_sum: f64 = faces.iter().map(|f| 0.5 * (d[f[1]] - d[f[0]]).cross(d[f[2]] - d[f[0]]).length()).sum();
     let r_in = 3.0 * volume.abs() / area_sum;
-    let centre =
-        (u.length_squared() * v.cross(w) + v.length_squared() * w.cross(u) + w.length_squared() * u.cross(v)) / (2.0 * det);
-    let r_circ = centre.length();
+    let r_circ = circumcentre(d).map_or(f64::INFINITY, |c| c.distance(d[0]));
     let lengths = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)].map(|(i, j)| d[i].distance(d[j]));
     let l_min = lengths.iter().copied().fold(f64::INFINITY, f64::min);
     let l_max = lengths.iter().copied().fold(0.0, f64::max);

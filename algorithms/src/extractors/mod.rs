@@ -4,6 +4,7 @@
 //! [`Extractor`](crate::Extractor) (module doc: paper, summary, guarantees, costs) and a
 //! `from_options` constructor, declare the module below, and add one line to [`INFOS`].
 
+pub mod bcc_sculpt;
 pub mod dual_contouring;
 pub mod marching_cubes;
 pub mod marching_tetrahedra;
@@ -11,6 +12,7 @@ pub mod regularised_marching_tetrahedra;
 mod slabs;
 pub mod surface_nets;
 
+pub use bcc_sculpt::BccSculpt;
 pub use dual_contouring::DualContouring;
 pub use marching_cubes::MarchingCubes;
 pub use marching_tetrahedra::MarchingTetrahedra;
@@ -76,6 +78,13 @@ pub const INFOS: &[ExtractorInfo] = &[
         description: regularised_marching_tetrahedra::DESCRIPTION,
         options: regularised_marching_tetrahedra::OPTION_NAMES,
         make: regularised_marching_tetrahedra::from_options,
+    },
+    // Stuart et al. 2013: BCC lattice sculpted to the surface, snowflakes, ODT relaxation (volume).
+    ExtractorInfo {
+        name: "bcc-sculpt",
+        description: bcc_sculpt::DESCRIPTION,
+        options: bcc_sculpt::OPTION_NAMES,
+        make: bcc_sculpt::from_options,
     },
 ];
 

@@ -67,6 +67,11 @@ impl Field for MeshField {
             d
         }
     }
+
+    fn surface_mesh(&self) -> Option<&TriangleBvh> {
+        Some(&self.bvh)
+    }
+
     fn domain(&self) -> Aabb {
         self.domain
     }

@@ -57,10 +57,20 @@ enum Command {
         /// Smoothing iterations (shorthand for --set iterations=N).
         #[arg(long, allow_negative_numbers = true)]
         iterations: Option<String>,
+        /// bcc-sculpt: lattice spacing h (shorthand for --set spacing=H).
+        #[arg(long, allow_negative_numbers = true)]
+        spacing: Option<String>,
+        /// bcc-sculpt: d_offset / h, where relaxation stops (shorthand for --set offset-ratio=R).
+        #[arg(long, allow_negative_numbers = true)]
+        offset_ratio: Option<String>,
+        /// bcc-sculpt: perturbed lattices to try, keeping the best (shorthand for --set perturbations=K).
+        #[arg(long, allow_negative_numbers = true)]
+        perturbations: Option<String>,
         /// Any algorithm option, NAME=VALUE (repeatable; see the algorithm's module documentation).
         #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_option)]
         set: Vec<(String, String)>,
-        /// Write the mesh (.obj or .ply).
+        /// Write the mesh (.obj or .ply); volume extractors also write their tetrahedra beside it
+        /// (same name, .vtk).
         #[arg(long, short)]
         output: Option<PathBuf>,
         /// Write the metrics JSON here (printed to stdout when absent).
@@ -148,6 +158,9 @@ fn main() -> ExitCode {
             post,
             smoothing,
             iterations,
+            spacing,
+            offset_ratio,
+            perturbations,
             set,
             output,
             metrics,
@@ -159,6 +172,9 @@ fn main() -> ExitCode {
                 .map(|(k, v)| (k.as_str(), v.as_str()))
                 .chain(smoothing.as_deref().map(|v| ("smoothing", v)))
                 .chain(iterations.as_deref().map(|v| ("iterations", v)))
+                .chain(spacing.as_deref().map(|v| ("spacing", v)))
+                .chain(offset_ratio.as_deref().map(|v| ("offset-ratio", v)))
+                .chain(perturbations.as_deref().map(|v| ("perturbations", v)))
             {
                 options.set(k, v);
             }
@@ -230,8 +246,14 @@ fn extract(
         }
     }
     let outcome = run(config)?;
+    for warning in &outcome.report.warnings {
+        eprintln!("warning: {warning}");
+    }
     if let Some(path) = &output {
         io::write_mesh(path, &outcome.extraction.surface)?;
+        if !outcome.extraction.volume.tetrahedra.is_empty() {
+            io::write_vtk_tets(&io::tetrahedra_path(path), &outcome.extraction.volume)?;
+        }
     }
     if let Some(path) = &samples_out {
         io::write_samples(path, &outcome.samples)?;

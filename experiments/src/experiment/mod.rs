@@ -11,6 +11,7 @@ pub mod decimation;
 pub mod peers;
 pub mod sharp_features;
 pub mod sphere_convergence;
+pub mod stuart_tables;
 pub mod surface_nets_smoothing;
 pub mod svoboda_timing;
 
@@ -132,6 +133,7 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(peers::Peers),
         Box::new(decimation::Decimation),
         Box::new(svoboda_timing::SvobodaTiming),
+        Box::new(stuart_tables::StuartTables),
     ]
 }
 

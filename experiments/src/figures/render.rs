@@ -219,6 +219,28 @@ pub fn side_by_side(left: &Image, right: &Image) -> Image {
     Image { width, height, rgb }
 }
 
+/// Images in rows of `columns`, left to right then top to bottom, 4-pixel gaps, white background.
+pub fn grid(images: &[&Image], columns: usize) -> Image {
+    let gap = 4;
+    let columns = columns.max(1);
+    let rows = images.len().div_ceil(columns);
+    let cell_w = images.iter().map(|i| i.width).max().unwrap_or(0);
+    let cell_h = images.iter().map(|i| i.height).max().unwrap_or(0);
+    let used_columns = columns.min(images.len()) as u32;
+    let width = (used_columns * cell_w + used_columns.saturating_sub(1) * gap).max(1);
+    let height = (rows as u32 * cell_h + (rows as u32).saturating_sub(1) * gap).max(1);
+    let mut rgb = vec![255u8; (width * height * 3) as usize];
+    for (k, img) in images.iter().enumerate() {
+        let (x0, y0) = ((k % columns) as u32 * (cell_w + gap), (k / columns) as u32 * (cell_h + gap));
+        for y in 0..img.height {
+            let src = &img.rgb[(y * img.width * 3) as usize..((y + 1) * img.width * 3) as usize];
+            let at = (((y0 + y) * width + x0) * 3) as usize;
+            rgb[at..at + src.len()].copy_from_slice(src);
+        }
+    }
+    Image { width, height, rgb }
+}
+
 /// Writes a PNG atomically.
 pub fn save_png(path: &Path, image: &Image) -> Result<(), crate::io::IoError> {
     crate::io::write_atomic(path, |w| {
@@ -279,6 +301,20 @@ mod tests {
         assert_eq!(px(0, 0), bg);
         let empty = render(&TriMesh::default(), &RenderOptions { width: 8, height: 8, ..Default::default() });
         assert!(empty.rgb.chunks(3).all(|p| p == bg));
+    }
+
+    #[test]
+    fn grid_places_images_in_rows_of_equal_cells() {
+        let a = Image { width: 2, height: 1, rgb: vec![1; 6] };
+        let b = Image { width: 1, height: 2, rgb: vec![2; 6] };
+        let g = grid(&[&a, &b, &a], 2);
+        // Cells are 2x2 with 4-pixel gaps: two columns, two rows.
+        assert_eq!((g.width, g.height), (8, 8));
+        let px = |x: u32, y: u32| &g.rgb[((y * 8 + x) * 3) as usize..((y * 8 + x) * 3 + 3) as usize];
+        assert_eq!(px(0, 0), &[1, 1, 1]);
+        assert_eq!(px(6, 1), &[2, 2, 2]);
+        assert_eq!(px(1, 6), &[1, 1, 1]);
+        assert_eq!(px(7, 7), &[255, 255, 255]);
     }
 
     #[test]

@@ -137,3 +137,20 @@ fn bcc_sculpt_is_registered_and_refuses_bad_options() {
     o.set("spacing", "-1");
     assert!(extractors::build("bcc-sculpt", &o).err().unwrap().to_string().contains("spacing"));
 }
+
+#[test]
+fn a_time_budget_returns_the_best_mesh_so_far() {
+    let field = object_field("fandisk.obj");
+    let options = SculptOptions {
+        cells: 10,
+        offset_ratio: 0.2,
+        perturbations: 50,
+        budget: Some(std::time::Duration::from_millis(1)),
+        ..Default::default()
+    };
+    let result = sculpt_surface(field.surface_mesh().unwrap(), "fandisk", &options).unwrap();
+    assert!(result.report.attempts_run >= 1 && result.report.attempts_run < 50, "{:?}", result.report);
+    assert!(!result.report.converged, "ratio 0.2 cannot converge in 1 ms");
+    assert_valid_volume(&result.volume, "fandisk within a budget");
+    assert!(encloses(&result.boundary, field.surface_mesh().unwrap()));
+}

@@ -134,8 +134,8 @@ impl Default for SculptOptions {
             max_iterations: 1000,
             budget: None,
             quality_floor: 20.0,
-            attract: true,
-            clearance: 0.5,
+            attract: false,
+            clearance: 0.0,
         }
     }
 }

@@ -151,6 +151,12 @@ pub trait Extractor: Send + Sync {
         false
     }
 
+    /// Whether its output is local to each cell, so [`crate::chunks::extract_chunked`] can mesh
+    /// chunks independently and weld them exactly.
+    fn supports_chunks(&self) -> bool {
+        false
+    }
+
     /// Extracts from `samples` into `out`, which is cleared first (keeping capacity).
     fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError>;
 }

@@ -27,6 +27,7 @@
 //! ```
 
 pub mod bvh;
+pub mod chunks;
 pub mod extract;
 pub mod extractors;
 pub mod field;

@@ -2,6 +2,7 @@
 //! sample once, extract, post-process, measure, and describe the run as the metrics JSON.
 
 use crate::io::{self, IoError};
+use isolab_algorithms::chunks::{extract_chunked, ChunkStats};
 use isolab_algorithms::{
     extractors, fields, ExtractError, Extraction, Field, FieldError, Grid, Lattice, LatticeError, OptionError, Options,
     SampleError, Samples,
@@ -43,6 +44,8 @@ pub struct RunConfig {
     pub post: Vec<String>,
     /// Algorithm options by name (`smoothing`, `iterations`, ...).
     pub options: Options,
+    /// Mesh in chunks of this many cells per side and weld (`--chunk N`).
+    pub chunk: Option<usize>,
 }
 
 impl RunConfig {
@@ -58,6 +61,7 @@ impl RunConfig {
             seed: fields::DEFAULT_SEED,
             post: Vec::new(),
             options: Options::new(),
+            chunk: None,
         }
     }
 }
@@ -240,12 +244,38 @@ pub struct RunReport {
     /// `volume_ratio`, `encloses`, `converged`).
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub volume_mesh: Option<VolumeMetrics>,
+    /// Chunked extraction (`--chunk N`): chunks per axis, meshed, skipped, welded vertices.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub chunks: Option<ChunkReport>,
     /// What the extractor warned about (an open input surface, non-convergence).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
     /// Mesh measures.
     #[serde(flatten)]
     pub metrics: MeshMetrics,
+}
+
+/// The metrics JSON's `chunks`.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct ChunkReport {
+    /// Cells per chunk side.
+    pub size: usize,
+    /// Chunks per axis.
+    pub per_axis: [usize; 3],
+    /// Chunks meshed.
+    pub meshed: usize,
+    /// Chunks skipped, all outside.
+    pub empty: usize,
+    /// Chunks skipped, all inside.
+    pub full: usize,
+    /// Vertices merged at seams.
+    pub welded: usize,
+}
+
+impl From<(usize, ChunkStats)> for ChunkReport {
+    fn from((size, s): (usize, ChunkStats)) -> Self {
+        Self { size, per_axis: s.chunks, meshed: s.meshed, empty: s.empty, full: s.full, welded: s.welded }
+    }
 }
 
 /// The outcome of a run: the meshes and their report.
@@ -277,7 +307,13 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
     check_memory(&lattice)?;
     let samples = Samples::sample(field.clone(), lattice, config.iso)?;
     let mut extraction = Extraction::default();
-    extractor.extract(&samples, &mut extraction)?;
+    let chunks = match config.chunk {
+        Some(n) => Some(ChunkReport::from((n, extract_chunked(extractor.as_ref(), &samples, n, &mut extraction)?))),
+        None => {
+            extractor.extract(&samples, &mut extraction)?;
+            None
+        }
+    };
     for post in &posts {
         post.apply(&samples, &mut extraction)?;
     }
@@ -311,6 +347,7 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
         analytic_volume: field.analytic_volume(config.iso),
         analytic_area: field.analytic_area(config.iso),
         volume_mesh,
+        chunks,
         warnings: extraction.stats.warnings.clone(),
         metrics,
     };

@@ -336,3 +336,34 @@ fn bcc_sculpt_refuses_impossible_settings_by_name() {
     let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "8", "--spacing", "1"]);
     assert_clean_failure(&o, 2, &["marching-cubes does not take option 'spacing'"]);
 }
+
+#[test]
+fn chunked_extraction_matches_the_whole_volume_and_refuses_bad_sizes() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.json"), dir.path().join("b.json"));
+    let whole = isolab(&["extract", "-a", "marching-cubes", "-f", "asteroid", "--dims", "65,65,65", "-m", a.to_str().unwrap()]);
+    assert!(whole.status.success(), "{}", stderr(&whole));
+    let chunked = isolab(&[
+        "extract",
+        "-a",
+        "marching-cubes",
+        "-f",
+        "asteroid",
+        "--dims",
+        "65,65,65",
+        "--chunk",
+        "16",
+        "-m",
+        b.to_str().unwrap(),
+    ]);
+    assert!(chunked.status.success(), "{}", stderr(&chunked));
+    let (a, b) = (json(&a), json(&b));
+    assert_eq!((&a["vertices"], &a["triangles"], &a["euler"]), (&b["vertices"], &b["triangles"], &b["euler"]));
+    assert_eq!(b["chunks"]["per_axis"], serde_json::json!([4, 4, 4]));
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "asteroid", "--dims", "65,65,65", "--chunk", "10"]);
+    assert_clean_failure(&o, 1, &["chunk size 10 does not divide"]);
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "asteroid", "--dims", "65,65,65", "--chunk", "1"]);
+    assert_clean_failure(&o, 1, &["below 2"]);
+    let o = isolab(&["extract", "-a", "surface-nets", "-f", "asteroid", "--dims", "65,65,65", "--chunk", "16"]);
+    assert_clean_failure(&o, 1, &["surface-nets", "not supported yet"]);
+}

@@ -483,6 +483,10 @@ impl Extractor for MarchingCubes {
         }
     }
 
+    fn supports_chunks(&self) -> bool {
+        true
+    }
+
     fn description(&self) -> &'static str {
         match self.options.faces {
             FaceResolution::SeparateInside => DESCRIPTION,

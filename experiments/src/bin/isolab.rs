@@ -66,6 +66,10 @@ enum Command {
         /// bcc-sculpt: perturbed lattices to try, keeping the best (shorthand for --set perturbations=K).
         #[arg(long, allow_negative_numbers = true)]
         perturbations: Option<String>,
+        /// Mesh in chunks of N cells per side (sharing boundary samples, in parallel) and write the
+        /// welded mesh; N must divide the cells along every axis (use --dims k*N+1).
+        #[arg(long)]
+        chunk: Option<usize>,
         /// Any algorithm option, NAME=VALUE (repeatable; see the algorithm's module documentation).
         #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_option)]
         set: Vec<(String, String)>,
@@ -161,6 +165,7 @@ fn main() -> ExitCode {
             spacing,
             offset_ratio,
             perturbations,
+            chunk,
             set,
             output,
             metrics,
@@ -178,7 +183,7 @@ fn main() -> ExitCode {
             {
                 options.set(k, v);
             }
-            let config = RunConfig { algorithm, field, resolution, dims, lattice, iso, seed, post, options };
+            let config = RunConfig { algorithm, field, resolution, dims, lattice, iso, seed, post, options, chunk };
             extract(&config, output, metrics, samples_out).map_err(|e| (e.exit_code(), e.to_string()))
         }
         Command::Metrics { file } => io::read_mesh(&file)

@@ -1,0 +1,112 @@
+//! Chunked extraction (`--chunk N`): chunks share their boundary samples, are meshed
+//! independently, and the welded mesh equals the single-volume extraction exactly in counts and
+//! topology; bad chunk sizes and unsupported extractors are refused by name.
+
+use isolab_algorithms::chunks::{chunk_counts, extract_chunked};
+use isolab_algorithms::extractors::{self, MarchingCubes};
+use isolab_algorithms::{Extraction, Extractor, Grid, Lattice, Samples};
+use isolab_metrics::{signed_volume, surface_area, topology};
+use isolab_tests::{blob_field, object_field};
+use proptest::prelude::*;
+
+fn sampled(name: &str, n: usize, bcc: bool) -> Samples {
+    let field = object_field(name);
+    let grid = Grid::with_dims(&field.domain(), [n, n, n]).unwrap();
+    Samples::sample(field, if bcc { Lattice::Bcc(grid) } else { Lattice::Cubic(grid) }, 0.0).unwrap()
+}
+
+fn assert_same_mesh(whole: &Extraction, welded: &Extraction, what: &str) {
+    assert_eq!(welded.surface.positions.len(), whole.surface.positions.len(), "{what}: vertices");
+    assert_eq!(welded.surface.triangles.len(), whole.surface.triangles.len(), "{what}: triangles");
+    let (a, b) = (topology(&whole.surface), topology(&welded.surface));
+    assert_eq!(
+        (a.closed, a.edge_manifold, a.vertex_manifold, a.outward, a.euler, a.components, a.boundary_edges),
+        (b.closed, b.edge_manifold, b.vertex_manifold, b.outward, b.euler, b.components, b.boundary_edges),
+        "{what}: topology"
+    );
+    // Positions differ only by rounding (each chunk works in exact local coordinates).
+    let (sa, sb) = (surface_area(&whole.surface), surface_area(&welded.surface));
+    assert!((sa - sb).abs() <= 1e-6 * sa, "{what}: area {sa} vs {sb}");
+    let (va, vb) = (signed_volume(&whole.surface), signed_volume(&welded.surface));
+    assert!((va - vb).abs() <= 1e-6 * (va.abs() + sa.powf(1.5)), "{what}: volume {va} vs {vb}");
+}
+
+#[test]
+fn welded_chunks_equal_the_single_volume_on_terrain_asteroid_and_gyroid() {
+    for name in ["terrain", "asteroid", "gyroid"] {
+        let samples = sampled(name, 65, false);
+        for algorithm in ["marching-cubes", "marching-cubes-decider"] {
+            let e = extractors::by_name(algorithm).unwrap();
+            let mut whole = Extraction::default();
+            e.extract(&samples, &mut whole).unwrap();
+            for chunk in [8, 16, 32] {
+                let mut welded = Extraction::default();
+                let stats = extract_chunked(e.as_ref(), &samples, chunk, &mut welded).unwrap();
+                let what = format!("{algorithm} on {name} at 65^3 in chunks of {chunk}");
+                assert_same_mesh(&whole, &welded, &what);
+                let per_axis = 64 / chunk;
+                assert_eq!(stats.chunks, [per_axis; 3]);
+                assert_eq!(stats.meshed + stats.empty + stats.full, per_axis.pow(3), "{what}");
+                assert!(stats.welded > 0, "{what}: seams were welded");
+            }
+        }
+    }
+}
+
+#[test]
+fn empty_and_full_chunks_are_skipped() {
+    // A small sphere inside the first chunk (samples 0..=8): the rest is empty.
+    let samples = isolab_tests::grid_samples([33, 33, 33], |x, y, z| {
+        let d = ((x as f32 - 4.0).powi(2) + (y as f32 - 4.0).powi(2) + (z as f32 - 4.0).powi(2)).sqrt();
+        d - 2.5
+    });
+    let mut out = Extraction::default();
+    let stats = extract_chunked(&MarchingCubes::default(), &samples, 8, &mut out).unwrap();
+    assert_eq!((stats.meshed, stats.empty, stats.full), (1, 63, 0));
+    assert!(topology(&out.surface).closed);
+    // Everything inside: nothing to mesh at all.
+    let inside = isolab_tests::grid_samples([17, 17, 17], |_, _, _| -1.0);
+    let stats = extract_chunked(&MarchingCubes::default(), &inside, 8, &mut out).unwrap();
+    assert_eq!((stats.meshed, stats.full), (0, 8));
+    assert!(out.surface.triangles.is_empty());
+}
+
+#[test]
+fn bad_chunk_sizes_and_unsupported_extractors_are_refused_by_name() {
+    let samples = sampled("sphere", 33, false);
+    let grid = *samples.grid();
+    let mc = MarchingCubes::default();
+    let mut out = Extraction::default();
+    let err = extract_chunked(&mc, &samples, 1, &mut out).unwrap_err().to_string();
+    assert!(err.contains("chunk size 1 is below 2"), "{err}");
+    let err = extract_chunked(&mc, &samples, 10, &mut out).unwrap_err().to_string();
+    assert!(err.contains("chunk size 10 does not divide") && err.contains("32x32x32"), "{err}");
+    assert_eq!(chunk_counts(&grid, 16, "x").unwrap(), [2, 2, 2]);
+    let sn = extractors::by_name("surface-nets").unwrap();
+    let err = extract_chunked(sn.as_ref(), &samples, 16, &mut out).unwrap_err().to_string();
+    assert!(err.contains("surface-nets") && err.contains("not supported"), "{err}");
+    let bcc = sampled("sphere", 17, true);
+    assert!(extract_chunked(&mc, &bcc, 8, &mut out).is_err());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    /// Random blobby fields: chunked marching cubes equals the whole-volume extraction.
+    #[test]
+    fn random_fields_chunk_exactly(
+        blobs in prop::collection::vec((0.1f32..0.9, 0.1f32..0.9, 0.1f32..0.9, 0.05f32..0.3), 1..8),
+        threshold in 0.3f32..0.9,
+        chunk in prop::sample::select(vec![2usize, 4, 8]),
+    ) {
+        let samples = blob_field(17, &blobs, threshold);
+        let mut whole = Extraction::default();
+        MarchingCubes::default().extract(&samples, &mut whole).unwrap();
+        let mut welded = Extraction::default();
+        extract_chunked(&MarchingCubes::default(), &samples, chunk, &mut welded).unwrap();
+        prop_assert_eq!(welded.surface.positions.len(), whole.surface.positions.len());
+        prop_assert_eq!(welded.surface.triangles.len(), whole.surface.triangles.len());
+        let (a, b) = (topology(&whole.surface), topology(&welded.surface));
+        prop_assert_eq!((a.closed, a.edge_manifold, a.euler), (b.closed, b.edge_manifold, b.euler));
+    }
+}

@@ -530,7 +530,6 @@ impl Extractor for MarchingCubes {
             pool.push(Scratch::default());
         }
         let scratches = &mut pool[..tasks];
-        let bounds: Vec<(usize, usize)> = (0..tasks).map(|t| (t * slab_cells / tasks, (t + 1) * slab_cells / tasks)).collect();
 
         let t_slabs = Instant::now();
         if tasks == 1 {
@@ -540,9 +539,8 @@ impl Extractor for MarchingCubes {
         } else {
             scratches
                 .par_iter_mut()
-                .zip(bounds.par_iter())
                 .enumerate()
-                .for_each(|(t, (s, &(z0, z1)))| ctx.slab(z0, z1, t > 0, s));
+                .for_each(|(t, s)| ctx.slab(t * slab_cells / tasks, (t + 1) * slab_cells / tasks, t > 0, s));
         }
         let slab_wall = t_slabs.elapsed();
 

@@ -574,13 +574,18 @@ fn build_adjacency(n: usize, links: &mut Vec<(u32, u32)>, start: &mut Vec<u32>, 
     }
     adjacency.clear();
     adjacency.resize(start[n] as usize, 0);
-    let mut fill: Vec<u32> = start[..n].to_vec();
+    // Fill with start[i] as vertex i's cursor (it ends at start[i + 1]), then shift back: no
+    // buffer besides the reused ones, so steady-state re-meshing does not allocate.
     for &(a, b) in links.iter() {
-        adjacency[fill[a as usize] as usize] = b;
-        fill[a as usize] += 1;
-        adjacency[fill[b as usize] as usize] = a;
-        fill[b as usize] += 1;
+        adjacency[start[a as usize] as usize] = b;
+        start[a as usize] += 1;
+        adjacency[start[b as usize] as usize] = a;
+        start[b as usize] += 1;
     }
+    for i in (1..=n).rev() {
+        start[i] = start[i - 1];
+    }
+    start[0] = 0;
 }
 
 fn neighbour_mean(i: usize, x: &[Vec3], start: &[u32], adjacency: &[u32]) -> Option<Vec3> {

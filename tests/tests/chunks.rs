@@ -110,3 +110,75 @@ proptest! {
         prop_assert_eq!((a.closed, a.edge_manifold, a.euler), (b.closed, b.edge_manifold, b.euler));
     }
 }
+
+mod editing {
+    use super::*;
+    use glam::Vec3;
+    use isolab_algorithms::chunks::{Brush, ChunkState, ChunkedVolume, EditError};
+
+    fn lcg(state: &mut u64) -> f32 {
+        *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (*state >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    #[test]
+    fn brush_edits_remesh_only_dirty_chunks_and_equal_a_fresh_extraction() {
+        let samples = sampled("terrain", 65, false);
+        let grid = *samples.grid();
+        let mc = MarchingCubes::default();
+        let mut world = ChunkedVolume::new(&mc, samples, 16).unwrap();
+        assert_eq!(world.remesh_dirty(&mc).unwrap(), 64);
+        let mut seed = 7u64;
+        let mut welded = Extraction::default();
+        for edit in 0..25 {
+            let p = Vec3::new(lcg(&mut seed), lcg(&mut seed), lcg(&mut seed));
+            let brush = Brush {
+                centre: grid.origin + p * grid.spacing * 64.0,
+                radius: grid.spacing * (2.0 + 6.0 * lcg(&mut seed)),
+                falloff: grid.spacing * 2.0 * lcg(&mut seed),
+                add: edit % 2 == 0,
+            };
+            let dirtied = world.apply(&brush).unwrap();
+            assert!(dirtied <= 27, "a brush of radius < 10 cells touches at most 3x3x3 chunks of 16");
+            assert_eq!(world.remesh_dirty(&mc).unwrap(), dirtied);
+            world.welded(&mut welded);
+            let mut whole = Extraction::default();
+            mc.extract(&world.samples().unwrap(), &mut whole).unwrap();
+            assert_same_mesh(&whole, &welded, &format!("after edit {edit}"));
+        }
+    }
+
+    #[test]
+    fn carving_a_chunk_empty_removes_its_mesh() {
+        let samples = isolab_tests::grid_samples([33, 33, 33], |_, y, _| y as f32 - 12.5);
+        let mc = MarchingCubes::default();
+        let mut world = ChunkedVolume::new(&mc, samples, 16).unwrap();
+        world.remesh_dirty(&mc).unwrap();
+        assert_eq!(world.slots().iter().filter(|s| s.state == ChunkState::Meshed).count(), 4);
+        // Carve everything below y = 16 around the first column of chunks.
+        for x in [0.0f32, 8.0, 16.0] {
+            for z in [0.0f32, 8.0, 16.0] {
+                world.apply(&Brush { centre: Vec3::new(x, 4.0, z), radius: 16.0, falloff: 0.0, add: false }).unwrap();
+            }
+        }
+        world.remesh_dirty(&mc).unwrap();
+        let first = &world.slots()[0];
+        assert_eq!(first.state, ChunkState::Empty, "chunk (0,0,0) carved out");
+        assert!(first.mesh.surface.triangles.is_empty());
+    }
+
+    #[test]
+    fn bad_brushes_are_refused_by_name() {
+        let samples = isolab_tests::grid_samples([17, 17, 17], |_, y, _| y as f32 - 8.5);
+        let mc = MarchingCubes::default();
+        let mut world = ChunkedVolume::new(&mc, samples, 8).unwrap();
+        let outside = world.apply(&Brush { centre: Vec3::splat(100.0), radius: 2.0, falloff: 0.0, add: true });
+        assert!(matches!(outside, Err(EditError::Outside { .. })), "{outside:?}");
+        assert!(outside.unwrap_err().to_string().contains("outside the world"));
+        for (radius, falloff) in [(0.0, 0.0), (-1.0, 0.0), (1.0, -1.0), (f32::NAN, 0.0)] {
+            let bad = world.apply(&Brush { centre: Vec3::splat(8.0), radius, falloff, add: true });
+            assert!(matches!(bad, Err(EditError::BadBrush { .. })), "radius {radius}, falloff {falloff}");
+        }
+        assert!(ChunkedVolume::new(&mc, isolab_tests::grid_samples([17, 17, 17], |_, _, _| 1.0), 5).is_err());
+    }
+}

@@ -14,6 +14,7 @@ pub mod sphere_convergence;
 pub mod stuart_tables;
 pub mod surface_nets_smoothing;
 pub mod svoboda_timing;
+pub mod terrain_edit;
 
 use crate::io::{write_atomic, IoError};
 use crate::run::RunError;
@@ -134,6 +135,7 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(decimation::Decimation),
         Box::new(svoboda_timing::SvobodaTiming),
         Box::new(stuart_tables::StuartTables),
+        Box::new(terrain_edit::TerrainEdit),
     ]
 }
 

@@ -264,10 +264,17 @@ pub fn save_turntable(
     let images: Vec<Image> = (0..frames)
         .map(|k| render(mesh, &RenderOptions { spin: k as f32 / frames as f32 * std::f32::consts::TAU, ..*opts }))
         .collect();
+    save_gif(path, &images, delay_cs)
+}
+
+/// Writes frames (all of the first frame's size) as a looping GIF, `delay_cs` hundredths of a
+/// second each, atomically.
+pub fn save_gif(path: &Path, images: &[Image], delay_cs: u16) -> Result<(), crate::io::IoError> {
+    let (width, height) = images.first().map_or((1, 1), |i| (i.width as u16, i.height as u16));
     crate::io::write_atomic(path, |w| {
-        let mut encoder = gif::Encoder::new(w, opts.width as u16, opts.height as u16, &[]).map_err(std::io::Error::other)?;
+        let mut encoder = gif::Encoder::new(w, width, height, &[]).map_err(std::io::Error::other)?;
         encoder.set_repeat(gif::Repeat::Infinite).map_err(std::io::Error::other)?;
-        for img in &images {
+        for img in images {
             let mut frame = gif::Frame::from_rgb_speed(img.width as u16, img.height as u16, &img.rgb, 10);
             frame.delay = delay_cs;
             encoder.write_frame(&frame).map_err(std::io::Error::other)?;

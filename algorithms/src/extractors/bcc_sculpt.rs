@@ -569,18 +569,18 @@ fn face_neighbours(tets: &[[u32; 4]]) -> Vec<[u32; 4]> {
     neighbours
 }
 
-/// Incident tetrahedra of each vertex, as offsets and a flat list.
-fn stars(vertices: usize, tets: &[[u32; 4]]) -> (Vec<u32>, Vec<u32>) {
+/// Incident elements (tetrahedra or triangles) of each vertex, as offsets and a flat list.
+fn stars<const K: usize>(vertices: usize, elements: &[[u32; K]]) -> (Vec<u32>, Vec<u32>) {
     let mut start = vec![0u32; vertices + 1];
-    tets.iter().flatten().for_each(|&v| start[v as usize + 1] += 1);
+    elements.iter().flatten().for_each(|&v| start[v as usize + 1] += 1);
     for v in 0..vertices {
         start[v + 1] += start[v];
     }
     let mut fill = start.clone();
-    let mut star = vec![0u32; 4 * tets.len()];
-    for (t, tet) in tets.iter().enumerate() {
-        for &v in tet {
-            star[fill[v as usize] as usize] = t as u32;
+    let mut star = vec![0u32; K * elements.len()];
+    for (e, element) in elements.iter().enumerate() {
+        for &v in element {
+            star[fill[v as usize] as usize] = e as u32;
             fill[v as usize] += 1;
         }
     }
@@ -929,7 +929,7 @@ impl VolumeMesh {
             }
         }
         let (star_start, star) = stars(positions.len(), &tets);
-        let (face_start, face_star) = stars_of_faces(positions.len(), &boundary);
+        let (face_start, face_star) = stars(positions.len(), &boundary);
         Self { positions, tets, star_start, star, boundary, face_start, face_star }
     }
 
@@ -958,32 +958,9 @@ impl VolumeMesh {
             });
             surface.triangles.push(local);
         }
-        let mut normals = vec![Vec3::ZERO; surface.positions.len()];
-        for t in &surface.triangles {
-            let p = t.map(|i| surface.positions[i as usize]);
-            let n = (p[1] - p[0]).cross(p[2] - p[0]);
-            t.iter().for_each(|&i| normals[i as usize] += n);
-        }
-        surface.normals = normals.into_iter().map(|n| n.normalize_or_zero()).collect();
+        surface.compute_face_weighted_normals();
         (TetMesh { positions: self.positions, tetrahedra: self.tets }, surface)
     }
-}
-
-fn stars_of_faces(vertices: usize, faces: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
-    let mut start = vec![0u32; vertices + 1];
-    faces.iter().flatten().for_each(|&v| start[v as usize + 1] += 1);
-    for v in 0..vertices {
-        start[v + 1] += start[v];
-    }
-    let mut fill = start.clone();
-    let mut star = vec![0u32; 3 * faces.len()];
-    for (f, face) in faces.iter().enumerate() {
-        for &v in face {
-            star[fill[v as usize] as usize] = f as u32;
-            fill[v as usize] += 1;
-        }
-    }
-    (start, star)
 }
 
 /// How relaxation ended.
@@ -1162,8 +1139,9 @@ fn sweep_is_clear(mesh: &VolumeMesh, surface: &TriangleBvh, v: usize, q: Vec3) -
     let p = mesh.positions[v];
     mesh.faces(v).iter().all(|&f| {
         let tri = mesh.boundary[f as usize];
-        let others: Vec<Vec3> = tri.iter().filter(|&&u| u as usize != v).map(|&u| mesh.positions[u as usize]).collect();
-        let swept = [p, q, others[0], others[1]];
+        let k = tri.iter().position(|&u| u as usize == v).unwrap_or(0);
+        let (a, b) = (mesh.positions[tri[(k + 1) % 3] as usize], mesh.positions[tri[(k + 2) % 3] as usize]);
+        let swept = [p, q, a, b];
         let mut b = Aabb::empty();
         swept.iter().for_each(|&x| b.grow(x));
         let planes = SeparatingPlanes::of(&swept);

@@ -2,22 +2,38 @@
 //! samples, meshed independently and in parallel (rayon), then welded into one mesh. Chunks whose
 //! samples are all inside or all outside are skipped from their min/max without meshing.
 //!
-//! Each chunk is meshed in exact local coordinates (origin 0, spacing 1) and moved to world space
-//! as `origin + (local + chunk offset) · spacing`, so a vertex on a face, edge or corner shared by
-//! several chunks gets bitwise the same position in each of them, and welding by position is exact.
-//! This holds for extractors whose output is local to the cell (every triangle from one cell's
-//! samples, every vertex from one lattice edge): marching cubes and its decider variant
-//! ([`Extractor::supports_chunks`]). Their welded output has exactly the vertices and triangles of
-//! the single-volume extraction (tested). Dual methods (surface nets, dual contouring, with
-//! smoothing) and the tetrahedral lattices need cells or tetrahedra that straddle chunk faces,
-//! hence an apron and ownership rules inside the extractor; they refuse chunking for now.
+//! Every chunk is meshed in the grid's **index coordinates** (sample `(x, y, z)` at `(x, y, z)`,
+//! exact in `f32` up to 2²⁴ samples per axis), so two chunks computing the same vertex from the
+//! same samples get bitwise the same position; positions go to world space as
+//! `origin + index · spacing` afterwards. What a chunk reads and how chunks weld depends on the
+//! extractor's [`Chunking`]:
+//! - [`Chunking::CellLocal`] (marching cubes, Kuhn marching tetrahedra): a chunk reads exactly
+//!   its `(N + 1)`³ samples; vertices on its faces are welded with the neighbours' by position
+//!   bits, or by lattice key where the extractor reports vertex origins (marching tetrahedra,
+//!   whose crossings can coincide at a sample equal to the iso-value; marching cubes keeps its
+//!   crossings off the samples). The welded output has exactly the vertices and triangles of the single-volume
+//!   extraction (tested).
+//! - [`Chunking::Apron`]`(a)` (surface nets, dual contouring, regularised marching tetrahedra):
+//!   a chunk also reads `a` samples of each neighbour (the *apron*: a dual quad needs its edge's
+//!   four cells, a cell's pieces its face neighbours, each smoothing iteration one more cell, a
+//!   merged vertex its sample's star). The extractor reports each vertex's lattice origin (owning
+//!   sample and ordinal, [`crate::extract::Origins`]); a triangle's *anchor* is the
+//!   componentwise minimum of its vertices' owning samples, and each chunk keeps only the
+//!   triangles whose anchor lies in its own samples, so every triangle is made by exactly one
+//!   chunk, far enough from that chunk's apron edge to be computed as the whole volume would.
+//!   Vertices weld by lattice key, so the welded mesh has the whole-volume topology whatever the
+//!   rounding (tested: counts and closedness equal the whole-volume extraction).
 //!
-//! [`ChunkedVolume`] keeps the samples and one persistent slot per chunk (its local samples and
-//! mesh buffers), so editing with a [`Brush`] re-meshes only the chunks whose samples changed, and
-//! re-meshing a chunk reuses its buffers.
+//! When the samples carry their field, each chunk gets it re-expressed in index coordinates
+//! ([`IndexSpaceField`]), so dual contouring's Hermite normals and projections see the true field.
+//!
+//! [`ChunkedVolume`] keeps the samples and one persistent slot per chunk (its samples and mesh
+//! buffers), so editing with a [`Brush`] re-meshes only the chunks whose samples (apron included)
+//! changed, and re-meshing a chunk reuses its buffers.
 
-use crate::extract::{ExtractError, Extraction, Extractor};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
 use crate::field::Field;
+use crate::geometry::Aabb;
 use crate::lattice::{Grid, Lattice};
 use crate::samples::Samples;
 use glam::Vec3;
@@ -39,6 +55,8 @@ pub struct ChunkStats {
     pub full: usize,
     /// Vertices merged at seams.
     pub welded: usize,
+    /// Apron width in samples (0 for cell-local extractors).
+    pub apron: usize,
 }
 
 /// Chunks per axis for chunks of `chunk` cells, or an error naming what does not fit.
@@ -56,21 +74,80 @@ pub fn chunk_counts(grid: &Grid, chunk: usize, algorithm: &'static str) -> Resul
             ),
         });
     }
+    if grid.dims.iter().any(|&d| d > 1 << 24) {
+        return Err(ExtractError::BadInput {
+            algorithm,
+            reason: format!(
+                "grid {}x{}x{} is above 2^24 samples on an axis (index coordinates would not be exact)",
+                grid.dims[0], grid.dims[1], grid.dims[2]
+            ),
+        });
+    }
     Ok(cells.map(|c| c / chunk))
 }
 
-/// Whether `extractor` can mesh chunks, and the grid of `samples` (cubic only).
-fn check_chunkable(extractor: &dyn Extractor, samples: &Samples) -> Result<Grid, ExtractError> {
+/// How `extractor` meshes chunks, and the grid of `samples` (cubic only).
+fn check_chunkable(extractor: &dyn Extractor, samples: &Samples) -> Result<(Grid, Chunking), ExtractError> {
     let algorithm = extractor.name();
-    if !extractor.supports_chunks() {
+    let chunking = extractor.chunking();
+    if chunking == Chunking::Unsupported {
         return Err(ExtractError::BadInput {
             algorithm,
-            reason: "chunked extraction is not supported yet (marching-cubes and marching-cubes-decider support it)".into(),
+            reason: "it cannot mesh in chunks (its output is a volume or depends on the whole grid)".into(),
         });
     }
     match *samples.lattice() {
-        Lattice::Cubic(grid) => Ok(grid),
+        Lattice::Cubic(grid) => Ok((grid, chunking)),
         Lattice::Bcc(_) => Err(ExtractError::UnsupportedLattice { algorithm, lattice: "bcc", supported: "cubic (for --chunk)" }),
+    }
+}
+
+/// A field seen in a grid's index coordinates: `f'(p) = f(origin + p · spacing)`.
+pub struct IndexSpaceField {
+    inner: Arc<dyn Field>,
+    origin: Vec3,
+    spacing: f32,
+}
+
+impl IndexSpaceField {
+    /// `inner` in the index coordinates of `grid`.
+    pub fn new(inner: Arc<dyn Field>, grid: &Grid) -> Self {
+        Self { inner, origin: grid.origin, spacing: grid.spacing }
+    }
+
+    fn world(&self, p: Vec3) -> Vec3 {
+        self.origin + p * self.spacing
+    }
+}
+
+impl Field for IndexSpaceField {
+    fn name(&self) -> &str {
+        self.inner.name()
+    }
+
+    fn value(&self, p: Vec3) -> f32 {
+        self.inner.value(self.world(p))
+    }
+
+    fn domain(&self) -> Aabb {
+        let d = self.inner.domain();
+        Aabb::new((d.min - self.origin) / self.spacing, (d.max - self.origin) / self.spacing)
+    }
+
+    fn has_analytic_gradient(&self) -> bool {
+        self.inner.has_analytic_gradient()
+    }
+
+    fn gradient(&self, p: Vec3) -> Vec3 {
+        self.inner.gradient(self.world(p)) * self.spacing
+    }
+
+    fn difference_step(&self) -> f32 {
+        self.inner.difference_step() / self.spacing
+    }
+
+    fn distance_to_surface(&self, p: Vec3, iso: f32) -> f32 {
+        self.inner.distance_to_surface(self.world(p), iso) / self.spacing
     }
 }
 
@@ -86,47 +163,93 @@ pub enum ChunkState {
     Meshed,
 }
 
-/// One chunk's persistent buffers: its samples in local coordinates and its mesh in world space.
+/// The samples a chunk reads and the anchors it owns, in world sample indices.
+#[derive(Clone, Copy, Debug)]
+struct Block {
+    /// First sample read per axis.
+    lo: [usize; 3],
+    /// Samples read per axis.
+    dims: [usize; 3],
+    /// Owned anchors: `own_lo[a] <= anchor[a] < own_hi[a]`.
+    own_lo: [usize; 3],
+    own_hi: [usize; 3],
+}
+
+impl Block {
+    fn new(id: [usize; 3], chunk: usize, apron: usize, world: [usize; 3]) -> Self {
+        let k0 = id.map(|c| c * chunk);
+        let lo = k0.map(|k| k.saturating_sub(apron));
+        let dims: [usize; 3] = std::array::from_fn(|a| (k0[a] + chunk + apron).min(world[a] - 1) - lo[a] + 1);
+        // The last chunk on an axis also owns the grid's last sample.
+        let own_hi = std::array::from_fn(|a| if k0[a] + chunk + 1 >= world[a] { world[a] } else { k0[a] + chunk });
+        Self { lo, dims, own_lo: k0, own_hi }
+    }
+
+    fn hi(&self, a: usize) -> usize {
+        self.lo[a] + self.dims[a] - 1
+    }
+}
+
+/// A lattice key: a vertex's owning sample (world indices) and ordinal, tagged apart from
+/// position keys by the top bit.
+fn lattice_key(o: [u32; 4], lo: [usize; 3]) -> u128 {
+    let g = |a: usize| u128::from(o[a]) + lo[a] as u128;
+    g(0) | g(1) << 32 | g(2) << 64 | u128::from(o[3] & 0x7FFF_FFFF) << 96 | 1 << 127
+}
+
+/// One chunk's persistent buffers: its samples in index coordinates and its mesh in world space.
 pub struct ChunkSlot {
     /// Chunk index per axis.
     pub id: [usize; 3],
+    block: Block,
     samples: Samples,
     /// The chunk's mesh (world space), valid when `state` is `Meshed`.
     pub mesh: Extraction,
-    /// Which mesh vertices lie on the chunk's faces (the only ones a neighbour can share).
-    on_face: Vec<bool>,
+    /// Per vertex: its weld key (position bits or lattice key), or `None` for vertices no other
+    /// chunk can have.
+    keys: Vec<Option<u128>>,
+    /// Scratch for compacting owned vertices.
+    remap: Vec<u32>,
     /// What the last meshing found.
     pub state: ChunkState,
 }
 
 impl ChunkSlot {
-    fn new(id: [usize; 3], chunk: usize, iso: f32) -> Self {
-        let n = chunk + 1;
-        let local = Grid { origin: Vec3::ZERO, spacing: 1.0, dims: [n, n, n] };
-        let samples = Samples::from_values(Lattice::Cubic(local), vec![0.0; n * n * n], iso).expect("zeros are finite");
-        Self { id, samples, mesh: Extraction::default(), on_face: Vec::new(), state: ChunkState::Empty }
+    /// A slot for chunk `id` reading `block` of `world`'s samples; `field` is the world's field.
+    fn new(id: [usize; 3], block: Block, world: &Grid, iso: f32, field: Option<&Arc<dyn Field>>) -> Self {
+        let local = Grid {
+            origin: Vec3::new(block.lo[0] as f32, block.lo[1] as f32, block.lo[2] as f32),
+            spacing: 1.0,
+            dims: block.dims,
+        };
+        let n = block.dims.iter().product();
+        let mut samples = Samples::from_values(Lattice::Cubic(local), vec![0.0; n], iso).expect("zeros are finite");
+        if let Some(f) = field {
+            samples = samples.with_field(Arc::new(IndexSpaceField::new(f.clone(), world)));
+        }
+        Self { id, block, samples, mesh: Extraction::default(), keys: Vec::new(), remap: Vec::new(), state: ChunkState::Empty }
     }
 
     /// Copies the chunk's samples out of the world's and meshes them (or records it empty/full).
-    fn remesh(&mut self, extractor: &dyn Extractor, grid: &Grid, values: &[f32], chunk: usize) -> Result<(), ExtractError> {
-        let n = chunk + 1;
-        let k0 = self.id.map(|c| c * chunk);
+    fn remesh(&mut self, extractor: &dyn Extractor, chunking: Chunking, grid: &Grid, values: &[f32]) -> Result<(), ExtractError> {
+        let b = self.block;
+        let [nx, ny, nz] = b.dims;
         let iso = self.samples.iso();
         let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
         let local = self.samples.values_mut();
-        for z in 0..n {
-            for y in 0..n {
-                let row = grid.index(k0[0], k0[1] + y, k0[2] + z);
-                let src = &values[row..row + n];
+        for z in 0..nz {
+            for y in 0..ny {
+                let row = grid.index(b.lo[0], b.lo[1] + y, b.lo[2] + z);
+                let src = &values[row..row + nx];
                 for &v in src {
                     lo = lo.min(v);
                     hi = hi.max(v);
                 }
-                local[(z * n + y) * n..(z * n + y + 1) * n].copy_from_slice(src);
+                local[(z * ny + y) * nx..(z * ny + y + 1) * nx].copy_from_slice(src);
             }
         }
         self.mesh.clear();
-        self.on_face.clear();
+        self.keys.clear();
         if lo >= iso {
             self.state = ChunkState::Empty;
             return Ok(());
@@ -136,21 +259,93 @@ impl ChunkSlot {
             return Ok(());
         }
         self.state = ChunkState::Meshed;
+        self.mesh.origins.wanted = true;
         extractor.extract(&self.samples, &mut self.mesh)?;
-        let last = chunk as f32;
-        self.on_face.extend(self.mesh.surface.positions.iter().map(|p| p.to_array().iter().any(|&c| c == 0.0 || c == last)));
-        let offset = Vec3::new(k0[0] as f32, k0[1] as f32, k0[2] as f32);
+        let with_origins = self.mesh.origins.vertices.len() == self.mesh.surface.positions.len();
+        match chunking {
+            Chunking::Apron(_) => self.keep_owned(extractor.name())?,
+            // Cell-local with origins: every vertex welds by lattice key (exact even where
+            // crossings coincide).
+            _ if with_origins => {
+                let lo = b.lo;
+                self.keys.extend(self.mesh.origins.vertices.iter().map(|&o| Some(lattice_key(o, lo))));
+            }
+            _ => {
+                let bounds = [0, 1, 2].map(|a| (b.lo[a] as f32, b.hi(a) as f32));
+                self.keys.extend(self.mesh.surface.positions.iter().map(|p| {
+                    let on_face = (0..3).any(|a| p[a] == bounds[a].0 || p[a] == bounds[a].1);
+                    on_face.then(|| position_key(*p))
+                }));
+            }
+        }
         for p in &mut self.mesh.surface.positions {
-            *p = grid.origin + (*p + offset) * grid.spacing;
+            *p = grid.origin + *p * grid.spacing;
+        }
+        Ok(())
+    }
+
+    /// Keeps the triangles whose anchor this chunk owns and the vertices they use, keyed by
+    /// their lattice origin.
+    fn keep_owned(&mut self, algorithm: &'static str) -> Result<(), ExtractError> {
+        let b = self.block;
+        let mesh = &mut self.mesh;
+        let origins = &mesh.origins.vertices;
+        if origins.len() != mesh.surface.positions.len() {
+            return Err(ExtractError::BadInput {
+                algorithm,
+                reason: format!(
+                    "reported {} vertex origins for {} vertices; it cannot mesh in chunks",
+                    origins.len(),
+                    mesh.surface.positions.len()
+                ),
+            });
+        }
+        let owned = |t: &[u32; 3]| {
+            (0..3).all(|a| {
+                let anchor = t.iter().map(|&v| origins[v as usize][a] as usize).min().unwrap_or(0) + b.lo[a];
+                (b.own_lo[a]..b.own_hi[a]).contains(&anchor)
+            })
+        };
+        mesh.surface.triangles.retain(owned);
+        self.remap.clear();
+        self.remap.resize(mesh.surface.positions.len(), u32::MAX);
+        for t in &mesh.surface.triangles {
+            for &v in t {
+                self.remap[v as usize] = 0;
+            }
+        }
+        let with_normals = mesh.surface.normals.len() == mesh.surface.positions.len();
+        let mut next = 0usize;
+        for (v, (slot, &origin)) in self.remap.iter_mut().zip(origins).enumerate() {
+            if *slot == 0 {
+                *slot = next as u32;
+                mesh.surface.positions[next] = mesh.surface.positions[v];
+                if with_normals {
+                    mesh.surface.normals[next] = mesh.surface.normals[v];
+                }
+                self.keys.push(Some(lattice_key(origin, b.lo)));
+                next += 1;
+            }
+        }
+        mesh.surface.positions.truncate(next);
+        mesh.surface.normals.truncate(if with_normals { next } else { 0 });
+        for t in &mut mesh.surface.triangles {
+            *t = t.map(|v| self.remap[v as usize]);
         }
         Ok(())
     }
 }
 
+/// A weld key from exact position bits.
+fn position_key(p: Vec3) -> u128 {
+    let [x, y, z] = p.to_array().map(|c| u128::from(c.to_bits()));
+    x | y << 32 | z << 64
+}
+
 /// Welds the chunks' meshes into `out` (cleared first) and fills the counts of `stats`.
 fn weld<'a>(slots: impl Iterator<Item = &'a ChunkSlot>, out: &mut Extraction, stats: &mut ChunkStats) {
     out.surface.clear();
-    let mut index: HashMap<[u32; 3], u32> = HashMap::new();
+    let mut index: HashMap<u128, u32> = HashMap::new();
     let mut with_normals = true;
     for slot in slots {
         match slot.state {
@@ -169,8 +364,10 @@ fn weld<'a>(slots: impl Iterator<Item = &'a ChunkSlot>, out: &mut Extraction, st
                     .enumerate()
                     .map(|(i, &p)| {
                         let next = out.surface.positions.len() as u32;
-                        let id =
-                            if slot.on_face[i] { *index.entry(p.to_array().map(f32::to_bits)).or_insert(next) } else { next };
+                        let id = match slot.keys[i] {
+                            Some(key) => *index.entry(key).or_insert(next),
+                            None => next,
+                        };
                         if id == next {
                             out.surface.positions.push(p);
                             if let Some(&n) = e.surface.normals.get(i) {
@@ -199,6 +396,14 @@ fn field_normals(field: Option<&Arc<dyn Field>>, out: &mut Extraction) {
     }
 }
 
+/// The apron a chunking needs.
+fn apron_of(chunking: Chunking) -> usize {
+    match chunking {
+        Chunking::Apron(a) => a,
+        _ => 0,
+    }
+}
+
 /// Meshes `samples` in chunks of `chunk`³ cells with `extractor` and welds the result into `out`.
 pub fn extract_chunked(
     extractor: &dyn Extractor,
@@ -206,14 +411,17 @@ pub fn extract_chunked(
     chunk: usize,
     out: &mut Extraction,
 ) -> Result<ChunkStats, ExtractError> {
-    let grid = check_chunkable(extractor, samples)?;
+    let (grid, chunking) = check_chunkable(extractor, samples)?;
     let counts = chunk_counts(&grid, chunk, extractor.name())?;
+    let apron = apron_of(chunking);
     let start = Instant::now();
-    let mut slots: Vec<ChunkSlot> = chunk_ids(counts).map(|id| ChunkSlot::new(id, chunk, samples.iso())).collect();
-    slots.par_iter_mut().try_for_each(|slot| slot.remesh(extractor, &grid, samples.values(), chunk))?;
+    let mut slots: Vec<ChunkSlot> = chunk_ids(counts)
+        .map(|id| ChunkSlot::new(id, Block::new(id, chunk, apron, grid.dims), &grid, samples.iso(), samples.field()))
+        .collect();
+    slots.par_iter_mut().try_for_each(|slot| slot.remesh(extractor, chunking, &grid, samples.values()))?;
     out.clear();
     out.stats.times.sampling = samples.sampling_time();
-    let mut stats = ChunkStats { chunks: counts, ..Default::default() };
+    let mut stats = ChunkStats { chunks: counts, apron, ..Default::default() };
     weld(slots.iter(), out, &mut stats);
     field_normals(samples.field(), out);
     out.stats.times.geometry = start.elapsed();
@@ -278,6 +486,7 @@ pub struct ChunkedVolume {
     grid: Grid,
     values: Vec<f32>,
     chunk: usize,
+    chunking: Chunking,
     counts: [usize; 3],
     slots: Vec<ChunkSlot>,
     dirty: Vec<bool>,
@@ -285,14 +494,17 @@ pub struct ChunkedVolume {
 
 impl ChunkedVolume {
     /// Takes `samples` (cubic) apart into chunks of `chunk`³ cells for `extractor`; every chunk
-    /// starts dirty.
+    /// starts dirty. Edits change the samples, so the field is not kept: extractors see raw
+    /// samples (dual contouring takes its normals from them).
     pub fn new(extractor: &dyn Extractor, samples: Samples, chunk: usize) -> Result<Self, ExtractError> {
-        let grid = check_chunkable(extractor, &samples)?;
+        let (grid, chunking) = check_chunkable(extractor, &samples)?;
         let counts = chunk_counts(&grid, chunk, extractor.name())?;
         let iso = samples.iso();
-        let slots: Vec<ChunkSlot> = chunk_ids(counts).map(|id| ChunkSlot::new(id, chunk, iso)).collect();
+        let apron = apron_of(chunking);
+        let slots: Vec<ChunkSlot> =
+            chunk_ids(counts).map(|id| ChunkSlot::new(id, Block::new(id, chunk, apron, grid.dims), &grid, iso, None)).collect();
         let dirty = vec![true; slots.len()];
-        Ok(Self { grid, values: samples.values().to_vec(), chunk, counts, slots, dirty })
+        Ok(Self { grid, values: samples.values().to_vec(), chunk, chunking, counts, slots, dirty })
     }
 
     /// Chunks per axis.
@@ -358,16 +570,17 @@ impl ChunkedVolume {
         if changed_lo[0] == usize::MAX {
             return Ok(0);
         }
-        // A sample on a chunk face belongs to the chunks on both sides.
-        let first = changed_lo.map(|c| c.saturating_sub(1) / self.chunk);
-        let last: [usize; 3] = std::array::from_fn(|a| (changed_hi[a] / self.chunk).min(self.counts[a] - 1));
+        // A chunk reads its samples plus its apron; a sample on a chunk face belongs to both sides.
+        let apron = apron_of(self.chunking);
+        let first = changed_lo.map(|c| c.saturating_sub(apron + 1) / self.chunk);
+        let last: [usize; 3] = std::array::from_fn(|a| ((changed_hi[a] + apron) / self.chunk).min(self.counts[a] - 1));
         let mut dirtied = 0;
         for z in first[2]..=last[2] {
             for y in first[1]..=last[1] {
                 for x in first[0]..=last[0] {
                     let k = x + self.counts[0] * (y + self.counts[1] * z);
-                    let k0 = [x, y, z].map(|c| c * self.chunk);
-                    let touches = (0..3).all(|a| changed_lo[a] <= k0[a] + self.chunk && changed_hi[a] >= k0[a]);
+                    let b = self.slots[k].block;
+                    let touches = (0..3).all(|a| changed_lo[a] <= b.hi(a) && changed_hi[a] >= b.lo[a]);
                     if touches && !self.dirty[k] {
                         self.dirty[k] = true;
                         dirtied += 1;
@@ -378,16 +591,23 @@ impl ChunkedVolume {
         Ok(dirtied)
     }
 
-    /// Re-meshes the dirty chunks (in parallel) and returns how many.
+    /// Re-meshes the dirty chunks (in parallel) with `extractor` (which must chunk as the one
+    /// the volume was made for) and returns how many.
     pub fn remesh_dirty(&mut self, extractor: &dyn Extractor) -> Result<usize, ExtractError> {
-        let (grid, values, chunk) = (self.grid, &self.values, self.chunk);
+        if extractor.chunking() != self.chunking {
+            return Err(ExtractError::BadInput {
+                algorithm: extractor.name(),
+                reason: format!("chunks as {:?}, but the volume was split for {:?}", extractor.chunking(), self.chunking),
+            });
+        }
+        let (grid, values, chunking) = (self.grid, &self.values, self.chunking);
         let dirty = &self.dirty;
         let count = dirty.iter().filter(|&&d| d).count();
         self.slots
             .par_iter_mut()
             .zip(dirty.par_iter())
             .filter(|(_, &d)| d)
-            .try_for_each(|(slot, _)| slot.remesh(extractor, &grid, values, chunk))?;
+            .try_for_each(|(slot, _)| slot.remesh(extractor, chunking, &grid, values))?;
         self.dirty.iter_mut().for_each(|d| *d = false);
         Ok(count)
     }
@@ -396,7 +616,7 @@ impl ChunkedVolume {
     /// no longer describes the samples).
     pub fn welded(&self, out: &mut Extraction) -> ChunkStats {
         out.clear();
-        let mut stats = ChunkStats { chunks: self.counts, ..Default::default() };
+        let mut stats = ChunkStats { chunks: self.counts, apron: apron_of(self.chunking), ..Default::default() };
         weld(self.slots.iter(), out, &mut stats);
         out.finish_counts(0);
         stats

@@ -67,6 +67,8 @@ pub struct Extraction {
     pub volume: TetMesh,
     /// Times and counts.
     pub stats: Stats,
+    /// Where each vertex comes from, when asked ([`Chunking::Apron`] extractors only).
+    pub origins: Origins,
 }
 
 impl Extraction {
@@ -75,6 +77,7 @@ impl Extraction {
         self.surface.clear();
         self.volume.clear();
         self.stats = Stats::default();
+        self.origins.vertices.clear();
     }
 
     /// Fills the counts and buffer bytes from the meshes (`scratch_bytes` is what the extractor
@@ -84,6 +87,56 @@ impl Extraction {
         self.stats.triangles = self.surface.triangles.len();
         self.stats.tetrahedra = self.volume.tetrahedra.len();
         self.stats.buffer_bytes = self.surface.capacity_bytes() + self.volume.capacity_bytes() + scratch_bytes;
+    }
+}
+
+/// How an extractor meshes a volume in chunks ([`crate::chunks`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Chunking {
+    /// It cannot.
+    Unsupported,
+    /// Every triangle comes from one cell's samples and every vertex from one lattice edge's two
+    /// samples: chunks that share their boundary samples mesh independently, in the lattice's
+    /// index coordinates, and weld exactly by position (marching cubes, Kuhn marching tetrahedra).
+    CellLocal,
+    /// Its output near a sample depends on samples up to `apron` samples away (dual methods'
+    /// neighbouring cells and smoothing, clustering's stars): each chunk also reads `apron`
+    /// samples of its neighbours, the extractor reports where each vertex comes from
+    /// ([`Origins`]), each chunk keeps the triangles it owns, and chunks weld by lattice key.
+    Apron(usize),
+}
+
+/// Where each surface vertex comes from in the lattice, for chunked extraction: filled by
+/// extractors whose [`Extractor::chunking`] is [`Chunking::Apron`] when `wanted` is set.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Origins {
+    /// Set by the caller to ask for origins (kept by [`Extraction::clear`]).
+    pub wanted: bool,
+    /// Per vertex: the sample that owns it (`x`, `y`, `z` sample indices of a cubic grid; for
+    /// dual methods the lower corner of its cell) and its ordinal among that sample's vertices.
+    pub vertices: Vec<[u32; 4]>,
+}
+
+impl Origins {
+    /// Fills `vertices` from each vertex's owning sample (a flat index of `grid`) and ordinal.
+    pub fn fill_with_ordinals(&mut self, grid: &crate::lattice::Grid, owners: impl Iterator<Item = (usize, u32)>) {
+        self.vertices.clear();
+        let [nx, ny, _] = grid.dims;
+        self.vertices.extend(owners.map(|(i, k)| [(i % nx) as u32, ((i / nx) % ny) as u32, (i / (nx * ny)) as u32, k]));
+    }
+
+    /// Fills `vertices` from each vertex's owning sample (a flat index of `grid`) and a tag, in
+    /// vertex order: consecutive vertices with the same owner and tag are numbered from `tag`
+    /// up. Tags keep apart vertices a sample makes in separate passes (a repair pass).
+    pub fn fill_from_owners(&mut self, grid: &crate::lattice::Grid, owners: impl Iterator<Item = (usize, u32)>) {
+        self.vertices.clear();
+        let [nx, ny, _] = grid.dims;
+        let mut last = (usize::MAX, 0u32, 0u32);
+        for (i, tag) in owners {
+            let ordinal = if i == last.0 && tag == last.1 { last.2 + 1 } else { tag };
+            last = (i, tag, ordinal);
+            self.vertices.push([(i % nx) as u32, ((i / nx) % ny) as u32, (i / (nx * ny)) as u32, ordinal]);
+        }
     }
 }
 
@@ -99,12 +152,6 @@ pub enum ExtractError {
         lattice: &'static str,
         /// Lattices it supports.
         supported: &'static str,
-    },
-    /// The algorithm needs the field itself (gradients), and the samples do not carry it.
-    #[error("{algorithm} needs the field's gradient (Hermite data), but these samples carry no field; sample a field instead of raw values")]
-    NeedsField {
-        /// Algorithm name.
-        algorithm: &'static str,
     },
     /// A surface post-process after an extractor that made no surface.
     #[error("{post} needs a triangle surface, but the extractor produced only a tetrahedral volume; drop --post {post}")]
@@ -151,10 +198,9 @@ pub trait Extractor: Send + Sync {
         false
     }
 
-    /// Whether its output is local to each cell, so [`crate::chunks::extract_chunked`] can mesh
-    /// chunks independently and weld them exactly.
-    fn supports_chunks(&self) -> bool {
-        false
+    /// How [`crate::chunks`] can mesh a volume in chunks with it.
+    fn chunking(&self) -> Chunking {
+        Chunking::Unsupported
     }
 
     /// Extracts from `samples` into `out`, which is cleared first (keeping capacity).

@@ -43,7 +43,7 @@ pub mod sign_rows;
 pub mod tables;
 pub mod tetrahedral;
 
-pub use extract::{ExtractError, Extraction, Extractor, PostProcess, StageTimes, Stats};
+pub use extract::{Chunking, ExtractError, Extraction, Extractor, Origins, PostProcess, StageTimes, Stats};
 pub use field::{Field, FieldError};
 pub use geometry::Aabb;
 pub use lattice::{Grid, Lattice, LatticeError};

@@ -88,6 +88,13 @@ impl Samples {
         Ok(Samples { lattice, values, iso, field: None, sampling_time: Duration::ZERO })
     }
 
+    /// Attaches the field these values were taken from (so extractors may ask it for exact
+    /// gradients); the caller vouches that the values are the field's.
+    pub fn with_field(mut self, field: Arc<dyn Field>) -> Samples {
+        self.field = Some(field);
+        self
+    }
+
     /// The lattice.
     pub fn lattice(&self) -> &Lattice {
         &self.lattice

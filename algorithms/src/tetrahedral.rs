@@ -303,8 +303,10 @@ pub struct TetScratch {
     touch: Vec<bool>,
     /// Samples whose crossings must not merge (set by a repairing caller).
     no_merge: Vec<bool>,
-    /// The sample that made each vertex, and how many crossings it merged.
-    owner: Vec<(u32, u8)>,
+    /// The sample that made each vertex, how many crossings it merged, and the lowest of their
+    /// directions (with the sample, a key for the vertex that does not depend on the lattice's
+    /// extent).
+    owner: Vec<(u32, u8, u8)>,
 }
 
 impl TetScratch {
@@ -315,6 +317,17 @@ impl TetScratch {
             + self.touch.capacity()
             + self.no_merge.capacity()
             + self.owner.capacity() * 8
+    }
+
+    /// Fills `origins` with each vertex's owning sample and the lowest direction of its crossings
+    /// (`grid` is the corner grid of a cubic lattice); vertices from index `repaired_from` on were
+    /// made by repairs and are tagged apart.
+    pub fn fill_origins(&self, grid: &Grid, repaired_from: usize, origins: &mut crate::extract::Origins) {
+        let owners = self.owner.iter().enumerate().map(|(v, &(s, _, k))| {
+            let tag = if v >= repaired_from { DIRECTIONS as u32 } else { 0 };
+            (s as usize, u32::from(k) + tag)
+        });
+        origins.fill_with_ordinals(grid, owners);
     }
 
     /// Samples currently forbidden to merge.
@@ -615,10 +628,14 @@ pub fn extract_tetrahedral(
                         packed |= u64::from(s) << (4 * k);
                     }
                     scratch.slots[i] = packed;
+                    let mut first = [u8::MAX; DIRECTIONS];
+                    for k in (0..DIRECTIONS).rev().filter(|&k| star.nearby >> k & 1 == 1) {
+                        first[islands.slot[k] as usize] = k as u8;
+                    }
                     for s in 0..islands.count as usize {
                         let mean = sums[s] / members[s] as f32;
                         mesh.positions.push(clustering.place(mean, members[s], field, iso, at.corners.spacing));
-                        scratch.owner.push((i as u32, members[s].min(255) as u8));
+                        scratch.owner.push((i as u32, members[s].min(255) as u8, first[s]));
                     }
                 }
             }
@@ -761,7 +778,7 @@ pub fn unmerge_and_regenerate(samples: &Samples, scratch: &mut TetScratch, out: 
     let iso = samples.iso();
     let mut changed = false;
     for &v in vertices {
-        let Some(&(sample, members)) = scratch.owner.get(v as usize) else { continue };
+        let Some(&(sample, members, _)) = scratch.owner.get(v as usize) else { continue };
         let i = sample as usize;
         if members < 2 || scratch.no_merge[i] {
             continue;
@@ -778,7 +795,7 @@ pub fn unmerge_and_regenerate(samples: &Samples, scratch: &mut TetScratch, out: 
             if (vj < iso) != (vi < iso) && owns(i, vi, j, vj, iso) {
                 let step = Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * (0.5 * at.corners.spacing);
                 out.surface.positions.push(at.position(q) + step * ((iso - vi) / (vj - vi)));
-                scratch.owner.push((sample, 1));
+                scratch.owner.push((sample, 1, k as u8));
                 packed |= slot << (4 * k);
                 slot += 1;
             }
@@ -814,6 +831,15 @@ pub fn finish_repair(out: &mut Extraction) {
         }
     }
     mesh.positions.truncate(next as usize);
+    let origins = &mut out.origins.vertices;
+    if origins.len() == used.len() {
+        for (v, &u) in used.iter().enumerate() {
+            if u != u32::MAX {
+                origins[u as usize] = origins[v];
+            }
+        }
+        origins.truncate(next as usize);
+    }
     for t in &mut mesh.triangles {
         *t = t.map(|v| used[v as usize]);
     }

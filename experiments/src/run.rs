@@ -270,11 +270,13 @@ pub struct ChunkReport {
     pub full: usize,
     /// Vertices merged at seams.
     pub welded: usize,
+    /// Samples each chunk reads beyond its own on every side (dual methods, clustering).
+    pub apron: usize,
 }
 
 impl From<(usize, ChunkStats)> for ChunkReport {
     fn from((size, s): (usize, ChunkStats)) -> Self {
-        Self { size, per_axis: s.chunks, meshed: s.meshed, empty: s.empty, full: s.full, welded: s.welded }
+        Self { size, per_axis: s.chunks, meshed: s.meshed, empty: s.empty, full: s.full, welded: s.welded, apron: s.apron }
     }
 }
 

@@ -364,6 +364,20 @@ fn chunked_extraction_matches_the_whole_volume_and_refuses_bad_sizes() {
     assert_clean_failure(&o, 1, &["chunk size 10 does not divide"]);
     let o = isolab(&["extract", "-a", "marching-cubes", "-f", "asteroid", "--dims", "65,65,65", "--chunk", "1"]);
     assert_clean_failure(&o, 1, &["below 2"]);
-    let o = isolab(&["extract", "-a", "surface-nets", "-f", "asteroid", "--dims", "65,65,65", "--chunk", "16"]);
-    assert_clean_failure(&o, 1, &["surface-nets", "not supported yet"]);
+    // Surface nets chunks with an apron (2 + its 4 smoothing iterations) and gives the whole
+    // volume's triangles.
+    let (c, d) = (dir.path().join("c.json"), dir.path().join("d.json"));
+    let sn = |extra: &[&str], m: &std::path::Path| {
+        let mut args = vec!["extract", "-a", "surface-nets", "-f", "asteroid", "--dims", "65,65,65", "-m", m.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        isolab(&args)
+    };
+    assert!(sn(&[], &c).status.success());
+    let o = sn(&["--chunk", "16"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (c, d) = (json(&c), json(&d));
+    assert_eq!((&c["triangles"], &c["euler"]), (&d["triangles"], &d["euler"]));
+    assert_eq!(d["chunks"]["apron"], serde_json::json!(6));
+    let o = isolab(&["extract", "-a", "bcc-sculpt", "-f", "sphere", "--dims", "33,33,33", "--chunk", "16"]);
+    assert_clean_failure(&o, 1, &["bcc-sculpt", "cannot mesh in chunks"]);
 }

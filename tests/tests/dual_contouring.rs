@@ -1,7 +1,7 @@
 //! Dual contouring: sharp corners of `csg` reproduced (marching cubes and surface nets cut them),
 //! closed and manifold on the smooth closed fields, and a clear error without a field.
 
-use isolab_algorithms::{extractors, fields, Extraction, Grid, Lattice, Samples, Vec3};
+use isolab_algorithms::{extractors, fields, Extraction, Grid, Samples};
 use isolab_tests::assert_closed_manifold;
 
 fn worst_corner_distance(algorithm: &str, resolution: usize) -> f32 {
@@ -39,11 +39,22 @@ fn smooth_closed_fields_are_closed_and_manifold() {
     }
 }
 
+/// Raw samples (a file, edited terrain) carry no field: the Hermite normals come from each cell's
+/// trilinear interpolant, and the vertices still sit on the sphere.
 #[test]
-fn raw_values_without_a_field_are_refused_by_name() {
-    let grid = Grid { origin: Vec3::ZERO, spacing: 1.0, dims: [3, 3, 3] };
-    let values: Vec<f32> = (0..27).map(|i| if i == 13 { -1.0 } else { 1.0 }).collect();
-    let s = Samples::from_values(Lattice::Cubic(grid), values, 0.0).unwrap();
-    let err = extractors::by_name("dual-contouring").unwrap().extract(&s, &mut Extraction::default()).unwrap_err().to_string();
-    assert!(err.contains("dual-contouring") && err.contains("gradient"), "{err}");
+fn raw_values_without_a_field_take_normals_from_the_samples() {
+    let f = isolab_tests::object_field("sphere");
+    let sampled = Samples::sample_cubic(f.clone(), Grid::covering(&f.domain(), 48).unwrap(), 0.0).unwrap();
+    let h = sampled.grid().spacing;
+    let raw = Samples::from_values(*sampled.lattice(), sampled.values().to_vec(), 0.0).unwrap();
+    let dc = extractors::by_name("dual-contouring").unwrap();
+    let (mut with_field, mut from_samples) = (Extraction::default(), Extraction::default());
+    dc.extract(&sampled, &mut with_field).unwrap();
+    dc.extract(&raw, &mut from_samples).unwrap();
+    assert_closed_manifold(&from_samples.surface, "sphere from raw samples");
+    assert_eq!(from_samples.surface.triangles.len(), with_field.surface.triangles.len());
+    let worst = |e: &Extraction| e.surface.positions.iter().map(|p| (p.length() - 0.4).abs() / h).fold(0.0f32, f32::max);
+    let (a, b) = (worst(&with_field), worst(&from_samples));
+    println!("worst distance / h: field normals {a}, sample normals {b}");
+    assert!(b < 0.1, "raw-sample dual contouring within 0.1 h of the sphere, got {b}");
 }

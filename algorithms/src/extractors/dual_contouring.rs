@@ -6,7 +6,9 @@
 //! **Summary.** The dual structure of [`SurfaceNets`] (a vertex per piece of surface in each
 //! cell, a quad per crossing edge, split along the shorter diagonal), with each vertex placed by
 //! minimising the quadric error function of the cell's Hermite data: for every edge crossing `p_i`
-//! with unit normal `n_i` (the field's gradient, analytic where the field has one), minimise
+//! with unit normal `n_i` (the field's gradient, analytic where the field has one; for raw samples
+//! with no field, such as edited terrain, the gradient of the cell's trilinear interpolant at the
+//! crossing, as game engines estimate normals from their voxels), minimise
 //! `Σ (n_i · (x - p_i))²`. The 3x3 system is solved around the mass point `m` (the mean of the
 //! crossings) with a truncated SVD (nalgebra): singular values below `svd-tolerance` times the
 //! largest are dropped, so flat and ridge-like cells stay near `m` along their free directions
@@ -38,7 +40,7 @@
 //! assert!(nearest < 0.05 * samples.grid().spacing);
 //! ```
 
-use crate::extract::{ExtractError, Extraction, Extractor};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
 use crate::extractors::surface_nets::{Placement, Smoothing, SnOptions, SurfaceNets};
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
@@ -83,7 +85,8 @@ pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError
     Ok(Box::new(DualContouring::new(o)))
 }
 
-/// Dual contouring on a cubic grid; needs samples that carry their field (for gradients).
+/// Dual contouring on a cubic grid (normals from the field when the samples carry it, from the
+/// samples otherwise).
 pub struct DualContouring {
     /// The options.
     pub options: DcOptions,
@@ -112,6 +115,10 @@ impl Extractor for DualContouring {
 
     fn description(&self) -> &'static str {
         DESCRIPTION
+    }
+
+    fn chunking(&self) -> Chunking {
+        self.engine.chunking()
     }
 
     fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {

@@ -45,7 +45,7 @@
 //! assert!(out.surface.positions.iter().all(|p| (p.length() - 0.4).abs() < 2e-3));
 //! ```
 
-use crate::extract::{ExtractError, Extraction, Extractor};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
 use crate::extractors::slabs::EXTERN;
 use crate::geometry::trilinear_gradient;
 use crate::lattice::{Grid, Lattice};
@@ -483,8 +483,8 @@ impl Extractor for MarchingCubes {
         }
     }
 
-    fn supports_chunks(&self) -> bool {
-        true
+    fn chunking(&self) -> Chunking {
+        Chunking::CellLocal
     }
 
     fn description(&self) -> &'static str {

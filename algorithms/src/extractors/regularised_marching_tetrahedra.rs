@@ -55,8 +55,9 @@
 //! **Costs.** As marching tetrahedra plus, per sample with two or more nearby crossings, a few
 //! bit operations per crossing (at most 14 × 14).
 
-use crate::extract::{ExtractError, Extraction, Extractor};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
 use crate::field::Field;
+use crate::lattice::Lattice;
 use crate::mesh::manifold_defects;
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
@@ -234,13 +235,20 @@ impl Extractor for RegularisedMarchingTetrahedra {
         DESCRIPTION
     }
 
+    /// A vertex merges the crossings of its sample's star, and the guard's repairs reach the
+    /// stars of neighbouring samples: 3 samples.
+    fn chunking(&self) -> Chunking {
+        Chunking::Apron(3)
+    }
+
     fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
         let mut scratch = TetScratch::default();
         extract_tetrahedral(samples, &self.options, &mut scratch, out)?;
+        let first_pass_vertices = out.surface.positions.len();
+        let mut repaired = false;
         if self.options.guard {
             // The checks and the re-run geometry passes count as geometry time.
             let (first_pass, t) = (out.stats.times.geometry, Instant::now());
-            let mut repaired = false;
             loop {
                 let defects = manifold_defects(&out.surface);
                 if defects.is_empty() || !unmerge_and_regenerate(samples, &mut scratch, out, &defects) {
@@ -249,9 +257,12 @@ impl Extractor for RegularisedMarchingTetrahedra {
                 repaired = true;
             }
             out.stats.times.geometry = first_pass + t.elapsed();
-            if repaired {
-                finish_repair(out);
-            }
+        }
+        if out.origins.wanted && matches!(samples.lattice(), Lattice::Cubic(_)) {
+            scratch.fill_origins(samples.grid(), first_pass_vertices, &mut out.origins);
+        }
+        if repaired {
+            finish_repair(out);
         }
         out.finish_counts(scratch.bytes());
         Ok(())

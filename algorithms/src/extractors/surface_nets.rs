@@ -61,7 +61,7 @@
 //! assert!(out.surface.positions.iter().all(|p| (p.length() - 0.4).abs() < 1.8 * h));
 //! ```
 
-use crate::extract::{ExtractError, Extraction, Extractor};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
 use crate::extractors::marching_cubes::Parallelism;
 use crate::extractors::slabs::EXTERN;
 use crate::geometry::trilinear_gradient;
@@ -364,15 +364,21 @@ impl Ctx<'_> {
                 let min = self.grid.position(x, y, z);
                 base[c] = tag | mesh.positions.len() as u32;
                 for p in 0..entry.polygons as usize {
-                    let local = match (self.placement, self.field) {
-                        (Placement::Qef { tolerance, clamp }, Some(field)) => {
+                    let local = match self.placement {
+                        Placement::Qef { tolerance, clamp } => {
                             let mut pts = [Vec3::ZERO; 12];
                             let mut nrm = [Vec3::ZERO; 12];
                             let mut k = 0;
                             for &(piece, q) in &crossings[..n] {
                                 if piece as usize == p {
                                     pts[k] = q;
-                                    nrm[k] = field.gradient(min + q * self.grid.spacing).normalize_or_zero();
+                                    // The field's gradient where the samples carry it, else the
+                                    // cell's trilinear interpolant's (Hermite data from samples).
+                                    let g = match self.field {
+                                        Some(field) => field.gradient(min + q * self.grid.spacing),
+                                        None => trilinear_gradient(&v, q),
+                                    };
+                                    nrm[k] = g.normalize_or_zero();
                                     k += 1;
                                 }
                             }
@@ -383,7 +389,7 @@ impl Ctx<'_> {
                                 x
                             }
                         }
-                        _ => sums[p] / counts[p],
+                        Placement::MassPoint => sums[p] / counts[p],
                     };
                     mesh.positions.push(min + local * self.grid.spacing);
                     mesh.normals.push(trilinear_gradient(&v, local.clamp(Vec3::ZERO, Vec3::ONE)).normalize_or_zero());
@@ -705,6 +711,15 @@ impl Extractor for SurfaceNets {
         DESCRIPTION
     }
 
+    /// A quad needs its edge's four cells, a cell's pieces depend on its face neighbours (ring
+    /// faces), and each smoothing iteration reaches one cell further: `2 + iterations` samples.
+    /// Implicit smoothing is a global solve, so chunked positions only approximate it (the
+    /// topology is still exact).
+    fn chunking(&self) -> Chunking {
+        let smoothing = if self.options.smoothing == Smoothing::None { 0 } else { self.options.iterations };
+        Chunking::Apron(2 + smoothing)
+    }
+
     fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
         out.clear();
         out.stats.times.sampling = samples.sampling_time();
@@ -722,9 +737,6 @@ impl Extractor for SurfaceNets {
         classify_rows(samples.values(), nx, samples.iso(), &mut s.rows);
         let row_time = t0.elapsed();
         let field = samples.field().map(|f| f.as_ref());
-        if matches!(self.placement, Placement::Qef { .. }) && field.is_none() {
-            return Err(ExtractError::NeedsField { algorithm: self.name() });
-        }
         let ctx = Ctx {
             values: samples.values(),
             grid,
@@ -813,6 +825,13 @@ impl Extractor for SurfaceNets {
             }));
         }
         out.stats.times.normals = t_normals.elapsed();
+        if out.origins.wanted {
+            let cell_of = |min: &Vec3| {
+                let c = ((*min - grid.origin) / grid.spacing).round();
+                (grid.index(c.x as usize, c.y as usize, c.z as usize), 0)
+            };
+            out.origins.fill_from_owners(&grid, s.cell_min.iter().map(cell_of));
+        }
         let scratch = s.bytes();
         drop(guard);
         out.finish_counts(scratch);

@@ -11,7 +11,7 @@ use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
 use crate::figures::render::{self, RenderOptions, Shading};
 use crate::report::markdown_table;
 use isolab_algorithms::chunks::{Brush, ChunkedVolume};
-use isolab_algorithms::{extractors, fields, Extraction, Grid, Lattice, Samples};
+use isolab_algorithms::{extractors, fields, Chunking, Extraction, Grid, Lattice, Samples};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -117,7 +117,7 @@ impl Experiment for TerrainEdit {
         let opts = RenderOptions { width: 420, height: 300, shading: Shading::Smooth, ..Default::default() };
         let (mut before, mut after, mut gif) = (String::new(), String::new(), String::new());
         for e in &surface_extractors {
-            if !e.supports_chunks() {
+            if e.chunking() == Chunking::Unsupported {
                 not_run.push(e.name().to_string());
                 bar.inc(EDITS as u64);
                 continue;

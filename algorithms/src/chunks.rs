@@ -447,6 +447,9 @@ pub struct Brush {
     pub falloff: f32,
     /// Add material (true) or carve it (false).
     pub add: bool,
+    /// The material an adding brush paints into the samples it makes solid
+    /// ([`crate::materials`]); carving leaves materials alone.
+    pub material: u8,
 }
 
 /// Errors editing a [`ChunkedVolume`].
@@ -488,6 +491,8 @@ pub struct ChunkedVolume {
     chunk: usize,
     chunking: Chunking,
     counts: [usize; 3],
+    /// One material id per sample, when given.
+    materials: Option<Vec<u8>>,
     slots: Vec<ChunkSlot>,
     dirty: Vec<bool>,
 }
@@ -504,7 +509,35 @@ impl ChunkedVolume {
         let slots: Vec<ChunkSlot> =
             chunk_ids(counts).map(|id| ChunkSlot::new(id, Block::new(id, chunk, apron, grid.dims), &grid, iso, None)).collect();
         let dirty = vec![true; slots.len()];
-        Ok(Self { grid, values: samples.values().to_vec(), chunk, chunking, counts, slots, dirty })
+        Ok(Self { grid, values: samples.values().to_vec(), chunk, chunking, counts, materials: None, slots, dirty })
+    }
+
+    /// Gives every sample a material id (x fastest, as the samples), for
+    /// [`ChunkedVolume::vertex_materials`]; adding brushes paint theirs.
+    pub fn with_materials(mut self, materials: Vec<u8>) -> Result<Self, ExtractError> {
+        if materials.len() != self.values.len() {
+            return Err(ExtractError::BadInput {
+                algorithm: "materials",
+                reason: format!("{} material ids given for {} samples", materials.len(), self.values.len()),
+            });
+        }
+        self.materials = Some(materials);
+        Ok(self)
+    }
+
+    /// The material of every vertex of `mesh` (the welded mesh, world space) from the current
+    /// samples ([`crate::materials::vertex_material`]); rock everywhere without materials.
+    pub fn vertex_materials(&self, mesh: &crate::mesh::TriMesh, out: &mut Vec<u8>) {
+        match &self.materials {
+            Some(m) => {
+                let iso = self.slots.first().map_or(0.0, |s| s.samples.iso());
+                crate::materials::vertex_materials(&self.grid, &self.values, iso, m, &mesh.positions, out);
+            }
+            None => {
+                out.clear();
+                out.resize(mesh.positions.len(), crate::materials::ROCK);
+            }
+        }
     }
 
     /// Chunks per axis.
@@ -546,6 +579,7 @@ impl ChunkedVolume {
             });
         }
         let g = self.grid;
+        let iso = self.slots.first().map_or(0.0, |s| s.samples.iso());
         let to_index = |p: f32, o: f32, n: usize, f: fn(f32) -> f32| (f((p - o) / g.spacing).max(0.0) as usize).min(n - 1);
         let lo: [usize; 3] = std::array::from_fn(|a| to_index(brush.centre[a] - reach, g.origin[a], g.dims[a], f32::floor));
         let hi: [usize; 3] = std::array::from_fn(|a| to_index(brush.centre[a] + reach, g.origin[a], g.dims[a], f32::ceil));
@@ -559,6 +593,9 @@ impl ChunkedVolume {
                     let new = if brush.add { smooth_min(old, d, brush.falloff) } else { -smooth_min(-old, d, brush.falloff) };
                     if new != old {
                         self.values[i] = new;
+                        if let Some(m) = self.materials.as_mut().filter(|_| brush.add && new < old && new < iso) {
+                            m[i] = brush.material;
+                        }
                         for (a, c) in [x, y, z].into_iter().enumerate() {
                             changed_lo[a] = changed_lo[a].min(c);
                             changed_hi[a] = changed_hi[a].max(c);

@@ -52,6 +52,12 @@ pub trait Field: Send + Sync {
         None
     }
 
+    /// The material at `p` (an id of [`crate::materials::NAMES`]); rock unless the field says
+    /// otherwise.
+    fn material(&self, _p: Vec3) -> u8 {
+        crate::materials::ROCK
+    }
+
     /// The analytic volume enclosed by the level set `iso` within the default domain, where known.
     fn analytic_volume(&self, _iso: f32) -> Option<f64> {
         None

@@ -160,9 +160,16 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&mut BufWriter<File>) -> std
 
 /// Writes a mesh as OBJ or binary little-endian PLY, chosen by the extension.
 pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<(), IoError> {
+    write_mesh_coloured(path, mesh, None)
+}
+
+/// Writes a mesh with optional per-vertex colours (materials): OBJ as `v x y z r g b` (the
+/// common extension MeshLab, Blender and trimesh read), PLY as `uchar red green blue`.
+pub fn write_mesh_coloured(path: &Path, mesh: &TriMesh, colours: Option<&[[u8; 3]]>) -> Result<(), IoError> {
+    let colours = colours.filter(|c| c.len() == mesh.positions.len());
     match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-        Some("obj") => write_atomic(path, |w| write_obj(w, mesh)),
-        Some("ply") => write_atomic(path, |w| write_ply(w, mesh)),
+        Some("obj") => write_atomic(path, |w| write_obj_coloured(w, mesh, colours)),
+        Some("ply") => write_atomic(path, |w| write_ply_coloured(w, mesh, colours)),
         _ => Err(IoError::UnknownFormat { path: path.into() }),
     }
 }
@@ -195,9 +202,20 @@ pub fn tetrahedra_path(surface: &Path) -> std::path::PathBuf {
 
 /// OBJ text: `v`, `vn` (when normals exist) and `f` lines, 1-based.
 pub fn write_obj(w: &mut impl Write, mesh: &TriMesh) -> std::io::Result<()> {
+    write_obj_coloured(w, mesh, None)
+}
+
+/// OBJ with optional vertex colours (`v x y z r g b`, components in [0, 1]).
+pub fn write_obj_coloured(w: &mut impl Write, mesh: &TriMesh, colours: Option<&[[u8; 3]]>) -> std::io::Result<()> {
     writeln!(w, "# isolab: {} vertices, {} triangles", mesh.positions.len(), mesh.triangles.len())?;
-    for p in &mesh.positions {
-        writeln!(w, "v {} {} {}", p.x, p.y, p.z)?;
+    for (i, p) in mesh.positions.iter().enumerate() {
+        match colours {
+            Some(c) => {
+                let [r, g, b] = c[i].map(|v| f32::from(v) / 255.0);
+                writeln!(w, "v {} {} {} {r:.4} {g:.4} {b:.4}", p.x, p.y, p.z)?
+            }
+            None => writeln!(w, "v {} {} {}", p.x, p.y, p.z)?,
+        }
     }
     let normals = mesh.normals.len() == mesh.positions.len() && !mesh.normals.is_empty();
     if normals {
@@ -218,12 +236,20 @@ pub fn write_obj(w: &mut impl Write, mesh: &TriMesh) -> std::io::Result<()> {
 
 /// Binary little-endian PLY: float x y z (and nx ny nz), faces as `uchar int` lists.
 pub fn write_ply(w: &mut impl Write, mesh: &TriMesh) -> std::io::Result<()> {
+    write_ply_coloured(w, mesh, None)
+}
+
+/// Binary PLY with optional `uchar red green blue` vertex colours after the floats.
+pub fn write_ply_coloured(w: &mut impl Write, mesh: &TriMesh, colours: Option<&[[u8; 3]]>) -> std::io::Result<()> {
     let normals = mesh.normals.len() == mesh.positions.len() && !mesh.normals.is_empty();
     writeln!(w, "ply\nformat binary_little_endian 1.0\ncomment isolab")?;
     writeln!(w, "element vertex {}", mesh.positions.len())?;
     writeln!(w, "property float x\nproperty float y\nproperty float z")?;
     if normals {
         writeln!(w, "property float nx\nproperty float ny\nproperty float nz")?;
+    }
+    if colours.is_some() {
+        writeln!(w, "property uchar red\nproperty uchar green\nproperty uchar blue")?;
     }
     writeln!(w, "element face {}\nproperty list uchar int vertex_indices\nend_header", mesh.triangles.len())?;
     for (i, p) in mesh.positions.iter().enumerate() {
@@ -234,6 +260,9 @@ pub fn write_ply(w: &mut impl Write, mesh: &TriMesh) -> std::io::Result<()> {
             for c in mesh.normals[i].to_array() {
                 w.write_all(&c.to_le_bytes())?;
             }
+        }
+        if let Some(c) = colours {
+            w.write_all(&c[i])?;
         }
     }
     for t in &mesh.triangles {
@@ -255,7 +284,7 @@ pub fn read_ply(path: &Path) -> Result<TriMesh, IoError> {
     if !header.contains("format binary_little_endian") {
         return Err(bad("only binary_little_endian PLY is read"));
     }
-    let (mut nv, mut nf, mut vprops, mut in_vertex) = (0usize, 0usize, 0usize, false);
+    let (mut nv, mut nf, mut vprops, mut vbytes, mut in_vertex) = (0usize, 0usize, 0usize, 0usize, false);
     for (k, l) in header.lines().enumerate() {
         let words: Vec<&str> = l.split_whitespace().collect();
         match words.as_slice() {
@@ -275,12 +304,16 @@ pub fn read_ply(path: &Path) -> Result<TriMesh, IoError> {
                 })?;
                 in_vertex = false;
             }
-            ["property", "float", _] if in_vertex => vprops += 1,
+            ["property", "float", _] if in_vertex && vbytes == 4 * vprops => {
+                vprops += 1;
+                vbytes += 4;
+            }
+            ["property", "uchar", _] if in_vertex => vbytes += 1,
             ["property", t, _] if in_vertex => {
                 return Err(IoError::Malformed {
                     path: path.into(),
                     line: k + 1,
-                    reason: format!("vertex property type '{t}' unsupported (float only)"),
+                    reason: format!("vertex property type '{t}' unsupported (float, then uchar colours)"),
                 })
             }
             _ => {}
@@ -297,7 +330,7 @@ pub fn read_ply(path: &Path) -> Result<TriMesh, IoError> {
         Ok(s)
     };
     for _ in 0..nv {
-        let v = take(4 * vprops)?;
+        let v = take(vbytes)?;
         let f = |i: usize| f32::from_le_bytes([v[4 * i], v[4 * i + 1], v[4 * i + 2], v[4 * i + 3]]);
         mesh.positions.push(Vec3::new(f(0), f(1), f(2)));
     }

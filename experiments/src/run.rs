@@ -46,6 +46,8 @@ pub struct RunConfig {
     pub options: Options,
     /// Mesh in chunks of this many cells per side and weld (`--chunk N`).
     pub chunk: Option<usize>,
+    /// Give every vertex the field's material (`--materials`).
+    pub materials: bool,
 }
 
 impl RunConfig {
@@ -62,6 +64,7 @@ impl RunConfig {
             post: Vec::new(),
             options: Options::new(),
             chunk: None,
+            materials: false,
         }
     }
 }
@@ -247,6 +250,9 @@ pub struct RunReport {
     /// Chunked extraction (`--chunk N`): chunks per axis, meshed, skipped, welded vertices.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub chunks: Option<ChunkReport>,
+    /// Vertices per material (`--materials`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub materials: Option<std::collections::BTreeMap<String, usize>>,
     /// What the extractor warned about (an open input surface, non-convergence).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
@@ -286,6 +292,8 @@ pub struct RunOutcome {
     pub samples: Samples,
     /// What the extractor produced.
     pub extraction: Extraction,
+    /// Each surface vertex's material (with `materials`), else empty.
+    pub vertex_materials: Vec<u8>,
     /// The metrics JSON.
     pub report: RunReport,
 }
@@ -319,6 +327,30 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
     for post in &posts {
         post.apply(&samples, &mut extraction)?;
     }
+    let mut vertex_materials = Vec::new();
+    if config.materials {
+        let grid = *samples.grid();
+        let sample_materials = isolab_algorithms::materials::sample(field.as_ref(), &grid);
+        let corners = &samples.values()[..grid.len()];
+        let positions = &extraction.surface.positions;
+        isolab_algorithms::materials::vertex_materials(
+            &grid,
+            corners,
+            config.iso,
+            &sample_materials,
+            positions,
+            &mut vertex_materials,
+        );
+    }
+    let material_counts = config.materials.then(|| {
+        let counts = isolab_algorithms::materials::histogram(&vertex_materials);
+        counts
+            .iter()
+            .enumerate()
+            .filter(|(_, &n)| n > 0)
+            .map(|(id, &n)| (isolab_algorithms::materials::name(id as u8), n))
+            .collect()
+    });
     let metrics = MeshMetrics::measure(&extraction.surface, Some((field.as_ref(), config.iso)));
     let volume_mesh =
         volume_metrics(&extraction.volume, &extraction.surface, Some((field.as_ref(), config.iso)), extraction.stats.converged);
@@ -350,10 +382,11 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
         analytic_area: field.analytic_area(config.iso),
         volume_mesh,
         chunks,
+        materials: material_counts,
         warnings: extraction.stats.warnings.clone(),
         metrics,
     };
-    Ok(RunOutcome { samples, extraction, report })
+    Ok(RunOutcome { samples, extraction, vertex_materials, report })
 }
 
 /// Writes any serializable value as pretty JSON, atomically.

@@ -381,3 +381,28 @@ fn chunked_extraction_matches_the_whole_volume_and_refuses_bad_sizes() {
     let o = isolab(&["extract", "-a", "bcc-sculpt", "-f", "sphere", "--dims", "33,33,33", "--chunk", "16"]);
     assert_clean_failure(&o, 1, &["bcc-sculpt", "cannot mesh in chunks"]);
 }
+
+#[test]
+fn materials_are_counted_and_written_as_vertex_colours() {
+    let dir = tempfile::tempdir().unwrap();
+    let (obj, ply, m) = (dir.path().join("t.obj"), dir.path().join("t.ply"), dir.path().join("t.json"));
+    let base = ["extract", "-a", "marching-cubes", "-f", "terrain", "--dims", "65,33,65", "--materials"];
+    let o = isolab(&[&base[..], &["-o", obj.to_str().unwrap(), "-m", m.to_str().unwrap()]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report = json(&m);
+    let counts = report["materials"].as_object().expect("materials in the metrics JSON");
+    let total: u64 = counts.values().map(|v| v.as_u64().unwrap()).sum();
+    assert_eq!(total, report["vertices"].as_u64().unwrap());
+    assert!(counts.contains_key("grass") && counts.contains_key("rock"), "{counts:?}");
+    let text = std::fs::read_to_string(&obj).unwrap();
+    let first = text.lines().find(|l| l.starts_with("v ")).unwrap();
+    assert_eq!(first.split_whitespace().count(), 7, "v x y z r g b: {first}");
+    // The coloured PLY reads back (colours skipped) with the same counts.
+    let o = isolab(&[&base[..], &["-o", ply.to_str().unwrap()]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let back = isolab(&["metrics", ply.to_str().unwrap()]);
+    assert!(back.status.success(), "{}", stderr(&back));
+    let back: serde_json::Value = serde_json::from_slice(&back.stdout).unwrap();
+    assert_eq!(back["vertices"], report["vertices"]);
+    assert_eq!(back["triangles"], report["triangles"]);
+}

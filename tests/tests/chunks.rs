@@ -167,6 +167,7 @@ mod editing {
                     radius: grid.spacing * (2.0 + 6.0 * lcg(&mut seed)),
                     falloff: grid.spacing * 2.0 * lcg(&mut seed),
                     add: edit % 2 == 0,
+                    material: 4,
                 };
                 let dirtied = world.apply(&brush).unwrap();
                 assert!(dirtied <= 27, "{algorithm}: a brush of radius < 10 cells touches at most 3x3x3 chunks of 16");
@@ -189,7 +190,9 @@ mod editing {
         // Carve everything below y = 16 around the first column of chunks.
         for x in [0.0f32, 8.0, 16.0] {
             for z in [0.0f32, 8.0, 16.0] {
-                world.apply(&Brush { centre: Vec3::new(x, 4.0, z), radius: 16.0, falloff: 0.0, add: false }).unwrap();
+                world
+                    .apply(&Brush { centre: Vec3::new(x, 4.0, z), radius: 16.0, falloff: 0.0, add: false, material: 0 })
+                    .unwrap();
             }
         }
         world.remesh_dirty(&mc).unwrap();
@@ -203,11 +206,11 @@ mod editing {
         let samples = isolab_tests::grid_samples([17, 17, 17], |_, y, _| y as f32 - 8.5);
         let mc = MarchingCubes::default();
         let mut world = ChunkedVolume::new(&mc, samples, 8).unwrap();
-        let outside = world.apply(&Brush { centre: Vec3::splat(100.0), radius: 2.0, falloff: 0.0, add: true });
+        let outside = world.apply(&Brush { centre: Vec3::splat(100.0), radius: 2.0, falloff: 0.0, add: true, material: 0 });
         assert!(matches!(outside, Err(EditError::Outside { .. })), "{outside:?}");
         assert!(outside.unwrap_err().to_string().contains("outside the world"));
         for (radius, falloff) in [(0.0, 0.0), (-1.0, 0.0), (1.0, -1.0), (f32::NAN, 0.0)] {
-            let bad = world.apply(&Brush { centre: Vec3::splat(8.0), radius, falloff, add: true });
+            let bad = world.apply(&Brush { centre: Vec3::splat(8.0), radius, falloff, add: true, material: 0 });
             assert!(matches!(bad, Err(EditError::BadBrush { .. })), "radius {radius}, falloff {falloff}");
         }
         assert!(ChunkedVolume::new(&mc, isolab_tests::grid_samples([17, 17, 17], |_, _, _| 1.0), 5).is_err());

@@ -60,12 +60,19 @@ impl Terrain {
     }
 }
 
+impl Terrain {
+    /// The ground term: height field plus a warp (negative below ground).
+    fn ground(&self, p: Vec3) -> f32 {
+        p.y - 0.12 * self.height.get_noise_2d(p.x, p.z) + 0.05 * self.warp.get_noise_3d(p.x, p.y, p.z)
+    }
+}
+
 impl Field for Terrain {
     fn name(&self) -> &str {
         "terrain"
     }
     fn value(&self, p: Vec3) -> f32 {
-        let ground = p.y - 0.12 * self.height.get_noise_2d(p.x, p.z) + 0.05 * self.warp.get_noise_3d(p.x, p.y, p.z);
+        let ground = self.ground(p);
         // Caves: remove material where the cave noise is high, but keep a solid floor.
         let cave = 0.1 * (self.caves.get_noise_3d(p.x, p.y, p.z) - 0.35);
         let floor = p.y + 0.2;
@@ -73,6 +80,23 @@ impl Field for Terrain {
     }
     fn domain(&self) -> Aabb {
         Aabb::new(Vec3::new(-0.5, -0.25, -0.5), Vec3::new(0.5, 0.25, 0.5))
+    }
+    /// Layers by depth below the ground: grass (sand in the low valleys) within 0.012 of it,
+    /// dirt to 0.04, rock below and in the caves.
+    fn material(&self, p: Vec3) -> u8 {
+        use crate::materials::{DIRT, GRASS, ROCK, SAND};
+        let depth = -self.ground(p);
+        if depth < 0.012 {
+            if p.y < -0.06 {
+                SAND
+            } else {
+                GRASS
+            }
+        } else if depth < 0.04 {
+            DIRT
+        } else {
+            ROCK
+        }
     }
 }
 

@@ -70,6 +70,10 @@ enum Command {
         /// welded mesh; N must divide the cells along every axis (use --dims k*N+1).
         #[arg(long)]
         chunk: Option<usize>,
+        /// Give every vertex the field's material (the inside sample of its lattice edge): counts
+        /// per material in the metrics JSON, vertex colours in the written mesh.
+        #[arg(long)]
+        materials: bool,
         /// Any algorithm option, NAME=VALUE (repeatable; see the algorithm's module documentation).
         #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_option)]
         set: Vec<(String, String)>,
@@ -166,6 +170,7 @@ fn main() -> ExitCode {
             offset_ratio,
             perturbations,
             chunk,
+            materials,
             set,
             output,
             metrics,
@@ -183,7 +188,7 @@ fn main() -> ExitCode {
             {
                 options.set(k, v);
             }
-            let config = RunConfig { algorithm, field, resolution, dims, lattice, iso, seed, post, options, chunk };
+            let config = RunConfig { algorithm, field, resolution, dims, lattice, iso, seed, post, options, chunk, materials };
             extract(&config, output, metrics, samples_out).map_err(|e| (e.exit_code(), e.to_string()))
         }
         Command::Metrics { file } => io::read_mesh(&file)
@@ -255,7 +260,8 @@ fn extract(
         eprintln!("warning: {warning}");
     }
     if let Some(path) = &output {
-        io::write_mesh(path, &outcome.extraction.surface)?;
+        let colours: Vec<[u8; 3]> = outcome.vertex_materials.iter().map(|&m| isolab_algorithms::materials::colour(m)).collect();
+        io::write_mesh_coloured(path, &outcome.extraction.surface, (!colours.is_empty()).then_some(colours.as_slice()))?;
         if !outcome.extraction.volume.tetrahedra.is_empty() {
             io::write_vtk_tets(&io::tetrahedra_path(path), &outcome.extraction.volume)?;
         }

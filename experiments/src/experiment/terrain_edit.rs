@@ -11,7 +11,7 @@ use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
 use crate::figures::render::{self, RenderOptions, Shading};
 use crate::report::markdown_table;
 use isolab_algorithms::chunks::{Brush, ChunkedVolume};
-use isolab_algorithms::{extractors, fields, Chunking, Extraction, Grid, Lattice, Samples};
+use isolab_algorithms::{extractors, fields, materials, Chunking, Extraction, Grid, Lattice, Samples};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -81,6 +81,7 @@ fn script(grid: &Grid, values: &dyn Fn(usize, usize) -> Option<usize>) -> Vec<Br
             radius: radius * grid.spacing,
             falloff: falloff * grid.spacing,
             add: brushes.len() % 2 == 1,
+            material: materials::CLAY,
         });
     }
     brushes
@@ -101,7 +102,8 @@ impl Experiment for TerrainEdit {
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let field = fields::builtin("terrain", Default::default()).map_err(crate::run::RunError::from)?;
         let grid = Grid::with_dims(&field.domain(), DIMS).map_err(crate::run::RunError::from)?;
-        let samples = Samples::sample(field, Lattice::Cubic(grid), 0.0).map_err(crate::run::RunError::from)?;
+        let samples = Samples::sample(field.clone(), Lattice::Cubic(grid), 0.0).map_err(crate::run::RunError::from)?;
+        let sample_materials = materials::sample(field.as_ref(), &grid);
         // The surface height of a column: the topmost sign change.
         let surface_y = |x: usize, z: usize| {
             (1..DIMS[1])
@@ -122,7 +124,13 @@ impl Experiment for TerrainEdit {
                 bar.inc(EDITS as u64);
                 continue;
             }
-            let mut world = ChunkedVolume::new(e.as_ref(), samples.clone(), CHUNK)?;
+            let mut world = ChunkedVolume::new(e.as_ref(), samples.clone(), CHUNK)?.with_materials(sample_materials.clone())?;
+            let mut vertex_materials = Vec::new();
+            let mut coloured = |world: &ChunkedVolume, welded: &Extraction, o: &RenderOptions| {
+                world.vertex_materials(&welded.surface, &mut vertex_materials);
+                let colours: Vec<[u8; 3]> = vertex_materials.iter().map(|&m| materials::colour(m)).collect();
+                render::render_coloured(&welded.surface, &colours, o)
+            };
             let start = Instant::now();
             world.remesh_dirty(e.as_ref())?;
             let initial_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -133,9 +141,9 @@ impl Experiment for TerrainEdit {
             let mut frames = Vec::new();
             if record_pictures {
                 let path = dir.join("before.png");
-                render::save_png(&path, &render::render(&welded.surface, &RenderOptions { width: 640, height: 420, ..opts }))?;
+                render::save_png(&path, &coloured(&world, &welded, &RenderOptions { width: 640, height: 420, ..opts }))?;
                 before = ctx.link(&path);
-                frames.push(render::render(&welded.surface, &opts));
+                frames.push(coloured(&world, &welded, &opts));
             }
             let (mut edit_ms, mut dirtied) = (Vec::with_capacity(EDITS), Vec::with_capacity(EDITS));
             for (k, brush) in brushes.iter().enumerate() {
@@ -146,7 +154,7 @@ impl Experiment for TerrainEdit {
                 dirtied.push(n);
                 if record_pictures && (k + 1) % GIF_EVERY == 0 {
                     world.welded(&mut welded);
-                    frames.push(render::render(&welded.surface, &opts));
+                    frames.push(coloured(&world, &welded, &opts));
                 }
                 bar.inc(1);
             }
@@ -154,7 +162,7 @@ impl Experiment for TerrainEdit {
             let t = isolab_metrics::topology(&welded.surface);
             if record_pictures {
                 let path = dir.join("after.png");
-                render::save_png(&path, &render::render(&welded.surface, &RenderOptions { width: 640, height: 420, ..opts }))?;
+                render::save_png(&path, &coloured(&world, &welded, &RenderOptions { width: 640, height: 420, ..opts }))?;
                 after = ctx.link(&path);
                 let path = dir.join("edits.gif");
                 render::save_gif(&path, &frames, 40)?;

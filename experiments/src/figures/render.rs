@@ -71,6 +71,8 @@ const SUPERSAMPLE: u32 = 2;
 struct Surface<'a> {
     clip: &'a [[f32; 4]],
     normals: &'a [Vec3],
+    /// Per-corner colours, or empty for `color` everywhere.
+    colours: &'a [Vec3],
     edge_px: &'a [Vec3],
     color: Vec3,
     lights: [Vec3; 2],
@@ -79,23 +81,24 @@ struct Surface<'a> {
 
 impl Pipeline for Surface<'_> {
     type Vertex = u32;
-    type VsOut = (vek::Vec3<f32>, vek::Vec3<f32>);
+    type VsOut = (vek::Vec3<f32>, vek::Vec3<f32>, vek::Vec3<f32>);
     type Pixel = u32;
 
     fn vert(&self, v: &u32) -> ([f32; 4], Self::VsOut) {
         let i = *v as usize;
         let n = self.normals[i];
         let e = self.edge_px[i];
-        (self.clip[i], (vek::Vec3::new(n.x, n.y, n.z), vek::Vec3::new(e.x, e.y, e.z)))
+        let c = self.colours.get(i).copied().unwrap_or(self.color);
+        (self.clip[i], (vek::Vec3::new(n.x, n.y, n.z), vek::Vec3::new(e.x, e.y, e.z), vek::Vec3::new(c.x, c.y, c.z)))
     }
 
-    fn frag(&self, (n, e): &Self::VsOut) -> u32 {
+    fn frag(&self, (n, e, c): &Self::VsOut) -> u32 {
         if self.wire_px > 0.0 && e.x.min(e.y).min(e.z) < self.wire_px {
             return pack(Vec3::from(WIRE));
         }
         let n = Vec3::new(n.x, n.y, n.z).normalize_or_zero();
         let diffuse: f32 = self.lights.iter().zip([0.55, 0.35]).map(|(l, w)| w * n.dot(*l).abs()).sum();
-        pack(self.color * (0.22 + diffuse))
+        pack(Vec3::new(c.x, c.y, c.z) * (0.22 + diffuse))
     }
 }
 
@@ -106,6 +109,13 @@ fn pack(c: Vec3) -> u32 {
 
 /// Renders `mesh` into an image.
 pub fn render(mesh: &TriMesh, opts: &RenderOptions) -> Image {
+    render_coloured(mesh, &[], opts)
+}
+
+/// Renders `mesh` with a colour per vertex (sRGB bytes, e.g. [`isolab_algorithms::materials::colour`]);
+/// an empty or short slice falls back to the options' colour.
+pub fn render_coloured(mesh: &TriMesh, vertex_colours: &[[u8; 3]], opts: &RenderOptions) -> Image {
+    let use_colours = vertex_colours.len() == mesh.positions.len() && !vertex_colours.is_empty();
     let (w, h) = ((opts.width * SUPERSAMPLE) as usize, (opts.height * SUPERSAMPLE) as usize);
     let mut color = Buffer2d::new([w, h], pack(Vec3::from(BACKGROUND)));
     let mut depth = Buffer2d::new([w, h], 1.0f32);
@@ -127,7 +137,11 @@ pub fn render(mesh: &TriMesh, opts: &RenderOptions) -> Image {
         let mut clip = Vec::with_capacity(corners);
         let mut normals = Vec::with_capacity(corners);
         let mut edge_px = Vec::with_capacity(corners);
+        let mut colours = Vec::with_capacity(if use_colours { corners } else { 0 });
         for t in &mesh.triangles {
+            if use_colours {
+                colours.extend(t.map(|i| Vec3::from(vertex_colours[i as usize].map(|c| f32::from(c) / 255.0))));
+            }
             let p = t.map(|i| rotation.transform_point3(mesh.positions[i as usize]));
             let c = p.map(|q| mvp * q.extend(1.0));
             let screen = c.map(|v: Vec4| glam::Vec2::new((v.x / v.w + 1.0) * 0.5 * w as f32, (v.y / v.w + 1.0) * 0.5 * h as f32));
@@ -149,6 +163,7 @@ pub fn render(mesh: &TriMesh, opts: &RenderOptions) -> Image {
         let surface = Surface {
             clip: &clip,
             normals: &normals,
+            colours: &colours,
             edge_px: &edge_px,
             color: Vec3::from(opts.color),
             lights,

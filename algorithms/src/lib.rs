@@ -34,6 +34,7 @@ pub mod field;
 pub mod fields;
 pub mod geometry;
 pub mod lattice;
+pub mod lod;
 pub mod materials;
 pub mod mesh;
 pub mod options;

@@ -1,0 +1,112 @@
+//! Levels of detail: marching cubes chunks at full and half resolution, stitched at their seams.
+//! Over random terrains and random level patterns, no boundary edge is left anywhere but on the
+//! world's boundary, every edge has at most two triangles, and no seam edge goes unmatched.
+
+use isolab_algorithms::fields::{self, FieldParams};
+use isolab_algorithms::lod::extract_lod;
+use isolab_algorithms::{extractors, Extraction, Grid, Lattice, Samples, TriMesh, Vec3};
+use isolab_metrics::topology;
+use isolab_tests::blob_field;
+use proptest::prelude::*;
+use std::collections::HashMap;
+
+fn lcg(state: &mut u64) -> u64 {
+    *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    *state >> 33
+}
+
+/// Boundary edges (used by one triangle) whose ends are not both on one face of `bounds`.
+fn seam_boundary_edges(mesh: &TriMesh, lo: Vec3, hi: Vec3) -> usize {
+    let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *uses.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    let eps = 1e-4 * (hi - lo).max_element();
+    let on_face = |p: Vec3, a: usize| (p[a] - lo[a]).abs() < eps || (p[a] - hi[a]).abs() < eps;
+    uses.iter()
+        .filter(|(_, &n)| n == 1)
+        .filter(|((a, b), _)| {
+            let (p, q) = (mesh.positions[*a as usize], mesh.positions[*b as usize]);
+            !(0..3).any(|k| on_face(p, k) && on_face(q, k))
+        })
+        .count()
+}
+
+#[test]
+fn random_terrains_and_level_patterns_leave_no_crack() {
+    let mc = extractors::by_name("marching-cubes").unwrap();
+    let mut state = 11u64;
+    for seed in 1..=6 {
+        let field = fields::builtin("terrain", FieldParams { seed }).unwrap();
+        let grid = Grid::with_dims(&field.domain(), [65, 33, 65]).unwrap();
+        let samples = Samples::sample(field, Lattice::Cubic(grid), 0.0).unwrap();
+        let levels: Vec<u8> = (0..4 * 2 * 4).map(|_| (lcg(&mut state) % 2) as u8).collect();
+        let mut out = Extraction::default();
+        let stats = extract_lod(mc.as_ref(), &samples, 16, &levels, &mut out, None).unwrap();
+        let what = format!("terrain seed {seed}, levels {levels:?}");
+        assert_eq!(stats.unmatched, 0, "{what}");
+        assert!(stats.stitched > 0 && stats.restricted > 0, "{what}: seams were stitched");
+        let b = grid.bounds();
+        assert_eq!(seam_boundary_edges(&out.surface, b.min, b.max), 0, "{what}: a crack");
+        let t = topology(&out.surface);
+        assert_eq!(t.non_manifold_edges, 0, "{what}");
+        assert_eq!(t.misoriented_edges, 0, "{what}");
+    }
+}
+
+#[test]
+fn all_fine_equals_chunked_marching_cubes_and_all_coarse_equals_half_resolution() {
+    let mc = extractors::by_name("marching-cubes").unwrap();
+    let field = fields::builtin("asteroid", Default::default()).unwrap();
+    let grid = Grid::with_dims(&field.domain(), [65, 65, 65]).unwrap();
+    let samples = Samples::sample(field.clone(), Lattice::Cubic(grid), 0.0).unwrap();
+    let mut lod = Extraction::default();
+    extract_lod(mc.as_ref(), &samples, 16, &[0; 64], &mut lod, None).unwrap();
+    let mut whole = Extraction::default();
+    mc.extract(&samples, &mut whole).unwrap();
+    assert_eq!((lod.stats.vertices, lod.stats.triangles), (whole.stats.vertices, whole.stats.triangles));
+    let coarse_grid = Grid { origin: grid.origin, spacing: 2.0 * grid.spacing, dims: [33, 33, 33] };
+    let coarse = Samples::sample(field, Lattice::Cubic(coarse_grid), 0.0).unwrap();
+    mc.extract(&coarse, &mut whole).unwrap();
+    extract_lod(mc.as_ref(), &samples, 16, &[1; 64], &mut lod, None).unwrap();
+    assert_eq!((lod.stats.vertices, lod.stats.triangles), (whole.stats.vertices, whole.stats.triangles));
+}
+
+#[test]
+fn bad_lod_requests_are_refused_by_name() {
+    let samples = blob_field(17, &[(0.5, 0.5, 0.5, 0.3)], 0.5);
+    let mc = extractors::by_name("marching-cubes").unwrap();
+    let mut out = Extraction::default();
+    let err = |r: Result<_, isolab_algorithms::ExtractError>| r.unwrap_err().to_string();
+    assert!(err(extract_lod(mc.as_ref(), &samples, 8, &[0; 3], &mut out, None)).contains("3 levels given for 8 chunks"));
+    assert!(err(extract_lod(mc.as_ref(), &samples, 8, &[2; 8], &mut out, None)).contains("level 2"));
+    assert!(err(extract_lod(mc.as_ref(), &samples, 2, &[0; 512], &mut out, None)).contains("even and at least 4"));
+    let sn = extractors::by_name("surface-nets").unwrap();
+    assert!(err(extract_lod(sn.as_ref(), &samples, 8, &[0; 8], &mut out, None)).contains("marching-cubes"));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 96, ..ProptestConfig::default() })]
+
+    /// Random closed blobs under random level patterns: the stitched mesh is closed, manifold
+    /// and consistently oriented.
+    #[test]
+    fn random_blobs_stitch_closed(
+        blobs in prop::collection::vec((0.1f32..0.9, 0.1f32..0.9, 0.1f32..0.9, 0.05f32..0.3), 1..8),
+        threshold in 0.3f32..0.9,
+        levels in prop::collection::vec(0u8..2, 64),
+        chunk in prop::sample::select(vec![4usize, 8]),
+    ) {
+        let samples = blob_field(17, &blobs, threshold);
+        let mc = extractors::by_name("marching-cubes").unwrap();
+        let mut out = Extraction::default();
+        let levels = &levels[..(16 / chunk).pow(3)];
+        let stats = extract_lod(mc.as_ref(), &samples, chunk, levels, &mut out, None).unwrap();
+        prop_assert_eq!(stats.unmatched, 0);
+        let t = topology(&out.surface);
+        prop_assert!(t.closed && t.edge_manifold && t.oriented, "{:?} levels {:?}", (t.boundary_edges, t.non_manifold_edges, t.misoriented_edges), levels);
+    }
+}

@@ -8,6 +8,7 @@
 pub mod compare_algorithms;
 pub mod costen_table;
 pub mod decimation;
+pub mod large_world;
 pub mod peers;
 pub mod sharp_features;
 pub mod sphere_convergence;
@@ -15,6 +16,7 @@ pub mod stuart_tables;
 pub mod surface_nets_smoothing;
 pub mod svoboda_timing;
 pub mod terrain_edit;
+pub mod terrain_lod;
 
 use crate::io::{write_atomic, IoError};
 use crate::run::RunError;
@@ -136,6 +138,8 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(svoboda_timing::SvobodaTiming),
         Box::new(stuart_tables::StuartTables),
         Box::new(terrain_edit::TerrainEdit),
+        Box::new(terrain_lod::TerrainLod),
+        Box::new(large_world::LargeWorld),
     ]
 }
 

@@ -170,7 +170,7 @@ impl Experiment for LargeWorld {
             "\nSampling the noise field dominates the time (about ten noise evaluations per sample; most chunks turn out empty or \
              full only after sampling). Memory grows with one slab (the world's x and y extent), not with its z extent. \
              `ISOLAB_WORLD=8192,512,8192 cargo run --release -p isolab-experiments --bin large_world` runs the issue's example \
-             size (137 GiB dense; 16 times these samples, about 16 times the time at this throughput, twice the slab memory).\n",
+             size (137 GiB dense; 16 times these samples, about 16 times the time at this throughput, four times the slab memory).\n",
         );
         Ok(md)
     }

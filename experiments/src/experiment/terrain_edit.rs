@@ -217,8 +217,12 @@ impl Experiment for TerrainEdit {
         md.push_str(&format!(
             "`terrain` at {}x{}x{} samples in {CHUNK}³-cell chunks ({} chunks), meshed once, then {EDITS} scripted brush edits \
              (seed {SEED}: a sphere of radius 3-10 cells on the surface of a random column, falloff 0-3 cells, alternately \
-             carving and adding). An edit's time is the sample edit plus re-meshing every chunk it dirtied (in parallel on 2 \
-             cores); the welded mesh is only assembled for pictures. Against the 16.7 ms of a 60 Hz frame.\n\n",
+             carving and adding clay). An edit's time is the sample edit plus re-meshing every chunk it dirtied (in parallel on 2 \
+             cores); the welded mesh is only assembled for pictures. Against the 16.7 ms of a 60 Hz frame. Every surface \
+             extractor chunks: marching cubes and marching tetrahedra read exactly their chunk's samples, surface nets, dual \
+             contouring and regularised MT also an apron of their neighbours' (6, 2 and 3 samples), so an edit dirties more of \
+             their chunks and each chunk costs more (dual contouring here takes its normals from the samples, since edits leave \
+             the field behind).\n\n",
             DIMS[0],
             DIMS[1],
             DIMS[2],
@@ -265,7 +269,7 @@ impl Experiment for TerrainEdit {
         }
         md.push_str(&format!("\n![edit times]({})\n\n", data.plot));
         md.push_str(&format!(
-            "Before and after the {EDITS} edits (marching cubes), and every {GIF_EVERY}th edit as an animation:\n\n![before]({}) \
+            "Before and after the {EDITS} edits (marching cubes, coloured by material: grass, sand in the valleys, dirt, rock in the caves, the brushes' clay), and every {GIF_EVERY}th edit as an animation:\n\n![before]({}) \
              ![after]({})\n\n![edits]({})\n",
             data.before, data.after, data.gif
         ));

@@ -104,7 +104,9 @@ pub fn extract_lod(
             .iter()
             .map(|&p| {
                 let next = out.surface.positions.len() as u32;
-                let id = *index.entry(p.to_array().map(f32::to_bits)).or_insert(next);
+                // Only vertices on a chunk plane can be shared (index coordinates are exact).
+                let on_plane = (0..3).any(|a| p[a].fract() == 0.0 && (p[a] as usize) % chunk == 0);
+                let id = if on_plane { *index.entry(p.to_array().map(f32::to_bits)).or_insert(next) } else { next };
                 if id == next {
                     out.surface.positions.push(p);
                 }
@@ -114,8 +116,7 @@ pub fn extract_lod(
         out.surface.triangles.extend(mesh.surface.triangles.iter().map(|t| t.map(|v| remap[v as usize])));
         triangle_levels.extend(std::iter::repeat_n(level, mesh.surface.triangles.len()));
     }
-    let (stitched, unmatched) =
-        stitch(&mut out.surface.positions, &mut out.surface.triangles, &mut triangle_levels, chunk, &grid);
+    let (stitched, unmatched) = stitch(&out.surface.positions, &mut out.surface.triangles, &mut triangle_levels, chunk, &grid);
     for p in &mut out.surface.positions {
         *p = grid.origin + *p * grid.spacing;
     }
@@ -239,20 +240,16 @@ fn coarse_edge(p: Vec3) -> Option<(usize, [u32; 3])> {
 
 /// Stitches coarse seam edges to the fine boundary paths (module doc). Returns (stitched,
 /// unmatched).
-fn stitch(
-    positions: &mut [Vec3],
-    triangles: &mut Vec<[u32; 3]>,
-    levels: &mut Vec<u8>,
-    chunk: usize,
-    grid: &Grid,
-) -> (usize, usize) {
-    let uses = edge_uses(triangles);
-    let is_boundary = |a: u32, b: u32| uses.get(&(a.min(b), a.max(b))) == Some(&1);
+fn stitch(positions: &[Vec3], triangles: &mut Vec<[u32; 3]>, levels: &mut Vec<u8>, chunk: usize, grid: &Grid) -> (usize, usize) {
     // Interior chunk planes only (the world boundary stays open).
     let last = grid.dims.map(|d| (d - 1) as f32);
     let on_interior_plane = |p: Vec3, q: Vec3| {
         (0..3).any(|a| p[a] == q[a] && p[a] > 0.0 && p[a] < last[a] && (p[a] as usize) % chunk == 0 && p[a].fract() == 0.0)
     };
+    // Edge uses, counted only for edges lying in an interior chunk plane (the only candidates).
+    let in_plane = |a: u32, b: u32| on_interior_plane(positions[a as usize], positions[b as usize]);
+    let uses = edge_uses(triangles, in_plane);
+    let is_boundary = |a: u32, b: u32| uses.get(&(a.min(b), a.max(b))) == Some(&1);
     // Fine boundary: next vertex along each directed boundary edge, and vertices on coarse edges.
     let mut next_fine: HashMap<u32, Vec<u32>> = HashMap::new();
     let mut fine_on_edge: HashMap<(usize, [u32; 3]), u32> = HashMap::new();
@@ -289,7 +286,7 @@ fn stitch(
     for t in triangles.iter_mut() {
         *t = t.map(|v| remap.get(&v).copied().unwrap_or(v));
     }
-    let uses = edge_uses(triangles);
+    let uses = edge_uses(triangles, in_plane);
     let is_boundary = |a: u32, b: u32| uses.get(&(a.min(b), a.max(b))) == Some(&1);
     let (mut stitched, mut unmatched) = (0, 0);
     let mut fans: Vec<(usize, Vec<(u32, bool)>)> = Vec::new();
@@ -359,13 +356,31 @@ fn stitch(
     (stitched, unmatched)
 }
 
-/// How many triangles use each undirected edge.
-fn edge_uses(triangles: &[[u32; 3]]) -> HashMap<(u32, u32), u32> {
+/// Boundary edges (used by one triangle) whose two ends do not lie on one face of `bounds` (the
+/// world's box): the cracks a seam leaves. 0 for a stitched mesh.
+pub fn open_edges_off_bounds(mesh: &crate::mesh::TriMesh, bounds: &crate::geometry::Aabb) -> usize {
+    let (lo, hi) = (bounds.min, bounds.max);
+    let eps = 1e-4 * (hi - lo).max_element();
+    let on_face = |p: Vec3, a: usize| (p[a] - lo[a]).abs() < eps || (p[a] - hi[a]).abs() < eps;
+    edge_uses(&mesh.triangles, |_, _| true)
+        .iter()
+        .filter(|(_, &n)| n == 1)
+        .filter(|((a, b), _)| {
+            let (p, q) = (mesh.positions[*a as usize], mesh.positions[*b as usize]);
+            !(0..3).any(|k| on_face(p, k) && on_face(q, k))
+        })
+        .count()
+}
+
+/// How many triangles use each undirected edge that `keep` selects.
+fn edge_uses(triangles: &[[u32; 3]], keep: impl Fn(u32, u32) -> bool) -> HashMap<(u32, u32), u32> {
     let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
     for t in triangles {
         for k in 0..3 {
             let (a, b) = (t[k], t[(k + 1) % 3]);
-            *uses.entry((a.min(b), a.max(b))).or_default() += 1;
+            if keep(a, b) {
+                *uses.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
         }
     }
     uses

@@ -29,7 +29,8 @@ Modes:
           tests/reference/meshes/), which `cargo test` compares our metrics against;
   live    recompute the references for the committed golden meshes (catching a drift in the
           libraries), and for meshes the current isolab writes, compared with `isolab metrics`
-          (catching a drift in isolab). Ends with 'N passed, M failed'; exits 1 on any failure.
+          (catching a drift in isolab); and `isolab metrics` on the peers' own marching cubes
+          meshes (VTK, scikit-image) against the libraries' measures of them. Ends with 'N passed, M failed'; exits 1 on any failure.
 """
 import argparse
 import json
@@ -48,6 +49,8 @@ MODELS = ["stanford-bunny", "spot", "fandisk", "rocker-arm", "cheburashka", "tea
 EXTRACTED = [("mc-sphere-64", "sphere", 64), ("mc-torus-64", "torus", 64), ("mc-bunny-64", "models/stanford-bunny.obj", 64)]
 # Marching cubes equivalence cases: (field, resolution)
 EQUIVALENCE = [("sphere", 64), ("gyroid", 64), ("asteroid", 64), ("models/stanford-bunny.obj", 64)]
+# Peers' meshes measured by isolab and by the libraries: (field, resolution)
+PEER_METRICS = [("sphere", 64), ("models/stanford-bunny.obj", 64)]
 # Hausdorff pairs: (name, sampled mesh, target mesh)
 HAUSDORFF = [("mc-bunny-64", "stanford-bunny")]
 
@@ -484,8 +487,45 @@ def live(isolab):
                 closed = case["field"] != "gyroid"  # the gyroid is cut by the domain: no volume
                 check(f"{key} {peer}", close(p["area"], ours["area"], rel) and (not closed or close(p["volume"], abs(ours["volume"]), rel)),
                       f"area {ours['area']:.9f}/{p['area']:.9f} volume {abs(ours['volume']):.9f}/{p['volume']:.9f} (to {rel:g})")
+    # 4. Our metrics on the peers' own meshes equal the libraries' measures of those meshes.
+    with tempfile.TemporaryDirectory() as tmp:
+        for field, res in PEER_METRICS:
+            spec = os.path.join(ROOT, field) if field.endswith(".obj") else field
+            raw = os.path.join(tmp, "p.raw")
+            subprocess.run([isolab, "extract", "-a", "marching-cubes", "-f", spec, "-r", str(res), "--samples-out", raw],
+                           check=True, stdout=subprocess.DEVNULL)
+            vol, origin, h, iso = load_grid(raw)
+            for peer, (pv, pf) in [("vtkFlyingEdges3D", vtk_flying_edges(vol, origin, h, iso)),
+                                   ("skimage-lewiner", skimage_marching_cubes(vol, origin, h, iso, "lewiner"))]:
+                path = os.path.join(tmp, "peer.obj")
+                write_obj(path, pv, pf)
+                ours = json.loads(subprocess.run([isolab, "metrics", path], check=True, capture_output=True).stdout)
+                ref = measure(*read_mesh(path))
+                name = f"{peer} mesh of {os.path.basename(field)}@{res}"
+                check(name, ours["vertices"] == ref["vertices"] and ours["triangles"] == ref["triangles"],
+                      f"counts ours {ours['vertices']}/{ours['triangles']} ref {ref['vertices']}/{ref['triangles']}")
+                check(name, close(ours["area"], ref["cgal"]["area"], 1e-6) and close(ours["volume"], ref["cgal"]["volume"], 1e-6),
+                      f"area ours {ours['area']:.9f} cgal {ref['cgal']['area']:.9f}, volume ours {ours['volume']:.9f} cgal {ref['cgal']['volume']:.9f}")
+                check(name, ours["closed"] == ref["cgal"]["closed"] and ours["outward"] == ref["cgal"]["outward"],
+                      f"closed/outward ours {ours['closed']}/{ours['outward']} cgal {ref['cgal']['closed']}/{ref['cgal']['outward']}")
+                check(name, ours["boundary_edges"] == ref["meshlab"]["boundary_edges"] and ours["non_manifold_edges"] == ref["meshlab"]["non_manifold_edges"]
+                      and ours["components"] == ref["meshlab"]["components"],
+                      f"boundary/non-manifold edges, components ours {ours['boundary_edges']}/{ours['non_manifold_edges']}/{ours['components']} "
+                      f"meshlab {ref['meshlab']['boundary_edges']}/{ref['meshlab']['non_manifold_edges']}/{ref['meshlab']['components']}")
+                check(name, close(ours["aspect_ratio"]["mean"], ref["vtk"]["aspect_mean"], 1e-6) and close(ours["aspect_ratio"]["max"], ref["vtk"]["aspect_max"], 1e-6),
+                      f"Verdict aspect ours {ours['aspect_ratio']['mean']:.6f}/{ours['aspect_ratio']['max']:.4f} vtk {ref['vtk']['aspect_mean']:.6f}/{ref['vtk']['aspect_max']:.4f}")
     print(f"{check.passed} passed, {check.failed} failed")
     return check.failed == 0
+
+
+def write_obj(path, verts, faces):
+    """The mesh as OBJ with float32 coordinates written exactly (9 significant digits)."""
+    v32 = np.asarray(verts, dtype=np.float32)
+    with open(path, "w") as f:
+        for x, y, z in v32:
+            f.write(f"v {float(x):.9g} {float(y):.9g} {float(z):.9g}\n")
+        for a, b, c in np.asarray(faces):
+            f.write(f"f {a + 1} {b + 1} {c + 1}\n")
 
 
 def main():

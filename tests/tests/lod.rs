@@ -3,36 +3,15 @@
 //! world's boundary, every edge has at most two triangles, and no seam edge goes unmatched.
 
 use isolab_algorithms::fields::{self, FieldParams};
-use isolab_algorithms::lod::extract_lod;
-use isolab_algorithms::{extractors, Extraction, Grid, Lattice, Samples, TriMesh, Vec3};
+use isolab_algorithms::lod::{extract_lod, open_edges_off_bounds};
+use isolab_algorithms::{extractors, Extraction, Grid, Lattice, Samples};
 use isolab_metrics::topology;
 use isolab_tests::blob_field;
 use proptest::prelude::*;
-use std::collections::HashMap;
 
 fn lcg(state: &mut u64) -> u64 {
     *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
     *state >> 33
-}
-
-/// Boundary edges (used by one triangle) whose ends are not both on one face of `bounds`.
-fn seam_boundary_edges(mesh: &TriMesh, lo: Vec3, hi: Vec3) -> usize {
-    let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            *uses.entry((a.min(b), a.max(b))).or_default() += 1;
-        }
-    }
-    let eps = 1e-4 * (hi - lo).max_element();
-    let on_face = |p: Vec3, a: usize| (p[a] - lo[a]).abs() < eps || (p[a] - hi[a]).abs() < eps;
-    uses.iter()
-        .filter(|(_, &n)| n == 1)
-        .filter(|((a, b), _)| {
-            let (p, q) = (mesh.positions[*a as usize], mesh.positions[*b as usize]);
-            !(0..3).any(|k| on_face(p, k) && on_face(q, k))
-        })
-        .count()
 }
 
 #[test]
@@ -50,7 +29,7 @@ fn random_terrains_and_level_patterns_leave_no_crack() {
         assert_eq!(stats.unmatched, 0, "{what}");
         assert!(stats.stitched > 0 && stats.restricted > 0, "{what}: seams were stitched");
         let b = grid.bounds();
-        assert_eq!(seam_boundary_edges(&out.surface, b.min, b.max), 0, "{what}: a crack");
+        assert_eq!(open_edges_off_bounds(&out.surface, &b), 0, "{what}: a crack");
         let t = topology(&out.surface);
         assert_eq!(t.non_manifold_edges, 0, "{what}");
         assert_eq!(t.misoriented_edges, 0, "{what}");

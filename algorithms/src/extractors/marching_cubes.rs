@@ -46,7 +46,7 @@
 //! ```
 
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
-use crate::extractors::slabs::EXTERN;
+use crate::extractors::slabs::{ScratchPool, EXTERN};
 use crate::geometry::trilinear_gradient;
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
@@ -57,7 +57,6 @@ use crate::tables::marching_cubes::{
 };
 use glam::Vec3;
 use rayon::prelude::*;
-use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 /// Where vertex normals come from.
@@ -189,8 +188,14 @@ fn build(
 pub struct MarchingCubes {
     /// The options.
     pub options: McOptions,
-    pool: Mutex<Vec<Scratch>>,
-    rows: Mutex<Vec<Row>>,
+    scratch: ScratchPool<McScratch>,
+}
+
+/// One call's buffers: the row summaries and one scratch per slab task.
+#[derive(Default)]
+struct McScratch {
+    rows: Vec<Row>,
+    slabs: Vec<Scratch>,
 }
 
 impl MarchingCubes {
@@ -513,19 +518,19 @@ impl Extractor for MarchingCubes {
         let sample_normals = field.is_none() && matches!(self.options.normals, NormalSource::Auto | NormalSource::SampleGradient);
 
         let start = Instant::now();
-        let mut rows = self.rows.lock().unwrap_or_else(|e| e.into_inner());
-        classify_rows(samples.values(), nx, samples.iso(), &mut rows);
+        let mut held = self.scratch.take();
+        let McScratch { rows, slabs: pool } = &mut held;
+        classify_rows(samples.values(), nx, samples.iso(), rows);
         let t_min = match self.options.on_iso {
             OnIsoSamples::Separate => MIN_EDGE_FRACTION,
             OnIsoSamples::Exact => 0.0,
         };
         let decider = self.options.faces == FaceResolution::AsymptoticDecider;
-        let ctx = Ctx { values: samples.values(), grid, iso: samples.iso(), rows: &rows, sample_normals, t_min, decider };
+        let ctx = Ctx { values: samples.values(), grid, iso: samples.iso(), rows, sample_normals, t_min, decider };
         let row_time = start.elapsed();
 
         let slab_cells = nz - 1;
         let tasks = crate::extractors::slabs::task_count(self.options.parallelism, grid.cell_count(), slab_cells);
-        let mut pool = self.pool.lock().unwrap_or_else(|e| e.into_inner());
         while pool.len() < tasks {
             pool.push(Scratch::default());
         }
@@ -604,6 +609,7 @@ impl Extractor for MarchingCubes {
         }
         out.stats.times.normals = t_normals.elapsed();
         let scratch_bytes = pool.iter().map(Scratch::bytes).sum::<usize>() + rows.capacity() * std::mem::size_of::<Row>();
+        self.scratch.give(held);
         out.finish_counts(scratch_bytes);
         Ok(())
     }

@@ -63,7 +63,7 @@
 
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
 use crate::extractors::marching_cubes::Parallelism;
-use crate::extractors::slabs::EXTERN;
+use crate::extractors::slabs::{ScratchPool, EXTERN};
 use crate::geometry::trilinear_gradient;
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
@@ -73,7 +73,6 @@ use crate::sign_rows::{classify_rows, span, Row};
 use crate::tables::marching_cubes::{opposite_face, Case, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, RING_FACES, TABLE};
 use glam::Vec3;
 use rayon::prelude::*;
-use std::sync::Mutex;
 use std::time::Instant;
 
 /// One line for listings.
@@ -185,7 +184,7 @@ pub struct SurfaceNets {
     pub options: SnOptions,
     placement: Placement,
     label: Option<&'static str>,
-    scratch: Mutex<Scratch>,
+    scratch: ScratchPool<Scratch>,
 }
 
 #[derive(Default)]
@@ -249,12 +248,12 @@ impl Scratch {
 impl SurfaceNets {
     /// Surface nets with `options`.
     pub fn new(options: SnOptions) -> Self {
-        Self { options, placement: Placement::MassPoint, label: None, scratch: Mutex::new(Scratch::default()) }
+        Self { options, placement: Placement::MassPoint, label: None, scratch: ScratchPool::default() }
     }
 
     /// The dual engine with another vertex placement, reporting as `label` (dual contouring).
     pub fn with_placement(options: SnOptions, placement: Placement, label: &'static str) -> Self {
-        Self { options, placement, label: Some(label), scratch: Mutex::new(Scratch::default()) }
+        Self { options, placement, label: Some(label), scratch: ScratchPool::default() }
     }
 }
 
@@ -731,8 +730,8 @@ impl Extractor for SurfaceNets {
             });
         };
         let [nx, ny, nz] = grid.dims;
-        let mut guard = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
-        let s = &mut *guard;
+        let mut held = self.scratch.take();
+        let s = &mut held;
         let t0 = Instant::now();
         classify_rows(samples.values(), nx, samples.iso(), &mut s.rows);
         let row_time = t0.elapsed();
@@ -833,7 +832,7 @@ impl Extractor for SurfaceNets {
             out.origins.fill_from_owners(&grid, s.cell_min.iter().map(cell_of));
         }
         let scratch = s.bytes();
-        drop(guard);
+        self.scratch.give(held);
         out.finish_counts(scratch);
         Ok(())
     }
@@ -857,7 +856,7 @@ mod tests {
             let sn = SurfaceNets::new(SnOptions { smoothing, iterations: 6, ..Default::default() });
             let mut out = Extraction::default();
             sn.extract(&s, &mut out).unwrap();
-            let scratch = sn.scratch.lock().unwrap();
+            let scratch = sn.scratch.take();
             for (p, min) in out.surface.positions.iter().zip(&scratch.cell_min) {
                 let d = (*p - *min) / h;
                 assert!(d.min_element() >= -1e-4 && d.max_element() <= 1.0 + 1e-4, "{smoothing:?}: {p} outside cell at {min}");

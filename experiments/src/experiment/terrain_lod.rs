@@ -8,7 +8,7 @@
 use super::{Context, Experiment, ExperimentError};
 use crate::figures::render::{self, RenderOptions, Shading};
 use crate::report::{markdown_table, median};
-use isolab_algorithms::lod::extract_lod;
+use isolab_algorithms::lod::{extract_lod, open_edges_off_bounds};
 use isolab_algorithms::{extractors, fields, Extraction, Grid, Lattice, Samples, TriMesh, Vec3};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
@@ -39,26 +39,6 @@ struct Row {
 struct Data {
     rows: Vec<Row>,
     picture: String,
-}
-
-/// Boundary edges whose two ends are not on one face of the world box.
-fn seam_boundary_edges(mesh: &TriMesh, lo: Vec3, hi: Vec3) -> usize {
-    let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            *uses.entry((a.min(b), a.max(b))).or_default() += 1;
-        }
-    }
-    let eps = 1e-4 * (hi - lo).max_element();
-    let on_face = |p: Vec3, a: usize| (p[a] - lo[a]).abs() < eps || (p[a] - hi[a]).abs() < eps;
-    uses.iter()
-        .filter(|(_, &n)| n == 1)
-        .filter(|((a, b), _)| {
-            let (p, q) = (mesh.positions[*a as usize], mesh.positions[*b as usize]);
-            !(0..3).any(|k| on_face(p, k) && on_face(q, k))
-        })
-        .count()
 }
 
 impl Experiment for TerrainLod {
@@ -111,7 +91,7 @@ impl Experiment for TerrainLod {
                 triangles: out.surface.triangles.len(),
                 stitched: stats.stitched,
                 unmatched: stats.unmatched,
-                seam_boundary_edges: seam_boundary_edges(&out.surface, bounds.min, bounds.max),
+                seam_boundary_edges: open_edges_off_bounds(&out.surface, &bounds),
                 non_manifold_edges: t.non_manifold_edges,
                 median_ms: median(times).as_secs_f64() * 1e3,
             });

@@ -561,13 +561,11 @@ fn resolve(i: u32, offset: u32, below: u32) -> u32 {
     }
 }
 
-/// Builds the net's adjacency (CSR) from the quad sides.
-fn build_adjacency(n: usize, links: &mut Vec<(u32, u32)>, start: &mut Vec<u32>, adjacency: &mut Vec<u32>) {
-    for link in links.iter_mut() {
-        *link = (link.0.min(link.1), link.0.max(link.1));
-    }
-    links.sort_unstable();
-    links.dedup();
+/// Builds the net's adjacency (CSR) from the quad sides: a counting pass over both directions
+/// of every side (each side comes from two quads), then each vertex's short list sorted and
+/// deduplicated in place. Linear in the sides, and no buffer besides the reused ones, so
+/// steady-state re-meshing does not allocate.
+fn build_adjacency(n: usize, links: &[(u32, u32)], start: &mut Vec<u32>, adjacency: &mut Vec<u32>) {
     start.clear();
     start.resize(n + 1, 0);
     for &(a, b) in links.iter() {
@@ -579,8 +577,7 @@ fn build_adjacency(n: usize, links: &mut Vec<(u32, u32)>, start: &mut Vec<u32>, 
     }
     adjacency.clear();
     adjacency.resize(start[n] as usize, 0);
-    // Fill with start[i] as vertex i's cursor (it ends at start[i + 1]), then shift back: no
-    // buffer besides the reused ones, so steady-state re-meshing does not allocate.
+    // Fill with start[i] as vertex i's cursor (it ends at start[i + 1]), then shift back.
     for &(a, b) in links.iter() {
         adjacency[start[a as usize] as usize] = b;
         start[a as usize] += 1;
@@ -591,6 +588,24 @@ fn build_adjacency(n: usize, links: &mut Vec<(u32, u32)>, start: &mut Vec<u32>, 
         start[i] = start[i - 1];
     }
     start[0] = 0;
+    // Sort and deduplicate each vertex's list, compacting towards the front.
+    let mut write = 0usize;
+    for i in 0..n {
+        let (lo, hi) = (start[i] as usize, start[i + 1] as usize);
+        adjacency[lo..hi].sort_unstable();
+        start[i] = write as u32;
+        let mut last = u32::MAX;
+        for k in lo..hi {
+            let j = adjacency[k];
+            if j != last {
+                adjacency[write] = j;
+                write += 1;
+                last = j;
+            }
+        }
+    }
+    start[n] = write as u32;
+    adjacency.truncate(write);
 }
 
 fn neighbour_mean(i: usize, x: &[Vec3], start: &[u32], adjacency: &[u32]) -> Option<Vec3> {
@@ -803,7 +818,7 @@ impl Extractor for SurfaceNets {
 
         let t_smooth = Instant::now();
         if smoothing {
-            build_adjacency(out.surface.positions.len(), &mut s.links, &mut s.adjacency_start, &mut s.adjacency);
+            build_adjacency(out.surface.positions.len(), &s.links, &mut s.adjacency_start, &mut s.adjacency);
             self.smooth(s, &mut out.surface.positions, grid.spacing);
         }
         out.stats.times.smoothing = t_smooth.elapsed();

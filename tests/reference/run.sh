@@ -11,6 +11,33 @@ if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import vtk, pymeshlab
   python3 -m venv "$venv"
   "$venv/bin/pip" install --quiet --disable-pip-version-check -r "$here/requirements.txt"
 fi
+# The C++ decimators the `decimation` experiment runs (CGAL's edge_collapse, OpenMesh's
+# Decimater): Debian's libcgal-dev and libopenmesh-dev, installed when missing and possible, and
+# two small programs built into tests/reference/.bin when missing or older than their source.
+# Without them the experiment lists those decimators as not run, with this script's note.
+build_decimators() {
+  local bin="$here/.bin" src="$here/decimators"
+  mkdir -p "$bin"
+  if ! dpkg -s libcgal-dev libopenmesh-dev >/dev/null 2>&1; then
+    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+      export DEBIAN_FRONTEND=noninteractive
+      apt-get install -y -qq --no-install-recommends libcgal-dev libopenmesh-dev >/dev/null \
+        || { apt-get update -qq && apt-get install -y -qq --no-install-recommends libcgal-dev libopenmesh-dev >/dev/null; } \
+        || echo "note: could not install Debian's libcgal-dev and libopenmesh-dev" >&2
+    else
+      echo "note: Debian's libcgal-dev and libopenmesh-dev are missing (install them as root)" >&2
+    fi
+  fi
+  if [ ! -x "$bin/cgal_edge_collapse" ] || [ "$src/cgal_edge_collapse.cpp" -nt "$bin/cgal_edge_collapse" ]; then
+    g++ -O2 -std=c++17 "$src/cgal_edge_collapse.cpp" -o "$bin/cgal_edge_collapse" -lgmp -lmpfr \
+      || echo "note: could not build tests/reference/decimators/cgal_edge_collapse.cpp" >&2
+  fi
+  if [ ! -x "$bin/openmesh_decimater" ] || [ "$src/openmesh_decimater.cpp" -nt "$bin/openmesh_decimater" ]; then
+    g++ -O2 -std=c++17 "$src/openmesh_decimater.cpp" -o "$bin/openmesh_decimater" -lOpenMeshTools -lOpenMeshCore \
+      || echo "note: could not build tests/reference/decimators/openmesh_decimater.cpp" >&2
+  fi
+}
+build_decimators
 if [ "${1:-}" = "setup" ]; then
   exit 0  # the environment only (the `peers` experiment's Python peers use it)
 fi

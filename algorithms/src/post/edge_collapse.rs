@@ -340,7 +340,10 @@ pub fn collapse_safe(mesh: &mut TriMesh, limit: f32, target: usize, min_cos: f32
                 let longest =
                     (p[1] - p[0]).length_squared().max((p[2] - p[1]).length_squared()).max((p[0] - p[2]).length_squared());
                 let sliver = l0 < SLIVER * longest;
-                l1 > 1e-12 * l0.max(1e-30) && (sliver || (n0.dot(n1) >= min_cos * l0 * l1 && n1.dot(original[t as usize]) >= 0.0))
+                // A triangle that already has no area may keep none (its own zero-length
+                // edge collapses in turn); any other must keep some.
+                let keeps_area = l1 > 1e-12 * l0.max(1e-30) || l0 == 0.0;
+                keeps_area && (sliver || (n0.dot(n1) >= min_cos * l0 * l1 && n1.dot(original[t as usize]) >= 0.0))
             })
         });
         if !turns_ok {

@@ -1,12 +1,15 @@
 //! `decimation`: our edge collapses against an established decimator at the same triangle counts,
 //! on plain marching tetrahedra (BCC, the RMT paper's resolutions): the paper's sweep (0.5 h, its
-//! own count), our topology-safe collapse and pymeshlab's quadric edge collapse (topology
-//! preserving, optimal placement) both driven to that count and to a quarter of the input.
-//! Measured with our metrics (validated against pymeshlab, CGAL and VTK): aspect ratio, minimum
-//! angle, two-sided Hausdorff distance to the unsimplified surface (vertices and face samples),
-//! manifoldness, median time. OpenMesh's Decimater and CGAL's edge_collapse are not run yet (the
-//! first needs Debian's cmake and a source build, the second a C++ build against libcgal-dev);
-//! the report says so.
+//! own count), our topology-safe collapse, and three established decimators driven to that count
+//! and to a quarter of the input: pymeshlab's quadric edge collapse (topology preserving, optimal
+//! placement), CGAL's `Surface_mesh_simplification::edge_collapse` (its default Lindstrom-Turk
+//! cost and placement) and OpenMesh's `DecimaterT` (quadric priority with the normal-flipping
+//! guard). The two C++ ones are small programs in `tests/reference/decimators/` that
+//! `tests/reference/run.sh setup` builds against Debian's libcgal-dev and libopenmesh-dev; each
+//! times its own collapse in process. Measured with our metrics (validated against pymeshlab,
+//! CGAL and VTK): aspect ratio, minimum angle and zero-area triangles, two-sided Hausdorff
+//! distance to the unsimplified surface (vertices and face samples), manifoldness, median time.
+//! A decimator that is not installed is listed as not run, with the reason.
 
 use super::peers::PythonPeers;
 use super::{load_object, Context, Experiment, ExperimentError};
@@ -17,6 +20,8 @@ use isolab_algorithms::post::EdgeCollapse;
 use isolab_algorithms::{Extraction, Extractor, Grid, Lattice, Samples, TriMesh};
 use isolab_metrics::{hausdorff, triangle_quality, Sampling};
 use serde::{Deserialize, Serialize};
+use std::path::Path;
+use std::process::Command;
 use std::time::Duration;
 
 /// The experiment.
@@ -40,8 +45,11 @@ pub struct Row {
     pub triangles: usize,
     /// Mean Verdict aspect ratio.
     pub aspect_mean: f64,
-    /// Smallest angle, degrees.
+    /// Smallest angle of the triangles with an area, degrees.
     pub min_angle_deg: f64,
+    /// Triangles of zero area (left out of the shape statistics).
+    #[serde(default)]
+    pub degenerate: usize,
     /// Two-sided Hausdorff distance to the input surface, in grid spacings.
     pub hausdorff_h: f64,
     /// Closed, manifold and consistently oriented.
@@ -67,10 +75,74 @@ fn row(object: &str, input: &TriMesh, target: usize, decimator: &str, mesh: &Tri
         triangles: mesh.triangles.len(),
         aspect_mean: q.aspect_ratio.mean,
         min_angle_deg: q.min_angle_deg,
+        degenerate: q.degenerate_triangles,
         hausdorff_h: hausdorff(mesh, input, Sampling::VerticesAndFaces).max / f64::from(h),
         manifold: isolab_metrics::topology(mesh).is_watertight_manifold(),
         ms: median(times).as_secs_f64() * 1e3,
     }
+}
+
+/// The C++ decimators: (label in the table, program in `tests/reference/.bin`).
+const NATIVE: [(&str, &str); 2] =
+    [("CGAL edge_collapse (Lindstrom-Turk)", "cgal_edge_collapse"), ("OpenMesh Decimater (quadric)", "openmesh_decimater")];
+
+/// What a native decimator printed.
+#[derive(Deserialize)]
+struct NativeAnswer {
+    ms: Vec<f64>,
+}
+
+/// Runs a native decimator on the OBJ `input` down to `target` faces into `out` (`repeats` timed
+/// collapses, each of a fresh copy): its times and the mesh it wrote.
+fn run_native(
+    program: &Path,
+    input: &Path,
+    target: usize,
+    out: &Path,
+    repeats: usize,
+) -> Result<(Vec<Duration>, TriMesh), String> {
+    let output = Command::new(program)
+        .arg(input)
+        .arg(target.to_string())
+        .arg(out)
+        .arg(repeats.to_string())
+        .output()
+        .map_err(|e| format!("cannot start {}: {e}", program.display()))?;
+    if !output.status.success() {
+        return Err(format!("{} failed: {}", program.display(), String::from_utf8_lossy(&output.stderr).trim()));
+    }
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let line = stdout
+        .lines()
+        .rev()
+        .find(|l| l.trim_start().starts_with('{'))
+        .ok_or_else(|| format!("{} printed no result", program.display()))?;
+    let answer: NativeAnswer = serde_json::from_str(line).map_err(|e| format!("{} printed {line:?}: {e}", program.display()))?;
+    let mesh = crate::io::read_mesh(out).map_err(|e| e.to_string())?;
+    Ok((answer.ms.iter().map(|&ms| Duration::from_secs_f64(ms / 1e3)).collect(), mesh))
+}
+
+/// The native decimators that are built, building them (and installing their libraries) with
+/// `tests/reference/run.sh setup` when one is missing; the others with the reason.
+fn native_decimators(root: &Path) -> (Vec<(&'static str, std::path::PathBuf)>, Vec<String>) {
+    let bin = root.join("tests/reference/.bin");
+    if NATIVE.iter().any(|(_, p)| !bin.join(p).exists()) {
+        // Its notes go to stderr; what is still missing afterwards is reported below.
+        let _ = Command::new("bash").arg(root.join("tests/reference/run.sh")).arg("setup").status();
+    }
+    let mut found = Vec::new();
+    let mut skipped = Vec::new();
+    for (label, program) in NATIVE {
+        let path = bin.join(program);
+        if path.exists() {
+            found.push((label, path));
+        } else {
+            skipped.push(format!(
+                "{label}: tests/reference/.bin/{program} is not built (tests/reference/run.sh setup builds it; it needs g++ and Debian's libcgal-dev and libopenmesh-dev)"
+            ));
+        }
+    }
+    (found, skipped)
 }
 
 impl Experiment for Decimation {
@@ -81,12 +153,7 @@ impl Experiment for Decimation {
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let repeats = ctx.repeats.min(3);
         let root = ctx.report_dir.join("..");
-        let mut skipped = vec![
-            "OpenMesh Decimater: not run yet (needs Debian's cmake and a 3-minute source build of the `openmesh` package)"
-                .to_owned(),
-            "CGAL Surface_mesh_simplification::edge_collapse: not run yet (needs a small C++ program built against libcgal-dev)"
-                .to_owned(),
-        ];
+        let (native, mut skipped) = native_decimators(&root);
         let mut python = match PythonPeers::start(&root) {
             Ok((p, _)) => Some(p),
             Err(e) => {
@@ -107,6 +174,8 @@ impl Experiment for Decimation {
             let input = mt.surface.clone();
             let input_path = tmp.join(format!("{name}.ply"));
             crate::io::write_mesh(&input_path, &input)?;
+            let input_obj = tmp.join(format!("{name}.obj"));
+            crate::io::write_mesh(&input_obj, &input)?;
             // The paper's sweep sets the first target.
             let mut sweep = Vec::new();
             let mut out = mt.clone();
@@ -145,6 +214,13 @@ impl Experiment for Decimation {
                         (None, Err(e)) => skipped.push(format!("pymeshlab on {name}: {e}")),
                     }
                 }
+                for (label, program) in &native {
+                    let out_path = tmp.join(format!("{name}-{target}-native.obj"));
+                    match run_native(program, &input_obj, target, &out_path, repeats) {
+                        Ok((times, mesh)) => rows.push(row(name, &input, target, label, &mesh, times, grid.spacing)),
+                        Err(e) => skipped.push(format!("{label} on {name}: {e}")),
+                    }
+                }
             }
             bar.inc(1);
         }
@@ -156,12 +232,16 @@ impl Experiment for Decimation {
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
         let data: Data = ctx.read_data(NAME)?;
-        let mut md = String::from("## Simplification against an established decimator (`decimation`)\n\n");
+        let mut md = String::from("## Simplification against established decimators (`decimation`)\n\n");
         md.push_str(&format!(
             "Plain marching tetrahedra on BCC at the RMT paper's resolutions, simplified to the triangle count the paper's sweep \
-             reaches and to a quarter of the input: our paper sweep, our topology-safe collapse (midpoint placement), and \
-             pymeshlab's quadric edge collapse (topology preserving, optimal placement). Hausdorff is two-sided to the \
-             unsimplified surface, sampled at vertices, face centroids and edge midpoints, in grid spacings. Median of {} runs.\n\n",
+             reaches and to a quarter of the input: our paper sweep, our topology-safe collapse (midpoint placement), \
+             pymeshlab's quadric edge collapse (topology preserving, optimal placement), CGAL's edge_collapse (its default \
+             Lindstrom-Turk cost and placement) and OpenMesh's Decimater (quadric priority, normal-flipping guard; it keeps \
+             vertices where they were). The C++ decimators are the programs in `tests/reference/decimators/`, timing their \
+             own collapse in process (file reading excluded); pymeshlab's time is its filter's. Shape columns cover the \
+             triangles with an area; *zero-area* counts the others. Hausdorff is two-sided to the unsimplified surface, \
+             sampled at vertices, face centroids and edge midpoints, in grid spacings. Median of {} runs.\n\n",
             data.repeats
         ));
         let body: Vec<Vec<String>> = data
@@ -174,6 +254,7 @@ impl Experiment for Decimation {
                     r.triangles.to_string(),
                     format!("{:.3}", r.aspect_mean),
                     format!("{:.1}°", r.min_angle_deg),
+                    r.degenerate.to_string(),
                     format!("{:.3}", r.hausdorff_h),
                     if r.manifold { "yes".into() } else { "**no**".into() },
                     super::ms(r.ms),
@@ -181,7 +262,17 @@ impl Experiment for Decimation {
             })
             .collect();
         md.push_str(&markdown_table(
-            &["input → target", "decimator", "triangles", "AR mean", "min angle", "Hausdorff (h)", "closed manifold", "ms"],
+            &[
+                "input → target",
+                "decimator",
+                "triangles",
+                "AR mean",
+                "min angle",
+                "zero-area",
+                "Hausdorff (h)",
+                "closed manifold",
+                "ms",
+            ],
             &body,
         ));
         if !data.skipped.is_empty() {

@@ -55,6 +55,7 @@ use crate::lattice::{Grid, Lattice};
 use crate::samples::Samples;
 use crate::sign_rows::{classify_rows, span, Row};
 use glam::Vec3;
+use rayon::prelude::*;
 use std::sync::LazyLock;
 use std::time::Instant;
 
@@ -496,6 +497,143 @@ pub struct TetCounts {
     pub discarded: usize,
 }
 
+/// One slab's vertices and their owners, as the vertex pass made them.
+type SlabVertices = (Vec<Vec3>, Vec<(u32, u8, u8)>);
+
+/// What the vertex pass reads: everything but the per-sample outputs.
+struct VertexPass<'a> {
+    values: &'a [f32],
+    iso: f32,
+    topo: &'a TetTopology,
+    at: &'a Addresser,
+    layout: &'a Layout,
+    rows: &'a [Vec<Row>],
+    row_offsets: [Vec<(bool, isize, isize)>; 2],
+    steps: [Vec3; DIRECTIONS],
+    no_merge: &'a [bool],
+    clustering: &'a dyn Clustering,
+    field: Option<&'a dyn Field>,
+}
+
+impl VertexPass<'_> {
+    /// The vertex pass (Algorithm 2) over sample layers `z0..z1` of grid `p`: flags the samples
+    /// with a sign change on an edge (`touch`), and for each sample that owns crossings makes its
+    /// vertices (one per island) at the end of `positions`/`owner` and records the first one's
+    /// index (`base`, counted from `positions`' start) and each crossing's island (`slots`).
+    /// `touch`, `base` and `slots` start at flat sample index `first`.
+    #[allow(clippy::too_many_arguments)]
+    fn slab(
+        &self,
+        p: usize,
+        z0: usize,
+        z1: usize,
+        first: usize,
+        touch: &mut [bool],
+        base: &mut [u32],
+        slots: &mut [u64],
+        positions: &mut Vec<Vec3>,
+        owner: &mut Vec<(u32, u8, u8)>,
+        near: &mut Vec<Row>,
+    ) -> Result<(), ExtractError> {
+        let (values, iso, topo, at) = (self.values, self.iso, self.topo, self.at);
+        let layout = self.layout;
+        let part = &layout.parts[p];
+        let [dx, dy, dz] = part.dims;
+        let other = if layout.parts.len() > 1 { 1 - p } else { p };
+        for z in z0..z1 {
+            for y in 0..dy {
+                near.clear();
+                for &(cross, oy, oz) in &self.row_offsets[part.odd as usize] {
+                    let (g, dims) = if cross { (other, part.cross_dims) } else { (p, part.dims) };
+                    let (ry, rz) = (y as isize + oy, z as isize + oz);
+                    if ry >= 0 && rz >= 0 && (ry as usize) < dims[1] && (rz as usize) < dims[2] {
+                        near.push(self.rows[g][ry as usize + dims[1] * rz as usize]);
+                    }
+                }
+                let Some((lo, hi)) = span(near, dx.max(part.cross_dims[0])) else { continue };
+                let row_interior = (1..dy.saturating_sub(1)).contains(&y) && (1..dz.saturating_sub(1)).contains(&z);
+                let row_same = part.start + dx * (y + dy * z);
+                let row_cross = part.cross_start + part.cross_dims[0] * (y + part.cross_dims[1] * z);
+                for x in lo.saturating_sub(1)..(hi + 2).min(dx) {
+                    let i = row_same + x;
+                    let vi = values[i];
+                    let inside = vi < iso;
+                    let interior = row_interior && x >= 1 && x + 1 < dx;
+                    let q = [2 * x as i32 + part.odd, 2 * y as i32 + part.odd, 2 * z as i32 + part.odd];
+                    let neighbour = |k: usize| -> Option<usize> {
+                        if interior {
+                            let (cross, off) = part.offsets[k];
+                            Some(((if cross { row_cross + x } else { i }) as isize + off) as usize)
+                        } else {
+                            let d = topo.directions[k];
+                            at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]])
+                        }
+                    };
+                    // First the flags only; positions for the rare samples that own a crossing.
+                    let (mut nearby, mut neighbours, mut touched) = (0u16, 0u16, false);
+                    for k in 0..DIRECTIONS {
+                        let Some(j) = neighbour(k) else { continue };
+                        neighbours |= 1 << k;
+                        let vj = values[j];
+                        if (vj < iso) != inside {
+                            touched = true;
+                            if owns(i, vi, j, vj, iso) {
+                                nearby |= 1 << k;
+                            }
+                        }
+                    }
+                    touch[i - first] = touched;
+                    if nearby == 0 {
+                        continue;
+                    }
+                    let mut star = Star { nearby, neighbours, crossings: [Vec3::ZERO; DIRECTIONS] };
+                    let origin = at.position(q);
+                    let mut bits = nearby;
+                    while bits != 0 {
+                        let k = bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        let vj = values[neighbour(k).expect("flagged neighbours exist")];
+                        star.crossings[k] = origin + self.steps[k] * ((iso - vi) / (vj - vi));
+                    }
+                    let islands =
+                        if self.no_merge[i] { NoClustering.islands(&star, topo) } else { self.clustering.islands(&star, topo) };
+                    let start = positions.len();
+                    if start + islands.count as usize > u32::MAX as usize {
+                        return Err(ExtractError::TooLarge {
+                            algorithm: "marching tetrahedra",
+                            vertices: start + islands.count as usize,
+                        });
+                    }
+                    base[i - first] = start as u32;
+                    let mut sums = [Vec3::ZERO; DIRECTIONS];
+                    let mut members = [0u32; DIRECTIONS];
+                    let mut packed = 0u64;
+                    let mut bits = star.nearby;
+                    while bits != 0 {
+                        let k = bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        let s = islands.slot[k];
+                        sums[s as usize] += star.crossings[k];
+                        members[s as usize] += 1;
+                        packed |= u64::from(s) << (4 * k);
+                    }
+                    slots[i - first] = packed;
+                    let mut lowest = [u8::MAX; DIRECTIONS];
+                    for k in (0..DIRECTIONS).rev().filter(|&k| star.nearby >> k & 1 == 1) {
+                        lowest[islands.slot[k] as usize] = k as u8;
+                    }
+                    for s in 0..islands.count as usize {
+                        let mean = sums[s] / members[s] as f32;
+                        positions.push(self.clustering.place(mean, members[s], self.field, iso, at.corners.spacing));
+                        owner.push((i as u32, members[s].min(255) as u8, lowest[s]));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Marching tetrahedra on `samples` (BCC lattice: [`TetKind::Bcc`]; cubic grid: [`TetKind::Kuhn`])
 /// with the given clustering, into `out`. Returns the geometry pass counts.
 pub fn extract_tetrahedral(
@@ -533,9 +671,7 @@ pub fn extract_tetrahedral(
     }
     scratch.owner.clear();
     let layout = Layout::new(&at, topo);
-    let mesh = &mut out.surface;
     let half = 0.5 * at.corners.spacing;
-    let steps: [Vec3; DIRECTIONS] = topo.directions.map(|d| Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * half);
     // Row summaries of both grids: a row whose neighbouring rows (in both grids) all share its
     // state has no crossing and is skipped without loading its neighbours.
     let mut rows: Vec<Vec<Row>> = Vec::with_capacity(layout.parts.len());
@@ -545,100 +681,77 @@ pub fn extract_tetrahedral(
         classify_rows(&values[part.start..part.start + len], part.dims[0], iso, &mut r);
         rows.push(r);
     }
-    let row_offsets = row_neighbours(topo);
-    let mut near: Vec<Row> = Vec::with_capacity(16);
+    let pass = VertexPass {
+        values,
+        iso,
+        topo,
+        at: &at,
+        layout: &layout,
+        rows: &rows,
+        row_offsets: row_neighbours(topo),
+        steps: topo.directions.map(|d| Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * half),
+        no_merge: &scratch.no_merge,
+        clustering,
+        field,
+    };
+    // Slabs of sample layers, per grid, in index order: each writes its own samples' flags and
+    // slots and makes its own vertices; joined in order, the result is the serial pass's.
+    let layers: usize = layout.parts.iter().map(|p| p.dims[2]).sum();
+    let tasks = crate::extractors::slabs::task_count(crate::extractors::marching_cubes::Parallelism::Rayon, n, layers);
+    let mut slabs: Vec<(usize, usize, usize)> = Vec::new(); // (part, z0, z1)
     for (p, part) in layout.parts.iter().enumerate() {
-        let [dx, dy, dz] = part.dims;
-        let other = if layout.parts.len() > 1 { 1 - p } else { p };
-        for z in 0..dz {
-            for y in 0..dy {
-                near.clear();
-                for &(cross, oy, oz) in &row_offsets[part.odd as usize] {
-                    let (g, dims) = if cross { (other, part.cross_dims) } else { (p, part.dims) };
-                    let (ry, rz) = (y as isize + oy, z as isize + oz);
-                    if ry >= 0 && rz >= 0 && (ry as usize) < dims[1] && (rz as usize) < dims[2] {
-                        near.push(rows[g][ry as usize + dims[1] * rz as usize]);
-                    }
-                }
-                let Some((lo, hi)) = span(&near, dx.max(part.cross_dims[0])) else { continue };
-                let row_interior = (1..dy.saturating_sub(1)).contains(&y) && (1..dz.saturating_sub(1)).contains(&z);
-                let row_same = part.start + dx * (y + dy * z);
-                let row_cross = part.cross_start + part.cross_dims[0] * (y + part.cross_dims[1] * z);
-                for x in lo.saturating_sub(1)..(hi + 2).min(dx) {
-                    let i = row_same + x;
-                    let vi = values[i];
-                    let inside = vi < iso;
-                    let interior = row_interior && x >= 1 && x + 1 < dx;
-                    let q = [2 * x as i32 + part.odd, 2 * y as i32 + part.odd, 2 * z as i32 + part.odd];
-                    let neighbour = |k: usize| -> Option<usize> {
-                        if interior {
-                            let (cross, off) = part.offsets[k];
-                            Some(((if cross { row_cross + x } else { i }) as isize + off) as usize)
-                        } else {
-                            let d = topo.directions[k];
-                            at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]])
-                        }
-                    };
-                    // First the flags only; positions for the rare samples that own a crossing.
-                    let (mut nearby, mut neighbours, mut touch) = (0u16, 0u16, false);
-                    for k in 0..DIRECTIONS {
-                        let Some(j) = neighbour(k) else { continue };
-                        neighbours |= 1 << k;
-                        let vj = values[j];
-                        if (vj < iso) != inside {
-                            touch = true;
-                            if owns(i, vi, j, vj, iso) {
-                                nearby |= 1 << k;
-                            }
-                        }
-                    }
-                    scratch.touch[i] = touch;
-                    if nearby == 0 {
-                        continue;
-                    }
-                    let mut star = Star { nearby, neighbours, crossings: [Vec3::ZERO; DIRECTIONS] };
-                    let origin = at.position(q);
-                    let mut bits = nearby;
-                    while bits != 0 {
-                        let k = bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        let vj = values[neighbour(k).expect("flagged neighbours exist")];
-                        star.crossings[k] = origin + steps[k] * ((iso - vi) / (vj - vi));
-                    }
-                    let islands =
-                        if scratch.no_merge[i] { NoClustering.islands(&star, topo) } else { clustering.islands(&star, topo) };
-                    let base = mesh.positions.len();
-                    if base + islands.count as usize > u32::MAX as usize {
-                        return Err(ExtractError::TooLarge {
-                            algorithm: "marching tetrahedra",
-                            vertices: base + islands.count as usize,
-                        });
-                    }
-                    scratch.base[i] = base as u32;
-                    let mut sums = [Vec3::ZERO; DIRECTIONS];
-                    let mut members = [0u32; DIRECTIONS];
-                    let mut packed = 0u64;
-                    let mut bits = star.nearby;
-                    while bits != 0 {
-                        let k = bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        let s = islands.slot[k];
-                        sums[s as usize] += star.crossings[k];
-                        members[s as usize] += 1;
-                        packed |= u64::from(s) << (4 * k);
-                    }
-                    scratch.slots[i] = packed;
-                    let mut first = [u8::MAX; DIRECTIONS];
-                    for k in (0..DIRECTIONS).rev().filter(|&k| star.nearby >> k & 1 == 1) {
-                        first[islands.slot[k] as usize] = k as u8;
-                    }
-                    for s in 0..islands.count as usize {
-                        let mean = sums[s] / members[s] as f32;
-                        mesh.positions.push(clustering.place(mean, members[s], field, iso, at.corners.spacing));
-                        scratch.owner.push((i as u32, members[s].min(255) as u8, first[s]));
-                    }
+        let per = tasks.div_ceil(layout.parts.len()).min(part.dims[2]).max(1);
+        for k in 0..per {
+            slabs.push((p, k * part.dims[2] / per, (k + 1) * part.dims[2] / per));
+        }
+    }
+    if slabs.len() == 1 || tasks == 1 {
+        let mut near = Vec::with_capacity(16);
+        let (touch, base, slots) = (&mut scratch.touch[..], &mut scratch.base[..], &mut scratch.slots[..]);
+        for &(p, z0, z1) in &slabs {
+            pass.slab(p, z0, z1, 0, touch, base, slots, &mut out.surface.positions, &mut scratch.owner, &mut near)?;
+        }
+    } else {
+        // Disjoint sample ranges for the slabs.
+        let mut work = Vec::with_capacity(slabs.len());
+        let (mut touch, mut base, mut slots) = (&mut scratch.touch[..n], &mut scratch.base[..n], &mut scratch.slots[..n]);
+        let mut at_index = 0usize;
+        for &(p, z0, z1) in &slabs {
+            let part = &layout.parts[p];
+            let first = part.start + part.dims[0] * part.dims[1] * z0;
+            let last = part.start + part.dims[0] * part.dims[1] * z1;
+            let skip = first - at_index;
+            let (t, rest_t) = std::mem::take(&mut touch)[skip..].split_at_mut(last - first);
+            let (b, rest_b) = std::mem::take(&mut base)[skip..].split_at_mut(last - first);
+            let (s, rest_s) = std::mem::take(&mut slots)[skip..].split_at_mut(last - first);
+            (touch, base, slots) = (rest_t, rest_b, rest_s);
+            at_index = last;
+            work.push(((p, z0, z1, first), t, b, s));
+        }
+        let made: Vec<Result<SlabVertices, ExtractError>> = work
+            .into_par_iter()
+            .map(|((p, z0, z1, first), t, b, s)| {
+                let (mut positions, mut owner, mut near) = (Vec::new(), Vec::new(), Vec::with_capacity(16));
+                pass.slab(p, z0, z1, first, t, b, s, &mut positions, &mut owner, &mut near)?;
+                Ok((positions, owner))
+            })
+            .collect();
+        for result in made {
+            let (positions, owner) = result?;
+            let offset = out.surface.positions.len();
+            if offset + positions.len() > u32::MAX as usize {
+                return Err(ExtractError::TooLarge { algorithm: "marching tetrahedra", vertices: offset + positions.len() });
+            }
+            // Each sample's vertices are consecutive: its base is its first one's index.
+            let mut previous = u32::MAX;
+            for (k, &(sample, _, _)) in owner.iter().enumerate() {
+                if sample != previous {
+                    scratch.base[sample as usize] = (offset + k) as u32;
+                    previous = sample;
                 }
             }
+            out.surface.positions.extend_from_slice(&positions);
+            scratch.owner.extend_from_slice(&owner);
         }
     }
     out.stats.times.vertex = t.elapsed();
@@ -688,78 +801,101 @@ pub fn geometry_pass(samples: &Samples, scratch: &TetScratch, out: &mut Extracti
         TetKind::Kuhn => 6 * anchor_dims.iter().product::<usize>(),
     };
     let template_offsets: Vec<[(bool, isize); 4]> = topo.templates.iter().map(|t| t.map(|d| anchor_part.offset_of(d))).collect();
-    let triangles = &mut out.surface.triangles;
     let positions = &out.surface.positions;
     let [ax, ay, az] = anchor_dims;
     let [dx, dy, _] = anchor_part.dims;
-    for z in 0..az {
-        for y in 0..ay {
-            let row_same = anchor_part.start + dx * (y + dy * z);
-            let row_cross = anchor_part.cross_start + anchor_part.cross_dims[0] * (y + anchor_part.cross_dims[1] * z);
-            // BCC: every template exists when the anchor's +x, +y, +z neighbours do.
-            let row_full = topo.kind == TetKind::Kuhn || (y + 1 < ay && z + 1 < az);
-            for x in 0..ax {
-                let i = row_same + x;
-                if !scratch.touch[i] {
-                    continue;
-                }
-                let full = row_full && (topo.kind == TetKind::Kuhn || x + 1 < ax);
-                let q = [2 * x as i32 + anchor_part.odd, 2 * y as i32 + anchor_part.odd, 2 * z as i32 + anchor_part.odd];
-                for (t, offsets) in template_offsets.iter().enumerate() {
-                    let idx = if full {
-                        offsets.map(|(cross, off)| ((if cross { row_cross + x } else { i }) as isize + off) as usize)
-                    } else {
-                        let template = &topo.templates[t];
-                        let mut idx = [0usize; 4];
-                        let mut valid = true;
-                        for (v, d) in idx.iter_mut().zip(template) {
-                            match at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]]) {
-                                Some(j) => *v = j,
-                                None => valid = false,
-                            }
-                        }
-                        if !valid {
-                            continue;
-                        }
-                        idx
-                    };
-                    let v = idx.map(|i| values[i]);
-                    let case = usize::from(v[0] < iso)
-                        | usize::from(v[1] < iso) << 1
-                        | usize::from(v[2] < iso) << 2
-                        | usize::from(v[3] < iso) << 3;
-                    let entry = &MT_TABLE[case];
-                    if entry.count == 0 {
+    // The triangles of anchor layers `z0..z1`, in order, and their counts.
+    let layers = |z0: usize, z1: usize, triangles: &mut Vec<[u32; 3]>, counts: &mut TetCounts| {
+        for z in z0..z1 {
+            for y in 0..ay {
+                let row_same = anchor_part.start + dx * (y + dy * z);
+                let row_cross = anchor_part.cross_start + anchor_part.cross_dims[0] * (y + anchor_part.cross_dims[1] * z);
+                // BCC: every template exists when the anchor's +x, +y, +z neighbours do.
+                let row_full = topo.kind == TetKind::Kuhn || (y + 1 < ay && z + 1 < az);
+                for x in 0..ax {
+                    let i = row_same + x;
+                    if !scratch.touch[i] {
                         continue;
                     }
-                    counts.active += 1;
-                    let dirs = &topo.edge_directions[t];
-                    let mut ids = [0u32; 4];
-                    for (k, &(a, b)) in entry.edges[..entry.count as usize].iter().enumerate() {
-                        let (a, b) = (a as usize, b as usize);
-                        ids[k] = vertex_of(idx[a], v[a], idx[b], v[b], dirs[a][b]);
-                    }
-                    if entry.count == 3 {
-                        push_triangle([ids[0], ids[1], ids[2]], triangles, &mut counts.discarded);
-                    } else {
-                        let [a, b, c, d] = ids;
-                        let along_ac = if a == c {
-                            true
-                        } else if b == d {
-                            false
+                    let full = row_full && (topo.kind == TetKind::Kuhn || x + 1 < ax);
+                    let q = [2 * x as i32 + anchor_part.odd, 2 * y as i32 + anchor_part.odd, 2 * z as i32 + anchor_part.odd];
+                    for (t, offsets) in template_offsets.iter().enumerate() {
+                        let idx = if full {
+                            offsets.map(|(cross, off)| ((if cross { row_cross + x } else { i }) as isize + off) as usize)
                         } else {
-                            let p = |i: u32| positions[i as usize];
-                            p(a).distance_squared(p(c)) <= p(b).distance_squared(p(d))
+                            let template = &topo.templates[t];
+                            let mut idx = [0usize; 4];
+                            let mut valid = true;
+                            for (v, d) in idx.iter_mut().zip(template) {
+                                match at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]]) {
+                                    Some(j) => *v = j,
+                                    None => valid = false,
+                                }
+                            }
+                            if !valid {
+                                continue;
+                            }
+                            idx
                         };
-                        let halves = if along_ac { [[a, b, c], [a, c, d]] } else { [[a, b, d], [b, c, d]] };
-                        for h in halves {
-                            push_triangle(h, triangles, &mut counts.discarded);
+                        let v = idx.map(|i| values[i]);
+                        let case = usize::from(v[0] < iso)
+                            | usize::from(v[1] < iso) << 1
+                            | usize::from(v[2] < iso) << 2
+                            | usize::from(v[3] < iso) << 3;
+                        let entry = &MT_TABLE[case];
+                        if entry.count == 0 {
+                            continue;
+                        }
+                        counts.active += 1;
+                        let dirs = &topo.edge_directions[t];
+                        let mut ids = [0u32; 4];
+                        for (k, &(a, b)) in entry.edges[..entry.count as usize].iter().enumerate() {
+                            let (a, b) = (a as usize, b as usize);
+                            ids[k] = vertex_of(idx[a], v[a], idx[b], v[b], dirs[a][b]);
+                        }
+                        if entry.count == 3 {
+                            push_triangle([ids[0], ids[1], ids[2]], triangles, &mut counts.discarded);
+                        } else {
+                            let [a, b, c, d] = ids;
+                            let along_ac = if a == c {
+                                true
+                            } else if b == d {
+                                false
+                            } else {
+                                let p = |i: u32| positions[i as usize];
+                                p(a).distance_squared(p(c)) <= p(b).distance_squared(p(d))
+                            };
+                            let halves = if along_ac { [[a, b, c], [a, c, d]] } else { [[a, b, d], [b, c, d]] };
+                            for h in halves {
+                                push_triangle(h, triangles, &mut counts.discarded);
+                            }
                         }
                     }
                 }
             }
         }
+    };
+    let mut triangles = std::mem::take(&mut out.surface.triangles);
+    let tasks = crate::extractors::slabs::task_count(crate::extractors::marching_cubes::Parallelism::Rayon, ax * ay * az, az);
+    if tasks <= 1 {
+        layers(0, az, &mut triangles, &mut counts);
+    } else {
+        // Slabs of anchor layers, joined in order: the serial pass's triangles.
+        let slabs: Vec<(Vec<[u32; 3]>, TetCounts)> = (0..tasks)
+            .into_par_iter()
+            .map(|k| {
+                let (mut part, mut c) = (Vec::new(), TetCounts::default());
+                layers(k * az / tasks, (k + 1) * az / tasks, &mut part, &mut c);
+                (part, c)
+            })
+            .collect();
+        for (part, c) in slabs {
+            triangles.extend_from_slice(&part);
+            counts.active += c.active;
+            counts.discarded += c.discarded;
+        }
     }
+    out.surface.triangles = triangles;
     out.stats.times.geometry = t.elapsed();
     out.stats.discarded_triangles = counts.discarded;
     out.stats.active_cells = counts.active;

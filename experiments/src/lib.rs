@@ -4,6 +4,7 @@
 //! ([`io`]), the one-call pipeline the CLI and experiments share ([`run`]), and the binaries
 //! `isolab` (the CLI) and `report` (regenerates `report/`).
 
+pub mod alloc_meter;
 pub mod experiment;
 pub mod figures;
 pub mod io;

@@ -174,3 +174,23 @@ fn closed_shipped_models_give_closed_manifold_surfaces() {
         }
     }
 }
+
+/// Both passes run in slabs of layers on rayon's threads and join them in order: the output must
+/// not depend on how many slabs there were (1-thread and 2-thread pools cut 4 and 8 slabs here),
+/// nor on the lattice, for plain and regularised marching tetrahedra.
+#[test]
+fn slabbed_passes_give_the_same_mesh_on_any_thread_count() {
+    for bcc in [false, true] {
+        let s = sampled("asteroid", bcc, None, 90);
+        for e in [&MarchingTetrahedra as &dyn Extractor, &rmt()] {
+            let run = |threads: usize| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                pool.install(|| extract(e, &s))
+            };
+            let (one, two) = (run(1), run(2));
+            assert!(!one.surface.triangles.is_empty());
+            assert_eq!(one.surface.positions, two.surface.positions, "{} bcc={bcc}", e.name());
+            assert_eq!(one.surface.triangles, two.surface.triangles, "{} bcc={bcc}", e.name());
+        }
+    }
+}

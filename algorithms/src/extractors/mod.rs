@@ -9,7 +9,7 @@ pub mod dual_contouring;
 pub mod marching_cubes;
 pub mod marching_tetrahedra;
 pub mod regularised_marching_tetrahedra;
-mod slabs;
+pub(crate) mod slabs;
 pub mod surface_nets;
 
 pub use bcc_sculpt::BccSculpt;

@@ -8,6 +8,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
+// Counts heap bytes for the `scaling` experiment's peak-memory column.
+isolab_experiments::install_meter!();
+
 #[derive(Parser)]
 #[command(about = "Regenerate the isolab report: every experiment, then REPORT.md")]
 struct Args {

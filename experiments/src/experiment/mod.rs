@@ -10,6 +10,7 @@ pub mod costen_table;
 pub mod decimation;
 pub mod large_world;
 pub mod peers;
+pub mod scaling;
 pub mod sharp_features;
 pub mod sphere_convergence;
 pub mod stuart_tables;
@@ -134,6 +135,7 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(sharp_features::SharpFeatures),
         Box::new(costen_table::CostenTable),
         Box::new(peers::Peers),
+        Box::new(scaling::Scaling),
         Box::new(decimation::Decimation),
         Box::new(svoboda_timing::SvobodaTiming),
         Box::new(stuart_tables::StuartTables),

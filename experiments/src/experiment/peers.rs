@@ -152,7 +152,7 @@ fn ours(e: &dyn Extractor, s: &Samples, out: &mut Extraction) -> Result<Duration
 
 /// The memory floor: one read of every sample (a sum the optimiser cannot drop) and one write of
 /// `bytes` (filling a buffer allocated beforehand).
-fn floor(values: &[f32], bytes: usize) -> (Duration, Duration) {
+pub(crate) fn floor(values: &[f32], bytes: usize) -> (Duration, Duration) {
     // Eight independent lanes so the sum is limited by memory, not by the adder's latency.
     let t = Instant::now();
     let mut lanes = [0.0f32; 8];

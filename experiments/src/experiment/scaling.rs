@@ -1,0 +1,325 @@
+//! `scaling`: how every extractor's time and memory grow with the grid, and how it uses threads
+//! (issue 7, "how far from the limit" and "scaling"). The built-in `sphere` sampled on cubic grids
+//! of 32³ to 512³ samples; each registered extractor run on the same samples with rayon limited
+//! to one thread and to two (a pool per count, so the code scales to whatever it is given),
+//! alternating, median of the runs (one run each at 512³). Reported per run:
+//! - time, the speed-up from the second thread, and the slope of log time against log cells
+//!   (about 1: bound by the cells; about 2/3: bound by the surface);
+//! - time as a multiple of the machine's memory floor for that grid and output (one streaming read
+//!   of the samples plus one write of the output's bytes, measured here, as in `peers`);
+//! - peak heap during the extraction (a counting global allocator, [`crate::alloc_meter`], fresh
+//!   extractor and output buffers) against the bytes of grid plus output.
+//!
+//! An extractor whose one-thread run passes [`BUDGET_S`] is not run on larger grids (8× the cells);
+//! the report lists what was left out and why.
+
+use super::{Context, Experiment, ExperimentError};
+use crate::alloc_meter;
+use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
+use crate::report::{markdown_table, median};
+use isolab_algorithms::extractors::INFOS;
+use isolab_algorithms::options::Options;
+use isolab_algorithms::{fields, Extraction, Extractor, Grid, Samples};
+use serde::{Deserialize, Serialize};
+use std::time::Duration;
+
+/// The experiment.
+pub struct Scaling;
+
+const NAME: &str = "scaling";
+const FIELD: &str = "sphere";
+/// Samples per side.
+const SIZES: [usize; 5] = [32, 64, 128, 256, 512];
+/// Thread counts compared.
+const THREADS: [usize; 2] = [1, 2];
+/// A one-thread run longer than this (seconds) stops an extractor's climb to larger grids.
+const BUDGET_S: f64 = 6.0;
+
+/// One extractor on one grid.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Row {
+    algorithm: String,
+    n: usize,
+    cells: usize,
+    /// Median extraction time per thread count, ms (same order as `THREADS`).
+    ms: Vec<f64>,
+    runs: usize,
+    triangles: usize,
+    tetrahedra: usize,
+    /// The memory floor for this grid and this output: read + write, ms.
+    floor_ms: f64,
+    grid_bytes: usize,
+    output_bytes: usize,
+    /// Peak heap bytes the extraction added (None: the counting allocator is not installed).
+    peak_bytes: Option<usize>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Data {
+    field: String,
+    threads: Vec<usize>,
+    rows: Vec<Row>,
+    skipped: Vec<String>,
+}
+
+/// Bytes of the extraction's meshes as stored (positions, normals, indices).
+fn output_bytes(out: &Extraction) -> usize {
+    let s = &out.surface;
+    s.positions.len() * 12
+        + s.normals.len() * 12
+        + s.triangles.len() * 12
+        + out.volume.positions.len() * 12
+        + out.volume.tetrahedra.len() * 16
+}
+
+/// A fresh extractor (no scratch held from earlier runs).
+fn fresh(index: usize) -> Result<Box<dyn Extractor>, ExperimentError> {
+    (INFOS[index].make)(&Options::new()).map_err(|e| ExperimentError::Figure(format!("building {}: {e}", INFOS[index].name)))
+}
+
+/// Runs `extractor` on `samples` inside `pool`: the extraction time.
+fn timed(
+    pool: &rayon::ThreadPool,
+    extractor: &dyn Extractor,
+    samples: &Samples,
+    out: &mut Extraction,
+) -> Result<Duration, ExperimentError> {
+    pool.install(|| extractor.extract(samples, out))?;
+    Ok(out.stats.times.extraction())
+}
+
+/// Least-squares slope of `ln y` against `ln x`.
+fn log_slope(points: &[(f64, f64)]) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = points.iter().filter(|(x, y)| *x > 0.0 && *y > 0.0).map(|(x, y)| (x.ln(), y.ln())).collect();
+    if pts.len() < 2 {
+        return None;
+    }
+    let n = pts.len() as f64;
+    let (mx, my) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+impl Experiment for Scaling {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
+        let pools = THREADS
+            .iter()
+            .map(|&t| rayon::ThreadPoolBuilder::new().num_threads(t).build())
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|e| ExperimentError::Figure(format!("thread pool: {e}")))?;
+        let metered = alloc_meter::installed();
+        let field = fields::builtin(FIELD, Default::default()).map_err(crate::run::RunError::from)?;
+        let mut alive: Vec<bool> = vec![true; INFOS.len()];
+        let mut rows = Vec::new();
+        let mut skipped = Vec::new();
+        if !metered {
+            skipped.push("peak memory: this binary does not install the counting allocator".to_owned());
+        }
+        let bar = ctx.bar(NAME, (SIZES.len() * INFOS.len()) as u64);
+        for n in SIZES {
+            let grid = Grid::covering(&field.domain(), n).map_err(crate::run::RunError::from)?;
+            let samples = Samples::sample_cubic(field.clone(), grid, 0.0).map_err(crate::run::RunError::from)?;
+            let grid_bytes = samples.values().len() * 4;
+            let runs = if n >= 512 { 1 } else { ctx.repeats.min(3) };
+            for (index, info) in INFOS.iter().enumerate() {
+                bar.set_message(format!("{} {n}³", info.name));
+                if !alive[index] {
+                    bar.inc(1);
+                    continue;
+                }
+                // Memory first, on a fresh extractor and output, one thread.
+                let extractor = fresh(index)?;
+                let mut out = Extraction::default();
+                let (first, peak) = alloc_meter::peak_since(|| timed(&pools[0], extractor.as_ref(), &samples, &mut out));
+                let first = first?;
+                let mut times: Vec<Vec<Duration>> = vec![Vec::new(); THREADS.len()];
+                for _ in 0..runs {
+                    for (k, pool) in pools.iter().enumerate() {
+                        times[k].push(timed(pool, extractor.as_ref(), &samples, &mut out)?);
+                    }
+                }
+                let bytes = output_bytes(&out);
+                let floor: Vec<Duration> = (0..runs.max(2))
+                    .map(|_| {
+                        let (r, w) = super::peers::floor(samples.values(), bytes);
+                        r + w
+                    })
+                    .collect();
+                let ms: Vec<f64> = times.into_iter().map(|t| median(t).as_secs_f64() * 1e3).collect();
+                rows.push(Row {
+                    algorithm: info.name.to_owned(),
+                    n,
+                    cells: grid.dims.iter().map(|d| d.saturating_sub(1)).product(),
+                    ms: ms.clone(),
+                    runs,
+                    triangles: out.surface.triangles.len(),
+                    tetrahedra: out.volume.tetrahedra.len(),
+                    floor_ms: median(floor).as_secs_f64() * 1e3,
+                    grid_bytes,
+                    output_bytes: bytes,
+                    peak_bytes: peak,
+                });
+                let one_thread_s = ms[0].max(first.as_secs_f64() * 1e3) / 1e3;
+                if one_thread_s > BUDGET_S && n != *SIZES.last().unwrap_or(&n) {
+                    alive[index] = false;
+                    skipped.push(format!(
+                        "{} above {n}³: one thread took {one_thread_s:.1} s at {n}³ (over the {BUDGET_S} s budget; the next grid has 8× the cells)",
+                        info.name
+                    ));
+                }
+                bar.inc(1);
+            }
+        }
+        bar.finish_with_message("done");
+        let data = Data { field: FIELD.into(), threads: THREADS.to_vec(), rows, skipped };
+        figures(ctx, &data)?;
+        ctx.write_data(NAME, &data)
+    }
+
+    fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
+        let data: Data = ctx.read_data(NAME)?;
+        Ok(section(ctx, &data))
+    }
+}
+
+fn algorithms(data: &Data) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    for r in &data.rows {
+        if !names.contains(&r.algorithm) {
+            names.push(r.algorithm.clone());
+        }
+    }
+    names
+}
+
+fn figures(ctx: &Context, data: &Data) -> Result<(), ExperimentError> {
+    let dir = ctx.figure_dir(NAME)?;
+    let names = algorithms(data);
+    let series = |thread: usize| -> Vec<Series> {
+        names
+            .iter()
+            .map(|name| Series {
+                label: name.clone(),
+                color: crate::figures::color_of(name),
+                points: data.rows.iter().filter(|r| &r.algorithm == name).map(|r| (r.cells as f64, r.ms[thread])).collect(),
+            })
+            .collect()
+    };
+    for (k, &t) in data.threads.iter().enumerate() {
+        let chart = XyPlot {
+            title: format!("Extraction time against cells, {}, {t} thread{}", data.field, if t == 1 { "" } else { "s" }),
+            x_label: "cells".into(),
+            y_label: "ms (median)".into(),
+            x_scale: Scale::Log,
+            y_scale: Scale::Log,
+            style: Style::Lines,
+            series: series(k),
+        };
+        plot::xy(&dir.join(format!("time-{t}-threads")), &chart).map_err(ExperimentError::Figure)?;
+    }
+    Ok(())
+}
+
+fn mib(bytes: usize) -> String {
+    format!("{:.1}", bytes as f64 / (1024.0 * 1024.0))
+}
+
+fn section(ctx: &Context, data: &Data) -> String {
+    let threads = &data.threads;
+    let mut md = String::from("## Scaling with the grid and the threads (`scaling`)\n\n");
+    md.push_str(&format!(
+        "Every extractor on the built-in `{}` sampled on cubic grids of n³ samples (extraction only, the samples shared), with rayon \
+         limited to {} threads by a pool of that size, alternating; medians of 3 runs (one at 512³). *× floor* is the one-thread \
+         time over this machine's memory floor for the grid and that extractor's output (one streaming read of the samples plus \
+         one write of the output bytes, measured in the same run). *Peak* is the heap the extraction added at its highest, \
+         counted by a global allocator on a fresh extractor and output; *grid + output* is the least any extractor must hold \
+         (the samples are already there, so a ratio near 1 means the output is nearly all it keeps). Times are wall clock on a \
+         shared 2-core machine.\n\n",
+        data.field,
+        threads.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(" and "),
+    ));
+    // Slopes.
+    md.push_str("### Slopes of log time against log cells (64³ and up)\n\n");
+    let mut slopes = Vec::new();
+    for name in algorithms(data) {
+        let mut row = vec![name.clone()];
+        for k in 0..threads.len() {
+            let pts: Vec<(f64, f64)> =
+                data.rows.iter().filter(|r| r.algorithm == name && r.n >= 64).map(|r| (r.cells as f64, r.ms[k])).collect();
+            row.push(log_slope(&pts).map_or("-".into(), |s| format!("{s:.2}")));
+        }
+        let largest = data.rows.iter().filter(|r| r.algorithm == name).map(|r| r.n).max().unwrap_or(0);
+        row.push(format!("{largest}³"));
+        slopes.push(row);
+    }
+    let mut header: Vec<String> = vec!["extractor".into()];
+    header.extend(threads.iter().map(|t| format!("slope, {t} thread{}", if *t == 1 { "" } else { "s" })));
+    header.push("largest grid".into());
+    let header_refs: Vec<&str> = header.iter().map(|s| s.as_str()).collect();
+    md.push_str(&markdown_table(&header_refs, &slopes));
+    md.push_str(
+        "\nA slope near 1 means the time grows with the cells (the scan over every cell dominates), near 2/3 with the surface \
+         (the sphere's area grows as cells^(2/3)), lower still a cost the grid hardly drives (`bcc-sculpt`'s lattice has a fixed number of cells along the \
+         surface's longest side; a finer grid only refines the marching cubes surface it sculpts to).\n\n",
+    );
+    for &t in threads {
+        md.push_str(&format!(
+            "![time against cells, {t} thread{}]({})\n\n",
+            if t == 1 { "" } else { "s" },
+            ctx.link(&ctx.report_dir.join("figures").join(NAME).join(format!("time-{t}-threads.png")))
+        ));
+    }
+    md.push_str("### Every run\n\n");
+    let body: Vec<Vec<String>> = data
+        .rows
+        .iter()
+        .map(|r| {
+            let mut row = vec![r.algorithm.clone(), format!("{}³", r.n)];
+            row.extend(r.ms.iter().map(|&m| super::ms(m)));
+            row.push(if r.ms.len() > 1 && r.ms[1] > 0.0 { format!("{:.2}×", r.ms[0] / r.ms[1]) } else { "-".into() });
+            row.push(format!("{:.3}", r.floor_ms));
+            row.push(format!("{:.1}", r.ms[0] / r.floor_ms));
+            row.push(if r.tetrahedra > 0 { format!("{} tets", r.tetrahedra) } else { r.triangles.to_string() });
+            row.push(format!("{} + {}", mib(r.grid_bytes), mib(r.output_bytes)));
+            row.push(r.peak_bytes.map_or("-".into(), mib));
+            row.push(r.peak_bytes.map_or("-".into(), |p| {
+                format!("{:.2}", (r.grid_bytes + p) as f64 / (r.grid_bytes + r.output_bytes).max(1) as f64)
+            }));
+            row
+        })
+        .collect();
+    let mut header: Vec<String> = vec!["extractor".into(), "grid".into()];
+    header.extend(threads.iter().map(|t| format!("ms, {t} thread{}", if *t == 1 { "" } else { "s" })));
+    header.extend(
+        ["speed-up", "floor ms", "× floor", "triangles", "grid + output MiB", "peak MiB", "(grid + peak) / (grid + output)"]
+            .map(String::from),
+    );
+    let header_refs: Vec<&str> = header.iter().map(|s| s.as_str()).collect();
+    md.push_str(&markdown_table(&header_refs, &body));
+    if !data.skipped.is_empty() {
+        md.push_str("\n**Not run:** ");
+        md.push_str(&data.skipped.join("; "));
+        md.push('\n');
+    }
+    md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::log_slope;
+
+    #[test]
+    fn slopes_of_power_laws() {
+        let cubic: Vec<(f64, f64)> = [1.0, 2.0, 4.0, 8.0].iter().map(|&x: &f64| (x, 3.0 * x.powi(3))).collect();
+        assert!((log_slope(&cubic).unwrap() - 3.0).abs() < 1e-9);
+        let flat = [(1.0, 5.0), (10.0, 5.0)];
+        assert!(log_slope(&flat).unwrap().abs() < 1e-12);
+        assert_eq!(log_slope(&[(1.0, 1.0)]), None);
+        assert_eq!(log_slope(&[(1.0, 1.0), (1.0, 2.0)]), None);
+    }
+}

@@ -1,6 +1,9 @@
 //! `peers`: our extractors and the peer implementations on the same sampled grids in one run,
 //! alternating, medians of repeated runs, extraction only (sampling excluded for everyone):
-//! - in process: `fast-surface-nets` (its buffer reused, as a game engine would);
+//! - in process: `fast-surface-nets` (its buffer reused, as a game engine would) and the
+//!   `isosurface` crate's marching cubes (which samples a `Source` itself: ours reads the stored
+//!   grid, so its time includes that lookup; cubic grids only, and it also meshes one layer of
+//!   cells past the far faces, which a closed surface inside the grid never reaches);
 //! - through one Python subprocess (`tests/reference/peers.py`, in the pinned virtual environment
 //!   `tests/reference/run.sh setup` creates) reading the very grid we sampled: VTK's
 //!   vtkFlyingEdges3D on one and two threads, vtkMarchingCubes, scikit-image (Lorensen, Lewiner),
@@ -28,6 +31,26 @@ use std::time::{Duration, Instant};
 
 /// The experiment.
 pub struct Peers;
+
+/// The stored grid as the `isosurface` crate's `Source`: it asks for values at `(x, y, z)` in the
+/// unit cube in steps of `1 / (n - 1)`; past the far faces (where it also looks) the grid is
+/// outside.
+struct GridSource<'a> {
+    values: &'a [f32],
+    n: usize,
+}
+
+impl isosurface::source::Source for GridSource<'_> {
+    fn sample(&self, x: f32, y: f32, z: f32) -> f32 {
+        let last = (self.n - 1) as f32;
+        let index = |c: f32| (c * last).round() as usize;
+        let (i, j, k) = (index(x), index(y), index(z));
+        if i >= self.n || j >= self.n || k >= self.n {
+            return 1.0;
+        }
+        self.values[i + self.n * (j + self.n * k)]
+    }
+}
 
 const NAME: &str = "peers";
 const FIELDS: [&str; 4] = ["sphere", "gyroid", "asteroid", "terrain"];
@@ -251,6 +274,20 @@ impl Experiment for Peers {
                 let t = Instant::now();
                 surface_nets(samples.values(), &shape, [0; 3], [nx - 1, ny - 1, nz - 1], &mut fsn);
                 record("fast-surface-nets (1 thread)", t.elapsed(), fsn.positions.len(), fsn.indices.len() / 3);
+                if nx == ny && ny == nz {
+                    let source = GridSource { values: samples.values(), n: nx as usize };
+                    let (mut vertices, mut indices) = (Vec::new(), Vec::new());
+                    let t = Instant::now();
+                    isosurface::marching_cubes::MarchingCubes::new(nx as usize).extract(&source, &mut vertices, &mut indices);
+                    record("isosurface crate (1 thread)", t.elapsed(), vertices.len() / 3, indices.len() / 3);
+                } else {
+                    let note = format!(
+                        "isosurface crate on {field_name}: its grid is {nx}x{ny}x{nz}, and the crate meshes n³ grids only"
+                    );
+                    if !skipped.contains(&note) {
+                        skipped.push(note);
+                    }
+                }
                 if let Some(py) = python.as_mut() {
                     let mut peers: Vec<(&str, usize, String)> = vec![
                         ("vtk-flying-edges", 1, "VTK vtkFlyingEdges3D (1 thread)".into()),
@@ -379,6 +416,7 @@ fn section(data: &Data) -> String {
                 ratio(t("isolab surface-nets (2 threads)"), t("fast-surface-nets (1 thread)")),
                 ratio(t("isolab marching-cubes (1 thread)"), t("skimage-lewiner (1 thread)")),
                 ratio(t("isolab marching-cubes (1 thread)"), t("vtk-marching-cubes (1 thread)")),
+                ratio(t("isolab marching-cubes (1 thread)"), t("isosurface crate (1 thread)")),
             ]
         })
         .collect();
@@ -391,6 +429,7 @@ fn section(data: &Data) -> String {
             "SN (2 threads) vs fast-surface-nets",
             "MC vs skimage Lewiner",
             "MC vs vtkMarchingCubes",
+            "MC vs isosurface crate",
         ],
         &body,
     ));

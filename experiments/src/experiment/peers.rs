@@ -18,7 +18,7 @@ use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
 use crate::report::{markdown_table, median};
 use fast_surface_nets::ndshape::RuntimeShape;
 use fast_surface_nets::{surface_nets, SurfaceNetsBuffer};
-use isolab_algorithms::extractors::marching_cubes::{McOptions, Parallelism};
+use isolab_algorithms::extractors::marching_cubes::{McOptions, NormalSource, Parallelism};
 use isolab_algorithms::extractors::surface_nets::{Smoothing, SnOptions, SurfaceNets};
 use isolab_algorithms::extractors::MarchingCubes;
 use isolab_algorithms::{fields, Extraction, Extractor, Grid, Samples};
@@ -55,8 +55,8 @@ impl isosurface::source::Source for GridSource<'_> {
 const NAME: &str = "peers";
 const FIELDS: [&str; 4] = ["sphere", "gyroid", "asteroid", "terrain"];
 const SIZES: [usize; 3] = [64, 128, 256];
-/// 512^3 for the fast implementations only, on two fields (the slow peers take seconds a run).
-const LARGE: (usize, [&str; 2]) = (512, ["sphere", "gyroid"]);
+/// 512^3 for the fast implementations only, on every field (the slow peers take seconds a run).
+const LARGE: (usize, [&str; 4]) = (512, FIELDS);
 const SLOW_PEERS: [&str; 5] = ["vtk-marching-cubes", "skimage-lorensen", "skimage-lewiner", "pymcubes", "libigl"];
 
 /// One implementation on one grid.
@@ -229,8 +229,10 @@ impl Experiment for Peers {
         let mut grids: Vec<(&str, usize)> = FIELDS.iter().flat_map(|&f| SIZES.iter().map(move |&n| (f, n))).collect();
         grids.extend(LARGE.1.iter().map(|&f| (f, LARGE.0)));
         let bar = ctx.bar(NAME, grids.len() as u64);
-        let mc = MarchingCubes::default();
-        let mc1 = MarchingCubes::new(McOptions { parallelism: Parallelism::Serial, ..Default::default() });
+        // No normals, as the Python side runs VTK (ComputeNormalsOff) and the other peers make none.
+        let mc = MarchingCubes::new(McOptions { normals: NormalSource::None, ..Default::default() });
+        let mc1 =
+            MarchingCubes::new(McOptions { normals: NormalSource::None, parallelism: Parallelism::Serial, ..Default::default() });
         let sn = SurfaceNets::new(SnOptions { smoothing: Smoothing::None, ..Default::default() });
         let sn1 =
             SurfaceNets::new(SnOptions { smoothing: Smoothing::None, parallelism: Parallelism::Serial, ..Default::default() });
@@ -282,7 +284,7 @@ impl Experiment for Peers {
                     record("isosurface crate (1 thread)", t.elapsed(), vertices.len() / 3, indices.len() / 3);
                 } else {
                     let note = format!(
-                        "isosurface crate on {field_name}: its grid is {nx}x{ny}x{nz}, and the crate meshes n³ grids only"
+                        "isosurface crate on {field_name}: the field's grids are not n³ (the crate meshes n³ grids only)"
                     );
                     if !skipped.contains(&note) {
                         skipped.push(note);
@@ -347,7 +349,7 @@ fn time_of<'a>(data: &'a Data, implementation: &str, field: &str, n: usize) -> O
 }
 
 fn charts(dir: &Path, data: &Data) -> Result<(), ExperimentError> {
-    for field in ["sphere", "gyroid"] {
+    for field in FIELDS {
         let mut labels: Vec<&str> = data.timings.iter().filter(|t| t.field == field).map(|t| t.implementation.as_str()).collect();
         labels.sort_unstable();
         labels.dedup();
@@ -384,7 +386,8 @@ fn section(data: &Data) -> String {
     md.push_str(&format!(
         "Every implementation on the same sampled grid (built-in fields on their default domains, n samples a side), extraction \
          only, alternating, median of {} runs each; Python peers read the very grid isolab sampled (`tests/reference/peers.py`). \
-         Peer versions: {}. Times are wall clock on a shared 2-core machine; compare ratios within this run.\n\n",
+         Our marching cubes makes no normals here, as VTK runs with ComputeNormalsOff and the other marching cubes peers make \
+         none; surface nets makes its usual normals, as `fast-surface-nets` does. Peer versions: {}. Times are wall clock on a shared 2-core machine; compare ratios within this run.\n\n",
         data.repeats,
         if data.versions.is_empty() {
             "none available".to_owned()
@@ -456,7 +459,7 @@ fn section(data: &Data) -> String {
         .collect();
     md.push_str(&markdown_table(&header, &body));
     md.push_str(
-        "\n| | |\n|---|---|\n| ![sphere](figures/peers/time-sphere.png) | ![gyroid](figures/peers/time-gyroid.png) |\n\n",
+        "\n| | |\n|---|---|\n| ![sphere](figures/peers/time-sphere.png) | ![gyroid](figures/peers/time-gyroid.png) |\n| ![asteroid](figures/peers/time-asteroid.png) | ![terrain](figures/peers/time-terrain.png) |\n\n",
     );
     md.push_str("Regularised marching tetrahedra against `ferreus_rmt` is in the `costen_table` section (that peer samples the field itself, following the surface).\n");
     md

@@ -435,6 +435,26 @@ def close(a, b, rel):
     return abs(a - b) <= rel * max(abs(a), abs(b), 1e-300)
 
 
+def compare_metrics(check, isolab, name, path):
+    """`isolab metrics` of the mesh at `path` against CGAL's, pymeshlab's and VTK's measures of it;
+    returns our metrics."""
+    ours = json.loads(subprocess.run([isolab, "metrics", path], check=True, capture_output=True).stdout)
+    ref = measure(*read_mesh(path))
+    check(name, ours["vertices"] == ref["vertices"] and ours["triangles"] == ref["triangles"],
+          f"counts ours {ours['vertices']}/{ours['triangles']} ref {ref['vertices']}/{ref['triangles']}")
+    check(name, close(ours["area"], ref["cgal"]["area"], 1e-6) and close(ours["volume"], ref["cgal"]["volume"], 1e-6),
+          f"area ours {ours['area']:.9f} cgal {ref['cgal']['area']:.9f}, volume ours {ours['volume']:.9f} cgal {ref['cgal']['volume']:.9f}")
+    check(name, ours["closed"] == ref["cgal"]["closed"] and ours["outward"] == ref["cgal"]["outward"],
+          f"closed/outward ours {ours['closed']}/{ours['outward']} cgal {ref['cgal']['closed']}/{ref['cgal']['outward']}")
+    check(name, ours["boundary_edges"] == ref["meshlab"]["boundary_edges"] and ours["non_manifold_edges"] == ref["meshlab"]["non_manifold_edges"]
+          and ours["components"] == ref["meshlab"]["components"],
+          f"boundary/non-manifold edges, components ours {ours['boundary_edges']}/{ours['non_manifold_edges']}/{ours['components']} "
+          f"meshlab {ref['meshlab']['boundary_edges']}/{ref['meshlab']['non_manifold_edges']}/{ref['meshlab']['components']}")
+    check(name, close(ours["aspect_ratio"]["mean"], ref["vtk"]["aspect_mean"], 1e-6) and close(ours["aspect_ratio"]["max"], ref["vtk"]["aspect_max"], 1e-6),
+          f"Verdict aspect ours {ours['aspect_ratio']['mean']:.6f}/{ours['aspect_ratio']['max']:.4f} vtk {ref['vtk']['aspect_mean']:.6f}/{ref['vtk']['aspect_max']:.4f}")
+    return ours
+
+
 def live(isolab):
     check = Checks()
     # 1. The libraries still say what the committed goldens say.
@@ -499,21 +519,27 @@ def live(isolab):
                                    ("skimage-lewiner", skimage_marching_cubes(vol, origin, h, iso, "lewiner"))]:
                 path = os.path.join(tmp, "peer.obj")
                 write_obj(path, pv, pf)
-                ours = json.loads(subprocess.run([isolab, "metrics", path], check=True, capture_output=True).stdout)
-                ref = measure(*read_mesh(path))
-                name = f"{peer} mesh of {os.path.basename(field)}@{res}"
-                check(name, ours["vertices"] == ref["vertices"] and ours["triangles"] == ref["triangles"],
-                      f"counts ours {ours['vertices']}/{ours['triangles']} ref {ref['vertices']}/{ref['triangles']}")
-                check(name, close(ours["area"], ref["cgal"]["area"], 1e-6) and close(ours["volume"], ref["cgal"]["volume"], 1e-6),
-                      f"area ours {ours['area']:.9f} cgal {ref['cgal']['area']:.9f}, volume ours {ours['volume']:.9f} cgal {ref['cgal']['volume']:.9f}")
-                check(name, ours["closed"] == ref["cgal"]["closed"] and ours["outward"] == ref["cgal"]["outward"],
-                      f"closed/outward ours {ours['closed']}/{ours['outward']} cgal {ref['cgal']['closed']}/{ref['cgal']['outward']}")
-                check(name, ours["boundary_edges"] == ref["meshlab"]["boundary_edges"] and ours["non_manifold_edges"] == ref["meshlab"]["non_manifold_edges"]
-                      and ours["components"] == ref["meshlab"]["components"],
-                      f"boundary/non-manifold edges, components ours {ours['boundary_edges']}/{ours['non_manifold_edges']}/{ours['components']} "
-                      f"meshlab {ref['meshlab']['boundary_edges']}/{ref['meshlab']['non_manifold_edges']}/{ref['meshlab']['components']}")
-                check(name, close(ours["aspect_ratio"]["mean"], ref["vtk"]["aspect_mean"], 1e-6) and close(ours["aspect_ratio"]["max"], ref["vtk"]["aspect_max"], 1e-6),
-                      f"Verdict aspect ours {ours['aspect_ratio']['mean']:.6f}/{ours['aspect_ratio']['max']:.4f} vtk {ref['vtk']['aspect_mean']:.6f}/{ref['vtk']['aspect_max']:.4f}")
+                compare_metrics(check, isolab, f"{peer} mesh of {os.path.basename(field)}@{res}", path)
+    # 5. The C++ decimators the `decimation` experiment runs (built by run.sh): they reach the
+    # target exactly, leave a closed manifold, and our metrics of their output equal the libraries'.
+    with tempfile.TemporaryDirectory() as tmp:
+        source = os.path.join(tmp, "mt.obj")
+        subprocess.run([isolab, "extract", "-a", "marching-tetrahedra", "--lattice", "bcc", "-f", "asteroid", "--dims", "41,41,41",
+                        "-o", source], check=True, stdout=subprocess.DEVNULL)
+        triangles = len(read_mesh(source)[1])
+        target = triangles // 4 // 2 * 2
+        for program in ("cgal_edge_collapse", "openmesh_decimater"):
+            binary = os.path.join(HERE, ".bin", program)
+            if not os.path.exists(binary):
+                check(program, False, f"tests/reference/.bin/{program} is not built (run.sh builds it from tests/reference/decimators/)")
+                continue
+            out = os.path.join(tmp, f"{program}.obj")
+            answer = json.loads(subprocess.run([binary, source, str(target), out, "1"], check=True, capture_output=True).stdout)
+            ours = compare_metrics(check, isolab, f"{program} of asteroid MT ({triangles} -> {target})", out)
+            check(program, answer["triangles"] == target and ours["triangles"] == target and ours["closed"] and ours["edge_manifold"]
+                  and ours["vertex_manifold"] and ours["euler"] == 2,
+                  f"triangles said {answer['triangles']} read {ours['triangles']} target {target}; closed {ours['closed']}, "
+                  f"manifold {ours['edge_manifold']}/{ours['vertex_manifold']}, Euler {ours['euler']}")
     print(f"{check.passed} passed, {check.failed} failed")
     return check.failed == 0
 

@@ -1,6 +1,8 @@
 //! Sign-change summaries of x-rows of samples, shared by the cubic-grid extractors: a first pass
 //! that lets them skip rows, edges and cells that cannot hold surface (the trimming idea of
-//! Schroeder, Maynard & Geveci, "Flying edges", LDAV 2015).
+//! Schroeder, Maynard & Geveci, "Flying edges", LDAV 2015), and the inside/outside state of every
+//! sample packed 64 to a word ([`LayerSigns`]), so that crossing edges and surface cells are found
+//! by word operations over 64 samples at a time and only those are visited one by one.
 
 use rayon::prelude::*;
 
@@ -51,9 +53,219 @@ pub fn classify_rows(values: &[f32], nx: usize, iso: f32, rows: &mut Vec<Row>) {
     });
 }
 
+/// The row summaries and inside bits (`value < iso`, one bit per sample, 64 to a word) of the two
+/// sample layers a sweep along z is between, classified as the sweep reaches each layer, so the
+/// layer's samples are still in cache when the surface near them is built. Each bit row has one
+/// word past its samples that is always zero, so a row can be read one word past its end.
+#[derive(Clone, Debug, Default)]
+pub struct LayerSigns {
+    ny: usize,
+    words: usize,
+    /// The layer each of the two slots holds (`usize::MAX`: none).
+    held: [usize; 2],
+    rows: Vec<Row>,
+    bits: Vec<u64>,
+}
+
+impl LayerSigns {
+    /// Forgets the held layers and sizes the slots for rows of `nx` samples, `ny` rows a layer.
+    pub fn reset(&mut self, nx: usize, ny: usize) {
+        self.ny = ny;
+        self.words = nx.div_ceil(64) + 1;
+        self.held = [usize::MAX; 2];
+        self.rows.resize(2 * ny, Row::default());
+        self.bits.resize(2 * ny * self.words, 0);
+    }
+
+    /// Classifies sample layer `z` of `values` (`dims` samples, x fastest) into its slot, unless
+    /// already held.
+    pub fn classify(&mut self, values: &[f32], dims: [usize; 3], iso: f32, z: usize) {
+        let slot = z & 1;
+        if self.held[slot] == z {
+            return;
+        }
+        let [nx, ny, _] = dims;
+        let words = self.words;
+        let layer = &values[z * nx * ny..(z + 1) * nx * ny];
+        let rows = &mut self.rows[slot * ny..(slot + 1) * ny];
+        let bits = &mut self.bits[slot * ny * words..(slot + 1) * ny * words];
+        for ((row, out), v) in rows.iter_mut().zip(bits.chunks_exact_mut(words)).zip(layer.chunks_exact(nx)) {
+            for (word, chunk) in out.iter_mut().zip(v.chunks(64)) {
+                *word = inside_bits(chunk, iso);
+            }
+            *row = row_from_bits(out, nx);
+        }
+        self.held[slot] = z;
+    }
+
+    /// The summary of row `(y, z)`; layer `z` must be held.
+    #[inline]
+    pub fn row(&self, y: usize, z: usize) -> Row {
+        debug_assert_eq!(self.held[z & 1], z, "layer {z} is not classified");
+        self.rows[(z & 1) * self.ny + y]
+    }
+
+    /// The inside bits of row `(y, z)`; layer `z` must be held.
+    #[inline]
+    pub fn bits(&self, y: usize, z: usize) -> &[u64] {
+        debug_assert_eq!(self.held[z & 1], z, "layer {z} is not classified");
+        let r = (z & 1) * self.ny + y;
+        &self.bits[r * self.words..(r + 1) * self.words]
+    }
+
+    /// Bytes held.
+    pub fn capacity_bytes(&self) -> usize {
+        8 * self.bits.capacity() + std::mem::size_of::<Row>() * self.rows.capacity()
+    }
+}
+
+/// Bit `k` set when `values[k] < iso`, for up to 64 values; four at a time with SIMD compares.
+#[inline]
+fn inside_bits(values: &[f32], iso: f32) -> u64 {
+    let quads = values.chunks_exact(4);
+    let rest = quads.remainder();
+    let threshold = glam::Vec4::splat(iso);
+    let mut word = 0u64;
+    for (k, q) in quads.enumerate() {
+        word |= u64::from(glam::Vec4::from_slice(q).cmplt(threshold).bitmask()) << (4 * k);
+    }
+    let done = values.len() - rest.len();
+    for (k, &s) in rest.iter().enumerate() {
+        word |= u64::from(s < iso) << (done + k);
+    }
+    word
+}
+
+/// The [`Row`] summary of one row's bits.
+fn row_from_bits(bits: &[u64], nx: usize) -> Row {
+    let inside = bits[0] & 1 == 1;
+    let flip = if inside { u64::MAX } else { 0 };
+    let differs = |w: usize| (bits[w] ^ flip) & range_mask(w, 0, nx - 1);
+    let full = nx.div_ceil(64);
+    let Some(first) = (0..full).find_map(|w| {
+        let m = differs(w);
+        (m != 0).then(|| 64 * w + m.trailing_zeros() as usize)
+    }) else {
+        return Row { first: u32::MAX, last: 0, inside };
+    };
+    let last = (0..full).rev().find_map(|w| {
+        let m = differs(w);
+        (m != 0).then(|| 64 * w + 63 - m.leading_zeros() as usize)
+    });
+    Row { first: first as u32, last: last.unwrap_or(first) as u32, inside }
+}
+
+/// The bits of word `w` that stand for samples `lo..=hi`.
+#[inline]
+pub fn range_mask(w: usize, lo: usize, hi: usize) -> u64 {
+    let (start, end) = (64 * w, 64 * w + 63);
+    if hi < start || lo > end {
+        return 0;
+    }
+    let low = if lo > start { u64::MAX << (lo - start) } else { u64::MAX };
+    let high = if hi < end { u64::MAX >> (end - hi) } else { u64::MAX };
+    low & high
+}
+
+/// Word `w` of `row` shifted by one sample: bit `k` is sample `64 w + k + 1`.
+#[inline]
+pub fn next_bits(row: &[u64], w: usize) -> u64 {
+    row[w] >> 1 | row[w + 1] << 63
+}
+
+/// Calls `visit(x)` for every `x` in `lo..=hi` whose bit is set in `word(w)` (`w = x / 64`).
+#[inline]
+pub fn for_each_bit(lo: usize, hi: usize, mut word: impl FnMut(usize) -> u64, mut visit: impl FnMut(usize)) {
+    if lo > hi {
+        return;
+    }
+    for w in lo / 64..=hi / 64 {
+        let mut m = word(w) & range_mask(w, lo, hi);
+        while m != 0 {
+            visit(64 * w + m.trailing_zeros() as usize);
+            m &= m - 1;
+        }
+    }
+}
+
+/// Calls `visit(x, case)` for every cell `x` in `lo..=hi` (its lower corner's x) whose corners
+/// disagree, with its sign case (bit `c` set: marching cubes corner `c` inside). `rows` are the
+/// sample rows `(y, z)`, `(y + 1, z)`, `(y, z + 1)`, `(y + 1, z + 1)`; `hi` must be below the
+/// row's last sample.
+#[inline]
+pub fn for_each_surface_cell(rows: [&[u64]; 4], lo: usize, hi: usize, mut visit: impl FnMut(usize, u8)) {
+    if lo > hi {
+        return;
+    }
+    for w in lo / 64..=hi / 64 {
+        let a = rows.map(|r| r[w]);
+        let s = rows.map(|r| next_bits(r, w));
+        let any = a[0] | a[1] | a[2] | a[3] | s[0] | s[1] | s[2] | s[3];
+        let all = a[0] & a[1] & a[2] & a[3] & s[0] & s[1] & s[2] & s[3];
+        let mut m = (any & !all) & range_mask(w, lo, hi);
+        while m != 0 {
+            let b = m.trailing_zeros();
+            m &= m - 1;
+            let bit = |word: u64, c: u32| ((word >> b) as u8 & 1) << c;
+            let case = bit(a[0], 0)
+                | bit(s[0], 1)
+                | bit(s[1], 2)
+                | bit(a[1], 3)
+                | bit(a[2], 4)
+                | bit(s[2], 5)
+                | bit(s[3], 6)
+                | bit(a[3], 7);
+            visit(64 * w + b as usize, case);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bits_give_the_rows_and_the_cell_cases_of_the_values() {
+        // Pseudo-random values on 3 x 2 x 2 rows of lengths that straddle word boundaries.
+        for nx in [2usize, 3, 63, 64, 65, 127, 130] {
+            let ny = 2;
+            let values: Vec<f32> = (0..nx * ny * 2)
+                .map(|i| ((i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40) as f32 / 16_777_216.0 - 0.5)
+                .collect();
+            let values: Vec<f32> = values.iter().enumerate().map(|(i, v)| if i % 7 == 0 { 0.3 } else { *v }).collect();
+            let (mut signs, mut plain) = (LayerSigns::default(), Vec::new());
+            signs.reset(nx, ny);
+            signs.classify(&values, [nx, ny, 2], 0.0, 0);
+            signs.classify(&values, [nx, ny, 2], 0.0, 1);
+            classify_rows(&values, nx, 0.0, &mut plain);
+            for (r, b) in plain.iter().enumerate() {
+                let a = signs.row(r % ny, r / ny);
+                assert_eq!((a.first, a.last, a.inside), (b.first, b.last, b.inside), "nx {nx}");
+            }
+            let inside = |x: usize, y: usize, z: usize| values[x + nx * (y + ny * z)] < 0.0;
+            let mut seen = Vec::new();
+            for_each_surface_cell(
+                [signs.bits(0, 0), signs.bits(1, 0), signs.bits(0, 1), signs.bits(1, 1)],
+                0,
+                nx - 2,
+                |x, case| seen.push((x, case)),
+            );
+            let mut expected = Vec::new();
+            for x in 0..nx - 1 {
+                let corners = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]];
+                let case = corners.iter().enumerate().fold(0u8, |c, (k, d)| c | u8::from(inside(x + d[0], d[1], d[2])) << k);
+                if case != 0 && case != 255 {
+                    expected.push((x, case));
+                }
+            }
+            assert_eq!(seen, expected, "nx {nx}");
+            let mut crossings = Vec::new();
+            let first = signs.bits(0, 0);
+            for_each_bit(0, nx - 2, |w| first[w] ^ next_bits(first, w), |x| crossings.push(x));
+            let expected: Vec<usize> = (0..nx - 1).filter(|&x| inside(x, 0, 0) != inside(x + 1, 0, 0)).collect();
+            assert_eq!(crossings, expected, "nx {nx}");
+        }
+    }
 
     #[test]
     fn rows_and_spans() {

@@ -7,9 +7,12 @@
 //! **Summary.** Each cubic cell's eight corner signs index the 256-case table
 //! ([`crate::tables::marching_cubes`]); its triangles connect vertices on crossing edges, placed
 //! by linear interpolation. Every lattice edge gets at most one vertex, created once when its
-//! layer is swept, and found again through per-layer index arrays (no hash map). A first pass
-//! classifies each x-row of samples (uniform, or the x-range where the sign changes); rows, edges
-//! and cells that cannot hold surface are skipped from that alone. The volume is split into slabs
+//! layer is swept, and found again through per-layer index arrays (no hash map). As the sweep
+//! reaches a sample layer it packs the layer's inside states into bits, 64 samples to a word, and
+//! summarises each x-row (uniform, or the x-range where the sign changes)
+//! ([`crate::sign_rows::LayerSigns`]): uniform rows are skipped whole, crossing edges and surface
+//! cells are found by word operations over 64 samples at a time, and only they are visited one by
+//! one, while the layer's samples are still in cache. The volume is split into slabs
 //! of cells along z meshed in parallel (rayon); vertices on a slab's bottom layer belong to the
 //! slab below and are patched in when the slabs are joined, so there are no duplicates.
 //!
@@ -32,8 +35,9 @@
 //! exactly at the iso-value would give coincident vertices; by default vertices keep 1e-4 of the
 //! spacing from the edge ends instead ([`OnIsoSamples`]), so no triangle has zero area.
 //!
-//! **Costs.** One read of every sample for the row pass, then work proportional to the rows and
-//! cells near the surface. Memory: five `nx * ny` index layers per slab task plus the output.
+//! **Costs.** One read of every sample to pack its sign, then work proportional to the crossing
+//! edges and surface cells. Memory: five `nx * ny` index layers and two layers of sign bits per
+//! slab task, plus the output.
 //!
 //! ```
 //! use isolab_algorithms::{extractors::MarchingCubes, fields, Extraction, Extractor, Grid, Samples};
@@ -51,7 +55,7 @@ use crate::geometry::trilinear_gradient;
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
 use crate::samples::Samples;
-use crate::sign_rows::{classify_rows, span, Row};
+use crate::sign_rows::{for_each_bit, for_each_surface_cell, next_bits, span, LayerSigns};
 use crate::tables::marching_cubes::{
     decider_joins_inside, Case, AMBIGUOUS_FACES, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, TABLE,
 };
@@ -194,7 +198,6 @@ pub struct MarchingCubes {
 /// One call's buffers: the row summaries and one scratch per slab task.
 #[derive(Default)]
 struct McScratch {
-    rows: Vec<Row>,
     slabs: Vec<Scratch>,
 }
 
@@ -212,6 +215,8 @@ struct Scratch {
     x_hi: Vec<u32>,
     y_hi: Vec<u32>,
     z_mid: Vec<u32>,
+    /// The sign bits of the two sample layers the sweep is between.
+    signs: LayerSigns,
     mesh: TriMesh,
     vertex_time: Duration,
     geometry_time: Duration,
@@ -233,6 +238,7 @@ impl Scratch {
 
     fn bytes(&self) -> usize {
         4 * (self.x_lo.capacity() + self.y_lo.capacity() + self.x_hi.capacity() + self.y_hi.capacity() + self.z_mid.capacity())
+            + self.signs.capacity_bytes()
             + self.mesh.capacity_bytes()
     }
 }
@@ -242,7 +248,6 @@ struct Ctx<'a> {
     values: &'a [f32],
     grid: Grid,
     iso: f32,
-    rows: &'a [Row],
     sample_normals: bool,
     /// Clamp of the interpolation parameter to `[t_min, 1 - t_min]`.
     t_min: f32,
@@ -251,15 +256,6 @@ struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
-    #[inline]
-    fn inside(&self, i: usize) -> bool {
-        self.values[i] < self.iso
-    }
-
-    fn row(&self, y: usize, z: usize) -> Row {
-        self.rows[y + self.grid.dims[1] * z]
-    }
-
     /// Gradient of the samples at grid point `(x, y, z)` (central differences, one-sided at
     /// the boundary).
     fn sample_gradient(&self, x: usize, y: usize, z: usize) -> Vec3 {
@@ -301,45 +297,53 @@ impl Ctx<'_> {
     }
 
     /// Vertices on the x- and y-edges of sample layer `z`.
-    fn layer_vertices(&self, z: usize, xs: &mut [u32], ys: &mut [u32], mesh: &mut TriMesh) {
+    fn layer_vertices(&self, signs: &LayerSigns, z: usize, xs: &mut [u32], ys: &mut [u32], mesh: &mut TriMesh) {
         let [nx, ny, _] = self.grid.dims;
         for y in 0..ny {
-            let row = self.row(y, z);
+            let row = signs.row(y, z);
+            let here = signs.bits(y, z);
             if row.first <= row.last {
                 let lo = (row.first as usize).saturating_sub(1);
                 let hi = (row.last as usize).min(nx - 2);
-                let base = self.grid.index(0, y, z);
-                for x in lo..=hi {
-                    if self.inside(base + x) != self.inside(base + x + 1) {
+                for_each_bit(
+                    lo,
+                    hi,
+                    |w| here[w] ^ next_bits(here, w),
+                    |x| {
                         xs[x + nx * y] = self.push_vertex(mesh, [x, y, z], 0);
-                    }
-                }
+                    },
+                );
             }
             if y + 1 < ny {
-                if let Some((lo, hi)) = span(&[row, self.row(y + 1, z)], nx) {
-                    let base = self.grid.index(0, y, z);
-                    for x in lo..=hi {
-                        if self.inside(base + x) != self.inside(base + x + nx) {
+                if let Some((lo, hi)) = span(&[row, signs.row(y + 1, z)], nx) {
+                    let next = signs.bits(y + 1, z);
+                    for_each_bit(
+                        lo,
+                        hi,
+                        |w| here[w] ^ next[w],
+                        |x| {
                             ys[x + nx * y] = self.push_vertex(mesh, [x, y, z], 1);
-                        }
-                    }
+                        },
+                    );
                 }
             }
         }
     }
 
     /// Vertices on the z-edges between sample layers `z` and `z + 1`.
-    fn z_vertices(&self, z: usize, zs: &mut [u32], mesh: &mut TriMesh) {
+    fn z_vertices(&self, signs: &LayerSigns, z: usize, zs: &mut [u32], mesh: &mut TriMesh) {
         let [nx, ny, _] = self.grid.dims;
-        let layer = nx * ny;
         for y in 0..ny {
-            if let Some((lo, hi)) = span(&[self.row(y, z), self.row(y, z + 1)], nx) {
-                let base = self.grid.index(0, y, z);
-                for x in lo..=hi {
-                    if self.inside(base + x) != self.inside(base + x + layer) {
+            if let Some((lo, hi)) = span(&[signs.row(y, z), signs.row(y, z + 1)], nx) {
+                let (here, above) = (signs.bits(y, z), signs.bits(y, z + 1));
+                for_each_bit(
+                    lo,
+                    hi,
+                    |w| here[w] ^ above[w],
+                    |x| {
                         zs[x + nx * y] = self.push_vertex(mesh, [x, y, z], 2);
-                    }
-                }
+                    },
+                );
             }
         }
     }
@@ -347,25 +351,20 @@ impl Ctx<'_> {
     /// Triangles of the cells between sample layers `z` and `z + 1`. When `extern_bottom`, the
     /// bottom layer's x/y-edge vertices belong to the slab below and are written as tagged
     /// references `EXTERN | (2 * (x + nx * y) + axis)`.
-    fn cells(&self, z: usize, extern_bottom: bool, s: &mut Scratch) -> usize {
+    fn cells(&self, signs: &LayerSigns, z: usize, extern_bottom: bool, s: &mut Scratch) -> usize {
         let [nx, ny, _] = self.grid.dims;
         let layer = nx * ny;
         let mut active = 0;
         let tag = |i: usize, axis: u32| EXTERN | (2 * i as u32 + axis);
         for y in 0..ny - 1 {
-            let rows = [self.row(y, z), self.row(y + 1, z), self.row(y, z + 1), self.row(y + 1, z + 1)];
+            let rows = [signs.row(y, z), signs.row(y + 1, z), signs.row(y, z + 1), signs.row(y + 1, z + 1)];
             let Some((lo, hi)) = span(&rows, nx) else { continue };
             let base = self.grid.index(0, y, z);
-            for x in lo.saturating_sub(1)..=hi.min(nx - 2) {
+            let bits = [signs.bits(y, z), signs.bits(y + 1, z), signs.bits(y, z + 1), signs.bits(y + 1, z + 1)];
+            for_each_surface_cell(bits, lo.saturating_sub(1), hi.min(nx - 2), |x, case| {
+                let case = case as usize;
                 let i = base + x;
                 let corners = [i, i + 1, i + 1 + nx, i + nx, i + layer, i + 1 + layer, i + 1 + nx + layer, i + nx + layer];
-                let mut case = 0usize;
-                for (bit, &c) in corners.iter().enumerate() {
-                    case |= usize::from(self.inside(c)) << bit;
-                }
-                if case == 0 || case == 255 {
-                    continue;
-                }
                 active += 1;
                 let ambiguous = if self.decider { AMBIGUOUS_FACES[case] } else { 0 };
                 let entry = if ambiguous == 0 {
@@ -411,7 +410,7 @@ impl Ctx<'_> {
                 for t in entry.triangles() {
                     s.mesh.triangles.push(t.map(|edge| ids[edge as usize]));
                 }
-            }
+            });
         }
         active
     }
@@ -447,24 +446,29 @@ impl Ctx<'_> {
     /// Meshes cell slabs `z0..z1` into `s.mesh`; afterwards `s.x_lo`/`s.y_lo` hold the vertex
     /// indices of the top layer `z1`.
     fn slab(&self, z0: usize, z1: usize, extern_bottom: bool, s: &mut Scratch) {
-        let layer = self.grid.dims[0] * self.grid.dims[1];
-        s.prepare(layer);
+        let [nx, ny, _] = self.grid.dims;
+        s.prepare(nx * ny);
+        let mut signs = std::mem::take(&mut s.signs);
+        signs.reset(nx, ny);
         let start = Instant::now();
+        signs.classify(self.values, self.grid.dims, self.iso, z0);
         if !extern_bottom {
-            self.layer_vertices(z0, &mut s.x_lo, &mut s.y_lo, &mut s.mesh);
+            self.layer_vertices(&signs, z0, &mut s.x_lo, &mut s.y_lo, &mut s.mesh);
         }
         s.vertex_time += start.elapsed();
         for z in z0..z1 {
             let t0 = Instant::now();
-            self.z_vertices(z, &mut s.z_mid, &mut s.mesh);
-            self.layer_vertices(z + 1, &mut s.x_hi, &mut s.y_hi, &mut s.mesh);
+            signs.classify(self.values, self.grid.dims, self.iso, z + 1);
+            self.z_vertices(&signs, z, &mut s.z_mid, &mut s.mesh);
+            self.layer_vertices(&signs, z + 1, &mut s.x_hi, &mut s.y_hi, &mut s.mesh);
             let t1 = Instant::now();
-            s.active_cells += self.cells(z, extern_bottom && z == z0, s);
+            s.active_cells += self.cells(&signs, z, extern_bottom && z == z0, s);
             s.geometry_time += t1.elapsed();
             s.vertex_time += t1 - t0;
             std::mem::swap(&mut s.x_lo, &mut s.x_hi);
             std::mem::swap(&mut s.y_lo, &mut s.y_hi);
         }
+        s.signs = signs;
     }
 }
 
@@ -509,7 +513,7 @@ impl Extractor for MarchingCubes {
                 supported: "cubic",
             });
         };
-        let [nx, _, nz] = grid.dims;
+        let nz = grid.dims[2];
         let field = samples.field().filter(|f| match self.options.normals {
             NormalSource::Auto => f.has_analytic_gradient(),
             NormalSource::FieldGradient => true,
@@ -519,15 +523,14 @@ impl Extractor for MarchingCubes {
 
         let start = Instant::now();
         let mut held = self.scratch.take();
-        let McScratch { rows, slabs: pool } = &mut held;
-        classify_rows(samples.values(), nx, samples.iso(), rows);
+        let McScratch { slabs: pool } = &mut held;
         let t_min = match self.options.on_iso {
             OnIsoSamples::Separate => MIN_EDGE_FRACTION,
             OnIsoSamples::Exact => 0.0,
         };
         let decider = self.options.faces == FaceResolution::AsymptoticDecider;
-        let ctx = Ctx { values: samples.values(), grid, iso: samples.iso(), rows, sample_normals, t_min, decider };
-        let row_time = start.elapsed();
+        let ctx = Ctx { values: samples.values(), grid, iso: samples.iso(), sample_normals, t_min, decider };
+        let setup_time = start.elapsed();
 
         let slab_cells = nz - 1;
         let tasks = crate::extractors::slabs::task_count(self.options.parallelism, grid.cell_count(), slab_cells);
@@ -592,7 +595,7 @@ impl Extractor for MarchingCubes {
         let (cpu_v, cpu_g) =
             scratches.iter().fold((0.0, 0.0), |(v, g), s| (v + s.vertex_time.as_secs_f64(), g + s.geometry_time.as_secs_f64()));
         let vertex_share = if cpu_v + cpu_g > 0.0 { cpu_v / (cpu_v + cpu_g) } else { 0.5 };
-        out.stats.times.vertex = row_time + slab_wall.mul_f64(vertex_share);
+        out.stats.times.vertex = setup_time + slab_wall.mul_f64(vertex_share);
         out.stats.times.geometry = slab_wall.mul_f64(1.0 - vertex_share) + join_time;
         out.stats.active_cells = scratches.iter().map(|s| s.active_cells).sum();
 
@@ -608,7 +611,7 @@ impl Extractor for MarchingCubes {
             _ => {}
         }
         out.stats.times.normals = t_normals.elapsed();
-        let scratch_bytes = pool.iter().map(Scratch::bytes).sum::<usize>() + rows.capacity() * std::mem::size_of::<Row>();
+        let scratch_bytes = pool.iter().map(Scratch::bytes).sum::<usize>();
         self.scratch.give(held);
         out.finish_counts(scratch_bytes);
         Ok(())

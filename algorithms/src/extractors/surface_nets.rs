@@ -47,7 +47,9 @@
 //! Vertex normals are the gradient of the cell's trilinear interpolant at the vertex (no field
 //! evaluation, as game engines and `fast-surface-nets` do).
 //!
-//! **Costs.** One pass over the rows, then work proportional to surface cells; smoothing is
+//! **Costs.** One read of every sample to pack its sign, layer by layer as the sweep reaches it
+//! ([`crate::sign_rows::LayerSigns`]: surface cells and crossing edges are found 64 samples at a
+//! time), then work proportional to surface cells; smoothing is
 //! `iterations` passes over the vertices (implicit: a conjugate-gradient solve per iteration).
 //!
 //! ```
@@ -69,7 +71,7 @@ use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
-use crate::sign_rows::{classify_rows, span, Row};
+use crate::sign_rows::{for_each_bit, for_each_surface_cell, next_bits, span, LayerSigns};
 use crate::tables::marching_cubes::{opposite_face, Case, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, RING_FACES, TABLE};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -189,7 +191,6 @@ pub struct SurfaceNets {
 
 #[derive(Default)]
 struct Scratch {
-    rows: Vec<Row>,
     /// Lower corner of each vertex's cell (the smoothing constraint).
     cell_min: Vec<Vec3>,
     /// Net edges (quad sides) as vertex pairs, then the adjacency in CSR form.
@@ -217,6 +218,8 @@ struct Slab {
     /// The slab below's last cell layer, recomputed here so quads can refer to it.
     ghost: TriMesh,
     ghost_min: Vec<Vec3>,
+    /// The sign bits of the two sample layers the sweep is between.
+    signs: LayerSigns,
     /// Index of the first vertex of this slab's last cell layer.
     last_layer_start: u32,
     vertex_time: std::time::Duration,
@@ -232,13 +235,13 @@ impl Slab {
             + self.ghost.capacity_bytes()
             + 12 * (self.cell_min.capacity() + self.ghost_min.capacity())
             + 8 * self.links.capacity()
+            + self.signs.capacity_bytes()
     }
 }
 
 impl Scratch {
     fn bytes(&self) -> usize {
-        self.rows.capacity() * std::mem::size_of::<Row>()
-            + 4 * (self.adjacency_start.capacity() + self.adjacency.capacity())
+        4 * (self.adjacency_start.capacity() + self.adjacency.capacity())
             + 12 * (self.cell_min.capacity() + self.work.capacity() + self.velocity.capacity() + self.velocity_next.capacity())
             + 8 * self.links.capacity()
             + self.slabs.iter().map(Slab::bytes).sum::<usize>()
@@ -261,7 +264,6 @@ struct Ctx<'a> {
     values: &'a [f32],
     grid: Grid,
     iso: f32,
-    rows: &'a [Row],
     placement: Placement,
     field: Option<&'a dyn crate::field::Field>,
     tables: Tables,
@@ -271,10 +273,6 @@ impl Ctx<'_> {
     #[inline]
     fn inside(&self, i: usize) -> bool {
         self.values[i] < self.iso
-    }
-
-    fn row(&self, y: usize, z: usize) -> Row {
-        self.rows[y + self.grid.dims[1] * z]
     }
 
     /// The sign case of cell `(x, y, z)` (bit `c` set: table corner `c` inside).
@@ -310,8 +308,10 @@ impl Ctx<'_> {
     /// Vertices of the surface cells in cell layer `z`: one per separate piece of surface in the
     /// cell (the polygons of its marching cubes case), at the mean of that piece's edge crossings.
     /// `base` gets each cell's first vertex index and `cases` its [`Tables::entry`] code.
+    #[allow(clippy::too_many_arguments)]
     fn cell_vertices(
         &self,
+        signs: &LayerSigns,
         z: usize,
         tag: u32,
         base: &mut [u32],
@@ -322,22 +322,15 @@ impl Ctx<'_> {
         let [nx, ny, _] = self.grid.dims;
         let (sx, sxy) = (nx, nx * ny);
         for y in 0..ny - 1 {
-            let rows = [self.row(y, z), self.row(y + 1, z), self.row(y, z + 1), self.row(y + 1, z + 1)];
+            let rows = [signs.row(y, z), signs.row(y + 1, z), signs.row(y, z + 1), signs.row(y + 1, z + 1)];
             let Some((lo, hi)) = span(&rows, nx) else { continue };
             let start = self.grid.index(0, y, z);
-            for x in lo.saturating_sub(1)..=hi.min(nx - 2) {
+            let bits = [signs.bits(y, z), signs.bits(y + 1, z), signs.bits(y, z + 1), signs.bits(y + 1, z + 1)];
+            for_each_surface_cell(bits, lo.saturating_sub(1), hi.min(nx - 2), |x, case| {
                 let i = start + x;
                 let idx = [i, i + 1, i + 1 + sx, i + sx, i + sxy, i + 1 + sxy, i + 1 + sx + sxy, i + sx + sxy];
                 let v = idx.map(|k| self.values[k]);
-                let mut case = 0u8;
-                for (bit, &value) in v.iter().enumerate() {
-                    case |= u8::from(value < self.iso) << bit;
-                }
                 let c = x + (nx - 1) * y;
-                if case == 0 || case == 255 {
-                    cases[c] = u16::from(case) << 6;
-                    continue;
-                }
                 let code = u16::from(case) << 6 | u16::from(self.joined_faces(case, x, y, z));
                 cases[c] = code;
                 let entry = self.tables.entry(code);
@@ -394,7 +387,7 @@ impl Ctx<'_> {
                     mesh.normals.push(trilinear_gradient(&v, local.clamp(Vec3::ZERO, Vec3::ONE)).normalize_or_zero());
                     cell_min.push(min);
                 }
-            }
+            });
         }
     }
 
@@ -403,6 +396,7 @@ impl Ctx<'_> {
     #[allow(clippy::too_many_arguments)]
     fn quads(
         &self,
+        signs: &LayerSigns,
         z: usize,
         prev: (&[u32], &[u16]),
         cur: (&[u32], &[u16]),
@@ -434,49 +428,59 @@ impl Ctx<'_> {
             }
         };
         let mut triangles = std::mem::take(&mut mesh.triangles);
+        let bit = |row: &[u64], x: usize| row[x / 64] >> (x % 64) & 1 == 1;
         for y in 0..ny {
-            let base = self.grid.index(0, y, z);
+            let here = signs.bits(y, z);
             // z-edges (x, y, z)-(x, y, z+1): cells (x-1..x, y-1..y) of layer z.
             if z + 1 < self.grid.dims[2] && y >= 1 && y + 1 < ny {
-                if let Some((lo, hi)) = span(&[self.row(y, z), self.row(y, z + 1)], nx) {
-                    for x in lo.max(1)..=hi.min(nx - 2) {
-                        let a = self.inside(base + x);
-                        if a != self.inside(base + x + nx * ny) {
+                if let Some((lo, hi)) = span(&[signs.row(y, z), signs.row(y, z + 1)], nx) {
+                    let above = signs.bits(y, z + 1);
+                    for_each_bit(
+                        lo.max(1),
+                        hi.min(nx - 2),
+                        |w| here[w] ^ above[w],
+                        |x| {
                             let c = [
                                 cell(cur, x - 1, y - 1, 10),
                                 cell(cur, x, y - 1, 11),
                                 cell(cur, x, y, 8),
                                 cell(cur, x - 1, y, 9),
                             ];
-                            emit(c, !a, &mut triangles);
-                        }
-                    }
+                            emit(c, !bit(here, x), &mut triangles);
+                        },
+                    );
                 }
             }
             if z == 0 || z + 1 >= self.grid.dims[2] {
                 continue;
             }
             // x-edges (x, y, z)-(x+1, y, z): cells (x, y-1..y) of layers z-1 and z.
-            let row = self.row(y, z);
+            let row = signs.row(y, z);
             if y >= 1 && y + 1 < ny && !row.is_uniform() {
-                for x in (row.first as usize).saturating_sub(1)..=(row.last as usize).min(nx - 2) {
-                    let a = self.inside(base + x);
-                    if a != self.inside(base + x + 1) {
+                let (lo, hi) = ((row.first as usize).saturating_sub(1), (row.last as usize).min(nx - 2));
+                for_each_bit(
+                    lo,
+                    hi,
+                    |w| here[w] ^ next_bits(here, w),
+                    |x| {
                         let c = [cell(prev, x, y - 1, 6), cell(prev, x, y, 4), cell(cur, x, y, 0), cell(cur, x, y - 1, 2)];
-                        emit(c, !a, &mut triangles);
-                    }
-                }
+                        emit(c, !bit(here, x), &mut triangles);
+                    },
+                );
             }
             // y-edges (x, y, z)-(x, y+1, z): cells (x-1..x, y) of layers z-1 and z.
             if y + 1 < ny {
-                if let Some((lo, hi)) = span(&[row, self.row(y + 1, z)], nx) {
-                    for x in lo.max(1)..=hi.min(nx - 2) {
-                        let a = self.inside(base + x);
-                        if a != self.inside(base + x + nx) {
+                if let Some((lo, hi)) = span(&[row, signs.row(y + 1, z)], nx) {
+                    let next = signs.bits(y + 1, z);
+                    for_each_bit(
+                        lo.max(1),
+                        hi.min(nx - 2),
+                        |w| here[w] ^ next[w],
+                        |x| {
                             let c = [cell(prev, x - 1, y, 5), cell(cur, x - 1, y, 1), cell(cur, x, y, 3), cell(prev, x, y, 7)];
-                            emit(c, !a, &mut triangles);
-                        }
-                    }
+                            emit(c, !bit(here, x), &mut triangles);
+                        },
+                    );
                 }
             }
         }
@@ -507,23 +511,31 @@ impl Ctx<'_> {
         s.links.clear();
         s.vertex_time = std::time::Duration::ZERO;
         s.geometry_time = std::time::Duration::ZERO;
+        let mut signs = std::mem::take(&mut s.signs);
+        signs.reset(nx, ny);
+        let (values, dims, iso) = (self.values, self.grid.dims, self.iso);
         if z0 > 0 {
             let t = Instant::now();
-            self.cell_vertices(z0 - 1, EXTERN, &mut s.prev, &mut s.prev_case, &mut s.ghost, &mut s.ghost_min);
+            signs.classify(values, dims, iso, z0 - 1);
+            signs.classify(values, dims, iso, z0);
+            self.cell_vertices(&signs, z0 - 1, EXTERN, &mut s.prev, &mut s.prev_case, &mut s.ghost, &mut s.ghost_min);
             s.vertex_time += t.elapsed();
         }
         for z in z0..z1 {
             let a = Instant::now();
+            signs.classify(values, dims, iso, z);
+            signs.classify(values, dims, iso, z + 1);
             s.last_layer_start = s.mesh.positions.len() as u32;
-            self.cell_vertices(z, 0, &mut s.cur, &mut s.cur_case, &mut s.mesh, &mut s.cell_min);
+            self.cell_vertices(&signs, z, 0, &mut s.cur, &mut s.cur_case, &mut s.mesh, &mut s.cell_min);
             let b = Instant::now();
             let link_buffer = links.then_some(&mut s.links);
-            self.quads(z, (&s.prev, &s.prev_case), (&s.cur, &s.cur_case), &s.ghost.positions, &mut s.mesh, link_buffer);
+            self.quads(&signs, z, (&s.prev, &s.prev_case), (&s.cur, &s.cur_case), &s.ghost.positions, &mut s.mesh, link_buffer);
             s.geometry_time += b.elapsed();
             s.vertex_time += b - a;
             std::mem::swap(&mut s.prev, &mut s.cur);
             std::mem::swap(&mut s.prev_case, &mut s.cur_case);
         }
+        s.signs = signs;
     }
 }
 
@@ -747,19 +759,9 @@ impl Extractor for SurfaceNets {
         let [nx, ny, nz] = grid.dims;
         let mut held = self.scratch.take();
         let s = &mut held;
-        let t0 = Instant::now();
-        classify_rows(samples.values(), nx, samples.iso(), &mut s.rows);
-        let row_time = t0.elapsed();
         let field = samples.field().map(|f| f.as_ref());
-        let ctx = Ctx {
-            values: samples.values(),
-            grid,
-            iso: samples.iso(),
-            rows: &s.rows,
-            placement: self.placement,
-            field,
-            tables: Tables::get(),
-        };
+        let ctx =
+            Ctx { values: samples.values(), grid, iso: samples.iso(), placement: self.placement, field, tables: Tables::get() };
         let smoothing = self.options.smoothing != Smoothing::None && self.options.iterations > 0;
         let cell_layers = nz - 1;
         let tasks = crate::extractors::slabs::task_count(self.options.parallelism, grid.cell_count(), cell_layers);
@@ -810,7 +812,7 @@ impl Extractor for SurfaceNets {
         let (cpu_v, cpu_g) =
             slabs.iter().fold((0.0, 0.0), |(v, g), sl| (v + sl.vertex_time.as_secs_f64(), g + sl.geometry_time.as_secs_f64()));
         let share = if cpu_v + cpu_g > 0.0 { cpu_v / (cpu_v + cpu_g) } else { 0.5 };
-        let vertex_time = row_time + slab_wall.mul_f64(share);
+        let vertex_time = slab_wall.mul_f64(share);
         let geometry_time = slab_wall.mul_f64(1.0 - share) + join_time;
         out.stats.times.vertex = vertex_time;
         out.stats.times.geometry = geometry_time;

@@ -334,24 +334,21 @@ impl Ctx<'_> {
                 let code = u16::from(case) << 6 | u16::from(self.joined_faces(case, x, y, z));
                 cases[c] = code;
                 let entry = self.tables.entry(code);
+                // Crossing of edge `e`, in the cell's unit cube.
+                let crossing = |e: usize| {
+                    let (a, b) = EDGES[e];
+                    let (va, vb) = (v[a as usize], v[b as usize]);
+                    self.tables.edge_start[e] + self.tables.edge_step[e] * ((self.iso - va) / (vb - va))
+                };
                 let mut sums = [Vec3::ZERO; 4];
                 let mut counts = [0.0f32; 4];
-                let mut crossings = [(0u8, Vec3::ZERO); 12];
-                let mut n = 0;
-                for (e, &(a, b)) in EDGES.iter().enumerate() {
-                    let piece = entry.edge_polygon[e];
-                    if piece == u8::MAX {
-                        continue;
-                    }
-                    let (va, vb) = (v[a as usize], v[b as usize]);
-                    let t = (self.iso - va) / (vb - va);
-                    let pa = Vec3::from(CORNERS[a as usize].map(f32::from));
-                    let pb = Vec3::from(CORNERS[b as usize].map(f32::from));
-                    let p = pa + (pb - pa) * t;
-                    sums[piece as usize] += p;
-                    counts[piece as usize] += 1.0;
-                    crossings[n] = (piece, p);
-                    n += 1;
+                let mut mask = entry.edge_mask;
+                while mask != 0 {
+                    let e = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let piece = entry.edge_polygon[e] as usize;
+                    sums[piece] += crossing(e);
+                    counts[piece] += 1.0;
                 }
                 let min = self.grid.position(x, y, z);
                 base[c] = tag | mesh.positions.len() as u32;
@@ -361,18 +358,17 @@ impl Ctx<'_> {
                             let mut pts = [Vec3::ZERO; 12];
                             let mut nrm = [Vec3::ZERO; 12];
                             let mut k = 0;
-                            for &(piece, q) in &crossings[..n] {
-                                if piece as usize == p {
-                                    pts[k] = q;
-                                    // The field's gradient where the samples carry it, else the
-                                    // cell's trilinear interpolant's (Hermite data from samples).
-                                    let g = match self.field {
-                                        Some(field) => field.gradient(min + q * self.grid.spacing),
-                                        None => trilinear_gradient(&v, q),
-                                    };
-                                    nrm[k] = g.normalize_or_zero();
-                                    k += 1;
-                                }
+                            for e in (0..12).filter(|&e| entry.edge_polygon[e] as usize == p) {
+                                let q = crossing(e);
+                                pts[k] = q;
+                                // The field's gradient where the samples carry it, else the
+                                // cell's trilinear interpolant's (Hermite data from samples).
+                                let g = match self.field {
+                                    Some(field) => field.gradient(min + q * self.grid.spacing),
+                                    None => trilinear_gradient(&v, q),
+                                };
+                                nrm[k] = g.normalize_or_zero();
+                                k += 1;
                             }
                             let x = crate::extractors::dual_contouring::solve_qef(&pts[..k], &nrm[..k], tolerance);
                             if clamp {
@@ -544,11 +540,20 @@ impl Ctx<'_> {
 struct Tables {
     default: &'static [Case; 256],
     rings: &'static [u8; 256],
+    /// Each cube edge's first corner and the step to its second, in the unit cube.
+    edge_start: [Vec3; 12],
+    edge_step: [Vec3; 12],
 }
 
 impl Tables {
     fn get() -> Tables {
-        Tables { default: &TABLE, rings: &RING_FACES }
+        let corner = |c: u8| Vec3::from(CORNERS[c as usize].map(f32::from));
+        Tables {
+            default: &TABLE,
+            rings: &RING_FACES,
+            edge_start: EDGES.map(|(a, _)| corner(a)),
+            edge_step: EDGES.map(|(a, b)| corner(b) - corner(a)),
+        }
     }
 
     /// The table entry for a cell code `case << 6 | joined faces`: the default table unless a

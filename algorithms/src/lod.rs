@@ -143,25 +143,32 @@ fn restrict(grid: &Grid, values: &[f32], iso: f32, chunk: usize, counts: [usize;
         let k0 = id.map(|c| c * chunk);
         for z in k0[2]..=k0[2] + chunk {
             for y in k0[1]..=k0[1] + chunk {
-                for x in k0[0]..=k0[0] + chunk {
+                // Only the chunk's boundary samples: whole rows on its y and z faces, the two
+                // ends of the others.
+                let whole_row = z == k0[2] || z == k0[2] + chunk || y == k0[1] || y == k0[1] + chunk;
+                let step = if whole_row { 1 } else { chunk };
+                for x in (k0[0]..=k0[0] + chunk).step_by(step) {
                     let c = [x, y, z];
-                    let on_boundary = (0..3).any(|a| c[a] == k0[a] || c[a] == k0[a] + chunk);
-                    let odd: Vec<usize> = (0..3).filter(|&a| c[a] % 2 == 1).collect();
-                    if !on_boundary || odd.is_empty() {
-                        continue;
+                    let mut odd = [0usize; 3];
+                    let mut odd_count = 0;
+                    for (a, &coordinate) in c.iter().enumerate() {
+                        if coordinate % 2 == 1 {
+                            odd[odd_count] = a;
+                            odd_count += 1;
+                        }
                     }
-                    let value = match odd.as_slice() {
+                    let value = match odd[..odd_count] {
                         [a] => {
                             let (mut lo, mut hi) = (c, c);
-                            lo[*a] -= 1;
-                            hi[*a] += 1;
+                            lo[a] -= 1;
+                            hi[a] += 1;
                             0.5 * (at(lo) + at(hi))
                         }
                         [a, b] => {
                             let corner = |da: usize, db: usize| {
                                 let mut q = c;
-                                q[*a] = q[*a] - 1 + 2 * da;
-                                q[*b] = q[*b] - 1 + 2 * db;
+                                q[a] = q[a] - 1 + 2 * da;
+                                q[b] = q[b] - 1 + 2 * db;
                                 at(q)
                             };
                             let v = [corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)];
@@ -176,7 +183,8 @@ fn restrict(grid: &Grid, values: &[f32], iso: f32, chunk: usize, counts: [usize;
                                 mean
                             }
                         }
-                        _ => continue, // odd on all three axes: inside the chunk, not on its boundary
+                        // Even on every axis (a coarse sample), or odd on all three (inside).
+                        _ => continue,
                     };
                     let i = grid.index(x, y, z);
                     if out[i] != value {

@@ -1,6 +1,7 @@
-//! Sign-change summaries of x-rows of samples, shared by the cubic-grid extractors: a first pass
-//! that lets them skip rows, edges and cells that cannot hold surface (the trimming idea of
-//! Schroeder, Maynard & Geveci, "Flying edges", LDAV 2015), and the inside/outside state of every
+//! Sign-change summaries of x-rows of samples, shared by the cubic-grid extractors, that let them
+//! skip rows, edges and cells that cannot hold surface (the trimming idea of Schroeder, Maynard &
+//! Geveci, "Flying edges", LDAV 2015): [`classify_rows`] as a first pass over a whole block (the
+//! tetrahedral engine), and, per sample layer as a sweep reaches it, the inside/outside state of every
 //! sample packed 64 to a word ([`LayerSigns`]), so that crossing edges and surface cells are found
 //! by word operations over 64 samples at a time and only those are visited one by one.
 

@@ -192,13 +192,8 @@ fn build(
 pub struct MarchingCubes {
     /// The options.
     pub options: McOptions,
-    scratch: ScratchPool<McScratch>,
-}
-
-/// One call's buffers: the row summaries and one scratch per slab task.
-#[derive(Default)]
-struct McScratch {
-    slabs: Vec<Scratch>,
+    /// One call's buffers: a scratch per slab task.
+    scratch: ScratchPool<Vec<Scratch>>,
 }
 
 impl MarchingCubes {
@@ -523,7 +518,7 @@ impl Extractor for MarchingCubes {
 
         let start = Instant::now();
         let mut held = self.scratch.take();
-        let McScratch { slabs: pool } = &mut held;
+        let pool = &mut held;
         let t_min = match self.options.on_iso {
             OnIsoSamples::Separate => MIN_EDGE_FRACTION,
             OnIsoSamples::Exact => 0.0,

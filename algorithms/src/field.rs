@@ -110,6 +110,15 @@ pub enum FieldError {
         /// How many vertices exist.
         vertices: usize,
     },
+    /// A volume's values or geometry cannot be meshed (too few voxels, a non-finite voxel, a
+    /// zero or non-finite spacing).
+    #[error("volume '{name}': {reason}")]
+    BadVolume {
+        /// The volume's name.
+        name: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// A vertex position is NaN or infinite.
     #[error("mesh '{name}': vertex {vertex} has a non-finite coordinate")]
     NonFiniteVertex {

@@ -1,6 +1,6 @@
 //! Mesh types: an indexed triangle mesh and a tetrahedral mesh.
 
-use glam::Vec3;
+use glam::{DAffine3, Vec3};
 
 /// An indexed triangle mesh. Triangles are counter-clockwise seen from outside.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -46,6 +46,26 @@ impl TriMesh {
             }
         }
         self.normals = acc.into_iter().map(|n| n.normalize_or_zero()).collect();
+    }
+
+    /// Maps the mesh through `affine` (in double precision): positions directly, normals by the
+    /// inverse transpose of its linear part (renormalised). A mirroring affine (negative
+    /// determinant, such as a scan's left-right flip) also reverses every triangle, so the mesh
+    /// keeps its orientation: normals that pointed outward still do, and the signed volume of a
+    /// closed mesh stays positive.
+    pub fn transform(&mut self, affine: &DAffine3) {
+        for p in &mut self.positions {
+            *p = affine.transform_point3(p.as_dvec3()).as_vec3();
+        }
+        let normal_map = affine.matrix3.inverse().transpose();
+        for n in &mut self.normals {
+            *n = (normal_map * n.as_dvec3()).normalize_or_zero().as_vec3();
+        }
+        if affine.matrix3.determinant() < 0.0 {
+            for t in &mut self.triangles {
+                t.swap(1, 2);
+            }
+        }
     }
 }
 
@@ -143,6 +163,19 @@ impl TetMesh {
     pub fn capacity_bytes(&self) -> usize {
         self.positions.capacity() * std::mem::size_of::<Vec3>() + self.tetrahedra.capacity() * std::mem::size_of::<[u32; 4]>()
     }
+
+    /// Maps the positions through `affine`; a mirroring affine also swaps two vertices of every
+    /// tetrahedron, so orientations stay positive.
+    pub fn transform(&mut self, affine: &DAffine3) {
+        for p in &mut self.positions {
+            *p = affine.transform_point3(p.as_dvec3()).as_vec3();
+        }
+        if affine.matrix3.determinant() < 0.0 {
+            for t in &mut self.tetrahedra {
+                t.swap(2, 3);
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -163,6 +196,33 @@ mod tests {
         let mut open = tetrahedron();
         open.triangles.pop();
         assert!(manifold_defects(&open).is_empty(), "a boundary is not a defect");
+    }
+
+    #[test]
+    fn a_mirroring_transform_keeps_the_orientation() {
+        use glam::{DMat3, DVec3};
+        let signed_volume = |m: &TriMesh| -> f32 {
+            m.triangles.iter().map(|t| t.map(|i| m.positions[i as usize])).map(|[a, b, c]| a.dot(b.cross(c)) / 6.0).sum()
+        };
+        let mut m = tetrahedron();
+        m.compute_face_weighted_normals();
+        let before = signed_volume(&m);
+        assert!(before > 0.0);
+        let mirror = DAffine3 {
+            matrix3: DMat3::from_cols(DVec3::new(-2.0, 0.0, 0.0), DVec3::new(0.0, 0.0, 3.0), DVec3::new(0.0, 1.0, 0.0)),
+            translation: DVec3::new(5.0, 6.0, 7.0),
+        };
+        m.transform(&mirror);
+        assert!((signed_volume(&m) - before * 6.0).abs() < 1e-5, "{}", signed_volume(&m));
+        assert_eq!(m.positions[1], Vec3::new(3.0, 6.0, 7.0));
+        // Vertex 0's normal pointed away from the others (into -x-y-z); it still points away.
+        let centroid = (m.positions[1] + m.positions[2] + m.positions[3]) / 3.0;
+        assert!(m.normals[0].dot(m.positions[0] - centroid) > 0.0);
+        assert!((m.normals[0].length() - 1.0).abs() < 1e-6);
+        let mut tets = TetMesh { positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z], tetrahedra: vec![[0, 1, 2, 3]] };
+        tets.transform(&mirror);
+        let [a, b, c, d] = tets.tetrahedra[0].map(|i| tets.positions[i as usize]);
+        assert!((b - a).cross(c - a).dot(d - a) > 0.0);
     }
 
     #[test]

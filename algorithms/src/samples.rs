@@ -95,6 +95,13 @@ impl Samples {
         self
     }
 
+    /// Records how long taking these values took (for values wrapped by [`Samples::from_values`]
+    /// after converting a file's voxels, say).
+    pub fn with_sampling_time(mut self, time: Duration) -> Samples {
+        self.sampling_time = time;
+        self
+    }
+
     /// The lattice.
     pub fn lattice(&self) -> &Lattice {
         &self.lattice
@@ -156,7 +163,11 @@ fn fill_grid(field: &dyn Field, grid: &Grid, out: &mut [f32]) {
 }
 
 fn check_finite(name: &str, lattice: &Lattice, values: &[f32]) -> Result<(), SampleError> {
-    match values.par_iter().position_first(|v| !v.is_finite()) {
+    // Blocks of 64 Ki values: rayon's per-item `position_first` cost 74 ms on 8.7 M values.
+    const BLOCK: usize = 1 << 16;
+    let block = values.par_chunks(BLOCK).position_first(|c| c.iter().fold(false, |bad, v| bad | !v.is_finite()));
+    let first = block.and_then(|b| values[b * BLOCK..].iter().position(|v| !v.is_finite()).map(|i| b * BLOCK + i));
+    match first {
         None => Ok(()),
         Some(index) => {
             let p: Vec3 = lattice.position_of(index);

@@ -7,7 +7,9 @@
 pub mod alloc_meter;
 pub mod experiment;
 pub mod figures;
+pub mod input;
 pub mod io;
+pub mod memory;
 pub mod peers;
 pub mod report;
 pub mod run;

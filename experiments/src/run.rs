@@ -1,16 +1,24 @@
-//! The pipeline shared by the CLI and the experiments: resolve a field and an algorithm by name,
-//! sample once, extract, post-process, measure, and describe the run as the metrics JSON.
+//! The pipeline shared by the CLI and the experiments: resolve an input and an algorithm by
+//! name, sample once (or take a volume's own voxels), extract, post-process, map to world
+//! coordinates, measure, and describe the run as the metrics JSON.
 
+pub use crate::input::load_field;
+use crate::input::{load_input, Input, InputKind, MeshChecks};
+use crate::io::volume::{Inside, Space, VolumeOptions};
 use crate::io::{self, IoError};
+use glam::{DAffine3, DMat3, DVec3};
 use isolab_algorithms::chunks::{extract_chunked, ChunkStats};
+use isolab_algorithms::fields::Complement;
 use isolab_algorithms::{
     extractors, fields, ExtractError, Extraction, Field, FieldError, Grid, Lattice, LatticeError, OptionError, Options,
     SampleError, Samples,
 };
 use isolab_metrics::{volume_metrics, MeshMetrics, VolumeMetrics};
+use rayon::prelude::*;
 use serde::Serialize;
 use std::path::Path;
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 /// Which lattice to sample on.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
@@ -23,12 +31,57 @@ pub enum LatticeKind {
     Bcc,
 }
 
+/// Where a volume file is meshed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum VolumeGrid {
+    /// On its own voxel grid: no value is interpolated (`resolution` and `dims` are ignored).
+    #[default]
+    Native,
+    /// Resampled trilinearly on an isotropic grid of `resolution` (or `dims`) over its world box.
+    Resampled,
+}
+
+/// The coordinate system meshes of anatomical volumes are written in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
+pub enum OutputSpace {
+    /// Right, Anterior, Superior: NIfTI's world, FreeSurfer's, what 3D Slicer displays.
+    #[default]
+    #[serde(rename = "RAS")]
+    Ras,
+    /// Left, Posterior, Superior: ITK's and DICOM's world, what 3D Slicer assumes of a file
+    /// that does not say.
+    #[serde(rename = "LPS")]
+    Lps,
+}
+
+impl OutputSpace {
+    /// The tag written into mesh files (`SPACE=RAS`).
+    pub fn tag(self) -> &'static str {
+        match self {
+            OutputSpace::Ras => "RAS",
+            OutputSpace::Lps => "LPS",
+        }
+    }
+
+    /// The map from RAS to this space.
+    fn map_from_ras(self) -> Option<DAffine3> {
+        match self {
+            OutputSpace::Ras => None,
+            OutputSpace::Lps => {
+                Some(DAffine3 { matrix3: DMat3::from_diagonal(DVec3::new(-1.0, -1.0, 1.0)), translation: DVec3::ZERO })
+            }
+        }
+    }
+}
+
 /// What to run.
 #[derive(Clone, Debug)]
 pub struct RunConfig {
     /// Extractor name.
     pub algorithm: String,
-    /// Built-in field name, or a path to an `.obj` file.
+    /// Built-in field name, or a path to a mesh (`.obj`, `.ply`, `.stl`, `.glb`) or volume
+    /// (`.nii[.gz]`, `.nrrd`, `.nhdr`, `.mhd`, `.mha`, or a `--samples-out` grid) file.
     pub field: String,
     /// Samples along the domain's longest side.
     pub resolution: usize,
@@ -36,8 +89,17 @@ pub struct RunConfig {
     pub dims: Option<[usize; 3]>,
     /// Lattice kind.
     pub lattice: LatticeKind,
-    /// Iso-value.
-    pub iso: f32,
+    /// Iso-value in the input's own values; `None`: the input's default (the iso-value an
+    /// isolab grid carries, Otsu's threshold for a scan, 0 otherwise).
+    pub iso: Option<f32>,
+    /// Which side of the iso-value is inside; `None`: above for scans, below otherwise.
+    pub inside: Option<Inside>,
+    /// Which volume of a 4-D file.
+    pub volume: VolumeOptions,
+    /// Where a volume file is meshed.
+    pub volume_grid: VolumeGrid,
+    /// The coordinate system of meshes of anatomical volumes.
+    pub space: OutputSpace,
     /// Seed of noise fields.
     pub seed: i32,
     /// Post-processes to apply in order.
@@ -59,7 +121,11 @@ impl RunConfig {
             resolution,
             dims: None,
             lattice: LatticeKind::Cubic,
-            iso: 0.0,
+            iso: None,
+            inside: None,
+            volume: VolumeOptions::default(),
+            volume_grid: VolumeGrid::Native,
+            space: OutputSpace::Ras,
             seed: fields::DEFAULT_SEED,
             post: Vec::new(),
             options: Options::new(),
@@ -136,18 +202,6 @@ impl RunError {
     }
 }
 
-/// Loads a built-in field by name, or an OBJ file as a signed-distance field.
-pub fn load_field(spec: &str, seed: i32) -> Result<Arc<dyn Field>, RunError> {
-    let path = Path::new(spec);
-    let looks_like_file = spec.to_ascii_lowercase().ends_with(".obj") || spec.contains('/') || path.is_file();
-    if !looks_like_file {
-        return Ok(fields::builtin(spec, fields::FieldParams { seed })?);
-    }
-    let mesh = io::read_obj(path, io::Coordinates::Finite)?;
-    let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or(spec);
-    Ok(Arc::new(fields::MeshField::new(name, &mesh.positions, &mesh.triangles)?))
-}
-
 /// Memory available to this process, from `/proc/meminfo` (None where unknown).
 pub fn available_memory() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
@@ -192,13 +246,17 @@ pub fn lattice_for(field: &dyn Field, config: &RunConfig) -> Result<Lattice, Run
 /// Wall times in milliseconds (the metrics JSON's `times_ms`).
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct TimesMs {
-    /// Field evaluation.
+    /// Reading, parsing and checking the input file (0 for built-in fields).
+    pub reading: f64,
+    /// Field evaluation (for a volume on its own grid: taking its values as samples).
     pub sampling: f64,
     /// Vertex + geometry + normals.
     pub extraction: f64,
     /// Post-processes.
     pub post: f64,
-    /// Everything.
+    /// Mapping a volume's mesh from voxel indices to world coordinates.
+    pub to_world: f64,
+    /// Everything above.
     pub total: f64,
     /// Vertex pass.
     pub vertex: f64,
@@ -221,8 +279,12 @@ pub struct RunReport {
     pub dims: [usize; 3],
     /// Lattice kind.
     pub lattice: &'static str,
-    /// Iso-value.
+    /// Iso-value, in the input's own values.
     pub iso: f32,
+    /// Which side of `iso` is inside.
+    pub inside: Inside,
+    /// What was meshed.
+    pub input: InputReport,
     /// Seed of noise fields.
     pub seed: i32,
     /// Post-processes applied.
@@ -261,6 +323,37 @@ pub struct RunReport {
     pub metrics: MeshMetrics,
 }
 
+/// The metrics JSON's `input`: what kind of input, and for volumes, what the file said.
+#[derive(Clone, Debug, Serialize)]
+pub struct InputReport {
+    /// `builtin`, `mesh` or `volume`.
+    pub kind: InputKind,
+    /// File format (`PLY`, `NIfTI-1`, ...), for files.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub format: Option<&'static str>,
+    /// Stored data type, for volumes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub data_type: Option<&'static str>,
+    /// Voxels per axis, for volumes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shape: Option<[usize; 3]>,
+    /// Voxel edge lengths in world units, for volumes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spacing: Option<[f64; 3]>,
+    /// Where a volume was meshed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub grid: Option<VolumeGrid>,
+    /// The coordinate system of the mesh, for anatomical volumes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub space: Option<OutputSpace>,
+    /// How the iso-value was chosen when the user gave none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub iso_from: Option<&'static str>,
+    /// What the reader noted (a picked volume, a unit conversion, a fallback affine).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
+}
+
 /// The metrics JSON's `chunks`.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct ChunkReport {
@@ -288,14 +381,67 @@ impl From<(usize, ChunkStats)> for ChunkReport {
 
 /// The outcome of a run: the meshes and their report.
 pub struct RunOutcome {
-    /// The samples it extracted from.
+    /// The samples it extracted from (for a volume on its own grid: in voxel index coordinates
+    /// unless the voxels are world-aligned cubes).
     pub samples: Samples,
-    /// What the extractor produced.
+    /// What the extractor produced, in world coordinates.
     pub extraction: Extraction,
     /// Each surface vertex's material (with `materials`), else empty.
     pub vertex_materials: Vec<u8>,
+    /// The map from the samples' coordinates to the world, when they differ (a volume meshed on
+    /// its own voxel grid); what `--samples-out` records.
+    pub samples_to_world: Option<DAffine3>,
+    /// What to tag mesh files with (`SPACE=RAS`), for anatomical volumes.
+    pub space_tag: Option<&'static str>,
+    /// Things to tell the user that are not warnings (the grid a volume was meshed on).
+    pub notes: Vec<String>,
     /// The metrics JSON.
     pub report: RunReport,
+}
+
+/// The samples a run extracts from, and the map from their coordinates to the world.
+struct Sampled {
+    samples: Samples,
+    to_world: Option<DAffine3>,
+    notes: Vec<String>,
+}
+
+/// A volume's own voxels as samples: values negated when inside is above (so that inside is
+/// `f < iso` as everywhere in isolab), on a grid in the world when the voxels are world-aligned
+/// cubes (no mapping needed), else in voxel index coordinates with the affine to map the mesh.
+fn volume_samples(
+    file: &crate::io::volume::VolumeFile,
+    config: &RunConfig,
+    inside: Inside,
+    iso: f32,
+) -> Result<Sampled, RunError> {
+    let start = Instant::now();
+    let v = &file.volume;
+    let sign = if inside == Inside::Above { -1.0f32 } else { 1.0 };
+    let m = v.index_to_world.matrix3;
+    let h = m.x_axis.x;
+    let aligned = h > 0.0 && m == DMat3::from_diagonal(DVec3::splat(h)) && (h as f32) as f64 == h;
+    let (grid, to_world) = if aligned {
+        (Grid { origin: v.index_to_world.translation.as_vec3(), spacing: h as f32, dims: v.dims }, None)
+    } else {
+        (Grid { origin: glam::Vec3::ZERO, spacing: 1.0, dims: v.dims }, Some(v.index_to_world))
+    };
+    let lattice = match config.lattice {
+        LatticeKind::Cubic => Lattice::Cubic(grid),
+        LatticeKind::Bcc => Lattice::Bcc(grid),
+    };
+    check_memory(&lattice)?;
+    let mut values: Vec<f32> = Vec::with_capacity(lattice.sample_count());
+    values.par_extend(v.values.par_iter().map(|&x| sign * x));
+    if config.lattice == LatticeKind::Bcc {
+        let centres = file.centres.clone().unwrap_or_else(|| v.cell_centres());
+        values.extend(centres.iter().map(|&x| sign * x));
+    }
+    let mut notes = Vec::new();
+    let [a, b, c] = v.dims;
+    notes.push(format!("meshing {} on its own {a} x {b} x {c} voxel grid (--resolution N or --dims resamples it)", v.name));
+    let samples = Samples::from_values(lattice, values, sign * iso)?.with_sampling_time(start.elapsed());
+    Ok(Sampled { samples, to_world, notes })
 }
 
 /// Samples, extracts, post-processes and measures.
@@ -309,13 +455,29 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
             extractors::build_post(p)?.ok_or_else(|| RunError::UnknownPost { name: p.clone(), valid: extractors::post_names() })
         })
         .collect::<Result<Vec<_>, _>>()?;
-    if !config.iso.is_finite() {
-        return Err(RunError::BadIso(config.iso));
+    if let Some(iso) = config.iso.filter(|v| !v.is_finite()) {
+        return Err(RunError::BadIso(iso));
     }
-    let field = load_field(&config.field, config.seed)?;
-    let lattice = lattice_for(field.as_ref(), config)?;
-    check_memory(&lattice)?;
-    let samples = Samples::sample(field.clone(), lattice, config.iso)?;
+    let input = load_input(&config.field, config.seed, config.volume, MeshChecks::Warn)?;
+    let inside = config.inside.unwrap_or(input.default_inside());
+    let (iso, iso_from) = choose_iso(&input, config.iso);
+    // Inside is `f < iso` in isolab: "above" meshes the complement at `-iso`.
+    let field: Arc<dyn Field> = match inside {
+        Inside::Below => input.field.clone(),
+        Inside::Above => Arc::new(Complement(input.field.clone())),
+    };
+    let internal_iso = if inside == Inside::Above { -iso } else { iso };
+    let native = input.volume.as_ref().filter(|_| config.volume_grid == VolumeGrid::Native);
+    let Sampled { samples, to_world, mut notes } = match native {
+        Some(file) => volume_samples(file, config, inside, iso)?,
+        None => {
+            let lattice = lattice_for(field.as_ref(), config)?;
+            check_memory(&lattice)?;
+            Sampled { samples: Samples::sample(field.clone(), lattice, internal_iso)?, to_world: None, notes: Vec::new() }
+        }
+    };
+    let mut warnings = input.warnings.clone();
+    warnings.extend(no_inside_warning(&samples, field.name(), iso, inside));
     let mut extraction = Extraction::default();
     let chunks = match config.chunk {
         Some(n) => Some(ChunkReport::from((n, extract_chunked(extractor.as_ref(), &samples, n, &mut extraction)?))),
@@ -327,6 +489,12 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
     for post in &posts {
         post.apply(&samples, &mut extraction)?;
     }
+    let world_start = Instant::now();
+    if let Some(a) = &to_world {
+        extraction.surface.transform(a);
+        extraction.volume.transform(a);
+    }
+    let to_world_time = world_start.elapsed();
     let mut vertex_materials = Vec::new();
     if config.materials {
         let grid = *samples.grid();
@@ -336,7 +504,7 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
         isolab_algorithms::materials::vertex_materials(
             &grid,
             corners,
-            config.iso,
+            internal_iso,
             &sample_materials,
             positions,
             &mut vertex_materials,
@@ -351,26 +519,66 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
             .map(|(id, &n)| (isolab_algorithms::materials::name(id as u8), n))
             .collect()
     });
-    let metrics = MeshMetrics::measure(&extraction.surface, Some((field.as_ref(), config.iso)));
+    let metrics = MeshMetrics::measure(&extraction.surface, Some((field.as_ref(), internal_iso)));
     let volume_mesh =
-        volume_metrics(&extraction.volume, &extraction.surface, Some((field.as_ref(), config.iso)), extraction.stats.converged);
+        volume_metrics(&extraction.volume, &extraction.surface, Some((field.as_ref(), internal_iso)), extraction.stats.converged);
+    // Anatomical volumes: the mesh in the space asked for (metrics are the same in either).
+    let anatomical = input.volume.as_ref().is_some_and(|v| v.space == Space::Ras);
+    let space = anatomical.then_some(config.space);
+    if let Some(map) = space.and_then(OutputSpace::map_from_ras) {
+        extraction.surface.transform(&map);
+        extraction.volume.transform(&map);
+    }
+    let samples_to_world = match (to_world, space.and_then(OutputSpace::map_from_ras)) {
+        (Some(a), Some(m)) => Some(m * a),
+        (Some(a), None) => Some(a),
+        (None, Some(m)) if native.is_some() => Some(m),
+        _ => None,
+    };
+    for warning in &extraction.stats.warnings {
+        // bcc-sculpt's own note on an open input repeats the input check's.
+        if !(input.kind == InputKind::Mesh && warning.starts_with("input surface '")) {
+            warnings.push(warning.clone());
+        }
+    }
+    if let Some(v) = &input.volume {
+        notes.extend(v.notes.iter().map(|n| format!("{}: {n}", v.volume.name)));
+        if let Some(from) = iso_from {
+            notes.push(format!("no --iso given: {iso} ({from})"));
+        }
+    }
     let t = extraction.stats.times;
-    let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    let input_report = InputReport {
+        kind: input.kind,
+        format: input.volume.as_ref().map(|v| v.format).or(input.mesh_format),
+        data_type: input.volume.as_ref().map(|v| v.data_type),
+        shape: input.volume.as_ref().map(|v| v.volume.dims),
+        spacing: input.volume.as_ref().map(|v| v.volume.spacing()),
+        grid: input.volume.as_ref().map(|_| config.volume_grid),
+        space,
+        iso_from,
+        notes: input.volume.as_ref().map(|v| v.notes.clone()).unwrap_or_default(),
+    };
     let report = RunReport {
         algorithm: config.algorithm.clone(),
         field: field.name().to_owned(),
         resolution: samples.grid().dims.iter().copied().max().unwrap_or(0),
         dims: samples.grid().dims,
         lattice: samples.lattice().kind(),
-        iso: config.iso,
+        iso,
+        inside,
+        input: input_report,
         seed: config.seed,
         post: config.post.clone(),
         tetrahedra: extraction.stats.tetrahedra,
         times_ms: TimesMs {
+            reading: ms(input.read_time),
             sampling: ms(t.sampling),
             extraction: ms(t.extraction()),
             post: ms(t.post),
-            total: ms(t.total()),
+            to_world: ms(to_world_time),
+            total: ms(input.read_time + t.total() + to_world_time),
             vertex: ms(t.vertex),
             geometry: ms(t.geometry),
             normals: ms(t.normals),
@@ -378,15 +586,64 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
         active_cells: extraction.stats.active_cells,
         buffer_bytes: extraction.stats.buffer_bytes,
         triangles_per_second: extraction.stats.triangles as f64 / t.extraction().as_secs_f64().max(1e-9),
-        analytic_volume: field.analytic_volume(config.iso),
-        analytic_area: field.analytic_area(config.iso),
+        analytic_volume: field.analytic_volume(internal_iso),
+        analytic_area: field.analytic_area(internal_iso),
         volume_mesh,
         chunks,
         materials: material_counts,
-        warnings: extraction.stats.warnings.clone(),
+        warnings,
         metrics,
     };
-    Ok(RunOutcome { samples, extraction, vertex_materials, report })
+    Ok(RunOutcome {
+        samples,
+        extraction,
+        vertex_materials,
+        samples_to_world,
+        space_tag: space.map(OutputSpace::tag),
+        notes,
+        report,
+    })
+}
+
+/// The iso-value of a run, in the input's own values, and how it was chosen when not given.
+fn choose_iso(input: &Input, given: Option<f32>) -> (f32, Option<&'static str>) {
+    if let Some(iso) = given {
+        return (iso, None);
+    }
+    match &input.volume {
+        Some(v) => match v.iso {
+            Some(iso) => (iso, Some("the grid's own iso-value")),
+            None => match v.volume.otsu_threshold() {
+                Some(t) => (t, Some("Otsu's threshold of the volume's values")),
+                None => (v.volume.values[0], Some("every voxel has this value")),
+            },
+        },
+        None => (0.0, None),
+    }
+}
+
+/// A warning when no sample is inside, or every sample is: the mesh is then empty, and the user
+/// should hear why rather than get a silent empty file.
+fn no_inside_warning(samples: &Samples, name: &str, iso: f32, inside: Inside) -> Option<String> {
+    let internal = samples.iso();
+    let inside_count = samples.values().par_iter().filter(|&&v| v < internal).count();
+    let side = match inside {
+        Inside::Above => "above",
+        Inside::Below => "below",
+    };
+    if inside_count == 0 {
+        Some(format!(
+            "no sample of '{name}' is inside at iso-value {iso} (inside is {side} it, and no value is): the mesh is empty; \
+             try another --iso or --inside"
+        ))
+    } else if inside_count == samples.values().len() {
+        Some(format!(
+            "every sample of '{name}' is inside at iso-value {iso} (inside is {side} it): the surface is outside the sampled \
+             domain and the mesh is empty; try another --iso or --inside"
+        ))
+    } else {
+        None
+    }
 }
 
 /// Writes any serializable value as pretty JSON, atomically.
@@ -410,6 +667,13 @@ mod tests {
         assert!(err.to_string().contains("lower --resolution"));
         assert!(check_memory_against(&lattice, Some(1 << 34)).is_ok());
         assert!(check_memory_against(&lattice, None).is_ok());
+    }
+
+    #[test]
+    fn output_space_maps_ras_to_lps() {
+        let m = OutputSpace::Lps.map_from_ras().unwrap();
+        assert_eq!(m.transform_point3(DVec3::new(1.0, 2.0, 3.0)), DVec3::new(-1.0, -2.0, 3.0));
+        assert!(OutputSpace::Ras.map_from_ras().is_none());
     }
 
     #[test]

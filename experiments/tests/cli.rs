@@ -182,7 +182,7 @@ fn malformed_and_empty_obj_files_name_the_file_and_line() {
     assert_clean_failure(&isolab(&["metrics", lines.to_str().unwrap()]), 2, &["lines.obj:3:", "at least 3"]);
     let ply = dir.path().join("odd.ply");
     std::fs::write(&ply, "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty double x\nend_header\n").unwrap();
-    assert_clean_failure(&isolab(&["metrics", ply.to_str().unwrap()]), 2, &["odd.ply", "double"]);
+    assert_clean_failure(&isolab(&["metrics", ply.to_str().unwrap()]), 2, &["odd.ply", "no scalar x, y and z"]);
 }
 
 #[test]
@@ -200,7 +200,7 @@ fn unwritable_outputs_fail_and_leave_no_file() {
     let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(left.len(), 1, "temporary files left behind: {left:?}");
     let o =
-        isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "8", "-o", dir.path().join("s.stl").to_str().unwrap()]);
+        isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "8", "-o", dir.path().join("s.xyz").to_str().unwrap()]);
     assert_clean_failure(&o, 1, &["unknown extension"]);
 }
 

@@ -3,15 +3,20 @@
 //! Every built-in field has a stable name, a one-line description and a default domain. Noise
 //! fields take a seed ([`FieldParams::seed`], default [`DEFAULT_SEED`]) so runs are repeatable.
 //! Mesh files become fields through [`MeshField`] (signed distance, sign from the generalized
-//! winding number).
+//! winding number), volume files through [`VolumeField`] (trilinear in world coordinates), and
+//! [`Complement`] flips which side is inside.
 
 mod analytic;
+mod complement;
 mod mesh_sdf;
 mod noise;
+pub mod volume;
 
 pub use analytic::{Csg, Gyroid, Sphere, Thin, Torus};
+pub use complement::Complement;
 pub use mesh_sdf::MeshField;
 pub use noise::{Asteroid, Terrain};
+pub use volume::{Volume, VolumeField};
 
 use crate::field::{Field, FieldError};
 use std::sync::Arc;

@@ -1,13 +1,14 @@
 //! `isolab`: list algorithms and fields, extract a mesh with metrics, or measure a mesh file.
 //!
-//! Exit codes: 0 success; 1 a failed extraction (bad field file, impossible lattice, non-finite
-//! field, unwritable output); 2 a usage error (unknown algorithm, post-process or field, bad
-//! arguments) or a mesh `isolab metrics` cannot read.
+//! Exit codes: 0 success; 1 a failed extraction (bad mesh or volume file, impossible lattice,
+//! non-finite field, unwritable output); 2 a usage error (unknown algorithm, post-process or
+//! field, bad arguments) or a mesh `isolab metrics` cannot read.
 
 use clap::{Parser, Subcommand};
 use isolab_algorithms::{extractors, fields};
 use isolab_experiments::io;
-use isolab_experiments::run::{run, write_json, LatticeKind, RunConfig, RunError};
+use isolab_experiments::io::volume::{Inside, VolumeOptions};
+use isolab_experiments::run::{run, write_json, LatticeKind, OutputSpace, RunConfig, RunError, VolumeGrid};
 use isolab_metrics::MeshMetrics;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -30,21 +31,35 @@ enum Command {
         /// Algorithm name (see `isolab list`).
         #[arg(long, short)]
         algorithm: String,
-        /// Built-in field name or path to an OBJ file.
+        /// Built-in field name, a mesh file (.obj, .ply, .stl, .glb, .gltf: its signed distance) or
+        /// a volume file (.nii, .nii.gz, .nrrd, .nhdr, .mhd, .mha, or a grid --samples-out wrote).
         #[arg(long, short)]
         field: String,
-        /// Samples along the longest side of the domain (at least 2).
-        #[arg(long, short, default_value_t = 64)]
-        resolution: usize,
+        /// Samples along the longest side of the domain (at least 2; default 64). A volume file is
+        /// meshed on its own voxel grid unless this or --dims is given, which resamples it.
+        #[arg(long, short)]
+        resolution: Option<usize>,
         /// Exact samples per axis, NX,NY,NZ or NXxNYxNZ (overrides --resolution).
         #[arg(long, value_parser = parse_dims)]
         dims: Option<[usize; 3]>,
         /// Lattice to sample on.
         #[arg(long, value_enum, default_value_t = LatticeKind::Cubic)]
         lattice: LatticeKind,
-        /// Iso-value (inside is f < iso).
-        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-        iso: f32,
+        /// Iso-value, in the input's own values (default 0; for a scan, Otsu's threshold; for a
+        /// grid --samples-out wrote, its own).
+        #[arg(long, allow_negative_numbers = true)]
+        iso: Option<f32>,
+        /// Which side of the iso-value is inside (default: above for volume files, where the
+        /// object is brighter than its background; below for distance fields).
+        #[arg(long, value_enum)]
+        inside: Option<Inside>,
+        /// Which 3-D volume of a 4-D volume file to mesh (from 0).
+        #[arg(long)]
+        volume: Option<usize>,
+        /// Coordinate system of meshes of anatomical volumes (written into the file as SPACE=...,
+        /// which 3D Slicer reads).
+        #[arg(long, value_enum, default_value_t = OutputSpace::Ras)]
+        space: OutputSpace,
         /// Seed of the noise fields.
         #[arg(long, default_value_t = fields::DEFAULT_SEED, allow_negative_numbers = true)]
         seed: i32,
@@ -77,8 +92,8 @@ enum Command {
         /// Any algorithm option, NAME=VALUE (repeatable; see the algorithm's module documentation).
         #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_option)]
         set: Vec<(String, String)>,
-        /// Write the mesh (.obj or .ply); volume extractors also write their tetrahedra beside it
-        /// (same name, .vtk).
+        /// Write the mesh (.obj, .ply, .stl, .glb or .gltf); volume extractors also write their
+        /// tetrahedra beside it (same name, .vtk).
         #[arg(long, short)]
         output: Option<PathBuf>,
         /// Write the metrics JSON here (printed to stdout when absent).
@@ -89,12 +104,12 @@ enum Command {
         #[arg(long)]
         samples_out: Option<PathBuf>,
     },
-    /// Print the metrics JSON of a mesh file (.obj or .ply).
+    /// Print the metrics JSON of a mesh file (.obj, .ply, .stl, .glb or .gltf).
     Metrics {
         /// The mesh file.
         file: PathBuf,
     },
-    /// Render a mesh file (.obj or .ply) to a PNG picture, or a turntable GIF.
+    /// Render a mesh file (.obj, .ply, .stl, .glb or .gltf) to a PNG picture, or a turntable GIF.
     Render {
         /// The mesh file.
         file: PathBuf,
@@ -142,7 +157,9 @@ fn list() {
     for p in posts {
         println!("  {:<34} {}", p.name(), p.description());
     }
-    println!("fields (or a path to an .obj file):");
+    println!(
+        "fields (or a path to a mesh file: .obj .ply .stl .glb .gltf; or a volume file: .nii .nii.gz .nrrd .nhdr .mhd .mha):"
+    );
     for f in fields::registry() {
         println!("  {:<34} {}", f.name, f.description);
     }
@@ -162,6 +179,9 @@ fn main() -> ExitCode {
             dims,
             lattice,
             iso,
+            inside,
+            volume,
+            space,
             seed,
             post,
             smoothing,
@@ -188,7 +208,24 @@ fn main() -> ExitCode {
             {
                 options.set(k, v);
             }
-            let config = RunConfig { algorithm, field, resolution, dims, lattice, iso, seed, post, options, chunk, materials };
+            let volume_grid = if resolution.is_some() || dims.is_some() { VolumeGrid::Resampled } else { VolumeGrid::Native };
+            let config = RunConfig {
+                algorithm,
+                field,
+                resolution: resolution.unwrap_or(64),
+                dims,
+                lattice,
+                iso,
+                inside,
+                volume: VolumeOptions { index: volume },
+                volume_grid,
+                space,
+                seed,
+                post,
+                options,
+                chunk,
+                materials,
+            };
             extract(&config, output, metrics, samples_out).map_err(|e| (e.exit_code(), e.to_string()))
         }
         Command::Metrics { file } => io::read_mesh(&file)
@@ -251,23 +288,27 @@ fn extract(
         }
     }
     if let Some(path) = &output {
-        if !matches!(path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref(), Some("obj" | "ply")) {
+        if io::MeshFormat::from_extension(path).is_none() {
             return Err(io::IoError::UnknownFormat { path: path.clone() }.into());
         }
     }
     let outcome = run(config)?;
+    for note in &outcome.notes {
+        eprintln!("note: {note}");
+    }
     for warning in &outcome.report.warnings {
         eprintln!("warning: {warning}");
     }
     if let Some(path) = &output {
         let colours: Vec<[u8; 3]> = outcome.vertex_materials.iter().map(|&m| isolab_algorithms::materials::colour(m)).collect();
-        io::write_mesh_coloured(path, &outcome.extraction.surface, (!colours.is_empty()).then_some(colours.as_slice()))?;
+        let extras = io::MeshExtras { colours: (!colours.is_empty()).then_some(colours.as_slice()), space: outcome.space_tag };
+        io::write_mesh_with(path, &outcome.extraction.surface, extras)?;
         if !outcome.extraction.volume.tetrahedra.is_empty() {
-            io::write_vtk_tets(&io::tetrahedra_path(path), &outcome.extraction.volume)?;
+            io::write_vtk_tets(&io::tetrahedra_path(path), &outcome.extraction.volume, outcome.space_tag)?;
         }
     }
     if let Some(path) = &samples_out {
-        io::write_samples(path, &outcome.samples)?;
+        io::write_samples(path, &outcome.samples, outcome.samples_to_world.as_ref())?;
     }
     match &metrics {
         Some(path) => write_json(path, &outcome.report)?,

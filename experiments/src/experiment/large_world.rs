@@ -9,7 +9,7 @@
 //! size is `ISOLAB_WORLD` (default `2048,512,2048` cells).
 
 use super::{Context, Experiment, ExperimentError};
-use crate::io::{self, PlyStream};
+use crate::io::PlyStream;
 use crate::report::markdown_table;
 use isolab_algorithms::chunks::stream_chunked;
 use isolab_algorithms::{extractors, fields, Grid};
@@ -82,15 +82,15 @@ impl Experiment for LargeWorld {
         let path = std::env::temp_dir().join(format!("isolab-large-world-{}.ply", std::process::id()));
         let slabs = (dims[2] - 1) / CHUNK;
         let bar = ctx.bar(NAME, slabs as u64);
-        let rss_before_mib = io::rss_mib();
-        let peak_reset = io::reset_peak_rss();
+        let rss_before_mib = crate::memory::rss_mib();
+        let peak_reset = crate::memory::reset_peak_rss();
         let start = Instant::now();
         let mut sink = PlyStream::create(&path)?;
         let stats = stream_chunked(mc.as_ref(), field.as_ref(), grid, 0.0, CHUNK, &mut sink, |_, _| bar.inc(1))
             .map_err(|e| ExperimentError::Figure(format!("streaming the world: {e}")))?;
         let file_bytes = sink.finish()?;
         let seconds = start.elapsed().as_secs_f64();
-        let peak_rss_mib = io::peak_rss_mib();
+        let peak_rss_mib = crate::memory::peak_rss_mib();
         bar.finish();
         let _ = std::fs::remove_file(&path);
         let samples = dims.iter().map(|&d| d as u64).product::<u64>();

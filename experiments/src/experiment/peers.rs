@@ -244,7 +244,7 @@ impl Experiment for Peers {
             let samples = Samples::sample_cubic(field, grid, 0.0).map_err(crate::run::RunError::from)?;
             // A file per grid: the Python side caches the grid it read last by path.
             let raw: PathBuf = tmp.join(format!("{field_name}-{n}.raw"));
-            crate::io::write_samples(&raw, &samples)?;
+            crate::io::write_samples(&raw, &samples, None)?;
             let large = n == LARGE.0;
             let mut runs: BTreeMap<String, (Vec<Duration>, usize, usize)> = BTreeMap::new();
             let mut record = |label: &str, t: Duration, v: usize, f: usize| {

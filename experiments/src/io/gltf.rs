@@ -1,0 +1,360 @@
+//! glTF 2.0, the format game engines and web viewers open: a writer for binary glTF (`.glb`)
+//! and for `.gltf` with the buffer embedded as a base64 data URI, with positions, unit normals
+//! and vertex colours (materials); and a reader for both (and for external `.bin` buffers), so
+//! `isolab metrics` measures what it wrote.
+//!
+//! The `gltf` crate parses and validates the JSON and the GLB container and walks the scene;
+//! accessors are read here with checked arithmetic (the crate's reader computes byte ranges
+//! with unchecked sums, which a malformed file can overflow). The JSON is written with
+//! `serde_json` (a dozen objects), the GLB container by the crate.
+//!
+//! Every file passes the Khronos glTF validator with no errors (`tests/reference/run.sh` runs it
+//! on what `isolab extract` writes). Coordinates are written as they are: glTF's +Y is up, which
+//! isolab's terrain follows; a scan's world (RAS: +Z up) is written unrotated.
+
+use super::IoError;
+use base64::Engine as _;
+use glam::{Mat4, Vec3};
+use isolab_algorithms::TriMesh;
+use serde_json::json;
+use std::borrow::Cow;
+use std::io::Write;
+use std::path::Path;
+
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+const FLOAT: u32 = 5126;
+const UNSIGNED_BYTE: u32 = 5121;
+const UNSIGNED_INT: u32 = 5125;
+
+/// How the buffer is stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Container {
+    /// Binary glTF: a JSON chunk and a BIN chunk in one file (`.glb`).
+    Binary,
+    /// JSON with the buffer as a base64 data URI (`.gltf`).
+    Embedded,
+}
+
+/// Unit normals for glTF: the mesh's own when it has them, else area-weighted ones; a vertex
+/// whose normal is undefined (only degenerate triangles around it) gets +Z, since the format
+/// requires unit length.
+fn unit_normals(mesh: &TriMesh) -> Vec<Vec3> {
+    let normals = if mesh.normals.len() == mesh.positions.len() && !mesh.normals.is_empty() {
+        mesh.normals.clone()
+    } else {
+        let mut m = TriMesh { positions: mesh.positions.clone(), normals: Vec::new(), triangles: mesh.triangles.clone() };
+        m.compute_face_weighted_normals();
+        m.normals
+    };
+    normals.into_iter().map(|n| n.try_normalize().unwrap_or(Vec3::Z)).collect()
+}
+
+/// The glTF JSON and its binary buffer for `mesh` (vertex colours from `colours`).
+fn document(mesh: &TriMesh, colours: Option<&[[u8; 3]]>, generator: &str) -> (serde_json::Value, Vec<u8>) {
+    let asset = json!({ "version": "2.0", "generator": generator });
+    if mesh.triangles.is_empty() || mesh.positions.is_empty() {
+        // A glTF accessor cannot be empty: an empty mesh is a scene with no nodes.
+        return (json!({ "asset": asset, "scene": 0, "scenes": [{ "nodes": [] }] }), Vec::new());
+    }
+    let mut bin = Vec::new();
+    let mut views = Vec::new();
+    let mut push_view = |bin: &mut Vec<u8>, bytes: &[u8], target: u32| {
+        while bin.len() % 4 != 0 {
+            bin.push(0);
+        }
+        views.push(json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len(), "target": target }));
+        bin.extend_from_slice(bytes);
+        views.len() - 1
+    };
+    let indices: Vec<u8> = mesh.triangles.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
+    let positions: Vec<u8> = mesh.positions.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect();
+    let normals: Vec<u8> = unit_normals(mesh).iter().flat_map(|n| n.to_array()).flat_map(f32::to_le_bytes).collect();
+    let (min, max) = mesh
+        .positions
+        .iter()
+        .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let max_index = mesh.triangles.iter().flatten().copied().max().unwrap_or(0);
+    let min_index = mesh.triangles.iter().flatten().copied().min().unwrap_or(0);
+    let v_indices = push_view(&mut bin, &indices, ELEMENT_ARRAY_BUFFER);
+    let v_positions = push_view(&mut bin, &positions, ARRAY_BUFFER);
+    let v_normals = push_view(&mut bin, &normals, ARRAY_BUFFER);
+    let n = mesh.positions.len();
+    let mut accessors = vec![
+        json!({ "bufferView": v_indices, "componentType": UNSIGNED_INT, "count": 3 * mesh.triangles.len(), "type": "SCALAR",
+                "min": [min_index], "max": [max_index] }),
+        json!({ "bufferView": v_positions, "componentType": FLOAT, "count": n, "type": "VEC3",
+                "min": min.to_array(), "max": max.to_array() }),
+        json!({ "bufferView": v_normals, "componentType": FLOAT, "count": n, "type": "VEC3" }),
+    ];
+    let mut attributes = json!({ "POSITION": 1, "NORMAL": 2 });
+    let colours = colours.filter(|c| c.len() == n);
+    if let Some(colours) = colours {
+        // RGBA: vertex attribute elements must be 4-byte aligned, which RGB bytes are not.
+        let rgba: Vec<u8> = colours.iter().flat_map(|&[r, g, b]| [r, g, b, 255]).collect();
+        let view = push_view(&mut bin, &rgba, ARRAY_BUFFER);
+        accessors
+            .push(json!({ "bufferView": view, "componentType": UNSIGNED_BYTE, "normalized": true, "count": n, "type": "VEC4" }));
+        attributes["COLOR_0"] = json!(3);
+    }
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let base = if colours.is_some() { [1.0, 1.0, 1.0, 1.0] } else { [0.8, 0.8, 0.8, 1.0] };
+    let doc = json!({
+        "asset": asset,
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0, "name": "isolab" }],
+        "meshes": [{ "primitives": [{ "attributes": attributes, "indices": 0, "material": 0, "mode": 4 }] }],
+        "materials": [{ "pbrMetallicRoughness": { "baseColorFactor": base, "metallicFactor": 0.0, "roughnessFactor": 0.8 } }],
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{ "byteLength": bin.len() }],
+    });
+    (doc, bin)
+}
+
+/// Writes `mesh` as glTF 2.0 (`.glb` or `.gltf` with an embedded buffer).
+pub fn write_gltf(
+    w: &mut impl Write,
+    mesh: &TriMesh,
+    colours: Option<&[[u8; 3]]>,
+    container: Container,
+    generator: &str,
+) -> std::io::Result<()> {
+    let (mut doc, bin) = document(mesh, colours, generator);
+    match container {
+        Container::Binary => {
+            let json = serde_json::to_vec(&doc).map_err(std::io::Error::other)?;
+            let glb = gltf::binary::Glb {
+                header: gltf::binary::Header { magic: *b"glTF", version: 2, length: 0 },
+                json: Cow::Owned(json),
+                bin: (!bin.is_empty()).then_some(Cow::Owned(bin)),
+            };
+            glb.to_writer(w).map_err(std::io::Error::other)
+        }
+        Container::Embedded => {
+            if !bin.is_empty() {
+                let uri =
+                    format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+                doc["buffers"][0]["uri"] = json!(uri);
+            }
+            serde_json::to_writer(&mut *w, &doc).map_err(std::io::Error::other)?;
+            w.write_all(b"\n")
+        }
+    }
+}
+
+/// Reads the triangles of every mesh in a glTF file's default scene (node transforms applied),
+/// or of every mesh when it has no scene. External buffers are read beside `path`.
+pub fn read_gltf(path: &Path) -> Result<TriMesh, IoError> {
+    let bytes = super::read_bytes(path)?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    parse_gltf(&bytes, path, &|uri: &str| {
+        let file = dir.join(uri);
+        std::fs::read(&file).map_err(|e| format!("cannot read buffer '{}': {e}", file.display()))
+    })
+}
+
+/// Parses glTF or GLB bytes; `external` reads a buffer given by a relative URI (return an error
+/// to refuse). `path` is only used in error messages.
+pub fn parse_gltf(bytes: &[u8], path: &Path, external: &dyn Fn(&str) -> Result<Vec<u8>, String>) -> Result<TriMesh, IoError> {
+    let invalid = |reason: String| IoError::Invalid { path: path.into(), reason };
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| invalid(format!("not a valid glTF file: {e}")))?;
+    let mut buffers = Vec::new();
+    for buffer in gltf.buffers() {
+        let data = match buffer.source() {
+            gltf::buffer::Source::Bin => {
+                gltf.blob.clone().ok_or_else(|| invalid("a buffer refers to a GLB BIN chunk the file lacks".into()))?
+            }
+            gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+                let (_, payload) = uri.split_once(";base64,").ok_or_else(|| invalid("a data URI buffer is not base64".into()))?;
+                base64::engine::general_purpose::STANDARD
+                    .decode(payload)
+                    .map_err(|e| invalid(format!("buffer {}: bad base64: {e}", buffer.index())))?
+            }
+            gltf::buffer::Source::Uri(uri) => external(uri).map_err(invalid)?,
+        };
+        if data.len() < buffer.length() {
+            return Err(invalid(format!(
+                "buffer {} has {} bytes, the file says {}",
+                buffer.index(),
+                data.len(),
+                buffer.length()
+            )));
+        }
+        buffers.push(data);
+    }
+    let mut mesh = TriMesh::default();
+    let mut add = |m: gltf::Mesh, to_world: Mat4| -> Result<(), IoError> {
+        for primitive in m.primitives() {
+            let mode = primitive.mode();
+            if !matches!(mode, gltf::mesh::Mode::Triangles | gltf::mesh::Mode::TriangleStrip | gltf::mesh::Mode::TriangleFan) {
+                continue;
+            }
+            let position = primitive
+                .get(&gltf::Semantic::Positions)
+                .ok_or_else(|| invalid(format!("mesh {} has a primitive without POSITION", m.index())))?;
+            let base = mesh.positions.len() as u32;
+            let points = read_accessor(&position, &buffers).map_err(|e| invalid(format!("mesh {} POSITION: {e}", m.index())))?;
+            if position.dimensions() != gltf::accessor::Dimensions::Vec3 {
+                return Err(invalid(format!("mesh {} POSITION is not VEC3", m.index())));
+            }
+            mesh.positions.extend(
+                points.chunks_exact(3).map(|c| to_world.transform_point3(Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))),
+            );
+            let count = points.len() / 3;
+            let order: Vec<u32> = match primitive.indices() {
+                Some(a) => {
+                    let values = read_accessor(&a, &buffers).map_err(|e| invalid(format!("mesh {} indices: {e}", m.index())))?;
+                    values.iter().map(|&v| v as u32).collect()
+                }
+                None => (0..count as u32).collect(),
+            };
+            if let Some(&bad) = order.iter().find(|&&i| i as usize >= count) {
+                return Err(invalid(format!("mesh {}: index {bad} is out of range ({count} vertices)", m.index())));
+            }
+            let mirrored = to_world.determinant() < 0.0;
+            let mut push = |mut t: [u32; 3]| {
+                if mirrored {
+                    t.swap(1, 2);
+                }
+                mesh.triangles.push(t.map(|i| base + i));
+            };
+            match mode {
+                gltf::mesh::Mode::Triangles => order.chunks_exact(3).for_each(|t| push([t[0], t[1], t[2]])),
+                gltf::mesh::Mode::TriangleStrip => {
+                    for (k, w) in order.windows(3).enumerate() {
+                        push(if k % 2 == 0 { [w[0], w[1], w[2]] } else { [w[1], w[0], w[2]] });
+                    }
+                }
+                _ => {
+                    for k in 2..order.len() {
+                        push([order[0], order[k - 1], order[k]]);
+                    }
+                }
+            }
+        }
+        Ok(())
+    };
+    let scene = gltf.default_scene().or_else(|| gltf.scenes().next());
+    match scene {
+        Some(scene) => {
+            let mut stack: Vec<(gltf::Node, Mat4, usize)> = scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+            while let Some((node, parent, depth)) = stack.pop() {
+                if depth > 64 {
+                    return Err(invalid("the node hierarchy is deeper than 64 levels (a cycle?)".into()));
+                }
+                let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+                if let Some(m) = node.mesh() {
+                    add(m, world)?;
+                }
+                stack.extend(node.children().map(|c| (c, world, depth + 1)));
+            }
+        }
+        None => {
+            for m in gltf.meshes() {
+                add(m, Mat4::IDENTITY)?;
+            }
+        }
+    }
+    if mesh.triangles.is_empty() {
+        return Err(IoError::Empty { path: path.into(), vertices: mesh.positions.len() });
+    }
+    Ok(mesh)
+}
+
+/// An accessor's components as f64 (exact for every component type), with every byte range
+/// checked.
+fn read_accessor(a: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<f64>, String> {
+    if a.sparse().is_some() {
+        return Err("sparse accessors are not supported".into());
+    }
+    let view = a.view().ok_or("the accessor has no buffer view")?;
+    let data = buffers.get(view.buffer().index()).ok_or("missing buffer")?;
+    let components = a.dimensions().multiplicity();
+    let (size, read): (usize, fn(&[u8]) -> f64) = match a.data_type() {
+        gltf::accessor::DataType::F32 => (4, |b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64),
+        gltf::accessor::DataType::U32 => (4, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64),
+        gltf::accessor::DataType::U16 => (2, |b| u16::from_le_bytes([b[0], b[1]]) as f64),
+        gltf::accessor::DataType::U8 => (1, |b| b[0] as f64),
+        gltf::accessor::DataType::I16 => (2, |b| i16::from_le_bytes([b[0], b[1]]) as f64),
+        gltf::accessor::DataType::I8 => (1, |b| b[0] as i8 as f64),
+    };
+    let element = size * components;
+    let stride = view.stride().unwrap_or(element).max(element);
+    let start = view.offset().checked_add(a.offset()).ok_or("offset overflows")?;
+    let count = a.count();
+    let view_end = view.offset().checked_add(view.length()).ok_or("view overflows")?;
+    if count == 0 {
+        return Ok(Vec::new());
+    }
+    let end = (count - 1)
+        .checked_mul(stride)
+        .and_then(|s| s.checked_add(start))
+        .and_then(|s| s.checked_add(element))
+        .ok_or("range overflows")?;
+    if end > view_end || end > data.len() {
+        return Err(format!("{count} elements need bytes {start}..{end}, beyond the buffer view"));
+    }
+    let mut out = Vec::with_capacity(count * components);
+    for k in 0..count {
+        let at = start + k * stride;
+        for c in 0..components {
+            out.push(read(&data[at + c * size..]));
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tetrahedron() -> TriMesh {
+        TriMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
+            normals: vec![],
+            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        }
+    }
+
+    #[test]
+    fn both_containers_round_trip() {
+        let colours = [[255, 0, 0], [0, 255, 0], [0, 0, 255], [9, 9, 9]];
+        for container in [Container::Binary, Container::Embedded] {
+            let mut bytes = Vec::new();
+            write_gltf(&mut bytes, &tetrahedron(), Some(&colours), container, "isolab test").unwrap();
+            let back = parse_gltf(&bytes, Path::new("t.glb"), &|_| Err("no files".into())).unwrap();
+            assert_eq!(back.positions, tetrahedron().positions, "{container:?}");
+            assert_eq!(back.triangles, tetrahedron().triangles, "{container:?}");
+        }
+    }
+
+    #[test]
+    fn an_empty_mesh_is_a_valid_empty_scene_and_reads_back_as_empty() {
+        let mut bytes = Vec::new();
+        write_gltf(&mut bytes, &TriMesh::default(), None, Container::Binary, "isolab").unwrap();
+        let e = parse_gltf(&bytes, Path::new("e.glb"), &|_| Err("no".into()));
+        assert!(matches!(e, Err(IoError::Empty { .. })));
+    }
+
+    #[test]
+    fn corrupt_files_are_errors_naming_the_file() {
+        let mut bytes = Vec::new();
+        write_gltf(&mut bytes, &tetrahedron(), None, Container::Binary, "isolab").unwrap();
+        for cut in [10, 40, bytes.len() - 8] {
+            let e = parse_gltf(&bytes[..cut], Path::new("cut.glb"), &|_| Err("no".into())).unwrap_err().to_string();
+            assert!(e.contains("cut.glb"), "{e}");
+        }
+        let e = parse_gltf(
+            b"{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"byteLength\":8,\"uri\":\"x.bin\"}]}",
+            Path::new("x.gltf"),
+            &|u| Err(format!("refused {u}")),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("refused x.bin"), "{e}");
+    }
+}

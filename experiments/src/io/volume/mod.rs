@@ -1,0 +1,437 @@
+//! Volume files: NIfTI-1 and -2 ([`nifti`]), NRRD ([`nrrd`]), MetaImage ([`metaimage`]) and
+//! the raw + JSON grid `--samples-out` writes ([`samples`]), read into a
+//! [`Volume`](isolab_algorithms::fields::Volume) whose affine maps voxel indices to world
+//! coordinates.
+//!
+//! World coordinates are RAS (x toward the subject's right... left-to-Right, Anterior, Superior;
+//! NIfTI's world and what 3D Slicer shows) for every anatomical format: MetaImage's LPS and
+//! NRRD's named spaces are converted. A grid with no anatomical space (an isolab grid, an NRRD
+//! with `scanner-xyz` or no space) keeps its coordinates as they are.
+//!
+//! Why by hand: there is no NRRD or MetaImage crate; `nifti` (0.18) reads NIfTI-1 only (no
+//! NIfTI-2), takes paths rather than bytes, and panics on user input (`qform_affine` on a
+//! negative pixdim or a qfac other than ±1). The three headers are short (a fixed binary layout,
+//! and two `key: value` texts); `flate2` does the decompression.
+
+pub mod metaimage;
+pub mod nifti;
+pub mod nrrd;
+pub mod samples;
+
+use super::IoError;
+use glam::DAffine3;
+use isolab_algorithms::fields::Volume;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+/// Which side of the iso-value a file's object is on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Inside {
+    /// Values above the iso-value are inside (scans: the object is brighter than its background).
+    Above,
+    /// Values below the iso-value are inside (distance fields, isolab's own grids).
+    Below,
+}
+
+/// The coordinate system of a volume's world.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum Space {
+    /// Right, Anterior, Superior (NIfTI, 3D Slicer's display).
+    Ras,
+    /// Not anatomical: coordinates as the file gives them.
+    Unknown,
+}
+
+/// A volume read from a file, with what the file says about it.
+#[derive(Clone, Debug)]
+pub struct VolumeFile {
+    /// The values and the index-to-world affine (RAS for anatomical files).
+    pub volume: std::sync::Arc<Volume>,
+    /// Format name ("NIfTI-1", "NRRD", ...).
+    pub format: &'static str,
+    /// The stored data type ("uint8", ...).
+    pub data_type: &'static str,
+    /// The world's coordinate system.
+    pub space: Space,
+    /// Which side is inside unless the user says: above for scans, below for isolab's grids.
+    pub inside: Inside,
+    /// The iso-value the file carries (isolab's grids), if any.
+    pub iso: Option<f32>,
+    /// Values at the voxel grid's cell centres, when the file holds a BCC lattice.
+    pub centres: Option<Vec<f32>>,
+    /// Things the user should know (a guessed offset, a unit conversion, a picked volume).
+    pub notes: Vec<String>,
+}
+
+/// The stored data types.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DataType {
+    /// Unsigned 8-bit.
+    U8,
+    /// Signed 8-bit.
+    I8,
+    /// Unsigned 16-bit.
+    U16,
+    /// Signed 16-bit.
+    I16,
+    /// Unsigned 32-bit.
+    U32,
+    /// Signed 32-bit.
+    I32,
+    /// Unsigned 64-bit.
+    U64,
+    /// Signed 64-bit.
+    I64,
+    /// 32-bit float.
+    F32,
+    /// 64-bit float.
+    F64,
+}
+
+impl DataType {
+    /// Bytes per value.
+    pub fn size(self) -> usize {
+        match self {
+            Self::U8 | Self::I8 => 1,
+            Self::U16 | Self::I16 => 2,
+            Self::U32 | Self::I32 | Self::F32 => 4,
+            Self::U64 | Self::I64 | Self::F64 => 8,
+        }
+    }
+
+    /// The numpy-style name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::U8 => "uint8",
+            Self::I8 => "int8",
+            Self::U16 => "uint16",
+            Self::I16 => "int16",
+            Self::U32 => "uint32",
+            Self::I32 => "int32",
+            Self::U64 => "uint64",
+            Self::I64 => "int64",
+            Self::F32 => "float32",
+            Self::F64 => "float64",
+        }
+    }
+
+    fn is_integer(self) -> bool {
+        !matches!(self, Self::F32 | Self::F64)
+    }
+}
+
+/// `count` values of type `ty` from `bytes` (which must hold them), as f32 scaled by
+/// `slope * v + inter`.
+pub fn decode(bytes: &[u8], ty: DataType, big_endian: bool, count: usize, slope: f64, inter: f64) -> Vec<f32> {
+    let size = ty.size();
+    let scaled = slope != 1.0 || inter != 0.0;
+    let mut out = Vec::with_capacity(count);
+    macro_rules! run {
+        ($t:ty) => {{
+            for chunk in bytes[..count * size].chunks_exact(size) {
+                let mut b = [0u8; std::mem::size_of::<$t>()];
+                b.copy_from_slice(chunk);
+                let v = if big_endian { <$t>::from_be_bytes(b) } else { <$t>::from_le_bytes(b) };
+                out.push(if scaled { (slope * v as f64 + inter) as f32 } else { v as f32 });
+            }
+        }};
+    }
+    match ty {
+        DataType::U8 => {
+            if scaled {
+                out.extend(bytes[..count].iter().map(|&v| (slope * v as f64 + inter) as f32));
+            } else {
+                out.extend(bytes[..count].iter().map(|&v| v as f32));
+            }
+        }
+        DataType::I8 => run!(i8),
+        DataType::U16 => run!(u16),
+        DataType::I16 => run!(i16),
+        DataType::U32 => run!(u32),
+        DataType::I32 => run!(i32),
+        DataType::U64 => run!(u64),
+        DataType::I64 => run!(i64),
+        DataType::F32 => run!(f32),
+        DataType::F64 => run!(f64),
+    }
+    out
+}
+
+/// Numbers written as text (NRRD `ascii`, MetaImage `BinaryData = False`): `count` of them.
+pub fn decode_text(text: &[u8], ty: DataType, count: usize, path: &Path) -> Result<Vec<f32>, IoError> {
+    let mut out = Vec::with_capacity(count.min(text.len() / 2 + 1));
+    for word in text.split(|b| b.is_ascii_whitespace() || *b == b',').filter(|w| !w.is_empty()) {
+        if out.len() == count {
+            break;
+        }
+        let w = String::from_utf8_lossy(word);
+        let v: f64 = w.parse().map_err(|_| IoError::Invalid {
+            path: path.into(),
+            reason: format!("value {}: '{}' is not a number", out.len(), super::shown(&w)),
+        })?;
+        if ty.is_integer() && v.fract() != 0.0 {
+            return Err(IoError::Invalid { path: path.into(), reason: format!("value {}: '{w}' is not an integer", out.len()) });
+        }
+        out.push(v as f32);
+    }
+    if out.len() < count {
+        return Err(IoError::Invalid {
+            path: path.into(),
+            reason: format!("the data holds {} values, the header says {count}", out.len()),
+        });
+    }
+    Ok(out)
+}
+
+/// How compressed data is framed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Compression {
+    /// gzip (NIfTI `.nii.gz`, NRRD `gzip`).
+    Gzip,
+    /// zlib (MetaImage `CompressedData = True`).
+    Zlib,
+}
+
+/// Decompresses `bytes` into exactly `need` bytes, then reads the stream to its end so that a
+/// truncated or corrupt stream (a bad checksum) is an error even when the data came out whole.
+/// Trailing data past `need` is read and dropped, up to a bound.
+pub fn inflate(bytes: &[u8], compression: Compression, need: usize, path: &Path) -> Result<Vec<u8>, IoError> {
+    let mut out = Vec::new();
+    out.try_reserve_exact(need).map_err(|_| IoError::Invalid {
+        path: path.into(),
+        reason: format!("the header asks for {need} bytes of data, more than this machine can hold"),
+    })?;
+    let mut reader: Box<dyn Read> = match compression {
+        Compression::Gzip => Box::new(flate2::read::MultiGzDecoder::new(bytes)),
+        Compression::Zlib => Box::new(flate2::read::ZlibDecoder::new(bytes)),
+    };
+    let corrupt = |e: std::io::Error| IoError::Invalid {
+        path: path.into(),
+        reason: format!(
+            "the {} data is corrupt or truncated ({e})",
+            if compression == Compression::Gzip { "gzip" } else { "zlib" }
+        ),
+    };
+    (&mut reader).take(need as u64).read_to_end(&mut out).map_err(corrupt)?;
+    if out.len() < need {
+        return Err(IoError::Invalid {
+            path: path.into(),
+            reason: format!("the header says {need} bytes, but the data decompresses to only {}", out.len()),
+        });
+    }
+    std::io::copy(&mut reader.take(1 << 26), &mut std::io::sink()).map_err(corrupt)?;
+    Ok(out)
+}
+
+/// Whether bytes start a gzip stream.
+pub fn is_gzip(bytes: &[u8]) -> bool {
+    bytes.starts_with(&[0x1f, 0x8b])
+}
+
+/// The first `n` decompressed bytes of a gzip stream (fewer if it is shorter); corrupt data is
+/// an error.
+pub fn gunzip_prefix(bytes: &[u8], n: usize, path: &Path) -> Result<Vec<u8>, IoError> {
+    let mut out = Vec::with_capacity(n);
+    flate2::read::MultiGzDecoder::new(bytes)
+        .take(n as u64)
+        .read_to_end(&mut out)
+        .map_err(|e| IoError::Invalid { path: path.into(), reason: format!("the gzip data is corrupt or truncated ({e})") })?;
+    Ok(out)
+}
+
+/// The volume formats.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VolumeFormat {
+    /// NIfTI-1 or -2 (`.nii`, `.nii.gz`, `.hdr` + `.img`).
+    Nifti,
+    /// NRRD (`.nrrd`, `.nhdr`).
+    Nrrd,
+    /// MetaImage (`.mhd`, `.mha`).
+    MetaImage,
+    /// isolab's raw f32 grid with a `.json` header beside it.
+    Samples,
+}
+
+/// The volume format of a file, by its content (magic numbers, a NIfTI header size) and name;
+/// `None` for anything else (meshes).
+pub fn detect(path: &Path, bytes: &[u8]) -> Option<VolumeFormat> {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("").to_ascii_lowercase();
+    if bytes.starts_with(b"NRRD") || name.ends_with(".nrrd") || name.ends_with(".nhdr") {
+        return Some(VolumeFormat::Nrrd);
+    }
+    if name.ends_with(".mhd") || name.ends_with(".mha") {
+        return Some(VolumeFormat::MetaImage);
+    }
+    if name.ends_with(".nii") || name.ends_with(".nii.gz") || name.ends_with(".hdr") || name.ends_with(".hdr.gz") {
+        return Some(VolumeFormat::Nifti);
+    }
+    if samples::header_path(path).is_file() {
+        return Some(VolumeFormat::Samples);
+    }
+    let head = if is_gzip(bytes) { gunzip_prefix(bytes, 4, path).ok()? } else { bytes.get(..4)?.to_vec() };
+    let size = |h: &[u8]| {
+        let b = [h[0], h[1], h[2], h[3]];
+        [i32::from_le_bytes(b), i32::from_be_bytes(b)]
+    };
+    if head.len() == 4 && size(&head).iter().any(|&s| s == 348 || s == 540) {
+        return Some(VolumeFormat::Nifti);
+    }
+    None
+}
+
+/// How to read a volume.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct VolumeOptions {
+    /// Which 3-D volume of a 4-D file (`--volume K`, from 0).
+    pub index: Option<usize>,
+}
+
+/// Reads a volume file of any format we read.
+pub fn read_volume(path: &Path, options: VolumeOptions) -> Result<VolumeFile, IoError> {
+    let bytes = super::read_bytes(path)?;
+    let format = detect(path, &bytes).ok_or_else(|| IoError::Invalid {
+        path: path.into(),
+        reason: "not a volume file we read (NIfTI, NRRD, MetaImage)".into(),
+    })?;
+    let sibling = |name: &str| -> Result<Vec<u8>, IoError> {
+        let file = path.parent().unwrap_or(Path::new("")).join(name);
+        super::read_bytes(&file)
+    };
+    match format {
+        VolumeFormat::Nifti => nifti::parse_nifti(&bytes, path, options, &sibling),
+        VolumeFormat::Nrrd => nrrd::parse_nrrd(&bytes, path, options, &sibling),
+        VolumeFormat::MetaImage => metaimage::parse_metaimage(&bytes, path, options, &sibling),
+        VolumeFormat::Samples => samples::read_samples(path),
+    }
+}
+
+/// Picks 3-D volume `index` of `extra` volumes stored one after the other (a 4-D file's time
+/// points); the shape is named when no index was given for a 4-D file.
+pub fn pick_volume(
+    path: &Path,
+    shape: &str,
+    extra: usize,
+    index: Option<usize>,
+    notes: &mut Vec<String>,
+) -> Result<usize, IoError> {
+    match (extra, index) {
+        (1, None | Some(0)) => Ok(0),
+        (1, Some(k)) => {
+            Err(IoError::Invalid { path: path.into(), reason: format!("--volume {k}: the file holds one 3-D volume ({shape})") })
+        }
+        (n, None) => Err(IoError::Invalid {
+            path: path.into(),
+            reason: format!("is 4-D ({shape}): {n} volumes; pick one with --volume K (0 to {})", n - 1),
+        }),
+        (n, Some(k)) if k < n => {
+            notes.push(format!("volume {k} of {n} ({shape})"));
+            Ok(k)
+        }
+        (n, Some(k)) => Err(IoError::Invalid {
+            path: path.into(),
+            reason: format!("--volume {k} is out of range: {shape} holds {n} volumes (0 to {})", n - 1),
+        }),
+    }
+}
+
+/// Checks `count` values of `ty` fit in `available` bytes from `offset`; the error names both.
+pub fn check_size(path: &Path, count: usize, ty: DataType, offset: usize, available: usize) -> Result<usize, IoError> {
+    let need = count
+        .checked_mul(ty.size())
+        .ok_or_else(|| IoError::Invalid { path: path.into(), reason: "the header's shape is too large".into() })?;
+    if offset.checked_add(need).is_none_or(|end| end > available) {
+        return Err(IoError::Invalid {
+            path: path.into(),
+            reason: format!(
+                "header and data disagree: {count} {} values need {need} bytes from byte {offset}, but the data has {available} bytes",
+                ty.name()
+            ),
+        });
+    }
+    Ok(need)
+}
+
+/// Wraps values into a [`Volume`], naming the file in any error.
+pub fn volume(path: &Path, dims: [usize; 3], values: Vec<f32>, affine: DAffine3) -> Result<Volume, IoError> {
+    let name = stem(path);
+    Volume::new(name, dims, values, affine)
+        .map_err(|e| IoError::Invalid { path: path.into(), reason: strip_name(&e.to_string()) })
+}
+
+/// The file name without its volume extensions (`.nii.gz`, `.nrrd`, ...).
+pub fn stem(path: &Path) -> String {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("volume");
+    let lower = name.to_ascii_lowercase();
+    for ext in [".nii.gz", ".hdr.gz", ".nii", ".hdr", ".nrrd", ".nhdr", ".mhd", ".mha", ".raw"] {
+        if lower.ends_with(ext) && name.len() > ext.len() {
+            return name[..name.len() - ext.len()].to_owned();
+        }
+    }
+    path.file_stem().and_then(|s| s.to_str()).unwrap_or("volume").to_owned()
+}
+
+fn strip_name(message: &str) -> String {
+    message.split_once("': ").map_or(message, |(_, rest)| rest).to_owned()
+}
+
+/// A data file named in a header, relative to the header's directory.
+pub fn data_path(header: &Path, name: &str) -> PathBuf {
+    header.parent().unwrap_or(Path::new("")).join(name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decode_every_type_both_endians_with_scaling() {
+        let p = Path::new("d");
+        assert_eq!(decode(&[1, 255], DataType::U8, false, 2, 1.0, 0.0), vec![1.0, 255.0]);
+        assert_eq!(decode(&[255], DataType::I8, false, 1, 2.0, 1.0), vec![-1.0]);
+        assert_eq!(decode(&[1, 0], DataType::U16, true, 1, 1.0, 0.0), vec![256.0]);
+        assert_eq!(decode(&(-300i16).to_le_bytes(), DataType::I16, false, 1, 0.5, 0.0), vec![-150.0]);
+        assert_eq!(decode(&7u32.to_be_bytes(), DataType::U32, true, 1, 1.0, 0.0), vec![7.0]);
+        assert_eq!(decode(&(-7i32).to_le_bytes(), DataType::I32, false, 1, 1.0, 0.0), vec![-7.0]);
+        assert_eq!(decode(&9u64.to_le_bytes(), DataType::U64, false, 1, 1.0, 0.0), vec![9.0]);
+        assert_eq!(decode(&(-9i64).to_be_bytes(), DataType::I64, true, 1, 1.0, 0.0), vec![-9.0]);
+        assert_eq!(decode(&1.5f32.to_le_bytes(), DataType::F32, false, 1, 1.0, 0.0), vec![1.5]);
+        assert_eq!(decode(&2.5f64.to_be_bytes(), DataType::F64, true, 1, 1.0, 0.0), vec![2.5]);
+        assert_eq!(decode_text(b"1 2\n3,4", DataType::I16, 4, p).unwrap(), vec![1.0, 2.0, 3.0, 4.0]);
+        assert!(decode_text(b"1 2", DataType::I16, 3, p).unwrap_err().to_string().contains("holds 2 values"));
+        assert!(decode_text(b"1 2.5", DataType::I16, 2, p).unwrap_err().to_string().contains("not an integer"));
+    }
+
+    #[test]
+    fn inflate_refuses_truncated_and_corrupt_streams() {
+        use std::io::Write;
+        let data: Vec<u8> = (0..5000u32).map(|i| (i * 7 % 251) as u8).collect();
+        let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+        gz.write_all(&data).unwrap();
+        let gz = gz.finish().unwrap();
+        let p = Path::new("v.nii.gz");
+        assert_eq!(inflate(&gz, Compression::Gzip, 5000, p).unwrap(), data);
+        // The data is whole, but the trailer (CRC, size) is cut: still an error.
+        let e = inflate(&gz[..gz.len() - 4], Compression::Gzip, 5000, p).unwrap_err().to_string();
+        assert!(e.contains("corrupt or truncated"), "{e}");
+        let e = inflate(&gz[..gz.len() / 2], Compression::Gzip, 5000, p).unwrap_err().to_string();
+        assert!(e.contains("corrupt or truncated") || e.contains("only"), "{e}");
+        let mut bad = gz.clone();
+        let mid = bad.len() / 2;
+        bad[mid] ^= 0x55;
+        assert!(inflate(&bad, Compression::Gzip, 5000, p).is_err());
+        let e = inflate(&gz, Compression::Gzip, 6000, p).unwrap_err().to_string();
+        assert!(e.contains("only 5000"), "{e}");
+    }
+
+    #[test]
+    fn four_d_files_need_a_volume_index() {
+        let p = Path::new("f.nii");
+        let mut notes = Vec::new();
+        let e = pick_volume(p, "64 x 64 x 30 x 5", 5, None, &mut notes).unwrap_err().to_string();
+        assert!(e.contains("64 x 64 x 30 x 5") && e.contains("--volume"), "{e}");
+        assert_eq!(pick_volume(p, "s", 5, Some(3), &mut notes).unwrap(), 3);
+        assert!(pick_volume(p, "s", 5, Some(5), &mut notes).is_err());
+        assert_eq!(stem(Path::new("/a/mni.nii.gz")), "mni");
+    }
+}

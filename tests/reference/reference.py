@@ -24,9 +24,15 @@ Libraries (pinned in requirements.txt):
 Every library gets the identical mesh: vertices are parsed as isolab parses them (v/f lines, fans)
 and rounded to float32, as isolab stores them.
 
+- volume files (volumes.py): real MRI data written as NIfTI-1/2 (nibabel), NRRD (pynrrd) and
+  MetaImage (SimpleITK); scikit-image's marching cubes of each, mapped through each file's
+  affine, is the golden vertex set isolab's marching cubes must give in world coordinates;
+- glTF: the Khronos validator (npm `gltf-validator`) on isolab's .glb and .gltf outputs.
+
 Modes:
   golden  write tests/reference/golden/*.json (and the isolab meshes they measure, in
-          tests/reference/meshes/), which `cargo test` compares our metrics against;
+          tests/reference/meshes/; the volume fixtures in tests/reference/volumes/), which
+          `cargo test` compares our metrics and meshes against;
   live    recompute the references for the committed golden meshes (catching a drift in the
           libraries), and for meshes the current isolab writes, compared with `isolab metrics`
           (catching a drift in isolab); and `isolab metrics` on the peers' own marching cubes
@@ -41,6 +47,8 @@ import sys
 import tempfile
 
 import numpy as np
+
+import volumes
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -416,6 +424,7 @@ def golden(isolab):
     with tempfile.TemporaryDirectory() as tmp:
         json.dump(mc_equivalence(isolab, tmp), open(os.path.join(HERE, "golden", "mc-equivalence.json"), "w"), indent=1)
     print("golden mc-equivalence")
+    volumes.golden()
 
 
 class Checks:
@@ -459,7 +468,7 @@ def live(isolab):
     check = Checks()
     # 1. The libraries still say what the committed goldens say.
     for file in sorted(os.listdir(os.path.join(HERE, "golden"))):
-        if file.startswith("tets") or file.startswith("mc-equivalence"):
+        if file.startswith("tets") or file.startswith("mc-equivalence") or file.startswith("volumes"):
             continue
         g = json.load(open(os.path.join(HERE, "golden", file)))
         now = measure(*read_mesh(os.path.join(ROOT, g["mesh"])))
@@ -540,6 +549,11 @@ def live(isolab):
                   and ours["vertex_manifold"] and ours["euler"] == 2,
                   f"triangles said {answer['triangles']} read {ours['triangles']} target {target}; closed {ours['closed']}, "
                   f"manifold {ours['edge_manifold']}/{ours['vertex_manifold']}, Euler {ours['euler']}")
+    # 6. Volume files: the libraries' own reading and scikit-image's marching cubes still give the
+    # golden vertex set, and so does isolab on every file, committed and freshly written.
+    volumes.live(isolab, check)
+    # 7. glTF outputs pass the Khronos validator.
+    volumes.gltf_validator(isolab, check)
     print(f"{check.passed} passed, {check.failed} failed")
     return check.failed == 0
 

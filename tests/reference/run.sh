@@ -7,7 +7,7 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 venv="$here/.venv"
-if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import vtk, pymeshlab, CGAL, igl, skimage, scipy, mcubes, tetgen" 2>/dev/null; then
+if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import vtk, pymeshlab, CGAL, igl, skimage, scipy, mcubes, tetgen, nibabel, nilearn, nrrd, SimpleITK" 2>/dev/null; then
   python3 -m venv "$venv"
   "$venv/bin/pip" install --quiet --disable-pip-version-check -r "$here/requirements.txt"
 fi
@@ -38,6 +38,14 @@ build_decimators() {
   fi
 }
 build_decimators
+# The Khronos glTF validator (npm, pinned by package-lock.json), for isolab's .glb/.gltf outputs.
+if [ ! -d "$here/node_modules/gltf-validator" ]; then
+  if command -v npm >/dev/null; then
+    (cd "$here" && npm ci --no-audit --no-fund --silent) || echo "note: could not install gltf-validator with npm" >&2
+  else
+    echo "note: npm is missing: the glTF validator check will fail" >&2
+  fi
+fi
 if [ "${1:-}" = "setup" ]; then
   exit 0  # the environment only (the `peers` experiment's Python peers use it)
 fi

@@ -54,8 +54,12 @@ fn unit_normals(mesh: &TriMesh) -> Vec<Vec3> {
 fn document(mesh: &TriMesh, colours: Option<&[[u8; 3]]>, generator: &str) -> (serde_json::Value, Vec<u8>) {
     let asset = json!({ "version": "2.0", "generator": generator });
     if mesh.triangles.is_empty() || mesh.positions.is_empty() {
-        // A glTF accessor cannot be empty: an empty mesh is a scene with no nodes.
-        return (json!({ "asset": asset, "scene": 0, "scenes": [{ "nodes": [] }] }), Vec::new());
+        // A glTF accessor cannot be empty: an empty mesh is a scene of one empty node (the
+        // validator refuses an empty node list, the `gltf` crate a scene without one).
+        return (
+            json!({ "asset": asset, "scene": 0, "scenes": [{ "nodes": [0] }], "nodes": [{ "name": "isolab (empty mesh)" }] }),
+            Vec::new(),
+        );
     }
     let mut bin = Vec::new();
     let mut views = Vec::new();
@@ -337,7 +341,7 @@ mod tests {
         let mut bytes = Vec::new();
         write_gltf(&mut bytes, &TriMesh::default(), None, Container::Binary, "isolab").unwrap();
         let e = parse_gltf(&bytes, Path::new("e.glb"), &|_| Err("no".into()));
-        assert!(matches!(e, Err(IoError::Empty { .. })));
+        assert!(matches!(e, Err(IoError::Empty { .. })), "{e:?}");
     }
 
     #[test]

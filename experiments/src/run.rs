@@ -408,13 +408,14 @@ struct Sampled {
 
 /// A volume's own voxels as samples: values negated when inside is above (so that inside is
 /// `f < iso` as everywhere in isolab), on a grid in the world when the voxels are world-aligned
-/// cubes (no mapping needed), else in voxel index coordinates with the affine to map the mesh.
-fn volume_samples(
+/// cubes (no mapping needed), else in voxel index coordinates, with the affine that maps a mesh
+/// of them to the world. `iso` is in the volume's own values.
+pub fn volume_samples(
     file: &crate::io::volume::VolumeFile,
-    config: &RunConfig,
+    lattice: LatticeKind,
     inside: Inside,
     iso: f32,
-) -> Result<Sampled, RunError> {
+) -> Result<(Samples, Option<DAffine3>), RunError> {
     let start = Instant::now();
     let v = &file.volume;
     let sign = if inside == Inside::Above { -1.0f32 } else { 1.0 };
@@ -426,22 +427,32 @@ fn volume_samples(
     } else {
         (Grid { origin: glam::Vec3::ZERO, spacing: 1.0, dims: v.dims }, Some(v.index_to_world))
     };
-    let lattice = match config.lattice {
+    let lattice = match lattice {
         LatticeKind::Cubic => Lattice::Cubic(grid),
         LatticeKind::Bcc => Lattice::Bcc(grid),
     };
     check_memory(&lattice)?;
     let mut values: Vec<f32> = Vec::with_capacity(lattice.sample_count());
     values.par_extend(v.values.par_iter().map(|&x| sign * x));
-    if config.lattice == LatticeKind::Bcc {
+    if let Lattice::Bcc(_) = lattice {
         let centres = file.centres.clone().unwrap_or_else(|| v.cell_centres());
         values.extend(centres.iter().map(|&x| sign * x));
     }
-    let mut notes = Vec::new();
-    let [a, b, c] = v.dims;
-    notes.push(format!("meshing {} on its own {a} x {b} x {c} voxel grid (--resolution N or --dims resamples it)", v.name));
     let samples = Samples::from_values(lattice, values, sign * iso)?.with_sampling_time(start.elapsed());
-    Ok(Sampled { samples, to_world, notes })
+    Ok((samples, to_world))
+}
+
+fn native_samples(
+    file: &crate::io::volume::VolumeFile,
+    config: &RunConfig,
+    inside: Inside,
+    iso: f32,
+) -> Result<Sampled, RunError> {
+    let (samples, to_world) = volume_samples(file, config.lattice, inside, iso)?;
+    let [a, b, c] = file.volume.dims;
+    let note =
+        format!("meshing {} on its own {a} x {b} x {c} voxel grid (--resolution N or --dims resamples it)", file.volume.name);
+    Ok(Sampled { samples, to_world, notes: vec![note] })
 }
 
 /// Samples, extracts, post-processes and measures.
@@ -469,7 +480,7 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
     let internal_iso = if inside == Inside::Above { -iso } else { iso };
     let native = input.volume.as_ref().filter(|_| config.volume_grid == VolumeGrid::Native);
     let Sampled { samples, to_world, mut notes } = match native {
-        Some(file) => volume_samples(file, config, inside, iso)?,
+        Some(file) => native_samples(file, config, inside, iso)?,
         None => {
             let lattice = lattice_for(field.as_ref(), config)?;
             check_memory(&lattice)?;

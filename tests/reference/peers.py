@@ -7,6 +7,14 @@ extraction call (grid conversion excluded), and prints {"ms": T, "vertices": V, 
 {"error": MESSAGE}. Peers: vtk-flying-edges (threads 1 or 2: VTK's STDThread SMP backend),
 vtk-marching-cubes, skimage-lorensen, skimage-lewiner, pymcubes, libigl. And one decimator:
 {"peer": "pymeshlab-quadric", "mesh": PATH, "target": FACES, "out": PATH}.
+
+Scans (the `real_volumes` experiment): {"peer": "scan", "library": "vtk-flying-edges" or
+"skimage-lewiner", "nifti": PATH, "level": V, "out": PATH or null} meshes the NIfTI file's array
+as nibabel loads it (cached between requests; VTK gets the stored dtype, scikit-image converts to
+float itself), timing the extraction call only, and writes the mesh in world coordinates (the
+file's affine) to `out` as binary PLY; {"peer": "scan-end-to-end", "nifti": PATH, "level": V}
+times what a user runs: nibabel loading the file, the array into a vtkImageData, flying edges,
+all fresh (nothing cached). The hello line names the MNI T1 template nilearn ships ("mni_t1").
 """
 import json
 import os
@@ -123,6 +131,90 @@ def run(req):
     raise RuntimeError(f"unknown peer {peer}")
 
 
+scans = {}
+
+
+def scan_array(path):
+    import nibabel as nib
+    if path not in scans:
+        scans.clear()
+        img = nib.load(path)
+        scans[path] = (np.asanyarray(img.dataobj), img.affine)
+    return scans[path]
+
+
+def vtk_scan_image(data, affine):
+    """The array as a vtkImageData with the affine's voxel sizes and origin (axis-aligned
+    affines only: flying edges does not take a direction matrix)."""
+    if not np.allclose(affine[:3, :3], np.diag(np.diag(affine[:3, :3]))):
+        raise RuntimeError("the scan's affine is not axis-aligned")
+    img = vtk.vtkImageData()
+    img.SetDimensions(*data.shape)
+    img.SetSpacing(*np.diag(affine[:3, :3]))
+    img.SetOrigin(*affine[:3, 3])
+    img.GetPointData().SetScalars(numpy_support.numpy_to_vtk(np.ascontiguousarray(data).ravel(order="F"), deep=True))
+    return img
+
+
+def flying_edges(img, level):
+    f = vtk.vtkFlyingEdges3D()
+    f.SetInputData(img)
+    f.SetValue(0, level)
+    f.ComputeNormalsOff()
+    f.ComputeGradientsOff()
+    f.ComputeScalarsOff()
+    return f
+
+
+def write_ply(path, verts, faces):
+    """Binary little-endian PLY: float xyz, uchar-int faces."""
+    verts = np.ascontiguousarray(verts, dtype="<f4")
+    rows = np.empty(len(faces), dtype=[("n", "u1"), ("i", "<i4", 3)])
+    rows["n"], rows["i"] = 3, faces
+    with open(path, "wb") as f:
+        f.write(f"ply\nformat binary_little_endian 1.0\nelement vertex {len(verts)}\nproperty float x\nproperty float y\n"
+                f"property float z\nelement face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n".encode())
+        f.write(verts.tobytes())
+        f.write(rows.tobytes())
+
+
+def scan(req):
+    data, affine = scan_array(req["nifti"])
+    level = float(req["level"])
+    if req["library"] == "vtk-flying-edges":
+        vtk.vtkSMPTools.SetBackend("Sequential")
+        f = flying_edges(vtk_scan_image(data, affine), level)
+        t = time.perf_counter()
+        f.Update()
+        ms = (time.perf_counter() - t) * 1e3
+        out = f.GetOutput()
+        verts = numpy_support.vtk_to_numpy(out.GetPoints().GetData()).astype(np.float64) if out.GetNumberOfPoints() else np.zeros((0, 3))
+        faces = numpy_support.vtk_to_numpy(out.GetPolys().GetConnectivityArray()).reshape(-1, 3)
+    elif req["library"] == "skimage-lewiner":
+        t = time.perf_counter()
+        v, faces, _, _ = measure.marching_cubes(data, level=level, method="lewiner")
+        ms = (time.perf_counter() - t) * 1e3
+        verts = v.astype(np.float64) @ affine[:3, :3].T + affine[:3, 3]
+    else:
+        raise RuntimeError(f"unknown scan library {req['library']}")
+    if req.get("out"):
+        write_ply(req["out"], verts, faces)
+    return ms, len(verts), len(faces)
+
+
+def scan_end_to_end(req):
+    import nibabel as nib
+    vtk.vtkSMPTools.SetBackend("Sequential")
+    t = time.perf_counter()
+    img = nib.load(req["nifti"])
+    data = np.asanyarray(img.dataobj)
+    f = flying_edges(vtk_scan_image(data, img.affine), float(req["level"]))
+    f.Update()
+    ms = (time.perf_counter() - t) * 1e3
+    out = f.GetOutput()
+    return ms, out.GetNumberOfPoints(), out.GetNumberOfPolys()
+
+
 def decimate(req):
     """pymeshlab's quadric edge collapse of the PLY/OBJ `mesh` down to `target` faces, written to
     `out` (OBJ); times the filter only."""
@@ -144,13 +236,25 @@ def main():
         available["pymeshlab"] = getattr(pymeshlab, "__version__", "installed")
     except Exception as e:  # noqa: BLE001
         errors["pymeshlab"] = str(e)
-    print(json.dumps({"available": available, "errors": errors}), flush=True)
+    hello = {"available": available, "errors": errors}
+    try:
+        import nibabel
+        import nilearn
+        available["nibabel"] = nibabel.__version__
+        available["nilearn"] = nilearn.__version__
+        path = os.path.join(os.path.dirname(nilearn.__file__), "datasets", "data", "mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz")
+        if os.path.exists(path):
+            hello["mni_t1"] = path
+    except Exception as e:  # noqa: BLE001
+        errors["nilearn"] = str(e)
+    print(json.dumps(hello), flush=True)
     for line in sys.stdin:
         if not line.strip():
             continue
         try:
             req = json.loads(line)
-            ms, nv, nf = decimate(req) if req.get("peer") == "pymeshlab-quadric" else run(req)
+            handler = {"pymeshlab-quadric": decimate, "scan": scan, "scan-end-to-end": scan_end_to_end}.get(req.get("peer"), run)
+            ms, nv, nf = handler(req)
             print(json.dumps({"ms": ms, "vertices": int(nv), "triangles": int(nf)}), flush=True)
         except Exception as e:  # noqa: BLE001
             print(json.dumps({"error": f"{type(e).__name__}: {e}"}), flush=True)

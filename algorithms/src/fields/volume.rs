@@ -56,7 +56,7 @@ impl Volume {
         if voxels != Some(values.len()) {
             return Err(bad(format!("{} values for a {} x {} x {} grid", values.len(), dims[0], dims[1], dims[2])));
         }
-        if let Some(at) = values.iter().position(|v| !v.is_finite()) {
+        if let Some(at) = first_non_finite(&values) {
             let [ni, nj, _] = dims;
             return Err(bad(format!(
                 "voxel ({}, {}, {}) is {}; volumes must be finite",
@@ -148,6 +148,14 @@ impl Volume {
     pub fn otsu_threshold(&self) -> Option<f32> {
         otsu_threshold(&self.values)
     }
+}
+
+/// The index of the first NaN or infinite value, checked in parallel blocks.
+fn first_non_finite(values: &[f32]) -> Option<usize> {
+    use rayon::prelude::*;
+    const BLOCK: usize = 1 << 16;
+    let block = values.par_chunks(BLOCK).position_first(|c| c.iter().fold(false, |bad, v| bad | !v.is_finite()))?;
+    values[block * BLOCK..].iter().position(|v| !v.is_finite()).map(|i| block * BLOCK + i)
 }
 
 /// Otsu's threshold of `values` (256 bins between their extremes): the bin boundary that

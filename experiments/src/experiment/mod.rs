@@ -10,6 +10,7 @@ pub mod costen_table;
 pub mod decimation;
 pub mod large_world;
 pub mod peers;
+pub mod real_volumes;
 pub mod scaling;
 pub mod sharp_features;
 pub mod sphere_convergence;
@@ -135,6 +136,7 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(sharp_features::SharpFeatures),
         Box::new(costen_table::CostenTable),
         Box::new(peers::Peers),
+        Box::new(real_volumes::RealVolumes),
         Box::new(scaling::Scaling),
         Box::new(decimation::Decimation),
         Box::new(svoboda_timing::SvobodaTiming),

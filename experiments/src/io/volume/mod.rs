@@ -122,29 +122,33 @@ impl DataType {
 }
 
 /// `count` values of type `ty` from `bytes` (which must hold them), as f32 scaled by
-/// `slope * v + inter`.
+/// `slope * v + inter`; in parallel blocks (a scan is millions of voxels).
 pub fn decode(bytes: &[u8], ty: DataType, big_endian: bool, count: usize, slope: f64, inter: f64) -> Vec<f32> {
+    use rayon::prelude::*;
+    const BLOCK: usize = 1 << 16;
     let size = ty.size();
     let scaled = slope != 1.0 || inter != 0.0;
-    let mut out = Vec::with_capacity(count);
+    let mut out = vec![0.0f32; count];
     macro_rules! run {
         ($t:ty) => {{
-            for chunk in bytes[..count * size].chunks_exact(size) {
-                let mut b = [0u8; std::mem::size_of::<$t>()];
-                b.copy_from_slice(chunk);
-                let v = if big_endian { <$t>::from_be_bytes(b) } else { <$t>::from_le_bytes(b) };
-                out.push(if scaled { (slope * v as f64 + inter) as f32 } else { v as f32 });
-            }
+            out.par_chunks_mut(BLOCK).zip(bytes[..count * size].par_chunks(BLOCK * size)).for_each(|(out, raw)| {
+                for (o, chunk) in out.iter_mut().zip(raw.chunks_exact(size)) {
+                    let mut b = [0u8; std::mem::size_of::<$t>()];
+                    b.copy_from_slice(chunk);
+                    let v = if big_endian { <$t>::from_be_bytes(b) } else { <$t>::from_le_bytes(b) };
+                    *o = if scaled { (slope * v as f64 + inter) as f32 } else { v as f32 };
+                }
+            })
         }};
     }
     match ty {
-        DataType::U8 => {
+        DataType::U8 => out.par_chunks_mut(BLOCK).zip(bytes[..count].par_chunks(BLOCK)).for_each(|(out, raw)| {
             if scaled {
-                out.extend(bytes[..count].iter().map(|&v| (slope * v as f64 + inter) as f32));
+                out.iter_mut().zip(raw).for_each(|(o, &v)| *o = (slope * v as f64 + inter) as f32);
             } else {
-                out.extend(bytes[..count].iter().map(|&v| v as f32));
+                out.iter_mut().zip(raw).for_each(|(o, &v)| *o = v as f32);
             }
-        }
+        }),
         DataType::I8 => run!(i8),
         DataType::U16 => run!(u16),
         DataType::I16 => run!(i16),

@@ -182,7 +182,7 @@ def scan(req):
     data, affine = scan_array(req["nifti"])
     level = float(req["level"])
     if req["library"] == "vtk-flying-edges":
-        vtk.vtkSMPTools.SetBackend("Sequential")
+        smp_threads(int(req.get("threads", 1)))
         f = flying_edges(vtk_scan_image(data, affine), level)
         t = time.perf_counter()
         f.Update()
@@ -202,9 +202,14 @@ def scan(req):
     return ms, len(verts), len(faces)
 
 
+def smp_threads(threads):
+    vtk.vtkSMPTools.SetBackend("STDThread" if threads > 1 else "Sequential")
+    vtk.vtkSMPTools.Initialize(threads)
+
+
 def scan_end_to_end(req):
     import nibabel as nib
-    vtk.vtkSMPTools.SetBackend("Sequential")
+    smp_threads(int(req.get("threads", 1)))
     t = time.perf_counter()
     img = nib.load(req["nifti"])
     data = np.asanyarray(img.dataobj)

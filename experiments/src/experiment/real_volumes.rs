@@ -81,7 +81,10 @@ struct Row {
     implementation: String,
     ours: bool,
     level: String,
-    time_ms: Spread,
+    /// Extraction time on one thread (ours in a one-thread rayon pool; VTK's Sequential backend).
+    time_1: Spread,
+    /// On two threads (rayon's pool; VTK's STDThread backend); none for single-threaded peers.
+    time_2: Option<Spread>,
     vertices: usize,
     triangles: usize,
     min_angle_deg: f64,
@@ -102,6 +105,8 @@ struct Row {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct EndToEnd {
     level: String,
+    /// Threads on both sides.
+    threads: usize,
     ours_ms: Spread,
     peer_ms: Spread,
     /// Peer median over ours.
@@ -144,7 +149,15 @@ fn levels(values: &[f32]) -> Vec<Level> {
     ]
 }
 
-fn row(implementation: &str, ours: bool, level: &Level, times: Vec<f64>, mesh: &TriMesh, field: &dyn Field, iso: f32) -> Row {
+fn row(
+    implementation: &str,
+    ours: bool,
+    level: &Level,
+    times: [Vec<f64>; 2],
+    mesh: &TriMesh,
+    field: &dyn Field,
+    iso: f32,
+) -> Row {
     let m = MeshMetrics::measure(mesh, Some((field, iso)));
     let t = &m.topology;
     let d = m.surface_distance.unwrap_or_default();
@@ -152,7 +165,8 @@ fn row(implementation: &str, ours: bool, level: &Level, times: Vec<f64>, mesh: &
         implementation: implementation.into(),
         ours,
         level: level.name.clone(),
-        time_ms: Spread::of(times),
+        time_1: Spread::of(times[0].clone()),
+        time_2: (!times[1].is_empty()).then(|| Spread::of(times[1].clone())),
         vertices: m.vertices,
         triangles: m.triangles,
         min_angle_deg: m.quality.min_angle_deg,
@@ -187,7 +201,12 @@ impl Experiment for RealVolumes {
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let root = ctx.report_dir.join("..");
-        let mut data = Data { repeats: ctx.repeats, threads: rayon::current_num_threads(), ..Default::default() };
+        let mut data = Data { repeats: ctx.repeats, threads: 2, ..Default::default() };
+        let pools: Vec<rayon::ThreadPool> = [1, 2]
+            .iter()
+            .map(|&n| rayon::ThreadPoolBuilder::new().num_threads(n).build())
+            .collect::<Result<_, _>>()
+            .map_err(|e| ExperimentError::Figure(format!("thread pool: {e}")))?;
         let (mut python, hello) = match PythonPeers::start(&root) {
             Ok(p) => p,
             Err(e) => {
@@ -226,42 +245,52 @@ impl Experiment for RealVolumes {
         for level in data.levels.clone() {
             let (samples, to_world) = volume_samples(&file, LatticeKind::Cubic, Inside::Above, level.iso)?;
             let internal = -level.iso;
-            // Ours and the peers, one run each per round, alternating.
-            let mut times: Vec<Vec<f64>> = vec![Vec::new(); surface.len() + peers.len()];
-            let mut meshes: Vec<Option<TriMesh>> = vec![None; surface.len() + peers.len()];
+            // Ours and the peers, one run each per round, alternating; on one thread, then two.
+            let slots = surface.len() + peers.len();
+            let mut times: Vec<[Vec<f64>; 2]> = vec![[Vec::new(), Vec::new()]; slots];
+            let mut meshes: Vec<Option<TriMesh>> = vec![None; slots];
             let mut errors: Vec<Option<String>> = vec![None; peers.len()];
-            for round in 0..ctx.repeats {
-                for (k, info) in surface.iter().enumerate() {
-                    let extractor = extractors::by_name(info.name).ok_or_else(|| ExperimentError::Figure(info.name.into()))?;
-                    let mut out = Extraction::default();
-                    extractor.extract(&samples, &mut out)?;
-                    times[k].push(out.stats.times.extraction().as_secs_f64() * 1e3);
-                    if round + 1 == ctx.repeats {
-                        if let Some(a) = &to_world {
-                            out.surface.transform(a);
-                        }
-                        meshes[k] = Some(out.surface);
-                    }
-                }
-                for (p, (peer, _)) in peers.iter().enumerate() {
-                    let out = tmp.join(format!("{peer}.ply"));
-                    let last = round + 1 == ctx.repeats;
-                    let request = serde_json::json!({"peer": "scan", "library": peer, "nifti": path, "level": level.iso,
-                                                     "out": if last { Some(&out) } else { None }});
-                    match python.request(&request) {
-                        Ok((ms, _, _)) => {
-                            times[surface.len() + p].push(ms);
-                            if last {
-                                meshes[surface.len() + p] = Some(crate::io::read_mesh(&out)?);
+            for (t, pool) in pools.iter().enumerate() {
+                for round in 0..ctx.repeats {
+                    let last = t == 1 && round + 1 == ctx.repeats;
+                    for (k, info) in surface.iter().enumerate() {
+                        let extractor =
+                            extractors::by_name(info.name).ok_or_else(|| ExperimentError::Figure(info.name.into()))?;
+                        let mut out = Extraction::default();
+                        pool.install(|| extractor.extract(&samples, &mut out))?;
+                        times[k][t].push(out.stats.times.extraction().as_secs_f64() * 1e3);
+                        if last {
+                            if let Some(a) = &to_world {
+                                out.surface.transform(a);
                             }
+                            meshes[k] = Some(out.surface);
                         }
-                        Err(e) => errors[p] = Some(e),
+                    }
+                    for (p, (peer, _)) in peers.iter().enumerate() {
+                        if t == 1 && *peer == "skimage-lewiner" && !last {
+                            continue; // single-threaded: timed once per round on the one-thread pass
+                        }
+                        let out = tmp.join(format!("{peer}.ply"));
+                        let request = serde_json::json!({"peer": "scan", "library": peer, "nifti": path, "level": level.iso,
+                                                         "threads": t + 1, "out": if last { Some(&out) } else { None }});
+                        match python.request(&request) {
+                            Ok((ms, _, _)) => {
+                                if !(t == 1 && *peer == "skimage-lewiner") {
+                                    times[surface.len() + p][t].push(ms);
+                                }
+                                if last {
+                                    meshes[surface.len() + p] = Some(crate::io::read_mesh(&out)?);
+                                }
+                            }
+                            Err(e) => errors[p] = Some(e),
+                        }
                     }
                 }
             }
             for (k, info) in surface.iter().enumerate() {
                 if let Some(mesh) = &meshes[k] {
-                    data.rows.push(row(info.name, true, &level, std::mem::take(&mut times[k]), mesh, field.as_ref(), internal));
+                    let t = std::mem::take(&mut times[k]);
+                    data.rows.push(row(info.name, true, &level, t, mesh, field.as_ref(), internal));
                 }
                 bar.inc(1);
             }
@@ -282,37 +311,46 @@ impl Experiment for RealVolumes {
                 }
                 bar.inc(1);
             }
-            // End to end, one-shot, alternating.
-            let (mut ours, mut theirs, mut counts) = (Vec::new(), Vec::new(), (0, 0));
-            for _ in 0..ctx.repeats {
-                let t = Instant::now();
-                let file = read_volume(path, VolumeOptions::default())?;
-                let (samples, to_world) = volume_samples(&file, LatticeKind::Cubic, Inside::Above, level.iso)?;
-                let mut out = Extraction::default();
-                let mc = extractors::by_name("marching-cubes").ok_or_else(|| ExperimentError::Figure("marching-cubes".into()))?;
-                mc.extract(&samples, &mut out)?;
-                if let Some(a) = &to_world {
-                    out.surface.transform(a);
-                }
-                ours.push(t.elapsed().as_secs_f64() * 1e3);
-                counts.0 = out.surface.triangles.len();
-                match python.request(&serde_json::json!({"peer": "scan-end-to-end", "nifti": path, "level": level.iso})) {
-                    Ok((ms, _, triangles)) => {
-                        theirs.push(ms);
-                        counts.1 = triangles;
+            // End to end, one-shot, alternating, on one thread and on two.
+            for (t, pool) in pools.iter().enumerate() {
+                let (mut ours, mut theirs, mut counts) = (Vec::new(), Vec::new(), (0, 0));
+                for _ in 0..ctx.repeats {
+                    let start = Instant::now();
+                    let triangles = pool.install(|| -> Result<usize, ExperimentError> {
+                        let file = read_volume(path, VolumeOptions::default())?;
+                        let (samples, to_world) = volume_samples(&file, LatticeKind::Cubic, Inside::Above, level.iso)?;
+                        let mut out = Extraction::default();
+                        let mc = extractors::by_name("marching-cubes")
+                            .ok_or_else(|| ExperimentError::Figure("marching-cubes".into()))?;
+                        mc.extract(&samples, &mut out)?;
+                        if let Some(a) = &to_world {
+                            out.surface.transform(a);
+                        }
+                        Ok(out.surface.triangles.len())
+                    })?;
+                    ours.push(start.elapsed().as_secs_f64() * 1e3);
+                    counts.0 = triangles;
+                    let request =
+                        serde_json::json!({"peer": "scan-end-to-end", "nifti": path, "level": level.iso, "threads": t + 1});
+                    match python.request(&request) {
+                        Ok((ms, _, triangles)) => {
+                            theirs.push(ms);
+                            counts.1 = triangles;
+                        }
+                        Err(e) => data.skipped.push(format!("end to end at {}: {e}", level.name)),
                     }
-                    Err(e) => data.skipped.push(format!("end to end at {}: {e}", level.name)),
                 }
+                let (ours_ms, peer_ms) = (Spread::of(ours), Spread::of(theirs));
+                data.end_to_end.push(EndToEnd {
+                    level: level.name.clone(),
+                    threads: t + 1,
+                    ratio: peer_ms.median / ours_ms.median,
+                    ours_ms,
+                    peer_ms,
+                    ours_triangles: counts.0,
+                    peer_triangles: counts.1,
+                });
             }
-            let (ours_ms, peer_ms) = (Spread::of(ours), Spread::of(theirs));
-            data.end_to_end.push(EndToEnd {
-                level: level.name.clone(),
-                ratio: peer_ms.median / ours_ms.median,
-                ours_ms,
-                peer_ms,
-                ours_triangles: counts.0,
-                peer_triangles: counts.1,
-            });
             bar.inc(1);
             // Pictures: marching cubes large, and every implementation small.
             let mc_index = surface.iter().position(|i| i.name == "marching-cubes");
@@ -372,9 +410,10 @@ impl Experiment for RealVolumes {
             data.levels.iter().map(|l| format!("**{}** {:.1} ({})", l.name, l.iso, l.how)).collect::<Vec<_>>().join("; ")
         ));
         s.push_str(&format!(
-            "Protocol: one-shot, {} alternating runs, median (min-max) in ms. Extraction only: a fresh extractor and output per \
-             run for ours (rayon, {} threads), a fresh `vtkFlyingEdges3D` (one thread, VTK's default backend) and a fresh \
-             scikit-image call on the array nibabel loaded. Distance: the mean over vertices of the first-order distance \
+            "Protocol: one-shot, {} alternating runs, median (min-max) in ms, on one thread and on {}: ours in a rayon pool of \
+             that size, VTK's flying edges on its Sequential backend for one thread and its STDThread backend for two \
+             (scikit-image is single-threaded). Extraction only: a fresh extractor and output per run for ours, a fresh \
+             `vtkFlyingEdges3D` and a fresh scikit-image call on the array nibabel loaded. Distance: the mean over vertices of the first-order distance \
              `|f - iso| / |grad f|` to the trilinear interpolant's level set, in voxels (1 mm; the maximum is not shown: \
              where the interpolant is nearly flat this estimate is meaningless). Every mesh is measured by isolab's metrics, checked against CGAL, pymeshlab and VTK \
              elsewhere in this report.\n\n",
@@ -390,7 +429,8 @@ impl Experiment for RealVolumes {
                     vec![
                         if r.ours { r.implementation.clone() } else { format!("_{}_", r.implementation) },
                         r.triangles.to_string(),
-                        format!("{:.1} ({:.1}-{:.1})", r.time_ms.median, r.time_ms.min, r.time_ms.max),
+                        format!("{:.1} ({:.1}-{:.1})", r.time_1.median, r.time_1.min, r.time_1.max),
+                        r.time_2.as_ref().map_or("-".into(), |t| format!("{:.1} ({:.1}-{:.1})", t.median, t.min, t.max)),
                         format!("{:.1}", r.min_angle_deg),
                         format!("{:.2} / {:.0}", r.aspect_mean, r.aspect_max),
                         r.components.to_string(),
@@ -413,7 +453,8 @@ impl Experiment for RealVolumes {
                 &[
                     "implementation",
                     "triangles",
-                    "ms",
+                    "ms, 1 thread",
+                    "ms, 2 threads",
                     "min angle",
                     "aspect mean / max",
                     "components",
@@ -435,6 +476,7 @@ impl Experiment for RealVolumes {
             .map(|e| {
                 vec![
                     e.level.clone(),
+                    e.threads.to_string(),
                     format!("{:.1} ({:.1}-{:.1})", e.ours_ms.median, e.ours_ms.min, e.ours_ms.max),
                     format!("{:.1} ({:.1}-{:.1})", e.peer_ms.median, e.peer_ms.min, e.peer_ms.max),
                     format!("{:.2}x", e.ratio),
@@ -445,9 +487,13 @@ impl Experiment for RealVolumes {
         s.push_str(
             "End to end, one process each, one-shot: isolab reading the `.nii.gz`, taking the voxels as samples, marching cubes \
              and the map to world coordinates, against nibabel loading the same file, the array into a `vtkImageData` and \
-             `vtkFlyingEdges3D` (ratio: peer time over ours, above 1 when isolab is faster):\n\n",
+             `vtkFlyingEdges3D`, both on the same number of threads (ratio: peer time over ours, above 1 when isolab is \
+             faster):\n\n",
         );
-        s.push_str(&markdown_table(&["level", "isolab ms", "nibabel + VTK ms", "ratio", "triangles (ours / VTK)"], &rows));
+        s.push_str(&markdown_table(
+            &["level", "threads", "isolab ms", "nibabel + VTK ms", "ratio", "triangles (ours / VTK)"],
+            &rows,
+        ));
         s.push('\n');
         for (label, path) in &data.images {
             s.push_str(&format!("![{label}]({path})\n\n_{label}_\n\n"));

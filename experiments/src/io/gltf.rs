@@ -3,10 +3,11 @@
 //! and vertex colours (materials); and a reader for both (and for external `.bin` buffers), so
 //! `isolab metrics` measures what it wrote.
 //!
-//! The `gltf` crate parses and validates the JSON and the GLB container and walks the scene;
-//! accessors are read here with checked arithmetic (the crate's reader computes byte ranges
-//! with unchecked sums, which a malformed file can overflow). The JSON is written with
-//! `serde_json` (a dozen objects), the GLB container by the crate.
+//! The `gltf` crate's JSON types (`gltf::json`) parse the document; the GLB container, the
+//! scene walk and the accessors are read here with every index and byte range checked: the
+//! crate's own validation indexed arrays unchecked and panicked on a mutated file (found by
+//! `tests/tests/parsers.rs`), and its GLB reader subtracts lengths unchecked. The JSON is written
+//! with `serde_json` (a dozen objects), the GLB container by the crate.
 //!
 //! Every file passes the Khronos glTF validator with no errors (`tests/reference/run.sh` runs it
 //! on what `isolab extract` writes). Coordinates are written as they are: glTF's +Y is up, which
@@ -161,63 +162,102 @@ pub fn read_gltf(path: &Path) -> Result<TriMesh, IoError> {
     })
 }
 
+/// Splits a GLB into its JSON and BIN chunks, with checked lengths.
+fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
+    let word = |at: usize| bytes.get(at..at + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize);
+    let version = word(4).ok_or("the GLB header is cut short")?;
+    if version != 2 {
+        return Err(format!("GLB version {version}, only 2 is read"));
+    }
+    let length = word(8).ok_or("the GLB header is cut short")?.min(bytes.len());
+    let mut at = 12;
+    let mut chunk = |kind: &[u8; 4]| -> Result<Option<&[u8]>, String> {
+        if at + 8 > length {
+            return Ok(None);
+        }
+        let size = word(at).ok_or("a chunk header is cut short")?;
+        if &bytes[at + 4..at + 8] != kind {
+            return Err(format!("expected a {} chunk at byte {at}", String::from_utf8_lossy(kind)));
+        }
+        let data = bytes.get(at + 8..at + 8 + size).filter(|_| at + 8 + size <= length).ok_or_else(|| {
+            format!("the {} chunk at byte {at} has {size} bytes, past the file's end", String::from_utf8_lossy(kind))
+        })?;
+        at += 8 + size;
+        Ok(Some(data))
+    };
+    let json = chunk(b"JSON")?.ok_or("the GLB has no JSON chunk")?;
+    let bin = chunk(b"BIN\0")?;
+    Ok((json, bin))
+}
+
 /// Parses glTF or GLB bytes; `external` reads a buffer given by a relative URI (return an error
-/// to refuse). `path` is only used in error messages.
+/// to refuse). `path` is only used in error messages. Every index and byte range in the file is
+/// checked here: the `gltf` crate's validation indexes arrays unchecked (it panicked on a
+/// mutated file), so only its JSON types are used.
 pub fn parse_gltf(bytes: &[u8], path: &Path, external: &dyn Fn(&str) -> Result<Vec<u8>, String>) -> Result<TriMesh, IoError> {
+    use gltf::json::accessor::Type;
+    use gltf::json::mesh::{Mode, Semantic};
+    use gltf::json::validation::Checked;
     let invalid = |reason: String| IoError::Invalid { path: path.into(), reason };
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| invalid(format!("not a valid glTF file: {e}")))?;
+    let (json, blob) = if bytes.starts_with(b"glTF") { split_glb(bytes).map_err(&invalid)? } else { (bytes, None) };
+    let root = gltf::json::Root::from_slice(json).map_err(|e| invalid(format!("not valid glTF JSON: {e}")))?;
     let mut buffers = Vec::new();
-    for buffer in gltf.buffers() {
-        let data = match buffer.source() {
-            gltf::buffer::Source::Bin => {
-                gltf.blob.clone().ok_or_else(|| invalid("a buffer refers to a GLB BIN chunk the file lacks".into()))?
+    for (i, buffer) in root.buffers.iter().enumerate() {
+        let data = match &buffer.uri {
+            None => {
+                blob.map(<[u8]>::to_vec).ok_or_else(|| invalid(format!("buffer {i} refers to a GLB BIN chunk the file lacks")))?
             }
-            gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
-                let (_, payload) = uri.split_once(";base64,").ok_or_else(|| invalid("a data URI buffer is not base64".into()))?;
+            Some(uri) if uri.starts_with("data:") => {
+                let (_, payload) =
+                    uri.split_once(";base64,").ok_or_else(|| invalid(format!("buffer {i}: a data URI that is not base64")))?;
                 base64::engine::general_purpose::STANDARD
                     .decode(payload)
-                    .map_err(|e| invalid(format!("buffer {}: bad base64: {e}", buffer.index())))?
+                    .map_err(|e| invalid(format!("buffer {i}: bad base64: {e}")))?
             }
-            gltf::buffer::Source::Uri(uri) => external(uri).map_err(invalid)?,
+            Some(uri) => external(uri).map_err(&invalid)?,
         };
-        if data.len() < buffer.length() {
-            return Err(invalid(format!(
-                "buffer {} has {} bytes, the file says {}",
-                buffer.index(),
-                data.len(),
-                buffer.length()
-            )));
+        if (data.len() as u64) < buffer.byte_length.0 {
+            return Err(invalid(format!("buffer {i} has {} bytes, the file says {}", data.len(), buffer.byte_length.0)));
         }
         buffers.push(data);
     }
     let mut mesh = TriMesh::default();
-    let mut add = |m: gltf::Mesh, to_world: Mat4| -> Result<(), IoError> {
-        for primitive in m.primitives() {
-            let mode = primitive.mode();
-            if !matches!(mode, gltf::mesh::Mode::Triangles | gltf::mesh::Mode::TriangleStrip | gltf::mesh::Mode::TriangleFan) {
+    let mut add = |m: usize, to_world: Mat4| -> Result<(), IoError> {
+        let json_mesh = root.meshes.get(m).ok_or_else(|| invalid(format!("a node refers to mesh {m}, which does not exist")))?;
+        for (k, primitive) in json_mesh.primitives.iter().enumerate() {
+            let mode = match primitive.mode {
+                Checked::Valid(mode) => mode,
+                Checked::Invalid => return Err(invalid(format!("mesh {m} primitive {k}: unknown mode"))),
+            };
+            if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
                 continue;
             }
             let position = primitive
-                .get(&gltf::Semantic::Positions)
-                .ok_or_else(|| invalid(format!("mesh {} has a primitive without POSITION", m.index())))?;
-            let base = mesh.positions.len() as u32;
-            let points = read_accessor(&position, &buffers).map_err(|e| invalid(format!("mesh {} POSITION: {e}", m.index())))?;
-            if position.dimensions() != gltf::accessor::Dimensions::Vec3 {
-                return Err(invalid(format!("mesh {} POSITION is not VEC3", m.index())));
+                .attributes
+                .get(&Checked::Valid(Semantic::Positions))
+                .ok_or_else(|| invalid(format!("mesh {m} primitive {k} has no POSITION")))?;
+            let accessor =
+                root.accessors.get(position.value()).ok_or_else(|| invalid(format!("mesh {m}: POSITION accessor missing")))?;
+            if accessor.type_ != Checked::Valid(Type::Vec3) {
+                return Err(invalid(format!("mesh {m} POSITION is not VEC3")));
             }
+            let points =
+                read_accessor(&root, position.value(), &buffers).map_err(|e| invalid(format!("mesh {m} POSITION: {e}")))?;
+            let base = mesh.positions.len() as u32;
             mesh.positions.extend(
                 points.chunks_exact(3).map(|c| to_world.transform_point3(Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))),
             );
             let count = points.len() / 3;
-            let order: Vec<u32> = match primitive.indices() {
-                Some(a) => {
-                    let values = read_accessor(&a, &buffers).map_err(|e| invalid(format!("mesh {} indices: {e}", m.index())))?;
-                    values.iter().map(|&v| v as u32).collect()
-                }
+            let order: Vec<u32> = match primitive.indices {
+                Some(a) => read_accessor(&root, a.value(), &buffers)
+                    .map_err(|e| invalid(format!("mesh {m} indices: {e}")))?
+                    .iter()
+                    .map(|&v| v as u32)
+                    .collect(),
                 None => (0..count as u32).collect(),
             };
             if let Some(&bad) = order.iter().find(|&&i| i as usize >= count) {
-                return Err(invalid(format!("mesh {}: index {bad} is out of range ({count} vertices)", m.index())));
+                return Err(invalid(format!("mesh {m}: index {bad} is out of range ({count} vertices)")));
             }
             let mirrored = to_world.determinant() < 0.0;
             let mut push = |mut t: [u32; 3]| {
@@ -227,8 +267,8 @@ pub fn parse_gltf(bytes: &[u8], path: &Path, external: &dyn Fn(&str) -> Result<V
                 mesh.triangles.push(t.map(|i| base + i));
             };
             match mode {
-                gltf::mesh::Mode::Triangles => order.chunks_exact(3).for_each(|t| push([t[0], t[1], t[2]])),
-                gltf::mesh::Mode::TriangleStrip => {
+                Mode::Triangles => order.chunks_exact(3).for_each(|t| push([t[0], t[1], t[2]])),
+                Mode::TriangleStrip => {
                     for (k, w) in order.windows(3).enumerate() {
                         push(if k % 2 == 0 { [w[0], w[1], w[2]] } else { [w[1], w[0], w[2]] });
                     }
@@ -242,23 +282,33 @@ pub fn parse_gltf(bytes: &[u8], path: &Path, external: &dyn Fn(&str) -> Result<V
         }
         Ok(())
     };
-    let scene = gltf.default_scene().or_else(|| gltf.scenes().next());
+    let scene = root.scene.map(|s| s.value()).or((!root.scenes.is_empty()).then_some(0));
     match scene {
-        Some(scene) => {
-            let mut stack: Vec<(gltf::Node, Mat4, usize)> = scene.nodes().map(|n| (n, Mat4::IDENTITY, 0)).collect();
-            while let Some((node, parent, depth)) = stack.pop() {
+        Some(s) => {
+            let scene = root.scenes.get(s).ok_or_else(|| invalid(format!("scene {s} does not exist")))?;
+            let mut stack: Vec<(usize, Mat4, usize)> = scene.nodes.iter().map(|n| (n.value(), Mat4::IDENTITY, 0)).collect();
+            while let Some((n, parent, depth)) = stack.pop() {
                 if depth > 64 {
                     return Err(invalid("the node hierarchy is deeper than 64 levels (a cycle?)".into()));
                 }
-                let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-                if let Some(m) = node.mesh() {
-                    add(m, world)?;
+                let node = root.nodes.get(n).ok_or_else(|| invalid(format!("node {n} does not exist")))?;
+                let local = match node.matrix {
+                    Some(m) => Mat4::from_cols_array(&m),
+                    None => Mat4::from_scale_rotation_translation(
+                        Vec3::from(node.scale.unwrap_or([1.0; 3])),
+                        glam::Quat::from_array(node.rotation.map_or([0.0, 0.0, 0.0, 1.0], |r| r.0)),
+                        Vec3::from(node.translation.unwrap_or([0.0; 3])),
+                    ),
+                };
+                let world = parent * local;
+                if let Some(m) = node.mesh {
+                    add(m.value(), world)?;
                 }
-                stack.extend(node.children().map(|c| (c, world, depth + 1)));
+                stack.extend(node.children.iter().flatten().map(|c| (c.value(), world, depth + 1)));
             }
         }
         None => {
-            for m in gltf.meshes() {
+            for m in 0..root.meshes.len() {
                 add(m, Mat4::IDENTITY)?;
             }
         }
@@ -269,28 +319,45 @@ pub fn parse_gltf(bytes: &[u8], path: &Path, external: &dyn Fn(&str) -> Result<V
     Ok(mesh)
 }
 
-/// An accessor's components as f64 (exact for every component type), with every byte range
-/// checked.
-fn read_accessor(a: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<f64>, String> {
-    if a.sparse().is_some() {
+/// Accessor `index`'s components as f64 (exact for every component type), with every index and
+/// byte range checked.
+fn read_accessor(root: &gltf::json::Root, index: usize, buffers: &[Vec<u8>]) -> Result<Vec<f64>, String> {
+    use gltf::json::accessor::{ComponentType, Type};
+    use gltf::json::validation::Checked;
+    let a = root.accessors.get(index).ok_or_else(|| format!("accessor {index} does not exist"))?;
+    if a.sparse.is_some() {
         return Err("sparse accessors are not supported".into());
     }
-    let view = a.view().ok_or("the accessor has no buffer view")?;
-    let data = buffers.get(view.buffer().index()).ok_or("missing buffer")?;
-    let components = a.dimensions().multiplicity();
-    let (size, read): (usize, fn(&[u8]) -> f64) = match a.data_type() {
-        gltf::accessor::DataType::F32 => (4, |b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64),
-        gltf::accessor::DataType::U32 => (4, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64),
-        gltf::accessor::DataType::U16 => (2, |b| u16::from_le_bytes([b[0], b[1]]) as f64),
-        gltf::accessor::DataType::U8 => (1, |b| b[0] as f64),
-        gltf::accessor::DataType::I16 => (2, |b| i16::from_le_bytes([b[0], b[1]]) as f64),
-        gltf::accessor::DataType::I8 => (1, |b| b[0] as i8 as f64),
+    let view_index = a.buffer_view.ok_or("the accessor has no buffer view")?.value();
+    let view = root.buffer_views.get(view_index).ok_or_else(|| format!("buffer view {view_index} does not exist"))?;
+    let data = buffers.get(view.buffer.value()).ok_or("the buffer view's buffer does not exist")?;
+    let components = match a.type_ {
+        Checked::Valid(Type::Scalar) => 1,
+        Checked::Valid(Type::Vec2) => 2,
+        Checked::Valid(Type::Vec3) => 3,
+        Checked::Valid(Type::Vec4) | Checked::Valid(Type::Mat2) => 4,
+        Checked::Valid(Type::Mat3) => 9,
+        Checked::Valid(Type::Mat4) => 16,
+        Checked::Invalid => return Err("unknown accessor type".into()),
+    };
+    let (size, read): (usize, fn(&[u8]) -> f64) = match a.component_type {
+        Checked::Valid(gltf::json::accessor::GenericComponentType(c)) => match c {
+            ComponentType::F32 => (4, |b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64),
+            ComponentType::U32 => (4, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64),
+            ComponentType::U16 => (2, |b| u16::from_le_bytes([b[0], b[1]]) as f64),
+            ComponentType::U8 => (1, |b| b[0] as f64),
+            ComponentType::I16 => (2, |b| i16::from_le_bytes([b[0], b[1]]) as f64),
+            ComponentType::I8 => (1, |b| b[0] as i8 as f64),
+        },
+        Checked::Invalid => return Err("unknown component type".into()),
     };
     let element = size * components;
-    let stride = view.stride().unwrap_or(element).max(element);
-    let start = view.offset().checked_add(a.offset()).ok_or("offset overflows")?;
-    let count = a.count();
-    let view_end = view.offset().checked_add(view.length()).ok_or("view overflows")?;
+    let stride = view.byte_stride.map_or(element, |s| s.0).max(element);
+    let to_usize = |v: u64| usize::try_from(v).map_err(|_| "an offset is too large".to_string());
+    let view_start = to_usize(view.byte_offset.map_or(0, |o| o.0))?;
+    let view_end = view_start.checked_add(to_usize(view.byte_length.0)?).ok_or("the view overflows")?;
+    let start = view_start.checked_add(to_usize(a.byte_offset.map_or(0, |o| o.0))?).ok_or("the offset overflows")?;
+    let count = to_usize(a.count.0)?;
     if count == 0 {
         return Ok(Vec::new());
     }
@@ -298,7 +365,7 @@ fn read_accessor(a: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<f64>, St
         .checked_mul(stride)
         .and_then(|s| s.checked_add(start))
         .and_then(|s| s.checked_add(element))
-        .ok_or("range overflows")?;
+        .ok_or("the accessor's range overflows")?;
     if end > view_end || end > data.len() {
         return Err(format!("{count} elements need bytes {start}..{end}, beyond the buffer view"));
     }

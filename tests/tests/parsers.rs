@@ -1,0 +1,140 @@
+//! Every file reader on mutated and random bytes: an error naming the file, never a panic.
+//!
+//! Seeds are real files of every format we read (meshes isolab writes in each format, the
+//! committed volume fixtures); proptest flips, overwrites, inserts and truncates bytes.
+
+use isolab_algorithms::fields::Volume;
+use isolab_experiments::io::volume::{metaimage, nifti, nrrd, VolumeOptions};
+use isolab_experiments::io::{self, Coordinates, IoError};
+use proptest::prelude::*;
+use std::path::Path;
+use std::sync::OnceLock;
+
+/// One seed file: a name (its extension picks the reader) and its bytes.
+struct Seed {
+    name: &'static str,
+    bytes: Vec<u8>,
+}
+
+fn seeds() -> &'static [Seed] {
+    static SEEDS: OnceLock<Vec<Seed>> = OnceLock::new();
+    SEEDS.get_or_init(|| {
+        let mesh = isolab_algorithms::TriMesh {
+            positions: vec![
+                glam::Vec3::ZERO,
+                glam::Vec3::X,
+                glam::Vec3::Y,
+                glam::Vec3::Z,
+            ],
+            normals: vec![],
+            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        };
+        let dir = std::env::temp_dir().join(format!("isolab-parsers-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut out = Vec::new();
+        for name in ["t.obj", "t.ply", "t.stl", "t.glb", "t.gltf"] {
+            let path = dir.join(name);
+            let colours = [[1, 2, 3], [4, 5, 6], [7, 8, 9], [10, 11, 12]];
+            io::write_mesh_with(&path, &mesh, io::MeshExtras { colours: Some(&colours), space: None }).unwrap();
+            out.push(Seed { name, bytes: std::fs::read(&path).unwrap() });
+        }
+        let mut ascii_ply = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+                              element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"
+            .to_vec();
+        out.push(Seed { name: "a.ply", bytes: std::mem::take(&mut ascii_ply) });
+        out.push(Seed {
+            name: "a.stl",
+            bytes: b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid\n".to_vec(),
+        });
+        let volumes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/reference/volumes");
+        for name in ["mni-small.nii.gz", "mni-small-qform.nii", "mni-small-2.nii.gz", "mni-small.nrrd", "mni-small.nhdr", "mni-small.mhd"] {
+            out.push(Seed { name, bytes: std::fs::read(volumes.join(name)).unwrap() });
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+        out
+    })
+}
+
+/// Parses `bytes` as the format `name` says; detached data files come from the fixtures.
+fn parse(name: &str, bytes: &[u8]) -> Result<(), IoError> {
+    let path = Path::new(name);
+    let no_files = |file: &str| -> Result<Vec<u8>, IoError> {
+        let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/reference/volumes");
+        match file {
+            "mni-small.raw" | "mni-small.zraw" => Ok(std::fs::read(fixtures.join(file)).unwrap()),
+            _ => Err(IoError::Read { path: file.into(), source: std::io::Error::from(std::io::ErrorKind::NotFound) }),
+        }
+    };
+    let check = |v: &Volume| assert!(v.values.iter().all(|x| x.is_finite()));
+    if name.ends_with(".nii") || name.ends_with(".nii.gz") {
+        nifti::parse_nifti(bytes, path, VolumeOptions::default(), &no_files).map(|f| check(&f.volume))
+    } else if name.ends_with(".nrrd") || name.ends_with(".nhdr") {
+        nrrd::parse_nrrd(bytes, path, VolumeOptions::default(), &no_files).map(|f| check(&f.volume))
+    } else if name.ends_with(".mhd") {
+        metaimage::parse_metaimage(bytes, path, VolumeOptions::default(), &no_files).map(|f| check(&f.volume))
+    } else {
+        io::parse_mesh(bytes, path, Coordinates::Any).map(|_| ())
+    }
+}
+
+fn assert_named(name: &str, result: Result<(), IoError>) {
+    if let Err(e) = result {
+        let message = e.to_string();
+        let file = Path::new(name).file_name().unwrap().to_string_lossy().into_owned();
+        // A detached header's fault may lie in its data file, which the message names instead.
+        let names_it = message.contains(&file)
+            || message.contains("mni-small.raw")
+            || message.contains("mni-small.zraw")
+            || matches!(e, IoError::Read { .. });
+        assert!(names_it, "{name}: the error does not name the file: {message}");
+    }
+}
+
+/// Byte edits: (position fraction, new byte) pairs, an optional insertion (position fraction,
+/// bytes), and the fraction of the file kept.
+type Edits = (Vec<(f64, u8)>, Option<(f64, Vec<u8>)>, f64);
+
+fn edits() -> impl Strategy<Value = Edits> {
+    (
+        prop::collection::vec((0.0..1.0f64, any::<u8>()), 0..8),
+        prop::option::of((0.0..1.0f64, prop::collection::vec(any::<u8>(), 1..16))),
+        prop_oneof![Just(1.0), 0.0..1.0f64],
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 3000, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn mutated_files_give_errors_naming_the_file_never_panics(seed in 0..13usize, (changes, insert, keep) in edits()) {
+        let s = &seeds()[seed % seeds().len()];
+        // Mutate the decompressed content of gzip seeds too, not only their compressed bytes.
+        let mut bytes = s.bytes.clone();
+        for (at, b) in &changes {
+            let i = ((bytes.len() as f64) * at) as usize;
+            if i < bytes.len() {
+                bytes[i] = *b;
+            }
+        }
+        if let Some((at, extra)) = &insert {
+            let i = ((bytes.len() as f64) * at) as usize;
+            bytes.splice(i.min(bytes.len())..i.min(bytes.len()), extra.iter().copied());
+        }
+        bytes.truncate(((bytes.len() as f64) * keep).ceil() as usize);
+        assert_named(s.name, parse(s.name, &bytes));
+    }
+
+    #[test]
+    fn random_bytes_give_errors_naming_the_file_never_panics(seed in 0..13usize, bytes in prop::collection::vec(any::<u8>(), 0..2000)) {
+        let s = &seeds()[seed % seeds().len()];
+        assert_named(s.name, parse(s.name, &bytes));
+    }
+}
+
+#[test]
+fn every_seed_parses_unmutated() {
+    assert_eq!(seeds().len(), 13);
+    for s in seeds() {
+        parse(s.name, &s.bytes).unwrap_or_else(|e| panic!("{}: {e}", s.name));
+    }
+}

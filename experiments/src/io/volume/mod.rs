@@ -3,9 +3,9 @@
 //! [`Volume`](isolab_algorithms::fields::Volume) whose affine maps voxel indices to world
 //! coordinates.
 //!
-//! World coordinates are RAS (x toward the subject's right... left-to-Right, Anterior, Superior;
-//! NIfTI's world and what 3D Slicer shows) for every anatomical format: MetaImage's LPS and
-//! NRRD's named spaces are converted. A grid with no anatomical space (an isolab grid, an NRRD
+//! World coordinates are RAS (+x toward the subject's Right, +y Anterior, +z Superior: NIfTI's
+//! world and what 3D Slicer shows) for every anatomical format: MetaImage's LPS and NRRD's named
+//! spaces are converted. A grid with no anatomical space (an isolab grid, an NRRD
 //! with `scanner-xyz` or no space) keeps its coordinates as they are.
 //!
 //! Why by hand: there is no NRRD or MetaImage crate; `nifti` (0.18) reads NIfTI-1 only (no

@@ -3,6 +3,10 @@
 use crate::geometry::Aabb;
 use glam::Vec3;
 
+/// The material id a field has where it says nothing else: 0, rock in `crate::materials`
+/// (which depends on fields, not the other way round).
+pub const DEFAULT_MATERIAL: u8 = 0;
+
 /// A scalar field `f: R^3 -> R`. Inside is `f < iso`.
 ///
 /// Implementors give a value, a default domain and, where they know it, an analytic gradient;
@@ -52,10 +56,10 @@ pub trait Field: Send + Sync {
         None
     }
 
-    /// The material at `p` (an id of [`crate::materials::NAMES`]); rock unless the field says
-    /// otherwise.
+    /// The material at `p` (an id of `materials::NAMES`); [`DEFAULT_MATERIAL`] (rock) unless the
+    /// field says otherwise.
     fn material(&self, _p: Vec3) -> u8 {
-        crate::materials::ROCK
+        DEFAULT_MATERIAL
     }
 
     /// The analytic volume enclosed by the level set `iso` within the default domain, where known.

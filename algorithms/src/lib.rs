@@ -42,6 +42,7 @@ pub mod post;
 pub mod predicates;
 pub mod samples;
 pub mod sign_rows;
+pub mod slabs;
 pub mod tables;
 pub mod tetrahedral;
 

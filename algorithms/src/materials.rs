@@ -27,8 +27,8 @@ pub fn colour(id: u8) -> [u8; 3] {
     COLOURS.get(id as usize).copied().unwrap_or([160, 160, 160])
 }
 
-/// Rock (the default).
-pub const ROCK: u8 = 0;
+/// Rock (the default, [`crate::field::DEFAULT_MATERIAL`]).
+pub const ROCK: u8 = crate::field::DEFAULT_MATERIAL;
 /// Dirt.
 pub const DIRT: u8 = 1;
 /// Grass.

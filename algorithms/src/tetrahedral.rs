@@ -697,7 +697,7 @@ pub fn extract_tetrahedral(
     // Slabs of sample layers, per grid, in index order: each writes its own samples' flags and
     // slots and makes its own vertices; joined in order, the result is the serial pass's.
     let layers: usize = layout.parts.iter().map(|p| p.dims[2]).sum();
-    let tasks = crate::extractors::slabs::task_count(crate::extractors::marching_cubes::Parallelism::Rayon, n, layers);
+    let tasks = crate::slabs::task_count(crate::slabs::Parallelism::Rayon, n, layers);
     let mut slabs: Vec<(usize, usize, usize)> = Vec::new(); // (part, z0, z1)
     for (p, part) in layout.parts.iter().enumerate() {
         let per = tasks.div_ceil(layout.parts.len()).min(part.dims[2]).max(1);
@@ -876,7 +876,7 @@ pub fn geometry_pass(samples: &Samples, scratch: &TetScratch, out: &mut Extracti
         }
     };
     let mut triangles = std::mem::take(&mut out.surface.triangles);
-    let tasks = crate::extractors::slabs::task_count(crate::extractors::marching_cubes::Parallelism::Rayon, ax * ay * az, az);
+    let tasks = crate::slabs::task_count(crate::slabs::Parallelism::Rayon, ax * ay * az, az);
     if tasks <= 1 {
         layers(0, az, &mut triangles, &mut counts);
     } else {

@@ -5,8 +5,8 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use fast_surface_nets::ndshape::{RuntimeShape, Shape};
 use fast_surface_nets::{surface_nets, SurfaceNetsBuffer};
-use isolab_algorithms::extractors::marching_cubes::Parallelism;
 use isolab_algorithms::extractors::surface_nets::{Smoothing, SnOptions, SurfaceNets};
+use isolab_algorithms::slabs::Parallelism;
 use isolab_algorithms::{fields, Extraction, Extractor, Grid, Samples};
 use std::hint::black_box;
 use std::time::Duration;

@@ -1,7 +1,8 @@
 //! Marching cubes: every cube sign pattern, random fields (property tests), serial against
 //! parallel, and analytic invariants on the built-in fields and shipped models.
 
-use isolab_algorithms::extractors::marching_cubes::{MarchingCubes, McOptions, Parallelism};
+use isolab_algorithms::extractors::marching_cubes::{MarchingCubes, McOptions};
+use isolab_algorithms::slabs::Parallelism;
 use isolab_algorithms::{fields, Grid, Samples};
 use isolab_experiments::run::{run, RunConfig};
 use isolab_tests::{assert_closed_manifold, blob_field, extract, grid_samples};

@@ -2,7 +2,8 @@
 //! random neighbours and on random fields, and topologically different from the default table
 //! exactly where the trilinear interpolant says so.
 
-use isolab_algorithms::extractors::marching_cubes::{FaceResolution, MarchingCubes, McOptions, Parallelism};
+use isolab_algorithms::extractors::marching_cubes::{FaceResolution, MarchingCubes, McOptions};
+use isolab_algorithms::slabs::Parallelism;
 use isolab_tests::{assert_closed_manifold, extract, grid_samples};
 use proptest::prelude::*;
 

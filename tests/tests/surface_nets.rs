@@ -154,7 +154,7 @@ fn normals_follow_the_field_gradient() {
 
 #[test]
 fn parallel_slabs_join_exactly_like_one_slab_on_a_rough_field() {
-    use isolab_algorithms::extractors::marching_cubes::Parallelism;
+    use isolab_algorithms::slabs::Parallelism;
     // Many slabs on a rough field: every slab boundary is crowded with quads.
     let f = fields::builtin("asteroid", Default::default()).unwrap();
     let grid = Grid::covering(&f.domain(), 97).unwrap();

@@ -3,9 +3,9 @@
 //! **Paper:** T. Ju, F. Losasso, S. Schaefer and J. Warren, "Dual contouring of Hermite data",
 //! SIGGRAPH 2002, DOI 10.1145/566654.566586.
 //!
-//! **Summary.** The dual structure of [`SurfaceNets`] (a vertex per piece of surface in each
+//! **Summary.** The dual structure of [`crate::extractors::dual`] (a vertex per piece of surface in each
 //! cell, a quad per crossing edge, split along the shorter diagonal), with each vertex placed by
-//! minimising the quadric error function of the cell's Hermite data: for every edge crossing `p_i`
+//! minimising the quadric error function of the cell's Hermite data ([`crate::extractors::dual::solve_qef`]): for every edge crossing `p_i`
 //! with unit normal `n_i` (the field's gradient, analytic where the field has one; for raw samples
 //! with no field, such as edited terrain, the gradient of the cell's trilinear interpolant at the
 //! crossing, as game engines estimate normals from their voxels), minimise
@@ -41,11 +41,9 @@
 //! ```
 
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
-use crate::extractors::surface_nets::{Placement, Smoothing, SnOptions, SurfaceNets};
+use crate::extractors::dual::{DualEngine, DualOptions, Placement, Smoothing};
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
-use glam::Vec3;
-use nalgebra::{Matrix3, Vector3};
 
 /// One line for listings.
 pub const DESCRIPTION: &str =
@@ -62,18 +60,18 @@ pub struct DcOptions {
     /// Keep each vertex inside its cell (default true).
     pub clamp: bool,
     /// Slabs in parallel (default) or serial.
-    pub parallelism: crate::extractors::marching_cubes::Parallelism,
+    pub parallelism: crate::slabs::Parallelism,
 }
 
 impl Default for DcOptions {
     fn default() -> Self {
-        Self { svd_tolerance: 0.1, clamp: true, parallelism: crate::extractors::marching_cubes::Parallelism::Rayon }
+        Self { svd_tolerance: 0.1, clamp: true, parallelism: crate::slabs::Parallelism::Rayon }
     }
 }
 
 /// Builds dual contouring from named options.
 pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError> {
-    use crate::extractors::marching_cubes::Parallelism;
+    use crate::slabs::Parallelism;
     let d = DcOptions::default();
     let mut r = options.reader("dual-contouring", OPTION_NAMES);
     let o = DcOptions {
@@ -90,7 +88,7 @@ pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError
 pub struct DualContouring {
     /// The options.
     pub options: DcOptions,
-    engine: SurfaceNets,
+    engine: DualEngine,
 }
 
 impl Default for DualContouring {
@@ -102,9 +100,10 @@ impl Default for DualContouring {
 impl DualContouring {
     /// Dual contouring with `options`.
     pub fn new(options: DcOptions) -> Self {
-        let sn = SnOptions { smoothing: Smoothing::None, iterations: 0, parallelism: options.parallelism, ..Default::default() };
+        let sn =
+            DualOptions { smoothing: Smoothing::None, iterations: 0, parallelism: options.parallelism, ..Default::default() };
         let placement = Placement::Qef { tolerance: options.svd_tolerance, clamp: options.clamp };
-        Self { options, engine: SurfaceNets::with_placement(sn, placement, "dual-contouring") }
+        Self { options, engine: DualEngine::new(sn, placement, "dual-contouring") }
     }
 }
 
@@ -123,55 +122,5 @@ impl Extractor for DualContouring {
 
     fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
         self.engine.extract(samples, out)
-    }
-}
-
-/// Minimises `Σ (n_i · (x - p_i))²` over the crossings `points` with unit `normals`, around their
-/// mass point, dropping singular values below `tolerance` times the largest. Returns the mass
-/// point when there is no usable normal.
-pub fn solve_qef(points: &[Vec3], normals: &[Vec3], tolerance: f32) -> Vec3 {
-    let n = points.len().max(1) as f32;
-    let mass = points.iter().copied().sum::<Vec3>() / n;
-    let mut a = Matrix3::<f64>::zeros();
-    let mut b = Vector3::<f64>::zeros();
-    for (p, nrm) in points.iter().zip(normals) {
-        let nv = Vector3::new(f64::from(nrm.x), f64::from(nrm.y), f64::from(nrm.z));
-        let d = f64::from(nrm.dot(*p - mass));
-        a += nv * nv.transpose();
-        b += nv * d;
-    }
-    let svd = a.svd(true, true);
-    let largest = svd.singular_values.max();
-    if largest <= 0.0 {
-        return mass;
-    }
-    let (Some(u), Some(vt)) = (svd.u, svd.v_t) else { return mass };
-    let mut x = Vector3::zeros();
-    for k in 0..3 {
-        let s = svd.singular_values[k];
-        if s > f64::from(tolerance) * largest {
-            let uk = u.column(k);
-            let vk = vt.row(k).transpose();
-            x += vk * (uk.dot(&b) / s);
-        }
-    }
-    mass + Vec3::new(x.x as f32, x.y as f32, x.z as f32)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn three_planes_meet_at_their_corner_and_one_plane_keeps_the_mass_point() {
-        let corner = Vec3::new(0.3, 0.6, 0.2);
-        let points = [corner + Vec3::new(0.0, 0.2, 0.3), corner + Vec3::new(0.1, 0.0, 0.25), corner + Vec3::new(0.2, 0.3, 0.0)];
-        let normals = [Vec3::X, Vec3::Y, Vec3::Z];
-        assert!(solve_qef(&points, &normals, 0.1).distance(corner) < 1e-5);
-        // All crossings on one plane z = 0.2: x and y stay at the mass point, z on the plane.
-        let flat = [Vec3::new(0.1, 0.1, 0.2), Vec3::new(0.9, 0.3, 0.2), Vec3::new(0.4, 0.8, 0.2)];
-        let x = solve_qef(&flat, &[Vec3::Z; 3], 0.1);
-        let mass = flat.iter().copied().sum::<Vec3>() / 3.0;
-        assert!(x.distance(mass) < 1e-6, "{x} vs {mass}");
     }
 }

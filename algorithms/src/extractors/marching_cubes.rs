@@ -50,12 +50,12 @@
 //! ```
 
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
-use crate::extractors::slabs::{ScratchPool, EXTERN};
 use crate::geometry::trilinear_gradient;
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
 use crate::samples::Samples;
 use crate::sign_rows::{for_each_bit, for_each_surface_cell, next_bits, span, LayerSigns};
+use crate::slabs::{slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN};
 use crate::tables::marching_cubes::{
     decider_joins_inside, Case, AMBIGUOUS_FACES, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, TABLE,
 };
@@ -77,16 +77,6 @@ pub enum NormalSource {
     FaceAverage,
     /// No normals.
     None,
-}
-
-/// Whether slabs run in parallel.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Parallelism {
-    /// Slabs in parallel on the rayon pool (one slab for small grids).
-    #[default]
-    Rayon,
-    /// One slab, on the calling thread.
-    Serial,
 }
 
 /// What to do with samples exactly at the iso-value.
@@ -528,7 +518,7 @@ impl Extractor for MarchingCubes {
         let setup_time = start.elapsed();
 
         let slab_cells = nz - 1;
-        let tasks = crate::extractors::slabs::task_count(self.options.parallelism, grid.cell_count(), slab_cells);
+        let tasks = crate::slabs::task_count(self.options.parallelism, grid.cell_count(), slab_cells);
         while pool.len() < tasks {
             pool.push(Scratch::default());
         }
@@ -549,15 +539,7 @@ impl Extractor for MarchingCubes {
 
         let t_join = Instant::now();
         if tasks > 1 {
-            let mut offsets = Vec::with_capacity(tasks + 1);
-            offsets.push(0usize);
-            for s in scratches.iter() {
-                offsets.push(offsets.last().copied().unwrap_or(0) + s.mesh.positions.len());
-            }
-            let total = offsets[tasks];
-            if total >= EXTERN as usize {
-                return Err(ExtractError::TooLarge { algorithm: "marching-cubes", vertices: total });
-            }
+            let offsets = slab_offsets(scratches.iter().map(|s| s.mesh.positions.len()), "marching-cubes")?;
             let surface = &mut out.surface;
             for s in scratches.iter() {
                 surface.positions.extend_from_slice(&s.mesh.positions);
@@ -585,13 +567,11 @@ impl Extractor for MarchingCubes {
         }
         let join_time = t_join.elapsed();
 
-        // Split the slab phase's wall time between the vertex and geometry passes in proportion
-        // to the CPU time each took across tasks.
         let (cpu_v, cpu_g) =
             scratches.iter().fold((0.0, 0.0), |(v, g), s| (v + s.vertex_time.as_secs_f64(), g + s.geometry_time.as_secs_f64()));
-        let vertex_share = if cpu_v + cpu_g > 0.0 { cpu_v / (cpu_v + cpu_g) } else { 0.5 };
-        out.stats.times.vertex = setup_time + slab_wall.mul_f64(vertex_share);
-        out.stats.times.geometry = slab_wall.mul_f64(1.0 - vertex_share) + join_time;
+        let (vertex_time, geometry_time) = split_slab_time(slab_wall, join_time, cpu_v, cpu_g);
+        out.stats.times.vertex = setup_time + vertex_time;
+        out.stats.times.geometry = geometry_time;
         out.stats.active_cells = scratches.iter().map(|s| s.active_cells).sum();
 
         let t_normals = Instant::now();

@@ -5,11 +5,11 @@
 //! `from_options` constructor, declare the module below, and add one line to [`INFOS`].
 
 pub mod bcc_sculpt;
+pub mod dual;
 pub mod dual_contouring;
 pub mod marching_cubes;
 pub mod marching_tetrahedra;
 pub mod regularised_marching_tetrahedra;
-pub(crate) mod slabs;
 pub mod surface_nets;
 
 pub use bcc_sculpt::BccSculpt;

@@ -1,0 +1,100 @@
+//! Slabs: what the grid extractors share to mesh layers of cells in parallel, public so that a
+//! new extractor can use them. A volume is cut along z into slabs of cell layers, each meshed by
+//! one rayon task into its own buffers; a slab's vertices on its bottom layer belong to the slab
+//! below, and indices to them are tagged ([`EXTERN`]) until the slabs are joined in order
+//! ([`slab_offsets`]). The result is the same mesh on any number of threads. [`ScratchPool`]
+//! gives concurrent callers (chunks meshed in parallel) their own reusable buffers;
+//! [`split_slab_time`] turns a parallel phase's wall time into the vertex and geometry stage
+//! times the reports show.
+
+use crate::extract::ExtractError;
+use std::time::Duration;
+
+/// Whether slabs run in parallel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Parallelism {
+    /// Slabs in parallel on the rayon pool (one slab for small grids).
+    #[default]
+    Rayon,
+    /// One slab, on the calling thread.
+    Serial,
+}
+
+/// Set on a slab-local vertex index that refers to the slab below until the slabs are joined.
+pub const EXTERN: u32 = 1 << 31;
+
+/// Cells per slab task below which the whole grid is one slab.
+const MIN_CELLS_PER_SLAB: usize = 32 * 32 * 32;
+
+/// How many slabs to cut `layers` cell layers of `cells` cells into: one when serial or small,
+/// otherwise up to four per rayon thread.
+pub fn task_count(parallelism: Parallelism, cells: usize, layers: usize) -> usize {
+    match parallelism {
+        Parallelism::Serial => 1,
+        Parallelism::Rayon => (cells / MIN_CELLS_PER_SLAB).clamp(1, 4 * rayon::current_num_threads()).min(layers).max(1),
+    }
+}
+
+/// The first global vertex index of each slab when slabs of `counts` vertices are joined in
+/// order, and the total last; more vertices than untagged indices can hold is an error naming
+/// `algorithm`.
+pub fn slab_offsets(counts: impl Iterator<Item = usize>, algorithm: &'static str) -> Result<Vec<usize>, ExtractError> {
+    let mut offsets = vec![0usize];
+    for n in counts {
+        offsets.push(offsets[offsets.len() - 1] + n);
+    }
+    let total = offsets[offsets.len() - 1];
+    if total >= EXTERN as usize {
+        return Err(ExtractError::TooLarge { algorithm, vertices: total });
+    }
+    Ok(offsets)
+}
+
+/// Splits a parallel slab phase's wall time between the vertex and the geometry pass in
+/// proportion to the CPU time each took across tasks (`cpu_vertex`, `cpu_geometry`, seconds);
+/// the join's time goes to the geometry pass. Returns (vertex, geometry).
+pub fn split_slab_time(slab_wall: Duration, join: Duration, cpu_vertex: f64, cpu_geometry: f64) -> (Duration, Duration) {
+    let share = if cpu_vertex + cpu_geometry > 0.0 { cpu_vertex / (cpu_vertex + cpu_geometry) } else { 0.5 };
+    (slab_wall.mul_f64(share), slab_wall.mul_f64(1.0 - share) + join)
+}
+
+/// Scratch buffers for concurrent calls of one extractor (chunks meshed in parallel): each call
+/// takes a set (a new one when all are in use) and gives it back, so calls never wait on each
+/// other's buffers and, once the pool holds a set per concurrent caller, re-meshing allocates
+/// nothing. (A lock held across the whole call would serialize parallel chunk meshing.)
+#[derive(Default)]
+pub struct ScratchPool<T>(std::sync::Mutex<Vec<T>>);
+
+impl<T: Default> ScratchPool<T> {
+    /// A free set of buffers, or a new one.
+    pub fn take(&self) -> T {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).pop().unwrap_or_default()
+    }
+
+    /// Returns a set for the next call.
+    pub fn give(&self, scratch: T) {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).push(scratch);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn offsets_accumulate_and_refuse_overflow() {
+        assert_eq!(slab_offsets([3, 0, 5].into_iter(), "x").unwrap(), vec![0, 3, 3, 8]);
+        let e = slab_offsets([EXTERN as usize - 1, 1].into_iter(), "x").unwrap_err();
+        assert!(matches!(e, ExtractError::TooLarge { vertices, .. } if vertices == EXTERN as usize));
+        assert_eq!(task_count(Parallelism::Serial, 1 << 30, 100), 1);
+        assert_eq!(task_count(Parallelism::Rayon, 10, 100), 1);
+    }
+
+    #[test]
+    fn slab_time_splits_by_cpu_share() {
+        let (v, g) = split_slab_time(Duration::from_millis(100), Duration::from_millis(10), 3.0, 1.0);
+        assert_eq!((v, g), (Duration::from_millis(75), Duration::from_millis(35)));
+        let (v, g) = split_slab_time(Duration::from_millis(10), Duration::ZERO, 0.0, 0.0);
+        assert_eq!(v, g);
+    }
+}

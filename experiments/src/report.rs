@@ -25,9 +25,14 @@ pub fn markdown_table(header: &[&str], rows: &[Vec<String>]) -> String {
     s
 }
 
-/// Milliseconds with three significant-ish decimals.
-pub fn ms(d: Duration) -> String {
-    let v = d.as_secs_f64() * 1e3;
+/// A duration in milliseconds.
+pub fn millis(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+/// Milliseconds, formatted with three significant-ish decimals (no negative times).
+pub fn ms(v: f64) -> String {
+    let v = v.max(0.0);
     if v >= 100.0 {
         format!("{v:.0}")
     } else if v >= 10.0 {

@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::path::Path;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// Which lattice to sample on.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
@@ -559,7 +559,7 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
         }
     }
     let t = extraction.stats.times;
-    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    let ms = crate::report::millis;
     let input_report = InputReport {
         kind: input.kind,
         format: input.volume.as_ref().map(|v| v.format).or(input.mesh_format),

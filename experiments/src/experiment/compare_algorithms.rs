@@ -2,7 +2,7 @@
 //! three resolutions: counts, quality, topology, accuracy, time and quad overshading; a table, a
 //! quality-against-cost scatter plot, aspect-ratio and angle histograms, and rendered images.
 
-use super::{measure, model_path, ms, Context, Experiment, ExperimentError, Measured};
+use super::context::{measure, model_path, ms, Context, Experiment, ExperimentError, Measured};
 use crate::figures::color_of;
 use crate::figures::plot::{self, HistogramPlot, Scale, Series, Style, XyPlot};
 use crate::figures::render::{render, save_png, save_turntable, side_by_side, RenderOptions, Shading};
@@ -76,7 +76,7 @@ impl Experiment for CompareAlgorithms {
             let field = load_field(spec, fields::DEFAULT_SEED)?;
             for (level, &resolution) in levels.iter().enumerate() {
                 let lattice = lattice_for(field.as_ref(), &RunConfig::new("", spec, resolution))?;
-                let samples = Samples::sample(field.clone(), lattice, 0.0).map_err(crate::run::RunError::from)?;
+                let samples = Samples::sample(field.clone(), lattice, 0.0)?;
                 for extractor in &extractors {
                     bar.set_message(format!("{} {name} {resolution}", extractor.name()));
                     let (row, out) = measure(extractor.as_ref(), &field, &samples, ctx.repeats)?;

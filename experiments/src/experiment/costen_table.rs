@@ -8,10 +8,10 @@
 //! topology-safe edge collapse). Every configuration runs `repeats` times, interleaved, and times
 //! are medians.
 
-use super::{load_object, Context, Experiment, ExperimentError};
+use super::context::{load_object, Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, BarChart, BarSeries};
 use crate::figures::render::{render, save_png, side_by_side, RenderOptions, Shading};
-use crate::report::{markdown_table, median};
+use crate::report::{markdown_table, median, millis};
 use isolab_algorithms::extract::PostProcess;
 use isolab_algorithms::extractors::regularised_marching_tetrahedra::{RegularisedMarchingTetrahedra, RmtOptions};
 use isolab_algorithms::extractors::MarchingTetrahedra;
@@ -177,8 +177,8 @@ fn projection(repeats: usize) -> Result<Vec<ProjectionRow>, ExperimentError> {
     let mut rows = Vec::new();
     for (_, name, dims) in OBJECTS {
         let field = load_object(name)?;
-        let grid = Grid::with_dims(&field.domain(), dims).map_err(crate::run::RunError::from)?;
-        let samples = Samples::sample(field.clone(), Lattice::Bcc(grid), 0.0).map_err(crate::run::RunError::from)?;
+        let grid = Grid::with_dims(&field.domain(), dims)?;
+        let samples = Samples::sample(field.clone(), Lattice::Bcc(grid), 0.0)?;
         let measure = |projection| -> Result<(MeshMetrics, f64), ExperimentError> {
             let e = RegularisedMarchingTetrahedra { options: RmtOptions { projection, ..Default::default() } };
             let mut out = Extraction::default();
@@ -187,7 +187,7 @@ fn projection(repeats: usize) -> Result<Vec<ProjectionRow>, ExperimentError> {
                 e.extract(&samples, &mut out)?;
                 t.push(out.stats.times.extraction());
             }
-            Ok((MeshMetrics::measure(&out.surface, Some((field.as_ref(), 0.0))), ms(median(t))))
+            Ok((MeshMetrics::measure(&out.surface, Some((field.as_ref(), 0.0))), millis(median(t))))
         };
         let (mean, t_mean) = measure(Projection::Mean)?;
         let (newton, t_newton) = measure(Projection::Newton)?;
@@ -252,13 +252,13 @@ fn against_ferreus(repeats: usize) -> Result<Vec<PeerRow>, ExperimentError> {
     let mut rows = Vec::new();
     for (_, name, dims) in OBJECTS {
         let field = load_object(name)?;
-        let grid = Grid::with_dims(&field.domain(), dims).map_err(crate::run::RunError::from)?;
+        let grid = Grid::with_dims(&field.domain(), dims)?;
         let lattice = Lattice::Bcc(grid);
         let (mut ours_total, mut ours_extraction, mut theirs) = (Vec::new(), Vec::new(), Vec::new());
         let mut last = None;
         for _ in 0..repeats {
             let t = std::time::Instant::now();
-            let samples = Samples::sample(field.clone(), lattice, 0.0).map_err(crate::run::RunError::from)?;
+            let samples = Samples::sample(field.clone(), lattice, 0.0)?;
             let mut out = Extraction::default();
             RegularisedMarchingTetrahedra::default().extract(&samples, &mut out)?;
             ours_total.push(t.elapsed());
@@ -272,10 +272,10 @@ fn against_ferreus(repeats: usize) -> Result<Vec<PeerRow>, ExperimentError> {
         rows.push(PeerRow {
             field: name.into(),
             spacing: f64::from(grid.spacing),
-            ours_total_ms: ms(median(ours_total)),
-            ours_extraction_ms: ms(median(ours_extraction)),
+            ours_total_ms: millis(median(ours_total)),
+            ours_extraction_ms: millis(median(ours_extraction)),
             ours_evaluations: lattice.sample_count(),
-            theirs_ms: ms(median(theirs)),
+            theirs_ms: millis(median(theirs)),
             theirs_evaluations: run.evaluations,
             theirs_flipped: run.flipped,
             ours: MeshMetrics::measure(&out.surface, Some((field.as_ref(), 0.0))),
@@ -364,10 +364,6 @@ fn run_method(m: &str, samples: &Samples, out: &mut Extraction) -> Result<usize,
     Ok(scratch)
 }
 
-fn ms(d: Duration) -> f64 {
-    d.as_secs_f64() * 1e3
-}
-
 impl Experiment for CostenTable {
     fn name(&self) -> &'static str {
         NAME
@@ -382,14 +378,14 @@ impl Experiment for CostenTable {
         for (prefix, name, dims) in OBJECTS {
             let field = load_object(name)?;
             for (code, bcc) in [("b", true), ("s", false)] {
-                let grid = Grid::with_dims(&field.domain(), dims).map_err(crate::run::RunError::from)?;
+                let grid = Grid::with_dims(&field.domain(), dims)?;
                 let lattice = if bcc { Lattice::Bcc(grid) } else { Lattice::Cubic(grid) };
                 // Interleaved repeats: sample, then every method once, per round.
                 let mut times: Vec<[Vec<Duration>; 5]> = METHODS.iter().map(|_| Default::default()).collect();
                 let mut sampling = Vec::new();
                 let mut last: Vec<(Extraction, usize)> = Vec::new();
                 for r in 0..repeats {
-                    let samples = Samples::sample(field.clone(), lattice, 0.0).map_err(crate::run::RunError::from)?;
+                    let samples = Samples::sample(field.clone(), lattice, 0.0)?;
                     sampling.push(samples.sampling_time());
                     for (k, m) in METHODS.iter().enumerate() {
                         let mut out = Extraction::default();
@@ -420,11 +416,11 @@ impl Experiment for CostenTable {
                         lattice: lattice.kind().into(),
                         dims,
                         spacing: f64::from(grid.spacing),
-                        t_sampling: ms(median(sampling.clone())),
-                        t_vertex: ms(v),
-                        t_geometry: ms(g),
-                        t_normals: ms(n),
-                        t_post: ms(p),
+                        t_sampling: millis(median(sampling.clone())),
+                        t_vertex: millis(v),
+                        t_geometry: millis(g),
+                        t_normals: millis(n),
+                        t_post: millis(p),
                         n_tetrahedra: out.stats.active_cells,
                         total_tetrahedra: tetrahedron_count(&lattice),
                         n_vertices: out.surface.positions.len(),
@@ -467,8 +463,8 @@ fn pictures(ctx: &Context, dir: &std::path::Path) -> Result<Vec<Picture>, Experi
         ("asteroid", [51, 51, 51], "asteroid, 50³ cells (Fig. 23)"),
     ] {
         let field = load_object(name)?;
-        let grid = Grid::with_dims(&field.domain(), dims).map_err(crate::run::RunError::from)?;
-        let samples = Samples::sample(field, Lattice::Bcc(grid), 0.0).map_err(crate::run::RunError::from)?;
+        let grid = Grid::with_dims(&field.domain(), dims)?;
+        let samples = Samples::sample(field, Lattice::Bcc(grid), 0.0)?;
         let mut out = Extraction::default();
         RegularisedMarchingTetrahedra::default().extract(&samples, &mut out)?;
         let view = if name == "stanford-bunny" { Vec3::new(0.3, 0.35, 1.0) } else { Vec3::new(1.0, 0.75, 1.35) };

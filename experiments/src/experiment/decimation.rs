@@ -11,8 +11,8 @@
 //! distance to the unsimplified surface (vertices and face samples), manifoldness, median time.
 //! A decimator that is not installed is listed as not run, with the reason.
 
+use super::context::{load_object, Context, Experiment, ExperimentError};
 use super::peers::PythonPeers;
-use super::{load_object, Context, Experiment, ExperimentError};
 use crate::report::{markdown_table, median};
 use isolab_algorithms::extract::PostProcess;
 use isolab_algorithms::extractors::MarchingTetrahedra;
@@ -167,8 +167,8 @@ impl Experiment for Decimation {
         let mut rows = Vec::new();
         for (name, dims) in OBJECTS {
             let field = load_object(name)?;
-            let grid = Grid::with_dims(&field.domain(), dims).map_err(crate::run::RunError::from)?;
-            let samples = Samples::sample(field, Lattice::Bcc(grid), 0.0).map_err(crate::run::RunError::from)?;
+            let grid = Grid::with_dims(&field.domain(), dims)?;
+            let samples = Samples::sample(field, Lattice::Bcc(grid), 0.0)?;
             let mut mt = Extraction::default();
             MarchingTetrahedra.extract(&samples, &mut mt)?;
             let input = mt.surface.clone();
@@ -257,7 +257,7 @@ impl Experiment for Decimation {
                     r.degenerate.to_string(),
                     format!("{:.3}", r.hausdorff_h),
                     if r.manifold { "yes".into() } else { "**no**".into() },
-                    super::ms(r.ms),
+                    super::context::ms(r.ms),
                 ]
             })
             .collect();

@@ -8,7 +8,7 @@
 //! size. The file goes to the system's temporary directory and is deleted afterwards. The world's
 //! size is `ISOLAB_WORLD` (default `2048,512,2048` cells).
 
-use super::{Context, Experiment, ExperimentError};
+use super::context::{Context, Experiment, ExperimentError};
 use crate::io::PlyStream;
 use crate::report::markdown_table;
 use isolab_algorithms::chunks::stream_chunked;
@@ -74,7 +74,7 @@ impl Experiment for LargeWorld {
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let dims = world_dims()?;
-        let field = fields::builtin("terrain", Default::default()).map_err(crate::run::RunError::from)?;
+        let field = fields::builtin("terrain", Default::default())?;
         let domain = field.domain();
         let spacing = (domain.max.y - domain.min.y) / (dims[1] - 1) as f32;
         let grid = Grid { origin: domain.min, spacing, dims };

@@ -6,6 +6,7 @@
 //! two-line binary in `src/bin/` calling [`run_and_assemble`].
 
 pub mod compare_algorithms;
+pub mod context;
 pub mod costen_table;
 pub mod decimation;
 pub mod large_world;
@@ -20,112 +21,10 @@ pub mod svoboda_timing;
 pub mod terrain_edit;
 pub mod terrain_lod;
 
-use crate::io::{write_atomic, IoError};
-use crate::run::RunError;
-use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
-use isolab_algorithms::{Extraction, Extractor, Field, Samples};
-use isolab_metrics::MeshMetrics;
-use serde::{de::DeserializeOwned, Deserialize, Serialize};
-use std::path::{Path, PathBuf};
-use std::sync::Arc;
-use std::time::Duration;
+pub use context::*;
 
-/// Errors while running an experiment or assembling the report.
-#[derive(Debug, thiserror::Error)]
-pub enum ExperimentError {
-    /// A file could not be read or written.
-    #[error(transparent)]
-    Io(#[from] IoError),
-    /// A run failed.
-    #[error(transparent)]
-    Run(#[from] RunError),
-    /// Extraction failed.
-    #[error(transparent)]
-    Extract(#[from] isolab_algorithms::ExtractError),
-    /// A data file is missing or malformed.
-    #[error("data file '{path}': {reason}; rerun the experiment")]
-    Data {
-        /// The file.
-        path: PathBuf,
-        /// What is wrong.
-        reason: String,
-    },
-    /// A figure could not be drawn.
-    #[error("figure: {0}")]
-    Figure(String),
-}
-
-/// Where and how experiments run.
-pub struct Context {
-    /// The report directory (`REPORT.md`, `data/`, `figures/`).
-    pub report_dir: PathBuf,
-    /// Extractions per configuration for timing medians.
-    pub repeats: usize,
-    /// Progress bars, one per experiment.
-    pub progress: MultiProgress,
-}
-
-impl Context {
-    /// A context writing into `report_dir`.
-    pub fn new(report_dir: PathBuf, repeats: usize) -> Self {
-        Self { report_dir, repeats: repeats.max(1), progress: MultiProgress::new() }
-    }
-
-    /// `data/<name>.json`.
-    pub fn data_path(&self, name: &str) -> PathBuf {
-        self.report_dir.join("data").join(format!("{name}.json"))
-    }
-
-    /// `figures/<name>/`, created.
-    pub fn figure_dir(&self, name: &str) -> Result<PathBuf, ExperimentError> {
-        let dir = self.report_dir.join("figures").join(name);
-        std::fs::create_dir_all(&dir).map_err(|source| IoError::Write { path: dir.clone(), source })?;
-        Ok(dir)
-    }
-
-    /// A progress bar of `len` steps labelled `name`.
-    pub fn bar(&self, name: &str, len: u64) -> ProgressBar {
-        let bar = self.progress.add(ProgressBar::new(len));
-        if let Ok(style) = ProgressStyle::with_template("{prefix:>20} [{bar:30}] {pos}/{len} {elapsed:>4} {msg}") {
-            bar.set_style(style.progress_chars("=> "));
-        }
-        bar.set_prefix(name.to_owned());
-        bar
-    }
-
-    /// Writes an experiment's data file.
-    pub fn write_data<T: Serialize>(&self, name: &str, data: &T) -> Result<(), ExperimentError> {
-        let path = self.data_path(name);
-        if let Some(dir) = path.parent() {
-            std::fs::create_dir_all(dir).map_err(|source| IoError::Write { path: dir.into(), source })?;
-        }
-        crate::run::write_json(&path, data)?;
-        Ok(())
-    }
-
-    /// Reads an experiment's data file.
-    pub fn read_data<T: DeserializeOwned>(&self, name: &str) -> Result<T, ExperimentError> {
-        let path = self.data_path(name);
-        let text =
-            std::fs::read_to_string(&path).map_err(|e| ExperimentError::Data { path: path.clone(), reason: e.to_string() })?;
-        serde_json::from_str(&text).map_err(|e| ExperimentError::Data { path, reason: e.to_string() })
-    }
-
-    /// A path relative to the report directory, for links in `REPORT.md`.
-    pub fn link(&self, path: &Path) -> String {
-        path.strip_prefix(&self.report_dir).unwrap_or(path).to_string_lossy().replace('\\', "/")
-    }
-}
-
-/// One experiment of the report.
-pub trait Experiment: Send + Sync {
-    /// Stable snake_case name: the binary, the data file and the figure folder.
-    fn name(&self) -> &'static str;
-    /// Runs it: writes its data and figures.
-    fn run(&self, ctx: &Context) -> Result<(), ExperimentError>;
-    /// Its section of `REPORT.md`, from its data file.
-    fn section(&self, ctx: &Context) -> Result<String, ExperimentError>;
-}
+use crate::io::write_atomic;
+use std::path::PathBuf;
 
 /// Every experiment, in report order.
 pub fn all() -> Vec<Box<dyn Experiment>> {
@@ -190,82 +89,4 @@ pub fn run_and_assemble(name: &str) -> std::process::ExitCode {
             std::process::ExitCode::FAILURE
         }
     }
-}
-
-/// `report/` at the workspace root.
-pub fn default_report_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join("report")
-}
-
-/// Path of a shipped model by name (`models/<name>.obj`).
-pub fn model_path(name: &str) -> String {
-    format!("{}/../models/{name}.obj", env!("CARGO_MANIFEST_DIR"))
-}
-
-/// A built-in field by name, or a shipped model by its file stem (`stanford-bunny`) as a
-/// signed-distance field: the objects the paper reproductions use.
-pub fn load_object(name: &str) -> Result<Arc<dyn Field>, ExperimentError> {
-    if std::path::Path::new(&model_path(name)).exists() {
-        Ok(crate::run::load_field(&model_path(name), isolab_algorithms::fields::DEFAULT_SEED)?)
-    } else {
-        Ok(isolab_algorithms::fields::builtin(name, Default::default()).map_err(crate::run::RunError::from)?)
-    }
-}
-
-/// One extractor on one set of samples: median extraction time and every metric.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct Measured {
-    /// Extractor name.
-    pub algorithm: String,
-    /// Field name.
-    pub field: String,
-    /// Samples along the longest side.
-    pub resolution: usize,
-    /// Samples per axis.
-    pub dims: [usize; 3],
-    /// Grid spacing.
-    pub spacing: f64,
-    /// One parallel sampling pass, ms.
-    pub sampling_ms: f64,
-    /// Median extraction time, ms.
-    pub extraction_ms: f64,
-    /// Extractions timed.
-    pub repeats: usize,
-    /// Analytic volume, where known.
-    pub analytic_volume: Option<f64>,
-    /// Every metric of the mesh.
-    pub metrics: MeshMetrics,
-}
-
-/// Extracts `repeats` times (keeping the last mesh), measures it, and returns it with the row.
-pub fn measure(
-    extractor: &dyn Extractor,
-    field: &Arc<dyn Field>,
-    samples: &Samples,
-    repeats: usize,
-) -> Result<(Measured, Extraction), ExperimentError> {
-    let mut out = Extraction::default();
-    let mut times = Vec::with_capacity(repeats);
-    for _ in 0..repeats.max(1) {
-        extractor.extract(samples, &mut out)?;
-        times.push(out.stats.times.extraction());
-    }
-    let row = Measured {
-        algorithm: extractor.name().into(),
-        field: field.name().into(),
-        resolution: samples.grid().dims.iter().copied().max().unwrap_or(0),
-        dims: samples.grid().dims,
-        spacing: f64::from(samples.grid().spacing),
-        sampling_ms: samples.sampling_time().as_secs_f64() * 1e3,
-        extraction_ms: crate::report::median(times).as_secs_f64() * 1e3,
-        repeats: repeats.max(1),
-        analytic_volume: field.analytic_volume(samples.iso()),
-        metrics: MeshMetrics::measure(&out.surface, Some((field.as_ref(), samples.iso()))),
-    };
-    Ok((row, out))
-}
-
-/// Formats milliseconds compactly.
-pub fn ms(v: f64) -> String {
-    crate::report::ms(Duration::from_secs_f64(v.max(0.0) / 1e3))
 }

@@ -13,7 +13,7 @@
 //! bytes) and every extractor as a multiple of it; thread scaling (one thread against rayon's
 //! pool); time against cells on a log-log plot.
 
-use super::{Context, Experiment, ExperimentError};
+use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
 use crate::report::{markdown_table, median};
 use fast_surface_nets::ndshape::RuntimeShape;
@@ -240,9 +240,9 @@ impl Experiment for Peers {
         let mut timings = Vec::new();
         let mut floors = Vec::new();
         for (field_name, n) in grids {
-            let field = fields::builtin(field_name, Default::default()).map_err(crate::run::RunError::from)?;
-            let grid = Grid::covering(&field.domain(), n).map_err(crate::run::RunError::from)?;
-            let samples = Samples::sample_cubic(field, grid, 0.0).map_err(crate::run::RunError::from)?;
+            let field = fields::builtin(field_name, Default::default())?;
+            let grid = Grid::covering(&field.domain(), n)?;
+            let samples = Samples::sample_cubic(field, grid, 0.0)?;
             // A file per grid: the Python side caches the grid it read last by path.
             let raw: PathBuf = tmp.join(format!("{field_name}-{n}.raw"));
             crate::io::write_samples(&raw, &samples, None)?;
@@ -450,11 +450,9 @@ fn section(data: &Data) -> String {
             let floor = fl.map_or(f64::NAN, |x| x.read_ms + x.write_ms);
             let mc = time_of(data, "isolab marching-cubes (2 threads)", f, *n).map_or(f64::NAN, |t| t.ms);
             let mut row = vec![format!("{f} {n}³"), format!("{floor:.2}"), format!("{:.1}", mc / floor)];
-            row.extend(
-                labels
-                    .iter()
-                    .map(|l| time_of(data, l, f, *n).map_or("-".into(), |t| format!("{} ({})", super::ms(t.ms), t.triangles))),
-            );
+            row.extend(labels.iter().map(|l| {
+                time_of(data, l, f, *n).map_or("-".into(), |t| format!("{} ({})", super::context::ms(t.ms), t.triangles))
+            }));
             row
         })
         .collect();

@@ -21,8 +21,8 @@
 //! The volume itself is not committed (the Python peers' environment installs it); without it
 //! the section says so.
 
+use super::context::{Context, Experiment, ExperimentError};
 use super::peers::PythonPeers;
-use super::{Context, Experiment, ExperimentError};
 use crate::figures::render::{grid, render, save_png, RenderOptions, Shading};
 use crate::io::volume::{read_volume, Inside, VolumeOptions};
 use crate::report::markdown_table;

@@ -13,7 +13,7 @@
 //! An extractor whose one-thread run passes [`BUDGET_S`] is not run on larger grids (8× the cells);
 //! the report lists what was left out and why.
 
-use super::{Context, Experiment, ExperimentError};
+use super::context::{Context, Experiment, ExperimentError};
 use crate::alloc_meter;
 use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
 use crate::report::{markdown_table, median};
@@ -113,7 +113,7 @@ impl Experiment for Scaling {
             .collect::<Result<Vec<_>, _>>()
             .map_err(|e| ExperimentError::Figure(format!("thread pool: {e}")))?;
         let metered = alloc_meter::installed();
-        let field = fields::builtin(FIELD, Default::default()).map_err(crate::run::RunError::from)?;
+        let field = fields::builtin(FIELD, Default::default())?;
         let mut alive: Vec<bool> = vec![true; INFOS.len()];
         let mut rows = Vec::new();
         let mut skipped = Vec::new();
@@ -122,8 +122,8 @@ impl Experiment for Scaling {
         }
         let bar = ctx.bar(NAME, (SIZES.len() * INFOS.len()) as u64);
         for n in SIZES {
-            let grid = Grid::covering(&field.domain(), n).map_err(crate::run::RunError::from)?;
-            let samples = Samples::sample_cubic(field.clone(), grid, 0.0).map_err(crate::run::RunError::from)?;
+            let grid = Grid::covering(&field.domain(), n)?;
+            let samples = Samples::sample_cubic(field.clone(), grid, 0.0)?;
             let grid_bytes = samples.values().len() * 4;
             let runs = if n >= 512 { 1 } else { ctx.repeats.min(3) };
             for (index, info) in INFOS.iter().enumerate() {
@@ -280,7 +280,7 @@ fn section(ctx: &Context, data: &Data) -> String {
         .iter()
         .map(|r| {
             let mut row = vec![r.algorithm.clone(), format!("{}³", r.n)];
-            row.extend(r.ms.iter().map(|&m| super::ms(m)));
+            row.extend(r.ms.iter().map(|&m| super::context::ms(m)));
             row.push(if r.ms.len() > 1 && r.ms[1] > 0.0 { format!("{:.2}×", r.ms[0] / r.ms[1]) } else { "-".into() });
             row.push(format!("{:.3}", r.floor_ms));
             row.push(format!("{:.1}", r.ms[0] / r.floor_ms));

@@ -3,7 +3,7 @@
 //! picture of each extractor's csg at the lowest resolution. Dual contouring places vertices from
 //! the field's normals and should land on the corners; the others cut them.
 
-use super::{Context, Experiment, ExperimentError};
+use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::render::{render, save_png, RenderOptions};
 use crate::report::markdown_table;
 use isolab_algorithms::{extractors, fields, Extraction, Grid, Lattice, Samples, Vec3};
@@ -38,14 +38,14 @@ impl Experiment for SharpFeatures {
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let dir = ctx.figure_dir(NAME)?;
-        let field = fields::builtin("csg", Default::default()).map_err(crate::run::RunError::from)?;
+        let field = fields::builtin("csg", Default::default())?;
         // Isosurface accuracy: volume extractors (bcc-sculpt encloses at its own spacing) are left out.
         let all: Vec<_> = extractors::registry().into_iter().filter(|e| !e.produces_volume()).collect();
         let bar = ctx.bar(NAME, (RESOLUTIONS.len() * all.len()) as u64);
         let (mut rows, mut images) = (Vec::new(), Vec::new());
         for n in RESOLUTIONS {
-            let grid = Grid::covering(&field.domain(), n).map_err(crate::run::RunError::from)?;
-            let samples = Samples::sample(field.clone(), Lattice::Cubic(grid), 0.0).map_err(crate::run::RunError::from)?;
+            let grid = Grid::covering(&field.domain(), n)?;
+            let samples = Samples::sample(field.clone(), Lattice::Cubic(grid), 0.0)?;
             for e in &all {
                 let mut out = Extraction::default();
                 e.extract(&samples, &mut out)?;

@@ -1,7 +1,7 @@
 //! `sphere_convergence`: relative volume and area error and vertex distance on the sphere as the
 //! resolution doubles, for every extractor; a table and a log-log plot.
 
-use super::{Context, Experiment, ExperimentError};
+use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::color_of;
 use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
 use crate::report::markdown_table;
@@ -39,7 +39,7 @@ impl Experiment for SphereConvergence {
     }
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
-        let field = fields::builtin("sphere", Default::default()).map_err(crate::run::RunError::from)?;
+        let field = fields::builtin("sphere", Default::default())?;
         let (v, a) = (field.analytic_volume(0.0).unwrap_or(1.0), field.analytic_area(0.0).unwrap_or(1.0));
         // Isosurface accuracy: volume extractors (bcc-sculpt encloses at its own spacing) are left out.
         let extractors: Vec<_> = extractors::registry().into_iter().filter(|e| !e.produces_volume()).collect();
@@ -48,7 +48,7 @@ impl Experiment for SphereConvergence {
         for n in RESOLUTIONS {
             let lattice = lattice_for(field.as_ref(), &RunConfig::new("", "sphere", n))?;
             let spacing = f64::from(lattice.grid().spacing);
-            let samples = Samples::sample(field.clone(), lattice, 0.0).map_err(crate::run::RunError::from)?;
+            let samples = Samples::sample(field.clone(), lattice, 0.0)?;
             for e in &extractors {
                 let mut out = Extraction::default();
                 e.extract(&samples, &mut out)?;

@@ -14,7 +14,7 @@
 //!   angle at ratio 0.6, rocker-arm's hole at the finest spacing (boundary genus 1), and the time of
 //!   the whole pipeline on the bunny at about 2,500 tetrahedra.
 
-use super::{load_object, Context, Experiment, ExperimentError};
+use super::context::{load_object, Context, Experiment, ExperimentError};
 use crate::figures::render::{self, RenderOptions, Shading};
 use crate::report::{markdown_table, median};
 use isolab_algorithms::extractors::bcc_sculpt::{sculpt_surface, SculptOptions};

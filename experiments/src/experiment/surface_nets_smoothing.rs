@@ -5,7 +5,7 @@
 //! distance to the true surface. The post measured about 17 ms (linear), 84 ms (explicit) and over
 //! 30 s (implicit) for its 32^3 chunk in Unity.
 
-use super::{ms, Context, Experiment, ExperimentError};
+use super::context::{ms, Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, BarChart, BarSeries};
 use crate::figures::render::{render, save_png, RenderOptions};
 use crate::report::{markdown_table, median};
@@ -78,10 +78,10 @@ impl Experiment for SurfaceNetsSmoothing {
         let mut rows = Vec::new();
         let mut images = Vec::new();
         for name in ["terrain", "sphere"] {
-            let field = fields::builtin(name, Default::default()).map_err(crate::run::RunError::from)?;
+            let field = fields::builtin(name, Default::default())?;
             for cells in CHUNKS {
-                let grid = Grid::with_dims(&field.domain(), [cells + 1; 3]).map_err(crate::run::RunError::from)?;
-                let samples = Samples::sample(field.clone(), Lattice::Cubic(grid), 0.0).map_err(crate::run::RunError::from)?;
+                let grid = Grid::with_dims(&field.domain(), [cells + 1; 3])?;
+                let samples = Samples::sample(field.clone(), Lattice::Cubic(grid), 0.0)?;
                 let h = f64::from(grid.spacing);
                 for (label, smoothing) in METHODS {
                     let sn = SurfaceNets::new(SnOptions { smoothing, iterations: ITERATIONS, ..Default::default() });

@@ -6,7 +6,7 @@
 //! times are medians of many runs, extraction alone (the paper's "time to triangulate") and with
 //! sampling.
 
-use super::{Context, Experiment, ExperimentError};
+use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
 use crate::report::{markdown_table, median};
 use isolab_algorithms::extractors;
@@ -62,20 +62,20 @@ impl Experiment for SvobodaTiming {
     }
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
-        let field = fields::builtin("terrain", Default::default()).map_err(crate::run::RunError::from)?;
+        let field = fields::builtin("terrain", Default::default())?;
         let bar = ctx.bar(NAME, SIZES.len() as u64);
         let built: Vec<_> = ALGORITHMS.iter().filter_map(|a| extractors::by_name(a)).collect();
         let mut rows = Vec::new();
         for cubes in SIZES {
             let n = cubes + 1;
-            let grid = Grid::with_dims(&field.domain(), [n, n, n]).map_err(crate::run::RunError::from)?;
+            let grid = Grid::with_dims(&field.domain(), [n, n, n])?;
             let runs = runs_for(cubes);
             let mut sampling = Vec::with_capacity(runs);
-            let mut samples = Samples::sample(field.clone(), Lattice::Cubic(grid), 0.0).map_err(crate::run::RunError::from)?;
+            let mut samples = Samples::sample(field.clone(), Lattice::Cubic(grid), 0.0)?;
             let mut times: Vec<Vec<Duration>> = vec![Vec::with_capacity(runs); built.len()];
             let mut outs: Vec<Extraction> = built.iter().map(|_| Extraction::default()).collect();
             for _ in 0..runs {
-                samples = Samples::sample(field.clone(), Lattice::Cubic(grid), 0.0).map_err(crate::run::RunError::from)?;
+                samples = Samples::sample(field.clone(), Lattice::Cubic(grid), 0.0)?;
                 sampling.push(samples.sampling_time());
                 // Alternating, buffers reused (steady-state re-meshing, as in a game).
                 for (k, e) in built.iter().enumerate() {
@@ -155,10 +155,10 @@ impl Experiment for SvobodaTiming {
                         data.rows
                             .iter()
                             .find(|r| r.algorithm == a && r.cubes == c)
-                            .map_or("-".into(), |r| format!("{} ({})", super::ms(r.extraction_ms), r.triangles)),
+                            .map_or("-".into(), |r| format!("{} ({})", super::context::ms(r.extraction_ms), r.triangles)),
                     );
                 }
-                row.push(data.rows.iter().find(|r| r.cubes == c).map_or("-".into(), |r| super::ms(r.sampling_ms)));
+                row.push(data.rows.iter().find(|r| r.cubes == c).map_or("-".into(), |r| super::context::ms(r.sampling_ms)));
                 row
             })
             .collect();
@@ -171,10 +171,10 @@ impl Experiment for SvobodaTiming {
         {
             md.push_str(&format!(
                 "\nAt 50³ our marching cubes takes {} against the paper's {} ms ({:.0}× less), {} with sampling. Cells show ms (triangles).\n",
-                super::ms(ours.extraction_ms),
+                super::context::ms(ours.extraction_ms),
                 paper.1,
                 paper.1 / ours.extraction_ms,
-                super::ms(ours.extraction_ms + ours.sampling_ms)
+                super::context::ms(ours.extraction_ms + ours.sampling_ms)
             ));
         }
         md.push_str("\n![time to triangulate](figures/svoboda_timing/time.png)\n");

@@ -6,7 +6,7 @@
 //! 16.7 ms frame budget, a plot of every edit, before/after pictures and a GIF of the sequence.
 //! Only chunk-capable extractors run (see `algorithms::chunks`); the others are listed as not run.
 
-use super::{Context, Experiment, ExperimentError};
+use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
 use crate::figures::render::{self, RenderOptions, Shading};
 use crate::report::markdown_table;
@@ -100,9 +100,9 @@ impl Experiment for TerrainEdit {
     }
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
-        let field = fields::builtin("terrain", Default::default()).map_err(crate::run::RunError::from)?;
-        let grid = Grid::with_dims(&field.domain(), DIMS).map_err(crate::run::RunError::from)?;
-        let samples = Samples::sample(field.clone(), Lattice::Cubic(grid), 0.0).map_err(crate::run::RunError::from)?;
+        let field = fields::builtin("terrain", Default::default())?;
+        let grid = Grid::with_dims(&field.domain(), DIMS)?;
+        let samples = Samples::sample(field.clone(), Lattice::Cubic(grid), 0.0)?;
         let sample_materials = materials::sample(field.as_ref(), &grid);
         // The surface height of a column: the topmost sign change.
         let surface_y = |x: usize, z: usize| {

@@ -5,7 +5,7 @@
 //! edges stitched (the cracks a naive mesher leaves), boundary edges left off the world's
 //! boundary (0 when watertight), manifoldness, time; a picture coloured by level.
 
-use super::{Context, Experiment, ExperimentError};
+use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::render::{self, RenderOptions, Shading};
 use crate::report::{markdown_table, median};
 use isolab_algorithms::lod::{extract_lod, open_edges_off_bounds};
@@ -47,9 +47,9 @@ impl Experiment for TerrainLod {
     }
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
-        let field = fields::builtin("terrain", Default::default()).map_err(crate::run::RunError::from)?;
-        let grid = Grid::with_dims(&field.domain(), DIMS).map_err(crate::run::RunError::from)?;
-        let samples = Samples::sample(field, Lattice::Cubic(grid), 0.0).map_err(crate::run::RunError::from)?;
+        let field = fields::builtin("terrain", Default::default())?;
+        let grid = Grid::with_dims(&field.domain(), DIMS)?;
+        let samples = Samples::sample(field, Lattice::Cubic(grid), 0.0)?;
         let mc = extractors::by_name("marching-cubes").ok_or_else(|| ExperimentError::Figure("no marching-cubes".into()))?;
         let counts = [8, 4, 8];
         let total = counts.iter().product::<usize>();

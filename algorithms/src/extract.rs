@@ -183,6 +183,33 @@ pub enum ExtractError {
     Lattice(#[from] LatticeError),
 }
 
+/// How to build an extractor: its name, one line, and a constructor from options. Each
+/// algorithm file defines its own as `pub const INFO` (the name is written there once, and its
+/// `Extractor::name` returns it); the registry ([`crate::extractors::INFOS`]) lists them.
+pub struct ExtractorInfo {
+    /// Stable kebab-case name (CLI, registry, report).
+    pub name: &'static str,
+    /// One line saying what it does.
+    pub description: &'static str,
+    /// The options it takes (`--set NAME=VALUE`).
+    pub options: &'static [&'static str],
+    /// Builds it; unknown or bad options are errors naming the option.
+    pub make: fn(&crate::options::Options) -> Result<Box<dyn Extractor>, crate::options::OptionError>,
+}
+
+/// How to build a post-process: [`ExtractorInfo`]'s counterpart (`pub const INFO` in its file,
+/// listed in [`crate::extractors::POST_INFOS`]).
+pub struct PostInfo {
+    /// Stable kebab-case name (the CLI's `--post NAME` or `--post NAME:OPTION=VALUE,...`).
+    pub name: &'static str,
+    /// One line saying what it does.
+    pub description: &'static str,
+    /// The options it takes.
+    pub options: &'static [&'static str],
+    /// Builds it; unknown or bad options are errors naming the option.
+    pub make: fn(&crate::options::Options) -> Result<Box<dyn PostProcess>, crate::options::OptionError>,
+}
+
 /// An isosurface or volume extractor. Dyn-compatible: experiments iterate over
 /// [`crate::extractors::registry`].
 pub trait Extractor: Send + Sync {

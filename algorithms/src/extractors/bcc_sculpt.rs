@@ -50,7 +50,7 @@
 //! in parallel), O(iterations × boundary vertices × nearby triangles of S) for the relaxation.
 
 use crate::bvh::TriangleBvh;
-use crate::extract::{ExtractError, Extraction, Extractor};
+use crate::extract::{ExtractError, Extraction, Extractor, ExtractorInfo};
 use crate::geometry::{circumcentre, dihedral_angles, Aabb};
 use crate::mesh::{manifold_defects, TetMesh, TriMesh};
 use crate::options::{OptionError, Options};
@@ -147,10 +147,14 @@ pub struct BccSculpt {
     pub options: SculptOptions,
 }
 
+/// Stuart et al. 2013: BCC lattice sculpted to the surface, snowflakes, ODT relaxation (volume).
+pub const INFO: ExtractorInfo =
+    ExtractorInfo { name: "bcc-sculpt", description: DESCRIPTION, options: OPTION_NAMES, make: from_options };
+
 /// Builds `bcc-sculpt` from named options.
 pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError> {
     let d = SculptOptions::default();
-    let mut r = options.reader("bcc-sculpt", OPTION_NAMES);
+    let mut r = options.reader(INFO.name, OPTION_NAMES);
     let positive = |v: &str| match v.trim().parse::<f32>() {
         Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
         Ok(_) => Err("must be a finite number above 0".to_string()),
@@ -169,7 +173,7 @@ pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError
     let clearance = r.number("clearance", d.clearance, 0.0, 0.95)?;
     r.finish()?;
     let bad = |option: &str, value: usize, reason: &str| OptionError::BadValue {
-        algorithm: "bcc-sculpt",
+        algorithm: INFO.name,
         option: option.into(),
         value: value.to_string(),
         reason: reason.into(),
@@ -248,7 +252,7 @@ pub struct Sculpted {
 
 impl Extractor for BccSculpt {
     fn name(&self) -> &'static str {
-        "bcc-sculpt"
+        INFO.name
     }
 
     fn description(&self) -> &'static str {
@@ -333,13 +337,13 @@ pub fn input_warnings(name: &str, surface: &TriangleBvh) -> Vec<String> {
 pub fn sculpt_surface(surface: &TriangleBvh, name: &str, options: &SculptOptions) -> Result<Sculpted, ExtractError> {
     let bounds = surface.bounds();
     if surface.is_empty() {
-        return Err(ExtractError::BadInput { algorithm: "bcc-sculpt", reason: format!("'{name}' has no surface to enclose") });
+        return Err(ExtractError::BadInput { algorithm: INFO.name, reason: format!("'{name}' has no surface to enclose") });
     }
     let longest = bounds.longest_side();
     let h = options.spacing.unwrap_or(longest / options.cells as f32);
     if !(h > 0.0 && h.is_finite()) || h > longest {
         return Err(ExtractError::BadInput {
-            algorithm: "bcc-sculpt",
+            algorithm: INFO.name,
             reason: format!("spacing {h} is larger than '{name}' (longest side {longest}); use a spacing below {longest}"),
         });
     }
@@ -347,7 +351,7 @@ pub fn sculpt_surface(surface: &TriangleBvh, name: &str, options: &SculptOptions
     let lattice_cells = cells.x as f64 * cells.y as f64 * cells.z as f64;
     if lattice_cells > 2e7 {
         return Err(ExtractError::BadInput {
-            algorithm: "bcc-sculpt",
+            algorithm: INFO.name,
             reason: format!("spacing {h} makes a lattice of {lattice_cells:.0} cells for '{name}'; use a larger spacing"),
         });
     }

@@ -40,7 +40,7 @@
 //! assert!(nearest < 0.05 * samples.grid().spacing);
 //! ```
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo};
 use crate::extractors::dual::{DualEngine, DualOptions, Placement, Smoothing};
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
@@ -69,11 +69,15 @@ impl Default for DcOptions {
     }
 }
 
+/// Ju et al. 2002: the dual structure with vertices at the minimum of the quadric error.
+pub const INFO: ExtractorInfo =
+    ExtractorInfo { name: "dual-contouring", description: DESCRIPTION, options: OPTION_NAMES, make: from_options };
+
 /// Builds dual contouring from named options.
 pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError> {
     use crate::slabs::Parallelism;
     let d = DcOptions::default();
-    let mut r = options.reader("dual-contouring", OPTION_NAMES);
+    let mut r = options.reader(INFO.name, OPTION_NAMES);
     let o = DcOptions {
         svd_tolerance: r.number("svd-tolerance", d.svd_tolerance, 0.0, 1.0)?,
         clamp: r.choice("clamp", d.clamp, &[("true", true), ("false", false)])?,
@@ -103,13 +107,13 @@ impl DualContouring {
         let sn =
             DualOptions { smoothing: Smoothing::None, iterations: 0, parallelism: options.parallelism, ..Default::default() };
         let placement = Placement::Qef { tolerance: options.svd_tolerance, clamp: options.clamp };
-        Self { options, engine: DualEngine::new(sn, placement, "dual-contouring") }
+        Self { options, engine: DualEngine::new(sn, placement, INFO.name) }
     }
 }
 
 impl Extractor for DualContouring {
     fn name(&self) -> &'static str {
-        "dual-contouring"
+        INFO.name
     }
 
     fn description(&self) -> &'static str {

@@ -49,7 +49,7 @@
 //! assert!(out.surface.positions.iter().all(|p| (p.length() - 0.4).abs() < 2e-3));
 //! ```
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo};
 use crate::geometry::trilinear_gradient;
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
@@ -132,9 +132,21 @@ pub const DESCRIPTION: &str = "Lorensen & Cline 1987: 256-case cube table, one v
 /// `on-iso` (separate, exact).
 pub const OPTION_NAMES: &[&str] = &["normals", "parallelism", "on-iso", "faces"];
 
+/// Lorensen & Cline 1987: the 256-case cube table, one vertex per crossing edge.
+pub const INFO: ExtractorInfo =
+    ExtractorInfo { name: "marching-cubes", description: DESCRIPTION, options: OPTION_NAMES, make: from_options };
+
+/// Nielson & Hamann 1991: marching cubes whose ambiguous faces follow the trilinear interpolant.
+pub const DECIDER_INFO: ExtractorInfo = ExtractorInfo {
+    name: "marching-cubes-decider",
+    description: DECIDER_DESCRIPTION,
+    options: OPTION_NAMES,
+    make: decider_from_options,
+};
+
 /// Builds marching cubes from named options.
 pub fn from_options(options: &crate::options::Options) -> Result<Box<dyn Extractor>, crate::options::OptionError> {
-    build(options, "marching-cubes", FaceResolution::SeparateInside)
+    build(options, INFO.name, FaceResolution::SeparateInside)
 }
 
 /// One line for listings of the asymptotic-decider variant.
@@ -143,7 +155,7 @@ pub const DECIDER_DESCRIPTION: &str =
 
 /// Builds the asymptotic-decider variant (`marching-cubes-decider`) from named options.
 pub fn decider_from_options(options: &crate::options::Options) -> Result<Box<dyn Extractor>, crate::options::OptionError> {
-    build(options, "marching-cubes-decider", FaceResolution::AsymptoticDecider)
+    build(options, DECIDER_INFO.name, FaceResolution::AsymptoticDecider)
 }
 
 fn build(
@@ -472,8 +484,8 @@ fn resolve(i: u32, offset: u32, below: Option<(&Scratch, u32)>) -> u32 {
 impl Extractor for MarchingCubes {
     fn name(&self) -> &'static str {
         match self.options.faces {
-            FaceResolution::SeparateInside => "marching-cubes",
-            FaceResolution::AsymptoticDecider => "marching-cubes-decider",
+            FaceResolution::SeparateInside => INFO.name,
+            FaceResolution::AsymptoticDecider => DECIDER_INFO.name,
         }
     }
 
@@ -539,7 +551,7 @@ impl Extractor for MarchingCubes {
 
         let t_join = Instant::now();
         if tasks > 1 {
-            let offsets = slab_offsets(scratches.iter().map(|s| s.mesh.positions.len()), "marching-cubes")?;
+            let offsets = slab_offsets(scratches.iter().map(|s| s.mesh.positions.len()), self.name())?;
             let surface = &mut out.surface;
             for s in scratches.iter() {
                 surface.positions.extend_from_slice(&s.mesh.positions);
@@ -563,7 +575,7 @@ impl Extractor for MarchingCubes {
                 }
             });
         } else if out.surface.positions.len() >= EXTERN as usize {
-            return Err(ExtractError::TooLarge { algorithm: "marching-cubes", vertices: out.surface.positions.len() });
+            return Err(ExtractError::TooLarge { algorithm: self.name(), vertices: out.surface.positions.len() });
         }
         let join_time = t_join.elapsed();
 

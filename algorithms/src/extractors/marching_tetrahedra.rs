@@ -27,7 +27,7 @@
 //! order, so the mesh does not depend on the thread count (the `scaling` experiment measures the
 //! speed-up).
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo};
 use crate::lattice::Lattice;
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
@@ -40,9 +40,13 @@ pub const DESCRIPTION: &str =
 /// Options it takes (none).
 pub const OPTION_NAMES: &[&str] = &[];
 
+/// Payne & Toga 1990: the 16-case tetrahedron table on a BCC lattice or Kuhn-split cubes.
+pub const INFO: ExtractorInfo =
+    ExtractorInfo { name: "marching-tetrahedra", description: DESCRIPTION, options: OPTION_NAMES, make: from_options };
+
 /// Builds it from options.
 pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError> {
-    options.reader("marching-tetrahedra", OPTION_NAMES).finish()?;
+    options.reader(INFO.name, OPTION_NAMES).finish()?;
     Ok(Box::new(MarchingTetrahedra))
 }
 
@@ -52,7 +56,7 @@ pub struct MarchingTetrahedra;
 
 impl Extractor for MarchingTetrahedra {
     fn name(&self) -> &'static str {
-        "marching-tetrahedra"
+        INFO.name
     }
 
     fn description(&self) -> &'static str {

@@ -1,8 +1,10 @@
 //! The extractor and post-process registries: one line per algorithm.
 //!
 //! Adding an algorithm: write `extractors/<name>.rs` with a type implementing
-//! [`Extractor`](crate::Extractor) (module doc: paper, summary, guarantees, costs) and a
-//! `from_options` constructor, declare the module below, and add one line to [`INFOS`].
+//! [`Extractor`](crate::Extractor) (module doc: paper, summary, guarantees, costs), a
+//! `from_options` constructor and `pub const INFO: ExtractorInfo` (its name, written once there);
+//! declare the module below and add `<name>::INFO,` to [`INFOS`]. The tests below check that every
+//! entry builds with its default options and reports the name it is registered under.
 
 pub mod bcc_sculpt;
 pub mod dual;
@@ -19,113 +21,39 @@ pub use marching_tetrahedra::MarchingTetrahedra;
 pub use regularised_marching_tetrahedra::RegularisedMarchingTetrahedra;
 pub use surface_nets::SurfaceNets;
 
+pub use crate::extract::{ExtractorInfo, PostInfo};
+
 use crate::extract::{Extractor, PostProcess};
 use crate::options::{OptionError, Options};
 use crate::post::edge_collapse;
 
-/// How to build an extractor: its name, one line, and a constructor from options.
-pub struct ExtractorInfo {
-    /// Stable kebab-case name.
-    pub name: &'static str,
-    /// One line saying what it does.
-    pub description: &'static str,
-    /// The options it takes (`--set NAME=VALUE`).
-    pub options: &'static [&'static str],
-    /// Builds it; unknown or bad options are errors naming the option.
-    pub make: fn(&Options) -> Result<Box<dyn Extractor>, OptionError>,
-}
-
-/// Every extractor, in the order the report lists them.
+/// Every extractor, in the order the report lists them: one line each (the paper is in each
+/// `INFO`'s doc and its module's).
 pub const INFOS: &[ExtractorInfo] = &[
-    // Lorensen & Cline 1987: the 256-case cube table, one vertex per crossing edge.
-    ExtractorInfo {
-        name: "marching-cubes",
-        description: marching_cubes::DESCRIPTION,
-        options: marching_cubes::OPTION_NAMES,
-        make: marching_cubes::from_options,
-    },
-    // Nielson & Hamann 1991: marching cubes whose ambiguous faces follow the trilinear interpolant.
-    ExtractorInfo {
-        name: "marching-cubes-decider",
-        description: marching_cubes::DECIDER_DESCRIPTION,
-        options: marching_cubes::OPTION_NAMES,
-        make: marching_cubes::decider_from_options,
-    },
-    // Gibson 1998: one vertex per surface cell, quads across crossing edges, constrained smoothing.
-    ExtractorInfo {
-        name: "surface-nets",
-        description: surface_nets::DESCRIPTION,
-        options: surface_nets::OPTION_NAMES,
-        make: surface_nets::from_options,
-    },
-    // Ju et al. 2002: the dual structure with vertices at the minimum of the quadric error.
-    ExtractorInfo {
-        name: "dual-contouring",
-        description: dual_contouring::DESCRIPTION,
-        options: dual_contouring::OPTION_NAMES,
-        make: dual_contouring::from_options,
-    },
-    // Payne & Toga 1990: the 16-case tetrahedron table on a BCC lattice or Kuhn-split cubes.
-    ExtractorInfo {
-        name: "marching-tetrahedra",
-        description: marching_tetrahedra::DESCRIPTION,
-        options: marching_tetrahedra::OPTION_NAMES,
-        make: marching_tetrahedra::from_options,
-    },
-    // Treece et al. 1999 / Costen 2026: marching tetrahedra with integrated vertex clustering.
-    ExtractorInfo {
-        name: "regularised-marching-tetrahedra",
-        description: regularised_marching_tetrahedra::DESCRIPTION,
-        options: regularised_marching_tetrahedra::OPTION_NAMES,
-        make: regularised_marching_tetrahedra::from_options,
-    },
-    // Stuart et al. 2013: BCC lattice sculpted to the surface, snowflakes, ODT relaxation (volume).
-    ExtractorInfo {
-        name: "bcc-sculpt",
-        description: bcc_sculpt::DESCRIPTION,
-        options: bcc_sculpt::OPTION_NAMES,
-        make: bcc_sculpt::from_options,
-    },
+    marching_cubes::INFO,
+    marching_cubes::DECIDER_INFO,
+    surface_nets::INFO,
+    dual_contouring::INFO,
+    marching_tetrahedra::INFO,
+    regularised_marching_tetrahedra::INFO,
+    bcc_sculpt::INFO,
 ];
 
-/// Every extractor, built from its default options.
+/// Every extractor, built from its default options (which every registered extractor accepts:
+/// tested, so a failure here is a bug in the registry, not in the user's input).
 pub fn registry() -> Vec<Box<dyn Extractor>> {
-    INFOS.iter().filter_map(|i| (i.make)(&Options::new()).ok()).collect()
-}
-
-/// How to build a post-process: its name, one line, and a constructor from options.
-pub struct PostInfo {
-    /// Stable kebab-case name (the CLI's `--post NAME` or `--post NAME:OPTION=VALUE,...`).
-    pub name: &'static str,
-    /// One line saying what it does.
-    pub description: &'static str,
-    /// The options it takes.
-    pub options: &'static [&'static str],
-    /// Builds it; unknown or bad options are errors naming the option.
-    pub make: fn(&Options) -> Result<Box<dyn PostProcess>, OptionError>,
+    INFOS.iter().map(|i| (i.make)(&Options::new()).unwrap_or_else(|e| panic!("{}'s default options fail: {e}", i.name))).collect()
 }
 
 /// Every post-process, one line each.
-pub const POST_INFOS: &[PostInfo] = &[
-    // Costen 2026, section 2.6: merge short edges in one sweep, drop degenerate triangles.
-    PostInfo {
-        name: "edge-collapse",
-        description: edge_collapse::PAPER_DESCRIPTION,
-        options: edge_collapse::PAPER_OPTION_NAMES,
-        make: edge_collapse::paper_from_options,
-    },
-    // Shortest-first collapse under the link condition and a normal test.
-    PostInfo {
-        name: "edge-collapse-safe",
-        description: edge_collapse::SAFE_DESCRIPTION,
-        options: edge_collapse::SAFE_OPTION_NAMES,
-        make: edge_collapse::safe_from_options,
-    },
-];
+pub const POST_INFOS: &[PostInfo] = &[edge_collapse::PAPER_INFO, edge_collapse::SAFE_INFO];
 
-/// Every post-process with default options.
+/// Every post-process with default options (tested to build, as [`registry`]).
 pub fn post_processes() -> Vec<Box<dyn PostProcess>> {
-    POST_INFOS.iter().filter_map(|i| (i.make)(&Options::new()).ok()).collect()
+    POST_INFOS
+        .iter()
+        .map(|i| (i.make)(&Options::new()).unwrap_or_else(|e| panic!("{}'s default options fail: {e}", i.name)))
+        .collect()
 }
 
 /// The post-process a CLI spec names: `NAME` or `NAME:OPTION=VALUE,OPTION=VALUE`. `Ok(None)` when
@@ -169,4 +97,27 @@ pub fn names() -> String {
 /// Comma-separated names of all post-processes (for error messages).
 pub fn post_names() -> String {
     post_processes().iter().map(|e| e.name()).collect::<Vec<_>>().join(", ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_entry_builds_with_defaults_and_reports_its_registered_name() {
+        let mut names = std::collections::HashSet::new();
+        for info in INFOS {
+            let e = (info.make)(&Options::new()).unwrap_or_else(|err| panic!("{}: {err}", info.name));
+            assert_eq!(e.name(), info.name);
+            assert_eq!(e.description(), info.description, "{}", info.name);
+            assert!(names.insert(info.name), "{} is registered twice", info.name);
+        }
+        for info in POST_INFOS {
+            let p = (info.make)(&Options::new()).unwrap_or_else(|err| panic!("{}: {err}", info.name));
+            assert_eq!(p.name(), info.name);
+            assert!(names.insert(info.name), "{} is registered twice", info.name);
+        }
+        assert_eq!(registry().len(), INFOS.len());
+        assert_eq!(post_processes().len(), POST_INFOS.len());
+    }
 }

@@ -55,7 +55,7 @@
 //! **Costs.** As marching tetrahedra plus, per sample with two or more nearby crossings, a few
 //! bit operations per crossing (at most 14 × 14).
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo};
 use crate::field::Field;
 use crate::lattice::Lattice;
 use crate::mesh::manifold_defects;
@@ -114,10 +114,18 @@ impl RmtOptions {
     }
 }
 
+/// Treece et al. 1999 / Costen 2026: marching tetrahedra with integrated vertex clustering.
+pub const INFO: ExtractorInfo = ExtractorInfo {
+    name: "regularised-marching-tetrahedra",
+    description: DESCRIPTION,
+    options: OPTION_NAMES,
+    make: from_options,
+};
+
 /// Builds it from options.
 pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError> {
     let d = RmtOptions::default();
-    let mut r = options.reader("regularised-marching-tetrahedra", OPTION_NAMES);
+    let mut r = options.reader(INFO.name, OPTION_NAMES);
     let o = RmtOptions {
         max_nearby: r.count("max-nearby", d.max_nearby as usize, DIRECTIONS)? as u32,
         loop_check: r.choice("loop-check", d.loop_check, &[("true", true), ("false", false)])?,
@@ -228,7 +236,7 @@ fn newton(field: &dyn Field, start: Vec3, iso: f32, reach: f32) -> Vec3 {
 
 impl Extractor for RegularisedMarchingTetrahedra {
     fn name(&self) -> &'static str {
-        "regularised-marching-tetrahedra"
+        INFO.name
     }
 
     fn description(&self) -> &'static str {

@@ -66,7 +66,7 @@
 //! assert!(out.surface.positions.iter().all(|p| (p.length() - 0.4).abs() < 1.8 * h));
 //! ```
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo};
 use crate::extractors::dual::{DualEngine, Placement};
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
@@ -82,10 +82,14 @@ pub const DESCRIPTION: &str =
 pub const OPTION_NAMES: &[&str] =
     &["smoothing", "iterations", "strength", "decay", "stiffness", "damping", "time-step", "parallelism"];
 
+/// Gibson 1998: one vertex per surface cell, quads across crossing edges, constrained smoothing.
+pub const INFO: ExtractorInfo =
+    ExtractorInfo { name: "surface-nets", description: DESCRIPTION, options: OPTION_NAMES, make: from_options };
+
 /// Builds surface nets from named options.
 pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError> {
     let d = SnOptions::default();
-    let mut r = options.reader("surface-nets", OPTION_NAMES);
+    let mut r = options.reader(INFO.name, OPTION_NAMES);
     let smoothing = r.choice(
         "smoothing",
         d.smoothing,
@@ -125,7 +129,7 @@ impl Default for SurfaceNets {
 impl SurfaceNets {
     /// Surface nets with `options`.
     pub fn new(options: SnOptions) -> Self {
-        Self { engine: DualEngine::new(options, Placement::MassPoint, "surface-nets") }
+        Self { engine: DualEngine::new(options, Placement::MassPoint, INFO.name) }
     }
 
     /// The options.
@@ -136,7 +140,7 @@ impl SurfaceNets {
 
 impl Extractor for SurfaceNets {
     fn name(&self) -> &'static str {
-        "surface-nets"
+        INFO.name
     }
 
     fn description(&self) -> &'static str {

@@ -29,7 +29,7 @@
 //! **Costs.** Paper: O(E α(E)) plus the sort. Safe: O(E log E), each collapse touching the two
 //! vertices' triangle fans.
 
-use crate::extract::{ExtractError, Extraction, PostProcess};
+use crate::extract::{ExtractError, Extraction, PostInfo, PostProcess};
 use crate::mesh::TriMesh;
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
@@ -90,8 +90,17 @@ impl EdgeCollapse {
 pub const DEFAULT_THRESHOLD: f32 = 0.5;
 
 /// Builds the paper's variant from options.
+/// Costen 2026, section 2.6: merge short edges in one sweep, drop degenerate triangles.
+pub const PAPER_INFO: PostInfo =
+    PostInfo { name: "edge-collapse", description: PAPER_DESCRIPTION, options: PAPER_OPTION_NAMES, make: paper_from_options };
+
+/// Shortest-first collapse under the link condition and a normal test.
+pub const SAFE_INFO: PostInfo =
+    PostInfo { name: "edge-collapse-safe", description: SAFE_DESCRIPTION, options: SAFE_OPTION_NAMES, make: safe_from_options };
+
+/// The paper's sweep from named options.
 pub fn paper_from_options(options: &Options) -> Result<Box<dyn PostProcess>, OptionError> {
-    let mut r = options.reader("edge-collapse", PAPER_OPTION_NAMES);
+    let mut r = options.reader(PAPER_INFO.name, PAPER_OPTION_NAMES);
     let threshold = positive_threshold(&mut r, DEFAULT_THRESHOLD)?;
     r.finish()?;
     Ok(Box::new(EdgeCollapse::paper(threshold)))
@@ -99,7 +108,7 @@ pub fn paper_from_options(options: &Options) -> Result<Box<dyn PostProcess>, Opt
 
 /// Builds the safe variant from options.
 pub fn safe_from_options(options: &Options) -> Result<Box<dyn PostProcess>, OptionError> {
-    let mut r = options.reader("edge-collapse-safe", SAFE_OPTION_NAMES);
+    let mut r = options.reader(SAFE_INFO.name, SAFE_OPTION_NAMES);
     let target = r.count("target", 0, u32::MAX as usize)?;
     // With a target and no threshold, edges of any length collapse until the target is met.
     let default = if target > 0 { f32::INFINITY } else { DEFAULT_THRESHOLD };
@@ -120,8 +129,8 @@ fn positive_threshold(r: &mut crate::options::OptionReader, default: f32) -> Res
 impl PostProcess for EdgeCollapse {
     fn name(&self) -> &'static str {
         match self.variant {
-            Variant::Paper => "edge-collapse",
-            Variant::Safe => "edge-collapse-safe",
+            Variant::Paper => PAPER_INFO.name,
+            Variant::Safe => SAFE_INFO.name,
         }
     }
 

@@ -4,7 +4,7 @@
 pub mod plot;
 pub mod render;
 
-/// Fixed colours per algorithm, by position in the extractor registry, so every figure agrees.
+/// Eight distinct colours (Tableau's), for series that are not algorithms.
 pub const PALETTE: [(u8, u8, u8); 8] = [
     (0x1f, 0x77, 0xb4),
     (0xd6, 0x27, 0x28),
@@ -16,9 +16,61 @@ pub const PALETTE: [(u8, u8, u8); 8] = [
     (0x17, 0xbe, 0xcf),
 ];
 
-/// The colour of an algorithm (or any name): its registry position, else a stable hash.
+/// The colours the report's figures have always given the registered algorithms.
+const NAMED: [(&str, (u8, u8, u8)); 7] = [
+    ("marching-cubes", PALETTE[0]),
+    ("marching-cubes-decider", PALETTE[1]),
+    ("surface-nets", PALETTE[2]),
+    ("dual-contouring", PALETTE[3]),
+    ("marching-tetrahedra", PALETTE[4]),
+    ("regularised-marching-tetrahedra", PALETTE[5]),
+    ("bcc-sculpt", PALETTE[6]),
+];
+
+/// The colour of an algorithm (or any name), the same in every figure and stable as the registry
+/// grows: the colours above for the algorithms that have them, otherwise a hue from a hash of
+/// the name (FNV-1a), so a new algorithm gets its own colour without a line here and without
+/// recolouring the others.
 pub fn color_of(name: &str) -> (u8, u8, u8) {
-    let names: Vec<&'static str> = isolab_algorithms::extractors::registry().iter().map(|e| e.name()).collect();
-    let i = names.iter().position(|n| *n == name).unwrap_or_else(|| name.bytes().map(usize::from).sum::<usize>());
-    PALETTE[i % PALETTE.len()]
+    if let Some((_, c)) = NAMED.iter().find(|(n, _)| *n == name) {
+        return *c;
+    }
+    let hash = name.bytes().fold(0xcbf29ce484222325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100000001b3));
+    hsv((hash % 360) as f32, 0.65, 0.8)
+}
+
+/// An sRGB colour from hue (degrees), saturation and value in [0, 1].
+fn hsv(h: f32, s: f32, v: f32) -> (u8, u8, u8) {
+    let c = v * s;
+    let x = c * (1.0 - ((h / 60.0) % 2.0 - 1.0).abs());
+    let (r, g, b) = match (h / 60.0) as u32 {
+        0 => (c, x, 0.0),
+        1 => (x, c, 0.0),
+        2 => (0.0, c, x),
+        3 => (0.0, x, c),
+        4 => (x, 0.0, c),
+        _ => (c, 0.0, x),
+    };
+    let to = |u: f32| ((u + v - c) * 255.0).round() as u8;
+    (to(r), to(g), to(b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_registered_algorithm_has_its_own_stable_colour() {
+        let names: Vec<&str> = isolab_algorithms::extractors::INFOS.iter().map(|i| i.name).collect();
+        let colours: Vec<_> = names.iter().map(|n| color_of(n)).collect();
+        for (i, a) in colours.iter().enumerate() {
+            for (j, b) in colours.iter().enumerate().skip(i + 1) {
+                let d = (a.0 as i32 - b.0 as i32).abs() + (a.1 as i32 - b.1 as i32).abs() + (a.2 as i32 - b.2 as i32).abs();
+                assert!(d > 60, "{} and {} look alike: {a:?} {b:?}", names[i], names[j]);
+            }
+        }
+        assert_eq!(color_of("a-new-extractor"), color_of("a-new-extractor"));
+        assert_eq!(hsv(0.0, 1.0, 1.0), (255, 0, 0));
+        assert_eq!(hsv(120.0, 1.0, 1.0), (0, 255, 0));
+    }
 }

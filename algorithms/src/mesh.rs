@@ -77,29 +77,17 @@ impl TriMesh {
 /// (regularised marching tetrahedra's guard); the metrics crate lists offenders for reports.
 pub fn manifold_defects(mesh: &TriMesh) -> Vec<u32> {
     let n = mesh.positions.len();
-    // Triangles around each vertex (counting sort).
-    let mut start = vec![0u32; n + 1];
-    for t in &mesh.triangles {
-        for &v in t {
-            start[v as usize + 1] += 1;
-        }
-    }
-    for i in 0..n {
-        start[i + 1] += start[i];
-    }
-    let mut fill = start.clone();
-    let mut links = vec![(0u32, 0u32); 3 * mesh.triangles.len()];
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            let v = t[k] as usize;
-            links[fill[v] as usize] = (t[(k + 1) % 3], t[(k + 2) % 3]);
-            fill[v] += 1;
-        }
-    }
+    let around = Incidence::of(n, &mesh.triangles);
+    let mut link = Vec::new();
     let mut bad = Vec::new();
     for v in 0..n {
-        let link = &links[start[v] as usize..start[v + 1] as usize];
-        if let Some(others) = link_defects(link) {
+        link.clear();
+        link.extend(around.of_vertex(v as u32).iter().map(|&t| {
+            let tri = mesh.triangles[t as usize];
+            let k = tri.iter().position(|&x| x == v as u32).unwrap_or(0);
+            (tri[(k + 1) % 3], tri[(k + 2) % 3])
+        }));
+        if let Some(others) = link_defects(&link) {
             bad.push(v as u32);
             bad.extend(others);
         }
@@ -107,6 +95,73 @@ pub fn manifold_defects(mesh: &TriMesh) -> Vec<u32> {
     bad.sort_unstable();
     bad.dedup();
     bad
+}
+
+/// The elements (triangles or tetrahedra) around each vertex, in compressed rows: vertex `v`'s
+/// are `items[start[v]..start[v + 1]]`, in increasing element order. Built by a counting sort in
+/// two passes over the elements.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Incidence {
+    /// Row offsets, one per vertex plus one.
+    pub start: Vec<u32>,
+    /// Element indices.
+    pub items: Vec<u32>,
+}
+
+impl Incidence {
+    /// The incidence of every element of `elements` on `vertices` vertices.
+    pub fn of<const K: usize>(vertices: usize, elements: &[[u32; K]]) -> Self {
+        Self::of_subset(vertices, elements, 0..elements.len() as u32)
+    }
+
+    /// The incidence of the elements `ids` (increasing) of `elements`.
+    pub fn of_subset<const K: usize>(vertices: usize, elements: &[[u32; K]], ids: impl Iterator<Item = u32> + Clone) -> Self {
+        let mut start = vec![0u32; vertices + 1];
+        for e in ids.clone() {
+            for &v in &elements[e as usize] {
+                start[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..vertices {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut items = vec![0u32; start[vertices] as usize];
+        for e in ids {
+            for &v in &elements[e as usize] {
+                items[fill[v as usize] as usize] = e;
+                fill[v as usize] += 1;
+            }
+        }
+        Self { start, items }
+    }
+
+    /// The elements around vertex `v`.
+    pub fn of_vertex(&self, v: u32) -> &[u32] {
+        &self.items[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
+}
+
+/// Whether a vertex's link, given as edges `a - b` (one per incident triangle, direction
+/// ignored), is one simple path or cycle: no link vertex on more than two edges, and one
+/// connected piece. The vertex-manifold test of both the repairing extractors and the metrics.
+pub fn link_is_one_fan(link: &[(u32, u32)]) -> bool {
+    let mut verts: Vec<u32> = link.iter().flat_map(|&(a, b)| [a, b]).collect();
+    verts.sort_unstable();
+    verts.dedup();
+    let local = |x: u32| verts.binary_search(&x).unwrap_or(0);
+    let mut degree = vec![0u8; verts.len()];
+    let mut pieces = petgraph::unionfind::UnionFind::<usize>::new(verts.len());
+    for &(a, b) in link {
+        let (la, lb) = (local(a), local(b));
+        degree[la] += 1;
+        degree[lb] += 1;
+        if degree[la] > 2 || degree[lb] > 2 {
+            return false;
+        }
+        pieces.union(la, lb);
+    }
+    (1..verts.len()).all(|i| pieces.equiv(0, i))
 }
 
 /// Checks one vertex's link, given as directed edges `a -> b` (one per incident triangle
@@ -128,18 +183,8 @@ fn link_defects(link: &[(u32, u32)]) -> Option<Vec<u32>> {
     if !faulty.is_empty() {
         return Some(faulty);
     }
-    // Each link vertex is now the tail and the head of at most one edge: one component?
-    let start = link.iter().position(|&(a, _)| link.iter().all(|&(_, d)| d != a)).unwrap_or(0);
-    let mut at = link.get(start)?.0;
-    let mut walked = 0;
-    while let Some(&(_, b)) = link.iter().find(|&&(a, _)| a == at) {
-        walked += 1;
-        at = b;
-        if walked > link.len() || at == link[start].0 {
-            break;
-        }
-    }
-    (walked != link.len()).then(Vec::new)
+    // Each link vertex is now the tail and the head of at most one edge: one piece?
+    (!link_is_one_fan(link)).then(Vec::new)
 }
 
 /// A tetrahedral mesh. Tetrahedra `[a, b, c, d]` have positive orientation:

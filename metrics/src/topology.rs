@@ -14,7 +14,9 @@
 //! - **genus** `g = (2C - χ - B) / 2` with `C` components and `B` boundary loops, for an
 //!   edge-manifold oriented mesh (otherwise `null`).
 
+use isolab_algorithms::mesh::{link_is_one_fan, Incidence};
 use isolab_algorithms::TriMesh;
+use petgraph::unionfind::UnionFind;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -78,28 +80,6 @@ impl Topology {
     }
 }
 
-struct UnionFind(Vec<u32>);
-
-impl UnionFind {
-    fn new(n: usize) -> Self {
-        Self((0..n as u32).collect())
-    }
-    fn find(&mut self, mut a: u32) -> u32 {
-        while self.0[a as usize] != a {
-            let up = self.0[self.0[a as usize] as usize];
-            self.0[a as usize] = up;
-            a = up;
-        }
-        a
-    }
-    fn union(&mut self, a: u32, b: u32) {
-        let (ra, rb) = (self.find(a), self.find(b));
-        if ra != rb {
-            self.0[ra.max(rb) as usize] = ra.min(rb);
-        }
-    }
-}
-
 fn push_listed<T>(list: &mut Vec<T>, item: T) {
     if list.len() < MAX_LISTED {
         list.push(item);
@@ -136,8 +116,8 @@ pub fn topology(mesh: &TriMesh) -> Topology {
     half.par_sort_unstable();
 
     let mut edges = 0i64;
-    let mut face_uf = UnionFind::new(mesh.triangles.len());
-    let mut boundary_uf = UnionFind::new(n);
+    let mut face_uf = UnionFind::<u32>::new(mesh.triangles.len());
+    let mut boundary_uf = UnionFind::<u32>::new(n);
     let mut boundary_vertices = Vec::new();
     let mut i = 0;
     while i < half.len() {
@@ -173,13 +153,13 @@ pub fn topology(mesh: &TriMesh) -> Topology {
     }
     boundary_vertices.sort_unstable();
     boundary_vertices.dedup();
-    let mut loop_roots: Vec<u32> = boundary_vertices.iter().map(|&v| boundary_uf.find(v)).collect();
+    let mut loop_roots: Vec<u32> = boundary_vertices.iter().map(|&v| boundary_uf.find_mut(v)).collect();
     loop_roots.sort_unstable();
     loop_roots.dedup();
     report.boundary_loops = loop_roots.len();
 
     // Components: triangles connected through shared edges (as CGAL and MeshLab count them).
-    report.components = valid.iter().filter(|&&t| face_uf.find(t) == t).count();
+    report.components = valid.iter().filter(|&&t| face_uf.find_mut(t) == t).count();
     let mut used = vec![false; n];
     for t in &mesh.triangles {
         for &v in t {
@@ -210,67 +190,25 @@ pub fn topology(mesh: &TriMesh) -> Topology {
 /// Vertices whose link (the opposite edges of their triangles) is not a single cycle or path.
 fn non_manifold_vertices(mesh: &TriMesh, valid: &[u32]) -> Vec<u32> {
     let n = mesh.positions.len();
-    let mut start = vec![0u32; n + 1];
-    for &t in valid {
-        for &v in &mesh.triangles[t as usize] {
-            start[v as usize + 1] += 1;
-        }
-    }
-    for v in 0..n {
-        start[v + 1] += start[v];
-    }
-    let mut fill = start.clone();
-    let mut incident = vec![0u32; start[n] as usize];
-    for &t in valid {
-        for &v in &mesh.triangles[t as usize] {
-            incident[fill[v as usize] as usize] = t;
-            fill[v as usize] += 1;
-        }
-    }
+    let around = Incidence::of_subset(n, &mesh.triangles, valid.iter().copied());
     (0..n as u32)
         .into_par_iter()
         .filter(|&v| {
-            let tris = &incident[start[v as usize] as usize..start[v as usize + 1] as usize];
-            !tris.is_empty() && !link_is_fan(mesh, v, tris)
+            let tris = around.of_vertex(v);
+            !tris.is_empty() && !link_is_one_fan(&link_of(mesh, v, tris))
         })
         .collect()
 }
 
-/// Whether the link edges of `v` form one cycle or one path.
-fn link_is_fan(mesh: &TriMesh, v: u32, tris: &[u32]) -> bool {
-    let mut links: Vec<(u32, u32)> = tris
-        .iter()
+/// The link edges of `v`: each incident triangle's edge opposite `v`.
+fn link_of(mesh: &TriMesh, v: u32, tris: &[u32]) -> Vec<(u32, u32)> {
+    tris.iter()
         .map(|&t| {
             let tri = mesh.triangles[t as usize];
             let k = tri.iter().position(|&x| x == v).unwrap_or(0);
             (tri[(k + 1) % 3], tri[(k + 2) % 3])
         })
-        .collect();
-    let mut verts: Vec<u32> = links.iter().flat_map(|&(a, b)| [a, b]).collect();
-    verts.sort_unstable();
-    verts.dedup();
-    // Degrees (at most 2 each) and connectivity by a tiny union-find on local ids.
-    let local = |x: u32| verts.binary_search(&x).unwrap_or(0);
-    let mut degree = vec![0u8; verts.len()];
-    let mut parent: Vec<usize> = (0..verts.len()).collect();
-    fn root(p: &mut [usize], mut a: usize) -> usize {
-        while p[a] != a {
-            a = p[a];
-        }
-        a
-    }
-    for (a, b) in links.drain(..) {
-        let (la, lb) = (local(a), local(b));
-        degree[la] += 1;
-        degree[lb] += 1;
-        if degree[la] > 2 || degree[lb] > 2 {
-            return false;
-        }
-        let (ra, rb) = (root(&mut parent, la), root(&mut parent, lb));
-        parent[ra] = rb;
-    }
-    let r0 = root(&mut parent, 0);
-    (0..verts.len()).all(|i| root(&mut parent, i) == r0)
+        .collect()
 }
 
 #[cfg(test)]

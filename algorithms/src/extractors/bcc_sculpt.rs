@@ -544,7 +544,7 @@ pub fn bcc_lattice(bounds: Aabb, h: f64, rotation: DQuat, shift: DVec3) -> BccLa
         }
     }
     let neighbours = face_neighbours(&tets);
-    let (star_start, star) = stars(positions.len(), &tets);
+    let crate::mesh::Incidence { start: star_start, items: star } = crate::mesh::Incidence::of(positions.len(), &tets);
     BccLattice { positions, tets, neighbours, star_start, star }
 }
 
@@ -571,24 +571,6 @@ fn face_neighbours(tets: &[[u32; 4]]) -> Vec<[u32; 4]> {
         }
     }
     neighbours
-}
-
-/// Incident elements (tetrahedra or triangles) of each vertex, as offsets and a flat list.
-fn stars<const K: usize>(vertices: usize, elements: &[[u32; K]]) -> (Vec<u32>, Vec<u32>) {
-    let mut start = vec![0u32; vertices + 1];
-    elements.iter().flatten().for_each(|&v| start[v as usize + 1] += 1);
-    for v in 0..vertices {
-        start[v + 1] += start[v];
-    }
-    let mut fill = start.clone();
-    let mut star = vec![0u32; K * elements.len()];
-    for (e, element) in elements.iter().enumerate() {
-        for &v in element {
-            star[fill[v as usize] as usize] = e as u32;
-            fill[v as usize] += 1;
-        }
-    }
-    (start, star)
 }
 
 /// Sculpting: which lattice tetrahedra overlap the volume bounded by `S`.
@@ -718,14 +700,7 @@ pub fn repair_boundary(lattice: &BccLattice, keep: &mut [bool]) -> Repaired {
 /// Groups of bombs (indices into `candidates`) whose candidate snowflakes share a vertex or a
 /// missing tetrahedron; groups are independent of each other.
 fn interacting_groups(lattice: &BccLattice, keep: &[bool], candidates: &[Vec<u32>]) -> Vec<Vec<usize>> {
-    let mut parent: Vec<usize> = (0..candidates.len()).collect();
-    fn find(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
+    let mut sets = petgraph::unionfind::UnionFind::<usize>::new(candidates.len());
     let mut owner: HashMap<u64, usize> = HashMap::new();
     for (i, c) in candidates.iter().enumerate() {
         for &v in c {
@@ -734,8 +709,7 @@ fn interacting_groups(lattice: &BccLattice, keep: &[bool], candidates: &[Vec<u32
             for key in keys {
                 match owner.get(&key) {
                     Some(&j) => {
-                        let (a, b) = (find(&mut parent, i), find(&mut parent, j));
-                        parent[a] = b;
+                        sets.union(i, j);
                     }
                     None => {
                         owner.insert(key, i);
@@ -746,7 +720,7 @@ fn interacting_groups(lattice: &BccLattice, keep: &[bool], candidates: &[Vec<u32
     }
     let mut groups: HashMap<usize, Vec<usize>> = HashMap::new();
     for i in 0..candidates.len() {
-        let root = find(&mut parent, i);
+        let root = sets.find_mut(i);
         groups.entry(root).or_default().push(i);
     }
     let mut groups: Vec<Vec<usize>> = groups.into_values().collect();
@@ -932,8 +906,9 @@ impl VolumeMesh {
                 }
             }
         }
-        let (star_start, star) = stars(positions.len(), &tets);
-        let (face_start, face_star) = stars(positions.len(), &boundary);
+        let crate::mesh::Incidence { start: star_start, items: star } = crate::mesh::Incidence::of(positions.len(), &tets);
+        let crate::mesh::Incidence { start: face_start, items: face_star } =
+            crate::mesh::Incidence::of(positions.len(), &boundary);
         Self { positions, tets, star_start, star, boundary, face_start, face_star }
     }
 

@@ -34,6 +34,7 @@ use crate::mesh::TriMesh;
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
 use glam::Vec3;
+use petgraph::unionfind::UnionFind;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::time::Instant;
@@ -174,33 +175,29 @@ fn edges_of(mesh: &TriMesh) -> Vec<(u32, u32)> {
     edges
 }
 
-fn find(parent: &mut [u32], mut i: u32) -> u32 {
-    while parent[i as usize] != i {
-        parent[i as usize] = parent[parent[i as usize] as usize];
-        i = parent[i as usize];
-    }
-    i
-}
-
 /// The paper's edge collapse: one pass over the sorted edges merging clusters closer than
 /// `limit`, then the rebuild.
 pub fn collapse_paper(mesh: &mut TriMesh, limit: f32) {
     let n = mesh.positions.len();
-    let mut parent: Vec<u32> = (0..n as u32).collect();
+    let mut clusters = UnionFind::<u32>::new(n);
     let mut weight = vec![1.0f32; n];
     let mut position = mesh.positions.clone();
     let limit2 = limit * limit;
     for (a, b) in edges_of(mesh) {
-        let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+        let (ra, rb) = (clusters.find_mut(a), clusters.find_mut(b));
         if ra == rb || position[ra as usize].distance_squared(position[rb as usize]) >= limit2 {
             continue;
         }
+        // The weighted mean is symmetric in the two clusters, so it does not matter which root
+        // the union keeps.
         let (wa, wb) = (weight[ra as usize], weight[rb as usize]);
-        position[ra as usize] = (position[ra as usize] * wa + position[rb as usize] * wb) / (wa + wb);
-        weight[ra as usize] = wa + wb;
-        parent[rb as usize] = ra;
+        let merged = (position[ra as usize] * wa + position[rb as usize] * wb) / (wa + wb);
+        clusters.union(ra, rb);
+        let root = clusters.find_mut(ra);
+        position[root as usize] = merged;
+        weight[root as usize] = wa + wb;
     }
-    let map: Vec<u32> = (0..n as u32).map(|i| find(&mut parent, i)).collect();
+    let map: Vec<u32> = (0..n as u32).map(|i| clusters.find_mut(i)).collect();
     rebuild(mesh, &position, &map);
 }
 
@@ -261,16 +258,13 @@ pub fn collapse_safe(mesh: &mut TriMesh, limit: f32, target: usize, min_cos: f32
     let mut version = vec![0u32; n];
     // Vertices left in each connected part: parts of MIN_PART vertices or fewer are left alone,
     // so a one-cell blob keeps its shape instead of folding into an inside-out tetrahedron.
-    let mut part: Vec<u32> = (0..n as u32).collect();
+    let mut parts = UnionFind::<u32>::new(n);
     for t in &tris {
         for k in 0..3 {
-            let (ra, rb) = (find(&mut part, t[k]), find(&mut part, t[(k + 1) % 3]));
-            if ra != rb {
-                part[ra as usize] = rb;
-            }
+            parts.union(t[k], t[(k + 1) % 3]);
         }
     }
-    let part: Vec<u32> = (0..n as u32).map(|v| find(&mut part, v)).collect();
+    let part: Vec<u32> = (0..n as u32).map(|v| parts.find_mut(v)).collect();
     let mut part_size = vec![0usize; n];
     for &p in &part {
         part_size[p as usize] += 1;

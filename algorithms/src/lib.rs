@@ -40,6 +40,7 @@ pub mod mesh;
 pub mod options;
 pub mod post;
 pub mod predicates;
+pub mod random;
 pub mod samples;
 pub mod sign_rows;
 pub mod slabs;

@@ -141,11 +141,6 @@ mod editing {
     use glam::Vec3;
     use isolab_algorithms::chunks::{Brush, ChunkState, ChunkedVolume, EditError};
 
-    fn lcg(state: &mut u64) -> f32 {
-        *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (*state >> 40) as f32 / (1u64 << 24) as f32
-    }
-
     #[test]
     fn brush_edits_remesh_only_dirty_chunks_and_equal_a_fresh_extraction() {
         // Marching cubes reads no apron; the others read 2 + smoothing (surface nets: 6), 2 (dual
@@ -158,14 +153,14 @@ mod editing {
             let grid = *samples.grid();
             let mut world = ChunkedVolume::new(e.as_ref(), samples, 16).unwrap();
             assert_eq!(world.remesh_dirty(e.as_ref()).unwrap(), 64);
-            let mut seed = 7u64;
+            let mut seed = isolab_algorithms::random::Random::new(7);
             let mut welded = Extraction::default();
             for edit in 0..edits {
-                let p = Vec3::new(lcg(&mut seed), lcg(&mut seed), lcg(&mut seed));
+                let p = Vec3::new(seed.unit_f32(), seed.unit_f32(), seed.unit_f32());
                 let brush = Brush {
                     centre: grid.origin + p * grid.spacing * 64.0,
-                    radius: grid.spacing * (2.0 + 6.0 * lcg(&mut seed)),
-                    falloff: grid.spacing * 2.0 * lcg(&mut seed),
+                    radius: grid.spacing * (2.0 + 6.0 * seed.unit_f32()),
+                    falloff: grid.spacing * 2.0 * seed.unit_f32(),
                     add: edit % 2 == 0,
                     material: 4,
                 };

@@ -9,20 +9,15 @@ use isolab_metrics::topology;
 use isolab_tests::blob_field;
 use proptest::prelude::*;
 
-fn lcg(state: &mut u64) -> u64 {
-    *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-    *state >> 33
-}
-
 #[test]
 fn random_terrains_and_level_patterns_leave_no_crack() {
     let mc = extractors::by_name("marching-cubes").unwrap();
-    let mut state = 11u64;
+    let mut random = isolab_algorithms::random::Random::new(11);
     for seed in 1..=6 {
         let field = fields::builtin("terrain", FieldParams { seed }).unwrap();
         let grid = Grid::with_dims(&field.domain(), [65, 33, 65]).unwrap();
         let samples = Samples::sample(field, Lattice::Cubic(grid), 0.0).unwrap();
-        let levels: Vec<u8> = (0..4 * 2 * 4).map(|_| (lcg(&mut state) % 2) as u8).collect();
+        let levels: Vec<u8> = (0..4 * 2 * 4).map(|_| (random.next_u64() % 2) as u8).collect();
         let mut out = Extraction::default();
         let stats = extract_lod(mc.as_ref(), &samples, 16, &levels, &mut out, None).unwrap();
         let what = format!("terrain seed {seed}, levels {levels:?}");

@@ -80,13 +80,8 @@ proptest! {
 #[test]
 fn parallel_slabs_join_without_cracks_on_white_noise() {
     // 64^3 cells of white noise: many slabs, every slab boundary crowded with crossings.
-    let mut state = 0x9e3779b97f4a7c15u64;
-    let mut next = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
-    };
+    let mut random = isolab_algorithms::random::Random::new(0x9e3779b97f4a7c15);
+    let mut next = move || random.unit_f32() - 0.5;
     let n = 65;
     let noise: Vec<f32> = (0..n * n * n).map(|_| next()).collect();
     let s = grid_samples([n, n, n], |x, y, z| {

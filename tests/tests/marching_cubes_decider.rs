@@ -11,15 +11,10 @@ fn mc(faces: FaceResolution) -> MarchingCubes {
     MarchingCubes::new(McOptions { faces, parallelism: Parallelism::Serial, ..Default::default() })
 }
 
-/// A tiny deterministic generator (xorshift).
+/// A seeded stream of uniform numbers in [0, 1).
 fn rng(seed: u64) -> impl FnMut() -> f32 {
-    let mut s = seed.wrapping_mul(0x9e3779b97f4a7c15) | 1;
-    move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 40) as f32 / (1u64 << 24) as f32
-    }
+    let mut random = isolab_algorithms::random::Random::new(seed);
+    move || random.unit_f32()
 }
 
 #[test]

@@ -428,14 +428,8 @@ pub fn perturbation(seed: u64, attempt: usize) -> (DQuat, DVec3) {
     if attempt == 0 {
         return (DQuat::IDENTITY, DVec3::ZERO);
     }
-    let mut state = seed ^ (attempt as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    let mut next = || {
-        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut random = crate::random::Random::new(seed ^ (attempt as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    let mut next = || random.unit();
     let (u1, u2, u3) = (next(), next(), next());
     let tau = std::f64::consts::TAU;
     let q = DQuat::from_xyzw(

@@ -63,14 +63,11 @@ struct Data {
 }
 
 /// The scripted edits: a sphere on the current surface of a random column, radius 3-10 cells,
-/// falloff 0-3 cells, alternately carving and adding (LCG-seeded, so every extractor and every
-/// run sees the same sequence).
+/// falloff 0-3 cells, alternately carving and adding (from the seeded stream `algorithms::random`,
+/// so every extractor and every run sees the same sequence).
 fn script(grid: &Grid, values: &dyn Fn(usize, usize) -> Option<usize>) -> Vec<Brush> {
-    let mut state = SEED;
-    let mut next = move || {
-        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (state >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut random = isolab_algorithms::random::Random::new(SEED);
+    let mut next = move || random.unit_f32();
     let mut brushes = Vec::with_capacity(EDITS);
     while brushes.len() < EDITS {
         let (x, z) = ((next() * (DIMS[0] - 1) as f32) as usize, (next() * (DIMS[2] - 1) as f32) as usize);

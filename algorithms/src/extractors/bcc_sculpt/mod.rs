@@ -1,0 +1,567 @@
+//! `bcc-sculpt`: a coarse tetrahedral mesh that encloses and approximates a surface, after
+//! Stuart, Levine, Jones & Bargteil 2013, "Automatic construction of coarse, high-quality
+//! tetrahedralizations that enclose and approximate surfaces for animation" (MIG '13), sections 3
+//! and 4 (`../shared/papers/stuart-bcc-sculpting-odt-tetrahedralization.txt`).
+//!
+//! The input surface `S` is the field's own triangle mesh for mesh fields (OBJ input), and the
+//! marching cubes surface of the samples for any other field. Four phases, one function each:
+//! 1. **Lattice** ([`bcc_lattice`], §3.1): the BCC tetrahedralization of `S`'s bounding box plus a
+//!    margin, every tetrahedron alike (two long edges between points of one grid, four short
+//!    edges; dihedral angles 60° and 90°), optionally rotated and translated (§3.4).
+//! 2. **Sculpting** ([`sculpt`], §3.2): a tetrahedron is kept when it overlaps the volume bounded
+//!    by `S`: one of its vertices is inside `S` (the generalized winding number decides, so open or
+//!    self-intersecting inputs have a defined inside), or it meets a triangle of `S`. The paper's
+//!    second and third tests (a vertex of `S` inside the tetrahedron; an edge of the tetrahedron
+//!    crossing a triangle) plus the one they miss (an edge of a triangle crossing a face) make an
+//!    exact closed triangle-tetrahedron test; candidates come from `S`'s bounding volume hierarchy
+//!    instead of the paper's all-pairs loops.
+//! 3. **Defusing bombs** ([`defuse_bombs`], §3.2): a kept tetrahedron with two or more faces on
+//!    the boundary flattens into a sliver under relaxation. Each bomb gets one complete snowflake
+//!    (the 24 tetrahedra around one of its vertices), the combination chosen for the fewest added
+//!    tetrahedra. The paper searches all combinations; we split the bombs into independent groups
+//!    (bombs interact only when their candidate snowflakes share a missing tetrahedron or a vertex)
+//!    and run an exact branch-and-bound per group, seeded with a greedy cover and capped at
+//!    [`COVER_NODE_LIMIT`] search nodes, past which the best cover found is kept and the result
+//!    says the search was not exhaustive. Tetrahedra of a complete snowflake have at most one
+//!    boundary face and adding tetrahedra only removes boundary faces, so one round removes every
+//!    bomb (tested).
+//!    Sculpting can also leave parts that touch only along an edge or at a vertex (thin features);
+//!    [`repair_boundary`] completes the snowflakes of such vertices so the boundary is a manifold
+//!    (not in the paper, whose tables do not report the boundary's topology).
+//! 4. **Variational vertex adjustment** ([`relax`], §3.3): every vertex moves by a time step toward
+//!    the volume-weighted mean of its incident tetrahedra's circumcentres (the ODT update of
+//!    Alliez et al. 2005). A step that would invert a tetrahedron is halved; a boundary vertex's
+//!    step is also halved while the region its boundary triangles sweep (for a single moving vertex,
+//!    exactly the tetrahedra `(p, p', a, b)` over its boundary faces `(p, a, b)`) meets `S` - exact
+//!    continuous collision detection for one moving vertex, in place of the paper's El Topo. So
+//!    `∂V` never crosses `S` and `V` keeps enclosing it. Iterations stop when every boundary vertex
+//!    is within `d_offset = offset-ratio * h` of `S` (converged), at `max-iterations`, when no
+//!    boundary vertex can move any more, or at the time budget; the last three report
+//!    non-convergence (the paper's dashes) and keep the mesh reached.
+//!
+//! **Perturbation** (§3.4): `perturbations = K` runs the pipeline on K lattices, the first as is,
+//! the others randomly rotated and translated (seeded), in parallel, and keeps the best: converged
+//! before not converged, then the largest minimum dihedral angle. With `budget-ms`, attempts not
+//! started by then are skipped and a running relaxation stops, so the result is the best so far.
+//!
+//! Output: the tetrahedra in [`Extraction::volume`] and their boundary (outward, counter-clockwise)
+//! in [`Extraction::surface`]; [`sculpt_surface`] also returns a [`SculptReport`] with the counts of
+//! every phase. Costs: O(lattice) for the lattice and sculpting (winding numbers and BVH queries,
+//! in parallel), O(iterations × boundary vertices × nearby triangles of S) for the relaxation.
+
+use crate::bvh::TriangleBvh;
+use crate::extract::{ExtractError, Extraction, Extractor, ExtractorInfo};
+use crate::geometry::{circumcentre, dihedral_angles, Aabb};
+use crate::mesh::{manifold_defects, TetMesh, TriMesh};
+use crate::options::{OptionError, Options};
+use crate::predicates::triangle_meets_tetrahedron;
+use crate::samples::Samples;
+use glam::{DQuat, DVec3, Vec3};
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::time::{Duration, Instant};
+
+mod cover;
+mod lattice;
+mod relax;
+mod sculpt;
+
+use cover::*;
+use lattice::*;
+pub use lattice::{bcc_lattice, perturbation, BccLattice};
+use relax::*;
+pub use sculpt::{bombs, defuse_bombs, repair_boundary, sculpt, Defused, Repaired};
+
+/// One line for the registry.
+pub const DESCRIPTION: &str =
+    "BCC lattice sculpted to the surface, bombs defused with snowflakes, ODT relaxation that keeps enclosing (tetrahedra + boundary)";
+
+/// Options `bcc-sculpt` takes.
+pub const OPTION_NAMES: &[&str] = &[
+    "spacing",
+    "cells",
+    "offset-ratio",
+    "perturbations",
+    "seed",
+    "time-step",
+    "max-iterations",
+    "budget-ms",
+    "quality-floor",
+    "attract",
+    "clearance",
+];
+
+/// Search nodes per group of interacting bombs before the best cover found so far is kept.
+pub const COVER_NODE_LIMIT: usize = 200_000;
+
+/// Lattice cells of margin around the surface's bounding box (so every kept vertex has a complete
+/// snowflake).
+const MARGIN_CELLS: f64 = 3.0;
+
+/// Tetrahedra around one interior lattice vertex (a snowflake).
+const SNOWFLAKE: usize = 24;
+
+/// Faces of tetrahedron `[a, b, c, d]` opposite each vertex, counter-clockwise seen from outside
+/// when the tetrahedron is positively oriented.
+const FACES: [[usize; 3]; 4] = [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]];
+
+/// Settings of `bcc-sculpt`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SculptOptions {
+    /// Lattice spacing `h` (corner-grid cell width); `None`: the surface's longest side / `cells`.
+    pub spacing: Option<f32>,
+    /// Cells along the longest side when no spacing is given.
+    pub cells: usize,
+    /// `d_offset / h`: relaxation stops when every boundary vertex is this close to `S`.
+    pub offset_ratio: f32,
+    /// Lattices tried (the first unperturbed); the best result is kept.
+    pub perturbations: usize,
+    /// Seed of the perturbations.
+    pub seed: u64,
+    /// Fraction of the way to the ODT position a vertex moves per iteration.
+    pub time_step: f32,
+    /// Relaxation iterations before giving up (non-convergence).
+    pub max_iterations: usize,
+    /// Wall-time budget for all attempts (`None`: unlimited).
+    pub budget: Option<Duration>,
+    /// Fraction of `d_offset` a boundary vertex keeps from `S` (0: may touch it).
+    pub clearance: f32,
+    /// Boundary vertices farther than `d_offset` whose ODT step fails step toward `S` instead.
+    pub attract: bool,
+    /// Smallest dihedral angle, degrees, a relaxation step may leave in a tetrahedron it changes
+    /// (0: the paper's unguarded update).
+    pub quality_floor: f32,
+}
+
+impl Default for SculptOptions {
+    fn default() -> Self {
+        Self {
+            spacing: None,
+            cells: 10,
+            offset_ratio: 0.6,
+            perturbations: 1,
+            seed: 1,
+            time_step: 0.25,
+            max_iterations: 1000,
+            budget: None,
+            quality_floor: 20.0,
+            attract: false,
+            clearance: 0.0,
+        }
+    }
+}
+
+/// The `bcc-sculpt` extractor.
+#[derive(Clone, Debug, Default)]
+pub struct BccSculpt {
+    /// Its settings.
+    pub options: SculptOptions,
+}
+
+/// Stuart et al. 2013: BCC lattice sculpted to the surface, snowflakes, ODT relaxation (volume).
+pub const INFO: ExtractorInfo =
+    ExtractorInfo { name: "bcc-sculpt", description: DESCRIPTION, options: OPTION_NAMES, make: from_options };
+
+/// Builds `bcc-sculpt` from named options.
+pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError> {
+    let d = SculptOptions::default();
+    let mut r = options.reader(INFO.name, OPTION_NAMES);
+    let positive = |v: &str| match v.trim().parse::<f32>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        Ok(_) => Err("must be a finite number above 0".to_string()),
+        Err(_) => Err("is not a number".to_string()),
+    };
+    let spacing = r.parse("spacing", None, |v| positive(v).map(Some))?;
+    let cells = r.count("cells", d.cells, 1000)?;
+    let offset_ratio = r.parse("offset-ratio", d.offset_ratio, positive)?;
+    let perturbations = r.count("perturbations", d.perturbations, 10_000)?;
+    let seed = r.count("seed", d.seed as usize, usize::MAX)? as u64;
+    let time_step = r.number("time-step", d.time_step, 0.01, 1.0)?;
+    let max_iterations = r.count("max-iterations", d.max_iterations, 1_000_000)?;
+    let budget = r.parse("budget-ms", None, |v| positive(v).map(|ms| Some(Duration::from_secs_f64(f64::from(ms) / 1e3))))?;
+    let quality_floor = r.number("quality-floor", d.quality_floor, 0.0, 60.0)?;
+    let attract = r.choice("attract", d.attract, &[("true", true), ("false", false)])?;
+    let clearance = r.number("clearance", d.clearance, 0.0, 0.95)?;
+    r.finish()?;
+    let bad = |option: &str, value: usize, reason: &str| OptionError::BadValue {
+        algorithm: INFO.name,
+        option: option.into(),
+        value: value.to_string(),
+        reason: reason.into(),
+    };
+    if perturbations == 0 {
+        return Err(bad("perturbations", 0, "must be at least 1 (the unperturbed lattice)"));
+    }
+    if cells < 2 {
+        return Err(bad("cells", cells, "must be at least 2"));
+    }
+    let options = SculptOptions {
+        spacing,
+        cells,
+        offset_ratio,
+        perturbations,
+        seed,
+        time_step,
+        max_iterations,
+        budget,
+        quality_floor,
+        attract,
+        clearance,
+    };
+    Ok(Box::new(BccSculpt { options }))
+}
+
+/// What one run of the pipeline did, phase by phase.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SculptReport {
+    /// Which attempt this is (0: the unperturbed lattice).
+    pub attempt: usize,
+    /// Lattice spacing used.
+    pub spacing: f32,
+    /// Tetrahedra of the whole lattice.
+    pub lattice_tetrahedra: usize,
+    /// Tetrahedra kept by sculpting.
+    pub sculpted_tetrahedra: usize,
+    /// Bombs found after sculpting.
+    pub bombs: usize,
+    /// Tetrahedra added back to complete snowflakes.
+    pub restored: usize,
+    /// Whether every group of bombs was searched exhaustively.
+    pub exhaustive: bool,
+    /// Tetrahedra added to make the boundary a manifold (snowflakes around pinched vertices).
+    pub manifold_restored: usize,
+    /// Boundary vertices still not manifold after repair (0 unless a pinch sits at the lattice edge).
+    pub manifold_defects_left: usize,
+    /// Bombs left after defusing (0 by construction; checked).
+    pub bombs_left: usize,
+    /// Relaxation iterations run.
+    pub iterations: usize,
+    /// Whether every boundary vertex came within `d_offset` of `S`.
+    pub converged: bool,
+    /// Largest distance of a boundary vertex to `S` at the end.
+    pub max_distance: f32,
+    /// Smallest and largest dihedral angle at the end, degrees.
+    pub dihedral_deg: [f64; 2],
+    /// Tetrahedra at the end.
+    pub tetrahedra: usize,
+    /// Attempts run in all (on the chosen result only).
+    pub attempts_run: usize,
+    /// Time of each phase: lattice + sculpting, defusing + compaction, relaxation.
+    pub times: [Duration; 3],
+}
+
+/// A sculpted, relaxed tetrahedral mesh.
+#[derive(Clone, Debug, Default)]
+pub struct Sculpted {
+    /// The tetrahedra (positively oriented).
+    pub volume: TetMesh,
+    /// Their boundary, outward.
+    pub boundary: TriMesh,
+    /// What happened.
+    pub report: SculptReport,
+}
+
+impl Extractor for BccSculpt {
+    fn name(&self) -> &'static str {
+        INFO.name
+    }
+
+    fn description(&self) -> &'static str {
+        DESCRIPTION
+    }
+
+    fn produces_volume(&self) -> bool {
+        true
+    }
+
+    fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
+        out.clear();
+        out.stats.times.sampling = samples.sampling_time();
+        let owned;
+        let surface: &TriangleBvh = match samples.field().and_then(|f| f.surface_mesh()) {
+            Some(bvh) => bvh,
+            None => {
+                owned = surface_of_samples(samples)?;
+                &owned
+            }
+        };
+        let name = samples.field().map_or("samples".to_string(), |f| f.name().to_string());
+        out.stats.warnings = input_warnings(&name, surface);
+        let sculpted = sculpt_surface(surface, &name, &self.options)?;
+        let r = &sculpted.report;
+        out.stats.times.vertex = r.times[0];
+        out.stats.times.geometry = r.times[1];
+        out.stats.times.smoothing = r.times[2];
+        out.stats.converged = Some(r.converged);
+        if !r.converged {
+            out.stats.warnings.push(format!(
+                "{name}: relaxation did not bring every boundary vertex within d_offset = {} of the surface \
+                 (farthest {:.4} after {} iterations); the mesh reached is returned",
+                self.options.offset_ratio * r.spacing,
+                r.max_distance,
+                r.iterations
+            ));
+        }
+        out.volume = sculpted.volume;
+        out.surface = sculpted.boundary;
+        out.finish_counts(0);
+        Ok(())
+    }
+}
+
+/// The marching cubes surface of samples that carry no triangle mesh.
+fn surface_of_samples(samples: &Samples) -> Result<TriangleBvh, ExtractError> {
+    let mc = crate::extractors::MarchingCubes::default();
+    let mut e = Extraction::default();
+    mc.extract(samples, &mut e)?;
+    let p = &e.surface.positions;
+    Ok(TriangleBvh::new(e.surface.triangles.iter().map(|t| t.map(|i| p[i as usize])).collect()))
+}
+
+/// Warnings about the input surface: open edges (the winding number then decides the inside).
+pub fn input_warnings(name: &str, surface: &TriangleBvh) -> Vec<String> {
+    let key = |p: Vec3| p.to_array().map(f32::to_bits);
+    let mut edges: HashMap<([u32; 3], [u32; 3]), i32> = HashMap::new();
+    for t in surface.triangles() {
+        for k in 0..3 {
+            let (a, b) = (key(t[k]), key(t[(k + 1) % 3]));
+            *edges.entry(if a < b { (a, b) } else { (b, a) }).or_default() += 1;
+        }
+    }
+    let open = edges.values().filter(|&&n| n == 1).count();
+    let non_manifold = edges.values().filter(|&&n| n > 2).count();
+    let mut warnings = Vec::new();
+    if open > 0 || non_manifold > 0 {
+        warnings.push(format!(
+            "input surface '{name}' is not closed ({open} boundary edges, {non_manifold} edges with more than two triangles): \
+             the generalized winding number decides what is inside"
+        ));
+    }
+    if surface.is_empty() {
+        warnings.push(format!("input surface '{name}' has no triangles"));
+    }
+    warnings
+}
+
+/// Runs the whole pipeline on surface `S` (`name` is used in errors), trying
+/// `options.perturbations` lattices and keeping the best.
+pub fn sculpt_surface(surface: &TriangleBvh, name: &str, options: &SculptOptions) -> Result<Sculpted, ExtractError> {
+    let bounds = surface.bounds();
+    if surface.is_empty() {
+        return Err(ExtractError::BadInput { algorithm: INFO.name, reason: format!("'{name}' has no surface to enclose") });
+    }
+    let longest = bounds.longest_side();
+    let h = options.spacing.unwrap_or(longest / options.cells as f32);
+    if !(h > 0.0 && h.is_finite()) || h > longest {
+        return Err(ExtractError::BadInput {
+            algorithm: INFO.name,
+            reason: format!("spacing {h} is larger than '{name}' (longest side {longest}); use a spacing below {longest}"),
+        });
+    }
+    let cells = (bounds.extent() / h).ceil() + 2.0 * MARGIN_CELLS as f32;
+    let lattice_cells = cells.x as f64 * cells.y as f64 * cells.z as f64;
+    if lattice_cells > 2e7 {
+        return Err(ExtractError::BadInput {
+            algorithm: INFO.name,
+            reason: format!("spacing {h} makes a lattice of {lattice_cells:.0} cells for '{name}'; use a larger spacing"),
+        });
+    }
+    let deadline = options.budget.map(|b| Instant::now() + b);
+    let attempts: Vec<Sculpted> = (0..options.perturbations)
+        .into_par_iter()
+        .filter_map(|attempt| {
+            if attempt > 0 && deadline.is_some_and(|d| Instant::now() >= d) {
+                return None;
+            }
+            let (rotation, shift) = perturbation(options.seed, attempt);
+            Some(run_attempt(surface, f64::from(h), rotation, shift, options, deadline, attempt))
+        })
+        .collect();
+    let attempts_run = attempts.len();
+    let mut best = attempts
+        .into_iter()
+        .max_by(|a, b| {
+            (a.report.converged, a.report.dihedral_deg[0])
+                .partial_cmp(&(b.report.converged, b.report.dihedral_deg[0]))
+                .unwrap_or(std::cmp::Ordering::Equal)
+                .then(b.report.attempt.cmp(&a.report.attempt))
+        })
+        .expect("attempt 0 always runs");
+    best.report.attempts_run = attempts_run;
+    Ok(best)
+}
+
+/// One attempt: lattice, sculpting, defusing, relaxation, output.
+fn run_attempt(
+    surface: &TriangleBvh,
+    h: f64,
+    rotation: DQuat,
+    shift: DVec3,
+    options: &SculptOptions,
+    deadline: Option<Instant>,
+    attempt: usize,
+) -> Sculpted {
+    let mut report = SculptReport { attempt, spacing: h as f32, exhaustive: true, ..Default::default() };
+    let start = Instant::now();
+    let lattice = bcc_lattice(surface.bounds(), h, rotation, shift);
+    report.lattice_tetrahedra = lattice.tets.len();
+    let mut keep = sculpt(&lattice, surface);
+    report.sculpted_tetrahedra = keep.iter().filter(|&&k| k).count();
+    report.times[0] = start.elapsed();
+
+    let start = Instant::now();
+    let defused = defuse_bombs(&lattice, &mut keep);
+    report.bombs = defused.bombs;
+    report.restored = defused.restored;
+    report.exhaustive = defused.exhaustive;
+    let repaired = repair_boundary(&lattice, &mut keep);
+    report.manifold_restored = repaired.restored;
+    report.manifold_defects_left = repaired.defects_left;
+    report.bombs_left = bombs(&lattice, &keep).len();
+    let mut mesh = VolumeMesh::from_lattice(&lattice, &keep);
+    report.times[1] = start.elapsed();
+
+    let start = Instant::now();
+    let relaxed = relax(&mut mesh, surface, h, options, deadline);
+    report.iterations = relaxed.iterations;
+    report.converged = relaxed.converged;
+    report.max_distance = relaxed.max_distance;
+    report.times[2] = start.elapsed();
+    let (volume, boundary) = mesh.into_meshes();
+    report.tetrahedra = volume.tetrahedra.len();
+    report.dihedral_deg = dihedral_range(&volume);
+    Sculpted { volume, boundary, report }
+}
+
+/// Smallest and largest dihedral angle over all tetrahedra, degrees.
+fn dihedral_range(mesh: &TetMesh) -> [f64; 2] {
+    mesh.tetrahedra
+        .par_iter()
+        .map(|t| {
+            let a = dihedral_angles(t.map(|v| mesh.positions[v as usize]));
+            [a.iter().copied().fold(180.0, f64::min), a.iter().copied().fold(0.0, f64::max)]
+        })
+        .reduce(|| [180.0, 0.0], |a, b| [a[0].min(b[0]), a[1].max(b[1])])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Distinct vertices of the surface's triangles.
+    fn surface_vertices(surface: &TriangleBvh) -> Vec<Vec3> {
+        let mut seen = std::collections::HashSet::new();
+        surface.triangles().iter().flatten().copied().filter(|p| seen.insert(p.to_array().map(f32::to_bits))).collect()
+    }
+
+    fn octahedron(r: f32) -> TriangleBvh {
+        let v = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z].map(|p| p * r);
+        let faces = [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+        TriangleBvh::new(faces.iter().map(|f: &[usize; 3]| f.map(|i| v[i])).collect())
+    }
+
+    #[test]
+    fn lattice_tetrahedra_are_alike_and_fill_the_box() {
+        let lattice = bcc_lattice(Aabb::cube(1.0), 0.5, DQuat::IDENTITY, DVec3::ZERO);
+        let volume: f64 = lattice.tets.iter().map(|t| signed_volume(t.map(|v| lattice.positions[v as usize])) / 6.0).sum();
+        for t in &lattice.tets {
+            let p = t.map(|v| lattice.positions[v as usize]);
+            assert!((signed_volume(p) / 6.0 - 0.125 / 12.0).abs() < 1e-9, "every tetrahedron has h³/12");
+            let mut a = dihedral_angles(p);
+            a.sort_by(f64::total_cmp);
+            let expect = [60.0, 60.0, 60.0, 60.0, 90.0, 90.0];
+            assert!(a.iter().zip(expect).all(|(x, e)| (x - e).abs() < 1e-4), "{a:?}");
+        }
+        assert!(volume > 8.0, "the lattice covers the box and its margin: {volume}");
+        let interior = (0..lattice.positions.len() as u32).filter(|&v| lattice.star(v).len() == SNOWFLAKE).count();
+        assert!(interior > 0 && lattice.star_start.windows(2).all(|w| w[1] - w[0] <= SNOWFLAKE as u32));
+        // Faces pair up: every interior face has a neighbour that points back.
+        for (t, n) in lattice.neighbours.iter().enumerate() {
+            for &u in n.iter().filter(|&&u| u != u32::MAX) {
+                assert!(lattice.neighbours[u as usize].contains(&(t as u32)));
+            }
+        }
+    }
+
+    #[test]
+    fn sculpting_keeps_every_overlapping_tetrahedron_and_defusing_leaves_no_bomb() {
+        let surface = octahedron(1.0);
+        for attempt in 0..4 {
+            let (rotation, shift) = perturbation(7, attempt);
+            let lattice = bcc_lattice(surface.bounds(), 0.37, rotation, shift);
+            let mut keep = sculpt(&lattice, &surface);
+            // Every kept tetrahedron overlaps the octahedron |x|+|y|+|z| <= 1, and every lattice
+            // tetrahedron containing a point of it is kept.
+            for (t, tet) in lattice.tets.iter().enumerate() {
+                let p = tet.map(|v| lattice.positions[v as usize]);
+                let centroid = (p[0] + p[1] + p[2] + p[3]) / 4.0;
+                if centroid.abs().element_sum() < 0.999 {
+                    assert!(keep[t], "tetrahedron {t} holds interior point {centroid}");
+                }
+                if keep[t] {
+                    let nearest = p.iter().map(|q| q.abs().element_sum()).fold(f32::INFINITY, f32::min);
+                    assert!(nearest < 1.0 + 0.37 * 1.5, "kept tetrahedron {t} is far outside");
+                }
+            }
+            let defused = defuse_bombs(&lattice, &mut keep);
+            assert!(bombs(&lattice, &keep).is_empty(), "attempt {attempt}: {defused:?}");
+        }
+    }
+
+    #[test]
+    fn the_cover_search_finds_the_cheapest_combination() {
+        // Two bombs; vertex 2 covers both and costs 4 (greedy's pick); 0 and 1 cost 2 each but
+        // share a tetrahedron, 3 together.
+        let problem = CoverProblem {
+            vertices: vec![10, 11, 12],
+            cost: vec![vec![0, 1], vec![1, 2], vec![3, 4, 5, 6]],
+            bombs: vec![vec![0, 2], vec![1, 2]],
+            tets: 7,
+        };
+        let (mut chosen, exhaustive) = problem.solve(1000);
+        chosen.sort();
+        assert!(exhaustive);
+        assert_eq!(chosen, vec![10, 11], "3 tetrahedra through the shared one beat greedy's 4");
+        let problem = CoverProblem { cost: vec![vec![0, 1], vec![2, 3], vec![4, 5]], ..problem };
+        let (chosen, _) = problem.solve(1000);
+        assert_eq!(chosen, vec![12], "one snowflake of 2 beats two of 2 each");
+    }
+
+    #[test]
+    fn relaxed_mesh_encloses_and_approaches_the_surface() {
+        let surface = octahedron(1.0);
+        let options = SculptOptions { spacing: Some(0.4), offset_ratio: 0.6, ..Default::default() };
+        let result = sculpt_surface(&surface, "octahedron", &options).unwrap();
+        let r = &result.report;
+        assert!(r.converged, "{r:?}");
+        assert!(r.max_distance <= 0.24 + 1e-6);
+        assert!(r.dihedral_deg[0] > 0.0, "no inverted tetrahedron: {r:?}");
+        for t in &result.volume.tetrahedra {
+            assert!(signed_volume(t.map(|v| result.volume.positions[v as usize])) > 0.0);
+        }
+        // Enclosure: no boundary vertex inside S, and S's vertices inside the boundary.
+        let boundary = TriangleBvh::new(
+            result.boundary.triangles.iter().map(|t| t.map(|i| result.boundary.positions[i as usize])).collect(),
+        );
+        for &p in &result.boundary.positions {
+            assert!(surface.winding_number(p) < 0.5, "boundary vertex {p} went inside S");
+        }
+        for p in surface_vertices(&surface) {
+            assert!(boundary.winding_number(p) > 0.5, "S vertex {p} is outside the tetrahedral mesh");
+        }
+    }
+
+    #[test]
+    fn bad_settings_are_refused_by_name() {
+        let surface = octahedron(1.0);
+        let options = SculptOptions { spacing: Some(5.0), ..Default::default() };
+        let err = sculpt_surface(&surface, "octahedron", &options).unwrap_err().to_string();
+        assert!(err.contains("spacing 5") && err.contains("octahedron"), "{err}");
+        let mut o = Options::new();
+        o.set("offset-ratio", "0");
+        assert!(from_options(&o).err().unwrap().to_string().contains("offset-ratio"));
+        let mut o = Options::new();
+        o.set("perturbations", "0");
+        assert!(from_options(&o).err().unwrap().to_string().contains("perturbations"));
+    }
+}

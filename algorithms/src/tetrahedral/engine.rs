@@ -1,0 +1,523 @@
+//! The two passes marching tetrahedra and RMT share (Costen 2026, Algorithms 2 and 3): the
+//! vertex pass (each sample's nearby crossings, handed to a [`Clustering`]) and the geometry pass
+//! (each tetrahedron's case), both in slabs of layers on rayon, joined in order.
+
+use super::*;
+
+/// The crossings one sample owns, as a clustering policy sees them.
+#[derive(Clone, Copy, Debug)]
+pub struct Star {
+    /// Bit `k`: the crossing on edge `k` is nearer this sample than the neighbour.
+    pub nearby: u16,
+    /// Bit `k`: neighbour `k` exists (all 14 away from the lattice boundary).
+    pub neighbours: u16,
+    /// Crossing positions (valid where `nearby` is set).
+    pub crossings: [Vec3; DIRECTIONS],
+}
+
+/// Which of a sample's nearby crossings become one vertex.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Islands {
+    /// Number of vertices made.
+    pub count: u8,
+    /// Vertex slot (`0..count`) of each nearby crossing's edge.
+    pub slot: [u8; DIRECTIONS],
+}
+
+/// How a sample's nearby crossings are grouped into vertices.
+pub trait Clustering: Sync {
+    /// Groups the nearby crossings of one sample; `topology` gives the star's adjacency.
+    fn islands(&self, star: &Star, topology: &TetTopology) -> Islands;
+
+    /// Final position of a vertex merged from `members` crossings with mean `mean`, on the level
+    /// set `iso` of `field` when the samples carry one; `spacing` is the grid spacing.
+    fn place(&self, mean: Vec3, _members: u32, _field: Option<&dyn Field>, _iso: f32, _spacing: f32) -> Vec3 {
+        mean
+    }
+}
+
+/// One vertex per crossing (plain marching tetrahedra).
+pub struct NoClustering;
+
+impl Clustering for NoClustering {
+    fn islands(&self, star: &Star, _: &TetTopology) -> Islands {
+        let mut slot = [u8::MAX; DIRECTIONS];
+        let mut count = 0;
+        for (k, s) in slot.iter_mut().enumerate() {
+            if star.nearby >> k & 1 == 1 {
+                *s = count;
+                count += 1;
+            }
+        }
+        Islands { count, slot }
+    }
+}
+
+/// Per-sample vertex bookkeeping, reusable between runs.
+#[derive(Clone, Debug, Default)]
+pub struct TetScratch {
+    pub(super) base: Vec<u32>,
+    pub(super) slots: Vec<u64>,
+    /// Samples with a sign change on one of their edges.
+    pub(super) touch: Vec<bool>,
+    /// Samples whose crossings must not merge (set by a repairing caller).
+    pub(super) no_merge: Vec<bool>,
+    /// The sample that made each vertex, how many crossings it merged, and the lowest of their
+    /// directions (with the sample, a key for the vertex that does not depend on the lattice's
+    /// extent).
+    pub(super) owner: Vec<(u32, u8, u8)>,
+}
+
+impl TetScratch {
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        self.base.capacity() * 4
+            + self.slots.capacity() * 8
+            + self.touch.capacity()
+            + self.no_merge.capacity()
+            + self.owner.capacity() * 8
+    }
+
+    /// Fills `origins` with each vertex's owning sample and the lowest direction of its crossings
+    /// (`grid` is the corner grid of a cubic lattice); vertices from index `repaired_from` on were
+    /// made by repairs and are tagged apart.
+    pub fn fill_origins(&self, grid: &Grid, repaired_from: usize, origins: &mut crate::extract::Origins) {
+        let owners = self.owner.iter().enumerate().map(|(v, &(s, _, k))| {
+            let tag = if v >= repaired_from { DIRECTIONS as u32 } else { 0 };
+            (s as usize, u32::from(k) + tag)
+        });
+        origins.fill_with_ordinals(grid, owners);
+    }
+
+    /// Samples currently forbidden to merge.
+    pub fn unmerged_samples(&self) -> usize {
+        self.no_merge.iter().filter(|&&b| b).count()
+    }
+}
+
+/// Sample addressing in doubled coordinates.
+pub(super) struct Addresser {
+    pub(super) corners: Grid,
+    pub(super) centres: Option<Grid>,
+    /// Largest doubled coordinate on each axis.
+    pub(super) max: [i32; 3],
+}
+
+impl Addresser {
+    pub(super) fn new(lattice: &Lattice) -> Addresser {
+        let corners = *lattice.grid();
+        let centres = matches!(lattice, Lattice::Bcc(_)).then(|| corners.centres());
+        Addresser { corners, centres, max: corners.dims.map(|n| 2 * (n as i32 - 1)) }
+    }
+
+    /// Flat index of the sample at doubled coordinates `q`, if the lattice has one there.
+    #[inline]
+    pub(super) fn index(&self, q: [i32; 3]) -> Option<usize> {
+        if (0..3).any(|k| q[k] < 0 || q[k] > self.max[k]) {
+            return None;
+        }
+        if q[0] & 1 == 0 {
+            Some(self.corners.index((q[0] / 2) as usize, (q[1] / 2) as usize, (q[2] / 2) as usize))
+        } else {
+            let c = self.centres.as_ref()?;
+            Some(self.corners.len() + c.index((q[0] / 2) as usize, (q[1] / 2) as usize, (q[2] / 2) as usize))
+        }
+    }
+
+    /// Doubled coordinates of flat sample `i`.
+    pub(super) fn coords(&self, i: usize) -> [i32; 3] {
+        let (g, i, odd) = match &self.centres {
+            Some(c) if i >= self.corners.len() => (c, i - self.corners.len(), 1),
+            _ => (&self.corners, i, 0),
+        };
+        let [nx, ny, _] = g.dims;
+        [(i % nx) as i32 * 2 + odd, ((i / nx) % ny) as i32 * 2 + odd, (i / (nx * ny)) as i32 * 2 + odd]
+    }
+
+    pub(super) fn position(&self, q: [i32; 3]) -> Vec3 {
+        self.corners.origin + Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) * (0.5 * self.corners.spacing)
+    }
+}
+
+/// One of the lattice's cubic grids (corners, or BCC centres) and the constant index offsets of
+/// the neighbours of its interior samples.
+pub(super) struct Part {
+    /// 0 for corners, 1 for centres (added to doubled coordinates).
+    pub(super) odd: i32,
+    /// First flat index and samples per axis.
+    pub(super) start: usize,
+    pub(super) dims: [usize; 3],
+    /// The other grid (BCC), or this one again.
+    pub(super) cross_start: usize,
+    pub(super) cross_dims: [usize; 3],
+    /// Per direction: whether the neighbour is in the other grid, and its index offset from
+    /// `(x, y, z)` in that grid's order.
+    pub(super) offsets: [(bool, isize); DIRECTIONS],
+}
+
+impl Part {
+    /// The grid and index offset of the sample at doubled offset `d` from one of this grid's
+    /// samples, in the same form as [`Part::offsets`].
+    pub(super) fn offset_of(&self, d: [i32; 3]) -> (bool, isize) {
+        let cross = d[0] & 1 != 0;
+        let shift = |c: i32| {
+            if !cross {
+                c / 2
+            } else if self.odd == 0 {
+                (c - 1) / 2
+            } else {
+                (c + 1) / 2
+            }
+        };
+        let (a, b, c) = (shift(d[0]) as isize, shift(d[1]) as isize, shift(d[2]) as isize);
+        let gd = if cross { self.cross_dims } else { self.dims };
+        (cross, a + gd[0] as isize * (b + gd[1] as isize * c))
+    }
+}
+
+pub(super) struct Layout {
+    pub(super) parts: Vec<Part>,
+}
+
+impl Layout {
+    pub(super) fn new(at: &Addresser, topo: &TetTopology) -> Layout {
+        let mut grids = vec![(0, 0usize, at.corners.dims)];
+        if let Some(c) = &at.centres {
+            grids.push((1, at.corners.len(), c.dims));
+        }
+        let parts = grids
+            .iter()
+            .map(|&(odd, start, dims)| {
+                let other = grids.iter().find(|g| g.0 != odd).copied().unwrap_or((odd, start, dims));
+                let mut part =
+                    Part { odd, start, dims, cross_start: other.1, cross_dims: other.2, offsets: [(false, 0); DIRECTIONS] };
+                part.offsets = topo.directions.map(|d| part.offset_of(d));
+                part
+            })
+            .collect();
+        Layout { parts }
+    }
+}
+
+/// For samples of each parity (corners 0, BCC centres 1): the rows their neighbours lie in, as
+/// (in the other grid?, y offset, z offset) of grid row indices, the sample's own row included.
+pub(super) fn row_neighbours(topo: &TetTopology) -> [Vec<(bool, isize, isize)>; 2] {
+    std::array::from_fn(|odd| {
+        let mut out = vec![(false, 0, 0)];
+        for d in topo.directions {
+            let cross = d[0] & 1 != 0;
+            let shift = |c: i32| -> isize {
+                (if !cross {
+                    c / 2
+                } else if odd == 0 {
+                    (c - 1) / 2
+                } else {
+                    (c + 1) / 2
+                }) as isize
+            };
+            let r = (cross, shift(d[1]), shift(d[2]));
+            if !out.contains(&r) {
+                out.push(r);
+            }
+        }
+        out
+    })
+}
+
+/// Whether the crossing on edge `(a, b)` belongs to `a`: it lies nearer `a` (ties: lower index).
+#[inline]
+pub(super) fn owns(a: usize, va: f32, b: usize, vb: f32, iso: f32) -> bool {
+    let (da, db) = ((va - iso).abs(), (vb - iso).abs());
+    da < db || (da == db && a < b)
+}
+
+/// Tetrahedra in the lattice: six per cube (Kuhn); four per pair of neighbouring cell centres
+/// (BCC, about twelve per cell).
+pub fn tetrahedron_count(lattice: &Lattice) -> usize {
+    let cells = lattice.grid().dims.map(|d| d.saturating_sub(1));
+    match lattice {
+        Lattice::Cubic(_) => 6 * cells.iter().product::<usize>(),
+        Lattice::Bcc(_) => {
+            let [a, b, c] = cells;
+            4 * (a.saturating_sub(1) * b * c + a * b.saturating_sub(1) * c + a * b * c.saturating_sub(1))
+        }
+    }
+}
+
+/// Counts of the geometry pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TetCounts {
+    /// Tetrahedra with a sign change (the paper's N_tetrahedra).
+    pub active: usize,
+    /// Tetrahedra in the lattice.
+    pub total: usize,
+    /// Triangles dropped for a repeated vertex.
+    pub discarded: usize,
+}
+
+/// One slab's vertices and their owners, as the vertex pass made them.
+type SlabVertices = (Vec<Vec3>, Vec<(u32, u8, u8)>);
+
+/// What the vertex pass reads: everything but the per-sample outputs.
+pub(super) struct VertexPass<'a> {
+    pub(super) values: &'a [f32],
+    pub(super) iso: f32,
+    pub(super) topo: &'a TetTopology,
+    pub(super) at: &'a Addresser,
+    pub(super) layout: &'a Layout,
+    pub(super) rows: &'a [Vec<Row>],
+    pub(super) row_offsets: [Vec<(bool, isize, isize)>; 2],
+    pub(super) steps: [Vec3; DIRECTIONS],
+    pub(super) no_merge: &'a [bool],
+    pub(super) clustering: &'a dyn Clustering,
+    pub(super) field: Option<&'a dyn Field>,
+}
+
+impl VertexPass<'_> {
+    /// The vertex pass (Algorithm 2) over sample layers `z0..z1` of grid `p`: flags the samples
+    /// with a sign change on an edge (`touch`), and for each sample that owns crossings makes its
+    /// vertices (one per island) at the end of `positions`/`owner` and records the first one's
+    /// index (`base`, counted from `positions`' start) and each crossing's island (`slots`).
+    /// `touch`, `base` and `slots` start at flat sample index `first`.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn slab(
+        &self,
+        p: usize,
+        z0: usize,
+        z1: usize,
+        first: usize,
+        touch: &mut [bool],
+        base: &mut [u32],
+        slots: &mut [u64],
+        positions: &mut Vec<Vec3>,
+        owner: &mut Vec<(u32, u8, u8)>,
+        near: &mut Vec<Row>,
+    ) -> Result<(), ExtractError> {
+        let (values, iso, topo, at) = (self.values, self.iso, self.topo, self.at);
+        let layout = self.layout;
+        let part = &layout.parts[p];
+        let [dx, dy, dz] = part.dims;
+        let other = if layout.parts.len() > 1 { 1 - p } else { p };
+        for z in z0..z1 {
+            for y in 0..dy {
+                near.clear();
+                for &(cross, oy, oz) in &self.row_offsets[part.odd as usize] {
+                    let (g, dims) = if cross { (other, part.cross_dims) } else { (p, part.dims) };
+                    let (ry, rz) = (y as isize + oy, z as isize + oz);
+                    if ry >= 0 && rz >= 0 && (ry as usize) < dims[1] && (rz as usize) < dims[2] {
+                        near.push(self.rows[g][ry as usize + dims[1] * rz as usize]);
+                    }
+                }
+                let Some((lo, hi)) = span(near, dx.max(part.cross_dims[0])) else { continue };
+                let row_interior = (1..dy.saturating_sub(1)).contains(&y) && (1..dz.saturating_sub(1)).contains(&z);
+                let row_same = part.start + dx * (y + dy * z);
+                let row_cross = part.cross_start + part.cross_dims[0] * (y + part.cross_dims[1] * z);
+                for x in lo.saturating_sub(1)..(hi + 2).min(dx) {
+                    let i = row_same + x;
+                    let vi = values[i];
+                    let inside = vi < iso;
+                    let interior = row_interior && x >= 1 && x + 1 < dx;
+                    let q = [2 * x as i32 + part.odd, 2 * y as i32 + part.odd, 2 * z as i32 + part.odd];
+                    let neighbour = |k: usize| -> Option<usize> {
+                        if interior {
+                            let (cross, off) = part.offsets[k];
+                            Some(((if cross { row_cross + x } else { i }) as isize + off) as usize)
+                        } else {
+                            let d = topo.directions[k];
+                            at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]])
+                        }
+                    };
+                    // First the flags only; positions for the rare samples that own a crossing.
+                    let (mut nearby, mut neighbours, mut touched) = (0u16, 0u16, false);
+                    for k in 0..DIRECTIONS {
+                        let Some(j) = neighbour(k) else { continue };
+                        neighbours |= 1 << k;
+                        let vj = values[j];
+                        if (vj < iso) != inside {
+                            touched = true;
+                            if owns(i, vi, j, vj, iso) {
+                                nearby |= 1 << k;
+                            }
+                        }
+                    }
+                    touch[i - first] = touched;
+                    if nearby == 0 {
+                        continue;
+                    }
+                    let mut star = Star { nearby, neighbours, crossings: [Vec3::ZERO; DIRECTIONS] };
+                    let origin = at.position(q);
+                    let mut bits = nearby;
+                    while bits != 0 {
+                        let k = bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        let vj = values[neighbour(k).expect("flagged neighbours exist")];
+                        star.crossings[k] = origin + self.steps[k] * ((iso - vi) / (vj - vi));
+                    }
+                    let islands =
+                        if self.no_merge[i] { NoClustering.islands(&star, topo) } else { self.clustering.islands(&star, topo) };
+                    let start = positions.len();
+                    if start + islands.count as usize > u32::MAX as usize {
+                        return Err(ExtractError::TooLarge {
+                            algorithm: "marching tetrahedra",
+                            vertices: start + islands.count as usize,
+                        });
+                    }
+                    base[i - first] = start as u32;
+                    let mut sums = [Vec3::ZERO; DIRECTIONS];
+                    let mut members = [0u32; DIRECTIONS];
+                    let mut packed = 0u64;
+                    let mut bits = star.nearby;
+                    while bits != 0 {
+                        let k = bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        let s = islands.slot[k];
+                        sums[s as usize] += star.crossings[k];
+                        members[s as usize] += 1;
+                        packed |= u64::from(s) << (4 * k);
+                    }
+                    slots[i - first] = packed;
+                    let mut lowest = [u8::MAX; DIRECTIONS];
+                    for k in (0..DIRECTIONS).rev().filter(|&k| star.nearby >> k & 1 == 1) {
+                        lowest[islands.slot[k] as usize] = k as u8;
+                    }
+                    for s in 0..islands.count as usize {
+                        let mean = sums[s] / members[s] as f32;
+                        positions.push(self.clustering.place(mean, members[s], self.field, iso, at.corners.spacing));
+                        owner.push((i as u32, members[s].min(255) as u8, lowest[s]));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Marching tetrahedra on `samples` (BCC lattice: [`TetKind::Bcc`]; cubic grid: [`TetKind::Kuhn`])
+/// with the given clustering, into `out`. Returns the geometry pass counts.
+pub fn extract_tetrahedral(
+    samples: &Samples,
+    clustering: &dyn Clustering,
+    scratch: &mut TetScratch,
+    out: &mut Extraction,
+) -> Result<TetCounts, ExtractError> {
+    out.clear();
+    out.stats.times.sampling = samples.sampling_time();
+    let lattice = *samples.lattice();
+    let topo = topology(TetKind::of(&lattice));
+    let at = Addresser::new(&lattice);
+    let values = samples.values();
+    let iso = samples.iso();
+    let field = samples.field().map(|f| f.as_ref() as &dyn Field);
+
+    // Vertex pass.
+    let t = Instant::now();
+    let n = values.len();
+    // Base and slots are read only for samples that own a crossing, which this pass writes, so a
+    // reused scratch is not cleared; a new one is allocated zeroed (the OS maps zero pages lazily,
+    // so only pages near the surface are ever touched).
+    if scratch.base.len() < n {
+        scratch.base = vec![0; n];
+        scratch.slots = vec![0; n];
+    }
+    if scratch.touch.len() < n {
+        scratch.touch = vec![false; n];
+    } else {
+        scratch.touch[..n].fill(false);
+    }
+    if scratch.no_merge.len() < n {
+        scratch.no_merge = vec![false; n];
+    }
+    scratch.owner.clear();
+    let layout = Layout::new(&at, topo);
+    let half = 0.5 * at.corners.spacing;
+    // Row summaries of both grids: a row whose neighbouring rows (in both grids) all share its
+    // state has no crossing and is skipped without loading its neighbours.
+    let mut rows: Vec<Vec<Row>> = Vec::with_capacity(layout.parts.len());
+    for part in &layout.parts {
+        let mut r = Vec::new();
+        let len = part.dims.iter().product::<usize>();
+        classify_rows(&values[part.start..part.start + len], part.dims[0], iso, &mut r);
+        rows.push(r);
+    }
+    let pass = VertexPass {
+        values,
+        iso,
+        topo,
+        at: &at,
+        layout: &layout,
+        rows: &rows,
+        row_offsets: row_neighbours(topo),
+        steps: topo.directions.map(|d| Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * half),
+        no_merge: &scratch.no_merge,
+        clustering,
+        field,
+    };
+    // Slabs of sample layers, per grid, in index order: each writes its own samples' flags and
+    // slots and makes its own vertices; joined in order, the result is the serial pass's.
+    let layers: usize = layout.parts.iter().map(|p| p.dims[2]).sum();
+    let tasks = crate::slabs::task_count(crate::slabs::Parallelism::Rayon, n, layers);
+    let mut slabs: Vec<(usize, usize, usize)> = Vec::new(); // (part, z0, z1)
+    for (p, part) in layout.parts.iter().enumerate() {
+        let per = tasks.div_ceil(layout.parts.len()).min(part.dims[2]).max(1);
+        for k in 0..per {
+            slabs.push((p, k * part.dims[2] / per, (k + 1) * part.dims[2] / per));
+        }
+    }
+    if slabs.len() == 1 || tasks == 1 {
+        let mut near = Vec::with_capacity(16);
+        let (touch, base, slots) = (&mut scratch.touch[..], &mut scratch.base[..], &mut scratch.slots[..]);
+        for &(p, z0, z1) in &slabs {
+            pass.slab(p, z0, z1, 0, touch, base, slots, &mut out.surface.positions, &mut scratch.owner, &mut near)?;
+        }
+    } else {
+        // Disjoint sample ranges for the slabs.
+        let mut work = Vec::with_capacity(slabs.len());
+        let (mut touch, mut base, mut slots) = (&mut scratch.touch[..n], &mut scratch.base[..n], &mut scratch.slots[..n]);
+        let mut at_index = 0usize;
+        for &(p, z0, z1) in &slabs {
+            let part = &layout.parts[p];
+            let first = part.start + part.dims[0] * part.dims[1] * z0;
+            let last = part.start + part.dims[0] * part.dims[1] * z1;
+            let skip = first - at_index;
+            let (t, rest_t) = std::mem::take(&mut touch)[skip..].split_at_mut(last - first);
+            let (b, rest_b) = std::mem::take(&mut base)[skip..].split_at_mut(last - first);
+            let (s, rest_s) = std::mem::take(&mut slots)[skip..].split_at_mut(last - first);
+            (touch, base, slots) = (rest_t, rest_b, rest_s);
+            at_index = last;
+            work.push(((p, z0, z1, first), t, b, s));
+        }
+        let made: Vec<Result<SlabVertices, ExtractError>> = work
+            .into_par_iter()
+            .map(|((p, z0, z1, first), t, b, s)| {
+                let (mut positions, mut owner, mut near) = (Vec::new(), Vec::new(), Vec::with_capacity(16));
+                pass.slab(p, z0, z1, first, t, b, s, &mut positions, &mut owner, &mut near)?;
+                Ok((positions, owner))
+            })
+            .collect();
+        for result in made {
+            let (positions, owner) = result?;
+            let offset = out.surface.positions.len();
+            if offset + positions.len() > u32::MAX as usize {
+                return Err(ExtractError::TooLarge { algorithm: "marching tetrahedra", vertices: offset + positions.len() });
+            }
+            // Each sample's vertices are consecutive: its base is its first one's index.
+            let mut previous = u32::MAX;
+            for (k, &(sample, _, _)) in owner.iter().enumerate() {
+                if sample != previous {
+                    scratch.base[sample as usize] = (offset + k) as u32;
+                    previous = sample;
+                }
+            }
+            out.surface.positions.extend_from_slice(&positions);
+            scratch.owner.extend_from_slice(&owner);
+        }
+    }
+    out.stats.times.vertex = t.elapsed();
+
+    out.stats.times.vertex = t.elapsed();
+    let counts = geometry_pass(samples, scratch, out);
+    let t = Instant::now();
+    out.surface.compute_face_weighted_normals();
+    out.stats.times.normals = t.elapsed();
+    Ok(counts)
+}

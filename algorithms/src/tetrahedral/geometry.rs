@@ -1,0 +1,153 @@
+//! The geometry pass (Costen 2026, Algorithm 3): every tetrahedron with a sign change emits its
+//! case's triangle or quad (split along the shorter diagonal) from the vertex pass's slots, in
+//! slabs of anchor layers joined in order; triangles collapsed by clustering are counted and
+//! dropped.
+
+use super::*;
+
+/// The geometry pass (Algorithm 3) over the vertex indices in `scratch`, replacing
+/// `out.surface.triangles`; sets the geometry time and the counts in `out.stats`.
+pub fn geometry_pass(samples: &Samples, scratch: &TetScratch, out: &mut Extraction) -> TetCounts {
+    let lattice = *samples.lattice();
+    let topo = topology(TetKind::of(&lattice));
+    let at = Addresser::new(&lattice);
+    let layout = Layout::new(&at, topo);
+    let values = samples.values();
+    let iso = samples.iso();
+    out.surface.triangles.clear();
+    let t = Instant::now();
+    let mut counts = TetCounts::default();
+    let vertex_of = |a: usize, va: f32, b: usize, vb: f32, dir_ab: u8| -> u32 {
+        let (o, k) = if owns(a, va, b, vb, iso) { (a, dir_ab) } else { (b, dir_ab ^ 1) };
+        scratch.base[o] + ((scratch.slots[o] >> (4 * k)) & 0xf) as u32
+    };
+    // Anchors: BCC cell centres (every tetrahedron around a centre contains it), or cubes' low
+    // corners (every Kuhn tetrahedron of a cube contains it). An anchor with no sign change on
+    // its edges has no surface in any of its tetrahedra.
+    let anchor_part = match topo.kind {
+        TetKind::Bcc => &layout.parts[1],
+        TetKind::Kuhn => &layout.parts[0],
+    };
+    let anchor_dims = match topo.kind {
+        TetKind::Bcc => anchor_part.dims,
+        TetKind::Kuhn => anchor_part.dims.map(|d| d - 1),
+    };
+    counts.total = match topo.kind {
+        TetKind::Bcc => {
+            let d = anchor_dims;
+            4 * ((d[0].saturating_sub(1)) * d[1] * d[2]
+                + d[0] * d[1].saturating_sub(1) * d[2]
+                + d[0] * d[1] * d[2].saturating_sub(1))
+        }
+        TetKind::Kuhn => 6 * anchor_dims.iter().product::<usize>(),
+    };
+    let template_offsets: Vec<[(bool, isize); 4]> = topo.templates.iter().map(|t| t.map(|d| anchor_part.offset_of(d))).collect();
+    let positions = &out.surface.positions;
+    let [ax, ay, az] = anchor_dims;
+    let [dx, dy, _] = anchor_part.dims;
+    // The triangles of anchor layers `z0..z1`, in order, and their counts.
+    let layers = |z0: usize, z1: usize, triangles: &mut Vec<[u32; 3]>, counts: &mut TetCounts| {
+        for z in z0..z1 {
+            for y in 0..ay {
+                let row_same = anchor_part.start + dx * (y + dy * z);
+                let row_cross = anchor_part.cross_start + anchor_part.cross_dims[0] * (y + anchor_part.cross_dims[1] * z);
+                // BCC: every template exists when the anchor's +x, +y, +z neighbours do.
+                let row_full = topo.kind == TetKind::Kuhn || (y + 1 < ay && z + 1 < az);
+                for x in 0..ax {
+                    let i = row_same + x;
+                    if !scratch.touch[i] {
+                        continue;
+                    }
+                    let full = row_full && (topo.kind == TetKind::Kuhn || x + 1 < ax);
+                    let q = [2 * x as i32 + anchor_part.odd, 2 * y as i32 + anchor_part.odd, 2 * z as i32 + anchor_part.odd];
+                    for (t, offsets) in template_offsets.iter().enumerate() {
+                        let idx = if full {
+                            offsets.map(|(cross, off)| ((if cross { row_cross + x } else { i }) as isize + off) as usize)
+                        } else {
+                            let template = &topo.templates[t];
+                            let mut idx = [0usize; 4];
+                            let mut valid = true;
+                            for (v, d) in idx.iter_mut().zip(template) {
+                                match at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]]) {
+                                    Some(j) => *v = j,
+                                    None => valid = false,
+                                }
+                            }
+                            if !valid {
+                                continue;
+                            }
+                            idx
+                        };
+                        let v = idx.map(|i| values[i]);
+                        let case = usize::from(v[0] < iso)
+                            | usize::from(v[1] < iso) << 1
+                            | usize::from(v[2] < iso) << 2
+                            | usize::from(v[3] < iso) << 3;
+                        let entry = &MT_TABLE[case];
+                        if entry.count == 0 {
+                            continue;
+                        }
+                        counts.active += 1;
+                        let dirs = &topo.edge_directions[t];
+                        let mut ids = [0u32; 4];
+                        for (k, &(a, b)) in entry.edges[..entry.count as usize].iter().enumerate() {
+                            let (a, b) = (a as usize, b as usize);
+                            ids[k] = vertex_of(idx[a], v[a], idx[b], v[b], dirs[a][b]);
+                        }
+                        if entry.count == 3 {
+                            push_triangle([ids[0], ids[1], ids[2]], triangles, &mut counts.discarded);
+                        } else {
+                            let [a, b, c, d] = ids;
+                            let along_ac = if a == c {
+                                true
+                            } else if b == d {
+                                false
+                            } else {
+                                let p = |i: u32| positions[i as usize];
+                                p(a).distance_squared(p(c)) <= p(b).distance_squared(p(d))
+                            };
+                            let halves = if along_ac { [[a, b, c], [a, c, d]] } else { [[a, b, d], [b, c, d]] };
+                            for h in halves {
+                                push_triangle(h, triangles, &mut counts.discarded);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    };
+    let mut triangles = std::mem::take(&mut out.surface.triangles);
+    let tasks = crate::slabs::task_count(crate::slabs::Parallelism::Rayon, ax * ay * az, az);
+    if tasks <= 1 {
+        layers(0, az, &mut triangles, &mut counts);
+    } else {
+        // Slabs of anchor layers, joined in order: the serial pass's triangles.
+        let slabs: Vec<(Vec<[u32; 3]>, TetCounts)> = (0..tasks)
+            .into_par_iter()
+            .map(|k| {
+                let (mut part, mut c) = (Vec::new(), TetCounts::default());
+                layers(k * az / tasks, (k + 1) * az / tasks, &mut part, &mut c);
+                (part, c)
+            })
+            .collect();
+        for (part, c) in slabs {
+            triangles.extend_from_slice(&part);
+            counts.active += c.active;
+            counts.discarded += c.discarded;
+        }
+    }
+    out.surface.triangles = triangles;
+    out.stats.times.geometry = t.elapsed();
+    out.stats.discarded_triangles = counts.discarded;
+    out.stats.active_cells = counts.active;
+    counts
+}
+
+#[inline]
+pub(super) fn push_triangle(t: [u32; 3], triangles: &mut Vec<[u32; 3]>, discarded: &mut usize) {
+    if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+        *discarded += 1;
+    } else {
+        triangles.push(t);
+    }
+}

@@ -1,0 +1,85 @@
+//! The repair RMT's guard uses: samples whose merging left a non-manifold vertex get one vertex
+//! per crossing again and only the geometry pass reruns; unused vertices are dropped at the end.
+
+use super::*;
+
+/// Forbids merging at the samples that made the merged vertices among `vertices`, gives each of
+/// their crossings its own new vertex, and runs the geometry pass again. Returns whether anything
+/// changed. The old merged vertices stay in `out.surface.positions`, unreferenced, until
+/// [`finish_repair`].
+pub fn unmerge_and_regenerate(samples: &Samples, scratch: &mut TetScratch, out: &mut Extraction, vertices: &[u32]) -> bool {
+    let lattice = *samples.lattice();
+    let topo = topology(TetKind::of(&lattice));
+    let at = Addresser::new(&lattice);
+    let values = samples.values();
+    let iso = samples.iso();
+    let mut changed = false;
+    for &v in vertices {
+        let Some(&(sample, members, _)) = scratch.owner.get(v as usize) else { continue };
+        let i = sample as usize;
+        if members < 2 || scratch.no_merge[i] {
+            continue;
+        }
+        scratch.no_merge[i] = true;
+        changed = true;
+        let q = at.coords(i);
+        let (vi, base) = (values[i], out.surface.positions.len() as u32);
+        let mut packed = 0u64;
+        let mut slot = 0u64;
+        for (k, d) in topo.directions.iter().enumerate() {
+            let Some(j) = at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]]) else { continue };
+            let vj = values[j];
+            if (vj < iso) != (vi < iso) && owns(i, vi, j, vj, iso) {
+                let step = Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * (0.5 * at.corners.spacing);
+                out.surface.positions.push(at.position(q) + step * ((iso - vi) / (vj - vi)));
+                scratch.owner.push((sample, 1, k as u8));
+                packed |= slot << (4 * k);
+                slot += 1;
+            }
+        }
+        scratch.base[i] = base;
+        scratch.slots[i] = packed;
+    }
+    if changed {
+        let time = out.stats.times.geometry;
+        geometry_pass(samples, scratch, out);
+        out.stats.times.geometry += time;
+    }
+    changed
+}
+
+/// After repairs: drops vertices no triangle uses (renumbering the rest in order) and
+/// recomputes the normals.
+pub fn finish_repair(out: &mut Extraction) {
+    let t = Instant::now();
+    let mesh = &mut out.surface;
+    let mut used = vec![u32::MAX; mesh.positions.len()];
+    for t in &mesh.triangles {
+        for &v in t {
+            used[v as usize] = 0;
+        }
+    }
+    let mut next = 0u32;
+    for (v, u) in used.iter_mut().enumerate() {
+        if *u == 0 {
+            *u = next;
+            mesh.positions[next as usize] = mesh.positions[v];
+            next += 1;
+        }
+    }
+    mesh.positions.truncate(next as usize);
+    let origins = &mut out.origins.vertices;
+    if origins.len() == used.len() {
+        for (v, &u) in used.iter().enumerate() {
+            if u != u32::MAX {
+                origins[u as usize] = origins[v];
+            }
+        }
+        origins.truncate(next as usize);
+    }
+    for t in &mut mesh.triangles {
+        *t = t.map(|v| used[v as usize]);
+    }
+    mesh.compute_face_weighted_normals();
+    out.stats.times.normals = t.elapsed();
+}

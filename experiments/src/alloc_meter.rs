@@ -1,6 +1,6 @@
 //! Peak heap memory for the `scaling` experiment: the `peakmem-alloc` crate's counting wrapper
 //! around the system allocator. A binary that wants the numbers installs it with
-//! [`install_meter!`] (the `report` and `scaling` binaries do; the library cannot, or test
+//! `install_meter!` (the `report` and `scaling` binaries do; the library cannot, or test
 //! binaries with their own counting allocator would clash); elsewhere [`peak_since`] says `None`.
 
 use peakmem_alloc::{PeakMemAllocTrait, INSTRUMENTED_SYSTEM};

@@ -1,6 +1,6 @@
 //! Peer implementations run in this process on the same field, for side-by-side comparisons.
 //!
-//! - [`ferreus_rmt`]: the `ferreus_rmt` crate (Maptek, MIT), an independent regularised marching
+//! - [`ferreus_rmt()`]: the `ferreus_rmt` crate (Maptek, MIT), an independent regularised marching
 //!   tetrahedra that follows the surface from seed points instead of sampling the whole volume.
 //!   It evaluates the field itself (in batches; we evaluate each batch in parallel, as our own
 //!   sampling is), so its time is comparable with our sampling plus extraction.

@@ -5,7 +5,7 @@
 //! VTK's vtkMeshQuality, CGAL, OpenMesh), as `../DESIGN.md`-style notes in each module say.
 //!
 //! - [`quality`]: triangle aspect ratios, radius ratio, angles;
-//! - [`topology`]: closed, manifold, oriented, outward, components, Euler characteristic, genus,
+//! - [`topology`](mod@topology): closed, manifold, oriented, outward, components, Euler characteristic, genus,
 //!   with the offending edges and vertices listed;
 //! - [`accuracy`]: volume, area, distance of vertices to the true surface;
 //! - [`MeshMetrics`]: all of the above in one serializable struct, the metrics JSON's core.

@@ -26,6 +26,18 @@
 //! triangles on the same grid. Both passes run in slabs of layers on rayon's threads, joined in
 //! order, so the mesh does not depend on the thread count (the `scaling` experiment measures the
 //! speed-up).
+//!
+//! ```
+//! use isolab_algorithms::{extractors::MarchingTetrahedra, fields, mesh::manifold_defects, Extraction, Extractor, Grid, Samples};
+//! let torus = fields::builtin("torus", Default::default()).unwrap();
+//! let samples = Samples::sample_cubic(torus.clone(), Grid::covering(&torus.domain(), 32).unwrap(), 0.0).unwrap();
+//! let mut out = Extraction::default();
+//! MarchingTetrahedra::default().extract(&samples, &mut out).unwrap();
+//! let m = &out.surface;
+//! // Closed and manifold, genus 1: V - E + F = V - F/2 = 0.
+//! assert!(manifold_defects(m).is_empty());
+//! assert_eq!(m.positions.len() as i64 - m.triangles.len() as i64 / 2, 0);
+//! ```
 
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo};
 use crate::lattice::Lattice;

@@ -1,7 +1,7 @@
 //! The extractor and post-process registries: one line per algorithm.
 //!
 //! Adding an algorithm: write `extractors/<name>.rs` with a type implementing
-//! [`Extractor`](crate::Extractor) (module doc: paper, summary, guarantees, costs), a
+//! [`Extractor`] (module doc: paper, summary, guarantees, costs), a
 //! `from_options` constructor and `pub const INFO: ExtractorInfo` (its name, written once there);
 //! declare the module below and add `<name>::INFO,` to [`INFOS`]. The tests below check that every
 //! entry builds with its default options and reports the name it is registered under.

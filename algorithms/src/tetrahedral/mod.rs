@@ -50,7 +50,7 @@
 //! run in slabs of layers on rayon ([`crate::slabs`]) joined in order, so the mesh is the same on
 //! any number of threads (the paper's section 3.1.4 parallelises sampling only).
 //!
-//! Files: [`topology`] (the lattices), [`table`] (the 16 cases), [`engine`] (the vertex pass and
+//! Files: [`topology`](mod@topology) (the lattices), [`table`] (the 16 cases), [`engine`] (the vertex pass and
 //! the driver), [`geometry`] (the geometry pass),
 //! [`repair`] (the guard's re-extraction).
 

@@ -10,7 +10,7 @@
 //! - peak heap during the extraction (a counting global allocator, [`crate::alloc_meter`], fresh
 //!   extractor and output buffers) against the bytes of grid plus output.
 //!
-//! An extractor whose one-thread run passes [`BUDGET_S`] is not run on larger grids (8× the cells);
+//! An extractor whose one-thread run passes `BUDGET_S` is not run on larger grids (8× the cells);
 //! the report lists what was left out and why.
 
 use super::context::{Context, Experiment, ExperimentError};

@@ -47,7 +47,7 @@ impl BccLattice {
     }
 }
 
-/// The BCC tetrahedralization, spacing `h`, of `bounds` plus [`MARGIN_CELLS`], built in a frame
+/// The BCC tetrahedralization, spacing `h`, of `bounds` plus `MARGIN_CELLS`, built in a frame
 /// rotated by `rotation` and shifted by `shift` cells. Tetrahedra are generated around each edge
 /// between adjacent centres: the four corners of the face they straddle close four tetrahedra
 /// (twelve per cell).

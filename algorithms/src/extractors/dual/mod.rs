@@ -14,8 +14,8 @@
 //!
 //! The front ends' module docs give the papers, guarantees and costs.
 
-mod qef;
-mod smoothing;
+pub mod qef;
+pub mod smoothing;
 
 pub use qef::solve_qef;
 

@@ -1,6 +1,6 @@
 //! Volume files: NIfTI-1 and -2 ([`nifti`]), NRRD ([`nrrd`]), MetaImage ([`metaimage`]) and
 //! the raw + JSON grid `--samples-out` writes ([`samples`]), read into a
-//! [`Volume`](isolab_algorithms::fields::Volume) whose affine maps voxel indices to world
+//! [`Volume`] whose affine maps voxel indices to world
 //! coordinates.
 //!
 //! World coordinates are RAS (+x toward the subject's Right, +y Anterior, +z Superior: NIfTI's

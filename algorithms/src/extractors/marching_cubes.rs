@@ -35,6 +35,10 @@
 //! exactly at the iso-value would give coincident vertices; by default vertices keep 1e-4 of the
 //! spacing from the edge ends instead ([`OnIsoSamples`]), so no triangle has zero area.
 //!
+//! **Why one file of about 650 lines.** The sweep's vertex pass, geometry pass, slab join and
+//! normals share one set of per-layer index arrays; split apart they would pass those arrays
+//! through half a dozen signatures. It is one algorithm that reads best whole.
+//!
 //! **Costs.** One read of every sample to pack its sign, then work proportional to the crossing
 //! edges and surface cells. Memory: five `nx * ny` index layers and two layers of sign bits per
 //! slab task, plus the output.

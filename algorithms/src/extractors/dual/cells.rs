@@ -1,0 +1,313 @@
+//! One slab's sweep of the dual engine: each surface cell's pieces and their vertices (mass point
+//! or quadric minimum), each crossing edge's quad, two cell layers of vertex indices at a time,
+//! and the cube tables it reads.
+
+use super::*;
+
+pub(super) struct Ctx<'a> {
+    pub(super) values: &'a [f32],
+    pub(super) grid: Grid,
+    pub(super) iso: f32,
+    pub(super) placement: Placement,
+    pub(super) field: Option<&'a dyn crate::field::Field>,
+    pub(super) tables: Tables,
+}
+
+impl Ctx<'_> {
+    #[inline]
+    pub(super) fn inside(&self, i: usize) -> bool {
+        self.values[i] < self.iso
+    }
+
+    /// The sign case of cell `(x, y, z)` (bit `c` set: table corner `c` inside).
+    pub(super) fn cell_case(&self, x: usize, y: usize, z: usize) -> u8 {
+        let [nx, ny, _] = self.grid.dims;
+        let i = self.grid.index(x, y, z);
+        CORNERS.iter().enumerate().fold(0u8, |case, (bit, c)| {
+            let k = i + c[0] as usize + nx * (c[1] as usize + ny * c[2] as usize);
+            case | u8::from(self.inside(k)) << bit
+        })
+    }
+
+    /// The faces of cell `(x, y, z)` whose inside corners are joined: the ring faces
+    /// ([`RING_FACES`]) that are ring faces of the neighbouring cell too. Both cells of a face
+    /// compute the same answer.
+    pub(super) fn joined_faces(&self, case: u8, x: usize, y: usize, z: usize) -> u8 {
+        let rings = self.tables.rings[case as usize];
+        if rings == 0 {
+            return 0;
+        }
+        let cells = self.grid.dims.map(|n| n as isize - 1);
+        (0..6).filter(|&f| rings >> f & 1 == 1).fold(0u8, |joins, f| {
+            let d = FACES[f].1;
+            let n = [x as isize + d[0] as isize, y as isize + d[1] as isize, z as isize + d[2] as isize];
+            if (0..3).any(|k| n[k] < 0 || n[k] >= cells[k]) {
+                return joins;
+            }
+            let other = self.cell_case(n[0] as usize, n[1] as usize, n[2] as usize);
+            joins | u8::from(self.tables.rings[other as usize] >> opposite_face(f) & 1 == 1) << f
+        })
+    }
+
+    /// Vertices of the surface cells in cell layer `z`: one per separate piece of surface in the
+    /// cell (the polygons of its marching cubes case), at the mean of that piece's edge crossings.
+    /// `base` gets each cell's first vertex index and `cases` its [`Tables::entry`] code.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn cell_vertices(
+        &self,
+        signs: &LayerSigns,
+        z: usize,
+        tag: u32,
+        base: &mut [u32],
+        cases: &mut [u16],
+        mesh: &mut TriMesh,
+        cell_min: &mut Vec<Vec3>,
+    ) {
+        let [nx, ny, _] = self.grid.dims;
+        let (sx, sxy) = (nx, nx * ny);
+        for y in 0..ny - 1 {
+            let rows = [signs.row(y, z), signs.row(y + 1, z), signs.row(y, z + 1), signs.row(y + 1, z + 1)];
+            let Some((lo, hi)) = span(&rows, nx) else { continue };
+            let start = self.grid.index(0, y, z);
+            let bits = [signs.bits(y, z), signs.bits(y + 1, z), signs.bits(y, z + 1), signs.bits(y + 1, z + 1)];
+            for_each_surface_cell(bits, lo.saturating_sub(1), hi.min(nx - 2), |x, case| {
+                let i = start + x;
+                let idx = [i, i + 1, i + 1 + sx, i + sx, i + sxy, i + 1 + sxy, i + 1 + sx + sxy, i + sx + sxy];
+                let v = idx.map(|k| self.values[k]);
+                let c = x + (nx - 1) * y;
+                let code = u16::from(case) << 6 | u16::from(self.joined_faces(case, x, y, z));
+                cases[c] = code;
+                let entry = self.tables.entry(code);
+                // Crossing of edge `e`, in the cell's unit cube.
+                let crossing = |e: usize| {
+                    let (a, b) = EDGES[e];
+                    let (va, vb) = (v[a as usize], v[b as usize]);
+                    self.tables.edge_start[e] + self.tables.edge_step[e] * ((self.iso - va) / (vb - va))
+                };
+                let mut sums = [Vec3::ZERO; 4];
+                let mut counts = [0.0f32; 4];
+                let mut mask = entry.edge_mask;
+                while mask != 0 {
+                    let e = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let piece = entry.edge_polygon[e] as usize;
+                    sums[piece] += crossing(e);
+                    counts[piece] += 1.0;
+                }
+                let min = self.grid.position(x, y, z);
+                base[c] = tag | mesh.positions.len() as u32;
+                for p in 0..entry.polygons as usize {
+                    let local = match self.placement {
+                        Placement::Qef { tolerance, clamp } => {
+                            let mut pts = [Vec3::ZERO; 12];
+                            let mut nrm = [Vec3::ZERO; 12];
+                            let mut k = 0;
+                            for e in (0..12).filter(|&e| entry.edge_polygon[e] as usize == p) {
+                                let q = crossing(e);
+                                pts[k] = q;
+                                // The field's gradient where the samples carry it, else the
+                                // cell's trilinear interpolant's (Hermite data from samples).
+                                let g = match self.field {
+                                    Some(field) => field.gradient(min + q * self.grid.spacing),
+                                    None => trilinear_gradient(&v, q),
+                                };
+                                nrm[k] = g.normalize_or_zero();
+                                k += 1;
+                            }
+                            let x = qef::solve_qef(&pts[..k], &nrm[..k], tolerance);
+                            if clamp {
+                                x.clamp(Vec3::ZERO, Vec3::ONE)
+                            } else {
+                                x
+                            }
+                        }
+                        Placement::MassPoint => sums[p] / counts[p],
+                    };
+                    mesh.positions.push(min + local * self.grid.spacing);
+                    mesh.normals.push(trilinear_gradient(&v, local.clamp(Vec3::ZERO, Vec3::ONE)).normalize_or_zero());
+                    cell_min.push(min);
+                }
+            });
+        }
+    }
+
+    /// Quads for the crossing edges whose four cells lie in cell layers `z - 1` (`prev`) and `z`
+    /// (`cur`): x- and y-edges of sample layer `z` (when `z > 0`) and z-edges from sample layer `z`.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn quads(
+        &self,
+        signs: &LayerSigns,
+        z: usize,
+        prev: (&[u32], &[u16]),
+        cur: (&[u32], &[u16]),
+        ghost: &[Vec3],
+        mesh: &mut TriMesh,
+        links: Option<&mut Vec<(u32, u32)>>,
+    ) {
+        let [nx, ny, _] = self.grid.dims;
+        let cx = nx - 1;
+        let tables = self.tables;
+        // The vertex of the piece of surface that crosses local edge `e` of a cell.
+        let cell = |layer: (&[u32], &[u16]), x: usize, y: usize, e: usize| {
+            let c = x + cx * y;
+            layer.0[c] + u32::from(tables.entry(layer.1[c]).edge_polygon[e])
+        };
+        let positions = &mesh.positions;
+        let at = |i: u32| if i & EXTERN == 0 { positions[i as usize] } else { ghost[(i & !EXTERN) as usize] };
+        let mut links = links;
+        let mut emit = |c: [u32; 4], flip: bool, triangles: &mut Vec<[u32; 3]>| {
+            let [c00, c10, c11, c01] = c;
+            let d0 = at(c00).distance_squared(at(c11));
+            let d1 = at(c10).distance_squared(at(c01));
+            let (t0, t1) = if d0 <= d1 { ([c00, c10, c11], [c00, c11, c01]) } else { ([c10, c11, c01], [c10, c01, c00]) };
+            for t in [t0, t1] {
+                triangles.push(if flip { [t[0], t[2], t[1]] } else { t });
+            }
+            if let Some(links) = links.as_deref_mut() {
+                links.extend([(c00, c10), (c10, c11), (c11, c01), (c01, c00)]);
+            }
+        };
+        let mut triangles = std::mem::take(&mut mesh.triangles);
+        let bit = |row: &[u64], x: usize| row[x / 64] >> (x % 64) & 1 == 1;
+        for y in 0..ny {
+            let here = signs.bits(y, z);
+            // z-edges (x, y, z)-(x, y, z+1): cells (x-1..x, y-1..y) of layer z.
+            if z + 1 < self.grid.dims[2] && y >= 1 && y + 1 < ny {
+                if let Some((lo, hi)) = span(&[signs.row(y, z), signs.row(y, z + 1)], nx) {
+                    let above = signs.bits(y, z + 1);
+                    for_each_bit(
+                        lo.max(1),
+                        hi.min(nx - 2),
+                        |w| here[w] ^ above[w],
+                        |x| {
+                            let c = [
+                                cell(cur, x - 1, y - 1, 10),
+                                cell(cur, x, y - 1, 11),
+                                cell(cur, x, y, 8),
+                                cell(cur, x - 1, y, 9),
+                            ];
+                            emit(c, !bit(here, x), &mut triangles);
+                        },
+                    );
+                }
+            }
+            if z == 0 || z + 1 >= self.grid.dims[2] {
+                continue;
+            }
+            // x-edges (x, y, z)-(x+1, y, z): cells (x, y-1..y) of layers z-1 and z.
+            let row = signs.row(y, z);
+            if y >= 1 && y + 1 < ny && !row.is_uniform() {
+                let (lo, hi) = ((row.first as usize).saturating_sub(1), (row.last as usize).min(nx - 2));
+                for_each_bit(
+                    lo,
+                    hi,
+                    |w| here[w] ^ next_bits(here, w),
+                    |x| {
+                        let c = [cell(prev, x, y - 1, 6), cell(prev, x, y, 4), cell(cur, x, y, 0), cell(cur, x, y - 1, 2)];
+                        emit(c, !bit(here, x), &mut triangles);
+                    },
+                );
+            }
+            // y-edges (x, y, z)-(x, y+1, z): cells (x-1..x, y) of layers z-1 and z.
+            if y + 1 < ny {
+                if let Some((lo, hi)) = span(&[row, signs.row(y + 1, z)], nx) {
+                    let next = signs.bits(y + 1, z);
+                    for_each_bit(
+                        lo.max(1),
+                        hi.min(nx - 2),
+                        |w| here[w] ^ next[w],
+                        |x| {
+                            let c = [cell(prev, x - 1, y, 5), cell(cur, x - 1, y, 1), cell(cur, x, y, 3), cell(prev, x, y, 7)];
+                            emit(c, !bit(here, x), &mut triangles);
+                        },
+                    );
+                }
+            }
+        }
+        mesh.triangles = triangles;
+    }
+}
+
+impl Ctx<'_> {
+    /// Meshes cell layers `z0..z1` into `s.mesh`, referring to the layer below `z0` (owned by the
+    /// slab below) through `EXTERN`-tagged indices into a recomputed ghost layer.
+    pub(super) fn slab(&self, z0: usize, z1: usize, links: bool, s: &mut Slab) {
+        let [nx, ny, _] = self.grid.dims;
+        let layer = (nx - 1) * (ny - 1);
+        for b in [&mut s.prev, &mut s.cur] {
+            if b.len() < layer {
+                b.resize(layer, 0);
+            }
+        }
+        for b in [&mut s.prev_case, &mut s.cur_case] {
+            if b.len() < layer {
+                b.resize(layer, 0);
+            }
+        }
+        s.mesh.clear();
+        s.ghost.clear();
+        s.cell_min.clear();
+        s.ghost_min.clear();
+        s.links.clear();
+        s.vertex_time = std::time::Duration::ZERO;
+        s.geometry_time = std::time::Duration::ZERO;
+        let mut signs = std::mem::take(&mut s.signs);
+        signs.reset(nx, ny);
+        let (values, dims, iso) = (self.values, self.grid.dims, self.iso);
+        if z0 > 0 {
+            let t = Instant::now();
+            signs.classify(values, dims, iso, z0 - 1);
+            signs.classify(values, dims, iso, z0);
+            self.cell_vertices(&signs, z0 - 1, EXTERN, &mut s.prev, &mut s.prev_case, &mut s.ghost, &mut s.ghost_min);
+            s.vertex_time += t.elapsed();
+        }
+        for z in z0..z1 {
+            let a = Instant::now();
+            signs.classify(values, dims, iso, z);
+            signs.classify(values, dims, iso, z + 1);
+            s.last_layer_start = s.mesh.positions.len() as u32;
+            self.cell_vertices(&signs, z, 0, &mut s.cur, &mut s.cur_case, &mut s.mesh, &mut s.cell_min);
+            let b = Instant::now();
+            let link_buffer = links.then_some(&mut s.links);
+            self.quads(&signs, z, (&s.prev, &s.prev_case), (&s.cur, &s.cur_case), &s.ghost.positions, &mut s.mesh, link_buffer);
+            s.geometry_time += b.elapsed();
+            s.vertex_time += b - a;
+            std::mem::swap(&mut s.prev, &mut s.cur);
+            std::mem::swap(&mut s.prev_case, &mut s.cur_case);
+        }
+        s.signs = signs;
+    }
+}
+
+/// The cube tables, dereferenced once per pass instead of once per lookup.
+#[derive(Clone, Copy)]
+pub(super) struct Tables {
+    pub(super) default: &'static [Case; 256],
+    pub(super) rings: &'static [u8; 256],
+    /// Each cube edge's first corner and the step to its second, in the unit cube.
+    pub(super) edge_start: [Vec3; 12],
+    pub(super) edge_step: [Vec3; 12],
+}
+
+impl Tables {
+    pub(super) fn get() -> Tables {
+        let corner = |c: u8| Vec3::from(CORNERS[c as usize].map(f32::from));
+        Tables {
+            default: &TABLE,
+            rings: &RING_FACES,
+            edge_start: EDGES.map(|(a, _)| corner(a)),
+            edge_step: EDGES.map(|(a, b)| corner(b) - corner(a)),
+        }
+    }
+
+    /// The table entry for a cell code `case << 6 | joined faces`: the default table unless a
+    /// face is joined (rare: only at faces wrapped on both sides).
+    #[inline]
+    pub(super) fn entry(&self, code: u16) -> &'static Case {
+        if code & 63 == 0 {
+            &self.default[(code >> 6) as usize]
+        } else {
+            &FACE_CHOICE_TABLE[code as usize]
+        }
+    }
+}

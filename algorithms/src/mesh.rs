@@ -37,6 +37,12 @@ impl TriMesh {
 
     /// Recomputes normals as the area-weighted mean of incident triangle normals.
     pub fn compute_face_weighted_normals(&mut self) {
+        self.normals = self.face_weighted_normals();
+    }
+
+    /// The area-weighted mean of each vertex's incident triangle normals, unit length (zero where
+    /// only degenerate triangles meet), without changing the mesh.
+    pub fn face_weighted_normals(&self) -> Vec<Vec3> {
         let mut acc = vec![Vec3::ZERO; self.positions.len()];
         for t in &self.triangles {
             let [a, b, c] = t.map(|i| self.positions[i as usize]);
@@ -45,7 +51,7 @@ impl TriMesh {
                 acc[i as usize] += n;
             }
         }
-        self.normals = acc.into_iter().map(|n| n.normalize_or_zero()).collect();
+        acc.into_iter().map(|n| n.normalize_or_zero()).collect()
     }
 
     /// Maps the mesh through `affine` (in double precision): positions directly, normals by the

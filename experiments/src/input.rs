@@ -85,7 +85,7 @@ pub fn load_input(spec: &str, seed: i32, volume_options: VolumeOptions, checks: 
     let path = Path::new(spec);
     let bytes = io::read_bytes(path)?;
     if volume::detect(path, &bytes).is_some() {
-        let file = Arc::new(volume::read_volume(path, volume_options)?);
+        let file = Arc::new(volume::read_volume_bytes(&bytes, path, volume_options)?);
         let field: Arc<dyn Field> = Arc::new(VolumeField::new(file.volume.clone()));
         return Ok(Input {
             field,
@@ -98,7 +98,7 @@ pub fn load_input(spec: &str, seed: i32, volume_options: VolumeOptions, checks: 
     }
     let format = io::MeshFormat::detect(&bytes, path);
     let mesh = match format {
-        io::MeshFormat::Glb | io::MeshFormat::Gltf => io::gltf::read_gltf(path)?,
+        io::MeshFormat::Glb | io::MeshFormat::Gltf => io::gltf::parse_gltf_beside(&bytes, path)?,
         _ => io::parse_mesh(&bytes, path, Coordinates::Finite)?,
     };
     let name = volume::stem(path);

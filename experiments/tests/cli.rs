@@ -1,16 +1,11 @@
 //! The `isolab` command line as scripts use it: outputs, metrics, and every kind of bad input
 //! (a clear message, a non-zero exit code, no panic, no half-written file).
 
+mod common;
+
+use common::{isolab, stderr};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn isolab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_isolab")).args(args).output().expect("isolab runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use std::process::Output;
 
 fn assert_clean_failure(o: &Output, code: i32, needles: &[&str]) {
     let err = stderr(o);

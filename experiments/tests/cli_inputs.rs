@@ -3,16 +3,10 @@
 //! the file and what is wrong, exit code 1, no panic, no output file left behind).
 
 use isolab_experiments::io::volume::nifti::write::nifti1;
+mod common;
+
+use common::{isolab, stderr};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn isolab(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_isolab")).args(args).output().expect("isolab runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 fn fixture(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/reference/volumes").join(name).to_string_lossy().into_owned()

@@ -413,11 +413,13 @@ impl Experiment for RealVolumes {
             "Protocol: one-shot, {} alternating runs, median (min-max) in ms, on one thread and on {}: ours in a rayon pool of \
              that size, VTK's flying edges on its Sequential backend for one thread and its STDThread backend for two \
              (scikit-image is single-threaded). Extraction only: a fresh extractor and output per run for ours, a fresh \
-             `vtkFlyingEdges3D` and a fresh scikit-image call on the array nibabel loaded. Distance: the mean over vertices of the first-order distance \
+             `vtkFlyingEdges3D` and a fresh scikit-image call on the array nibabel loaded. VTK meshes that \
+             array as stored ({}); isolab's samples are f32 (four bytes a voxel), converted \
+             beforehand (the conversion is in the end-to-end times below). Distance: the mean over vertices of the first-order distance \
              `|f - iso| / |grad f|` to the trilinear interpolant's level set, in voxels (1 mm; the maximum is not shown: \
              where the interpolant is nearly flat this estimate is meaningless). Every mesh is measured by isolab's metrics, checked against CGAL, pymeshlab and VTK \
              elsewhere in this report.\n\n",
-            data.repeats, data.threads
+            data.repeats, data.threads, data.data_type
         ));
         for level in &data.levels {
             s.push_str(&format!("**{} (iso {:.1})**\n\n", level.name, level.iso));

@@ -44,9 +44,7 @@ fn unit_normals(mesh: &TriMesh) -> Vec<Vec3> {
     let normals = if mesh.normals.len() == mesh.positions.len() && !mesh.normals.is_empty() {
         mesh.normals.clone()
     } else {
-        let mut m = TriMesh { positions: mesh.positions.clone(), normals: Vec::new(), triangles: mesh.triangles.clone() };
-        m.compute_face_weighted_normals();
-        m.normals
+        mesh.face_weighted_normals()
     };
     normals.into_iter().map(|n| n.try_normalize().unwrap_or(Vec3::Z)).collect()
 }
@@ -154,9 +152,13 @@ pub fn write_gltf(
 /// Reads the triangles of every mesh in a glTF file's default scene (node transforms applied),
 /// or of every mesh when it has no scene. External buffers are read beside `path`.
 pub fn read_gltf(path: &Path) -> Result<TriMesh, IoError> {
-    let bytes = super::read_bytes(path)?;
+    parse_gltf_beside(&super::read_bytes(path)?, path)
+}
+
+/// Parses the bytes of the glTF file at `path`, already read; external buffers are read beside it.
+pub fn parse_gltf_beside(bytes: &[u8], path: &Path) -> Result<TriMesh, IoError> {
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    parse_gltf(&bytes, path, &|uri: &str| {
+    parse_gltf(bytes, path, &|uri: &str| {
         let file = dir.join(uri);
         std::fs::read(&file).map_err(|e| format!("cannot read buffer '{}': {e}", file.display()))
     })

@@ -21,8 +21,8 @@ pub mod stream;
 pub mod volume;
 pub mod vtk;
 
-pub use obj::{parse_obj, read_obj, write_obj, write_obj_coloured};
-pub use ply::{parse_ply, read_ply, write_ply, write_ply_coloured};
+pub use obj::{parse_obj, write_obj_coloured};
+pub use ply::{parse_ply, write_ply, write_ply_coloured};
 pub use stream::PlyStream;
 pub use volume::samples::write_samples;
 pub use vtk::{tetrahedra_path, write_vtk_tets};
@@ -169,7 +169,7 @@ pub fn read_mesh(path: &Path) -> Result<TriMesh, IoError> {
 pub fn read_mesh_with(path: &Path, coordinates: Coordinates) -> Result<TriMesh, IoError> {
     let bytes = read_bytes(path)?;
     match MeshFormat::detect(&bytes, path) {
-        MeshFormat::Gltf | MeshFormat::Glb => gltf::read_gltf(path),
+        MeshFormat::Gltf | MeshFormat::Glb => gltf::parse_gltf_beside(&bytes, path),
         _ => parse_mesh(&bytes, path, coordinates),
     }
 }
@@ -240,14 +240,9 @@ pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<(), IoError> {
     write_mesh_with(path, mesh, MeshExtras::default())
 }
 
-/// Writes a mesh with optional per-vertex colours (materials): OBJ as `v x y z r g b` (the
-/// common extension MeshLab, Blender and trimesh read), PLY as `uchar red green blue`, glTF as
-/// `COLOR_0`.
-pub fn write_mesh_coloured(path: &Path, mesh: &TriMesh, colours: Option<&[[u8; 3]]>) -> Result<(), IoError> {
-    write_mesh_with(path, mesh, MeshExtras { colours, space: None })
-}
-
-/// Writes a mesh in the format its extension names, with `extras`.
+/// Writes a mesh in the format its extension names, with `extras`: colours as `v x y z r g b`
+/// in OBJ (what MeshLab, Blender and trimesh read), `uchar red green blue` in PLY, `COLOR_0` in
+/// glTF.
 pub fn write_mesh_with(path: &Path, mesh: &TriMesh, extras: MeshExtras) -> Result<(), IoError> {
     let colours = extras.colours.filter(|c| c.len() == mesh.positions.len());
     let generator = concat!("isolab ", env!("CARGO_PKG_VERSION"));

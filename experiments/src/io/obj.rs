@@ -12,12 +12,6 @@ use isolab_algorithms::TriMesh;
 use std::io::Write;
 use std::path::Path;
 
-/// Reads the triangles of an OBJ file.
-pub fn read_obj(path: &Path, coordinates: Coordinates) -> Result<TriMesh, IoError> {
-    let bytes = super::read_bytes(path)?;
-    parse_obj(&String::from_utf8_lossy(&bytes), path, coordinates)
-}
-
 /// Parses OBJ text; `path` is only used in error messages.
 pub fn parse_obj(text: &str, path: &Path, coordinates: Coordinates) -> Result<TriMesh, IoError> {
     let mut mesh = TriMesh::default();
@@ -67,11 +61,6 @@ pub fn parse_obj(text: &str, path: &Path, coordinates: Coordinates) -> Result<Tr
         return Err(IoError::Empty { path: path.into(), vertices: mesh.positions.len() });
     }
     Ok(mesh)
-}
-
-/// OBJ text: `v`, `vn` (when normals exist) and `f` lines, 1-based.
-pub fn write_obj(w: &mut impl Write, mesh: &TriMesh) -> std::io::Result<()> {
-    write_obj_coloured(w, mesh, None, None)
 }
 
 /// OBJ with optional vertex colours (`v x y z r g b`, components in [0, 1]) and an optional

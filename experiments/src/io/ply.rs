@@ -240,11 +240,6 @@ impl Body for Ascii<'_> {
     }
 }
 
-/// Reads a PLY file's triangles (polygons fan-triangulated).
-pub fn read_ply(path: &Path, coordinates: Coordinates) -> Result<TriMesh, IoError> {
-    parse_ply(&super::read_bytes(path)?, path, coordinates)
-}
-
 /// Parses PLY bytes; `path` is only used in error messages.
 pub fn parse_ply(bytes: &[u8], path: &Path, coordinates: Coordinates) -> Result<TriMesh, IoError> {
     let header = parse_header(bytes, path)?;

@@ -14,11 +14,6 @@ use std::collections::HashMap;
 use std::io::Write;
 use std::path::Path;
 
-/// Reads an STL file (ascii or binary).
-pub fn read_stl(path: &Path, coordinates: Coordinates) -> Result<TriMesh, IoError> {
-    parse_stl(&super::read_bytes(path)?, path, coordinates)
-}
-
 /// Whether `bytes` are a binary STL: a triangle count in bytes 80..84 that gives the file's
 /// exact size.
 pub fn is_binary_stl(bytes: &[u8]) -> bool {

@@ -293,8 +293,13 @@ pub struct VolumeOptions {
 
 /// Reads a volume file of any format we read.
 pub fn read_volume(path: &Path, options: VolumeOptions) -> Result<VolumeFile, IoError> {
-    let bytes = super::read_bytes(path)?;
-    let format = detect(path, &bytes).ok_or_else(|| IoError::Invalid {
+    read_volume_bytes(&super::read_bytes(path)?, path, options)
+}
+
+/// Reads a volume from the bytes of the file at `path`, already read (detached data files and
+/// `.img` halves are read beside it).
+pub fn read_volume_bytes(bytes: &[u8], path: &Path, options: VolumeOptions) -> Result<VolumeFile, IoError> {
+    let format = detect(path, bytes).ok_or_else(|| IoError::Invalid {
         path: path.into(),
         reason: "not a volume file we read (NIfTI, NRRD, MetaImage)".into(),
     })?;
@@ -303,9 +308,9 @@ pub fn read_volume(path: &Path, options: VolumeOptions) -> Result<VolumeFile, Io
         super::read_bytes(&file)
     };
     match format {
-        VolumeFormat::Nifti => nifti::parse_nifti(&bytes, path, options, &sibling),
-        VolumeFormat::Nrrd => nrrd::parse_nrrd(&bytes, path, options, &sibling),
-        VolumeFormat::MetaImage => metaimage::parse_metaimage(&bytes, path, options, &sibling),
+        VolumeFormat::Nifti => nifti::parse_nifti(bytes, path, options, &sibling),
+        VolumeFormat::Nrrd => nrrd::parse_nrrd(bytes, path, options, &sibling),
+        VolumeFormat::MetaImage => metaimage::parse_metaimage(bytes, path, options, &sibling),
         VolumeFormat::Samples => samples::read_samples(path),
     }
 }

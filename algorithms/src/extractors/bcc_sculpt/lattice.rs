@@ -48,9 +48,10 @@ impl BccLattice {
 }
 
 /// The BCC tetrahedralization, spacing `h`, of `bounds` plus `MARGIN_CELLS`, built in a frame
-/// rotated by `rotation` and shifted by `shift` cells. Tetrahedra are generated around each edge
-/// between adjacent centres: the four corners of the face they straddle close four tetrahedra
-/// (twelve per cell).
+/// rotated by `rotation` and shifted by `shift` cells. The tetrahedra are
+/// [`crate::tetrahedral::TetTopology`]'s BCC templates (the lattice marching tetrahedra meshes):
+/// around each edge between adjacent centres, the four corners of the face they straddle close
+/// four tetrahedra (twelve per cell).
 pub fn bcc_lattice(bounds: Aabb, h: f64, rotation: DQuat, shift: DVec3) -> BccLattice {
     // The surface's bounds in the lattice frame (rotate the box's corners back).
     let inverse = rotation.inverse();
@@ -86,40 +87,37 @@ pub fn bcc_lattice(bounds: Aabb, h: f64, rotation: DQuat, shift: DVec3) -> BccLa
             }
         }
     }
+    // The tetrahedra are the BCC topology's templates (the one BCC lattice marching tetrahedra
+    // also uses), anchored at every cell centre whose neighbour across the template's face exists.
+    // Template vertices are doubled offsets: odd coordinates are centres, even ones corners.
+    let templates = &crate::tetrahedral::topology(crate::tetrahedral::TetKind::Bcc).templates;
+    let vertex = |d: [i64; 3]| {
+        let [x, y, z] = d.map(|c| (c.div_euclid(2)) as usize);
+        if d[0] & 1 == 1 {
+            centre(x, y, z)
+        } else {
+            corner(x, y, z)
+        }
+    };
     let dims = [nx, ny, nz];
     let mut tets = Vec::with_capacity(12 * nx * ny * nz);
     for axis in 0..3 {
-        let (b, c) = ((axis + 1) % 3, (axis + 2) % 3);
         for k in 0..nz {
             for j in 0..ny {
                 for i in 0..nx {
-                    let cell = [i, j, k];
-                    if cell[axis] + 1 >= dims[axis] {
+                    if [i, j, k][axis] + 1 >= dims[axis] {
                         continue;
                     }
-                    let mut next = cell;
-                    next[axis] += 1;
-                    let (c0, c1) = (centre(i, j, k), centre(next[0], next[1], next[2]));
-                    // The face between the two centres' cells, at corner index cell[axis] + 1.
-                    let ring = [(0, 0), (1, 0), (1, 1), (0, 1)].map(|(db, dc)| {
-                        let mut p = cell;
-                        p[axis] += 1;
-                        p[b] += db;
-                        p[c] += dc;
-                        corner(p[0], p[1], p[2])
-                    });
-                    for m in 0..4 {
-                        tets.push([c0, c1, ring[m], ring[(m + 1) % 4]]);
+                    let anchor = [i, j, k].map(|c| 2 * c as i64 + 1);
+                    for template in &templates[4 * axis..4 * axis + 4] {
+                        tets.push(template.map(|o| vertex(std::array::from_fn(|a| anchor[a] + i64::from(o[a])))));
                     }
                 }
             }
         }
     }
-    for t in &mut tets {
-        if signed_volume(t.map(|v| positions[v as usize])) < 0.0 {
-            t.swap(2, 3);
-        }
-    }
+    // The templates are positively oriented in the lattice frame and a rotation keeps orientation.
+    debug_assert!(tets.iter().all(|t| signed_volume(t.map(|v| positions[v as usize])) > 0.0));
     let neighbours = face_neighbours(&tets);
     let crate::mesh::Incidence { start: star_start, items: star } = crate::mesh::Incidence::of(positions.len(), &tets);
     BccLattice { positions, tets, neighbours, star_start, star }

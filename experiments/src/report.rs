@@ -1,5 +1,6 @@
 //! Helpers for the report: repeated timing with medians, and Markdown tables.
 
+use serde::{Deserialize, Serialize};
 use std::time::Duration;
 
 /// Median of durations (the mean of the two middle values for an even count).
@@ -58,5 +59,35 @@ mod tests {
     fn table_shape() {
         let t = markdown_table(&["a", "b"], &[vec!["1".into(), "2".into()]]);
         assert_eq!(t, "| a | b |\n|---|---|\n| 1 | 2 |\n");
+    }
+}
+
+/// Median and spread of repeated runs, ms.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Spread {
+    /// Median.
+    pub median: f64,
+    /// Fastest run.
+    pub min: f64,
+    /// Slowest run.
+    pub max: f64,
+    /// Every run, in the order measured.
+    pub runs: Vec<f64>,
+}
+
+impl Spread {
+    /// The spread of `runs` (non-finite runs dropped).
+    pub fn of(mut runs: Vec<f64>) -> Spread {
+        runs.retain(|v| v.is_finite());
+        let mut sorted = runs.clone();
+        sorted.sort_by(f64::total_cmp);
+        let median = if sorted.is_empty() {
+            f64::NAN
+        } else if sorted.len() % 2 == 1 {
+            sorted[sorted.len() / 2]
+        } else {
+            (sorted[sorted.len() / 2 - 1] + sorted[sorted.len() / 2]) / 2.0
+        };
+        Spread { median, min: sorted.first().copied().unwrap_or(f64::NAN), max: sorted.last().copied().unwrap_or(f64::NAN), runs }
     }
 }

@@ -1,10 +1,12 @@
 """Peer isosurface extractors for isolab's `peers` experiment, as one long-lived subprocess.
 
 Protocol (JSON lines): on start it prints {"available": {peer: version or null}, "errors": {...}};
-then for every request line {"raw": PATH, "peer": NAME, "threads": N} it loads the grid written by
-`isolab extract --samples-out PATH` (cached between requests), runs the peer once, timing only the
-extraction call (grid conversion excluded), and prints {"ms": T, "vertices": V, "triangles": F} or
-{"error": MESSAGE}. Peers: vtk-flying-edges (threads 1 or 2: VTK's STDThread SMP backend),
+then for every request line {"raw": PATH, "peer": NAME, "threads": N, "protocol": P} it loads the
+grid written by `isolab extract --samples-out PATH` (cached between requests), runs the peer once,
+timing only the extraction call (grid conversion excluded), and prints {"ms": T, "vertices": V,
+"triangles": F} or {"error": MESSAGE}. P is "one-shot" (the default: a new VTK filter per call) or
+"steady-state" (VTK: the filter of the previous call on this grid, Modified() then Update(); the
+other peers keep no state, so both protocols run them the same way). Peers: vtk-flying-edges (threads 1 or 2: VTK's STDThread SMP backend),
 vtk-marching-cubes, skimage-lorensen, skimage-lewiner, pymcubes, libigl. And one decimator:
 {"peer": "pymeshlab-quadric", "mesh": PATH, "target": FACES, "out": PATH}.
 
@@ -85,12 +87,20 @@ def run(req):
         smp = vtk.vtkSMPTools
         smp.SetBackend("STDThread" if threads > 1 else "Sequential")
         smp.Initialize(threads)
-        f = vtk.vtkFlyingEdges3D() if peer == "vtk-flying-edges" else vtk.vtkMarchingCubes()
-        f.SetInputData(img)
-        f.SetValue(0, iso)
-        f.ComputeNormalsOff()
-        f.ComputeGradientsOff()
-        f.ComputeScalarsOff()
+        key = ("filter", peer, threads)
+        steady = req.get("protocol") == "steady-state"
+        if steady and key in g:
+            f = g[key]
+            f.Modified()
+        else:
+            f = vtk.vtkFlyingEdges3D() if peer == "vtk-flying-edges" else vtk.vtkMarchingCubes()
+            f.SetInputData(img)
+            f.SetValue(0, iso)
+            f.ComputeNormalsOff()
+            f.ComputeGradientsOff()
+            f.ComputeScalarsOff()
+            if steady:
+                g[key] = f
         t = time.perf_counter()
         f.Update()
         ms = (time.perf_counter() - t) * 1e3

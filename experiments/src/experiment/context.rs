@@ -34,6 +34,9 @@ pub enum ExperimentError {
     /// A figure could not be drawn.
     #[error("figure: {0}")]
     Figure(String),
+    /// A peer implementation failed where the experiment needs it.
+    #[error("peer {0}")]
+    Peer(#[from] crate::peers::PeerError),
 }
 
 // Field, lattice and sampling errors reach experiments as run errors, with their messages.

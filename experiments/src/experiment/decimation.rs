@@ -12,7 +12,8 @@
 //! A decimator that is not installed is listed as not run, with the reason.
 
 use super::context::{load_object, Context, Experiment, ExperimentError};
-use super::peers::PythonPeers;
+use crate::peers::python::{PythonPeer, PythonServer};
+use crate::peers::{Job, Peer, Protocol};
 use crate::report::{markdown_table, median};
 use isolab_algorithms::extract::PostProcess;
 use isolab_algorithms::extractors::MarchingTetrahedra;
@@ -154,8 +155,8 @@ impl Experiment for Decimation {
         let repeats = ctx.repeats.min(3);
         let root = ctx.report_dir.join("..");
         let (native, mut skipped) = native_decimators(&root);
-        let mut python = match PythonPeers::start(&root) {
-            Ok((p, _)) => Some(p),
+        let mut pymeshlab = match PythonServer::start(&root) {
+            Ok((server, _)) => Some(PythonPeer::new(&server, "pymeshlab-quadric")),
             Err(e) => {
                 skipped.push(format!("pymeshlab: {e}"));
                 None
@@ -196,13 +197,13 @@ impl Experiment for Decimation {
                     times.push(safe.stats.times.post);
                 }
                 rows.push(row(name, &input, target, "edge-collapse-safe (shortest first)", &safe.surface, times, grid.spacing));
-                if let Some(py) = python.as_mut() {
+                if let Some(py) = pymeshlab.as_mut() {
                     let out_path = tmp.join(format!("{name}-{target}.obj"));
                     let mut times = Vec::new();
                     let mut failed = None;
                     for _ in 0..repeats {
-                        match py.decimate(&input_path, target, &out_path) {
-                            Ok((ms, _, _)) => times.push(Duration::from_secs_f64(ms / 1e3)),
+                        match py.run(&Job::Decimate { mesh: &input_path, target, out: &out_path }, Protocol::OneShot) {
+                            Ok(run) => times.push(run.time),
                             Err(e) => failed = Some(e),
                         }
                     }
@@ -224,7 +225,7 @@ impl Experiment for Decimation {
             }
             bar.inc(1);
         }
-        drop(python);
+        drop(pymeshlab);
         let _ = std::fs::remove_dir_all(&tmp);
         bar.finish();
         ctx.write_data(NAME, &Data { repeats, rows, skipped })

@@ -1,57 +1,39 @@
 //! `peers`: our extractors and the peer implementations on the same sampled grids in one run,
-//! alternating, medians of repeated runs, extraction only (sampling excluded for everyone):
-//! - in process: `fast-surface-nets` (its buffer reused, as a game engine would) and the
-//!   `isosurface` crate's marching cubes (which samples a `Source` itself: ours reads the stored
-//!   grid, so its time includes that lookup; cubic grids only, and it also meshes one layer of
-//!   cells past the far faces, which a closed surface inside the grid never reaches);
-//! - through one Python subprocess (`tests/reference/peers.py`, in the pinned virtual environment
-//!   `tests/reference/run.sh setup` creates) reading the very grid we sampled: VTK's
-//!   vtkFlyingEdges3D on one and two threads, vtkMarchingCubes, scikit-image (Lorensen, Lewiner),
-//!   PyMCubes, libigl. A peer that is not installed is skipped with a note in the report.
+//! alternating, extraction only (sampling excluded for everyone), under both protocols of
+//! [`crate::peers::Protocol`]:
+//! - *one-shot*: fresh output and fresh state per call (ours: a new extractor and
+//!   `Extraction::default()`; VTK: a new filter; `fast-surface-nets`: a new buffer);
+//! - *steady state*: the same call repeated with what the implementation lets a caller keep (ours:
+//!   extractor and output; VTK: the filter, `Modified()` + `Update()`; `fast-surface-nets`: its
+//!   buffer), after one unrecorded warm-up call.
+//!
+//! Peers ([`crate::peers`]): in process `fast-surface-nets` and the `isosurface` crate's marching
+//! cubes; through `tests/reference/peers.py` (reading the very grid we sampled) VTK's
+//! vtkFlyingEdges3D on one and two threads, vtkMarchingCubes, scikit-image (Lorensen, Lewiner),
+//! PyMCubes, libigl. The slow peers keep no state, so they run one-shot only. A peer that is not
+//! installed is skipped with a note in the report. Medians of `repeats` alternating runs and
+//! their spread (fastest, slowest); ratios compare like with like (same protocol, same threads).
 //!
 //! Also measured: the memory floor (one streaming read of the grid plus writing the output's
-//! bytes) and every extractor as a multiple of it; thread scaling (one thread against rayon's
-//! pool); time against cells on a log-log plot.
+//! bytes) and our two-thread marching cubes as a multiple of it; time against cells on a log-log
+//! plot.
 
 use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
-use crate::report::{markdown_table, median};
-use fast_surface_nets::ndshape::RuntimeShape;
-use fast_surface_nets::{surface_nets, SurfaceNetsBuffer};
-use isolab_algorithms::extractors::marching_cubes::{McOptions, NormalSource};
-use isolab_algorithms::extractors::surface_nets::{Smoothing, SnOptions, SurfaceNets};
-use isolab_algorithms::extractors::MarchingCubes;
-use isolab_algorithms::slabs::Parallelism;
-use isolab_algorithms::{fields, Extraction, Extractor, Grid, Samples};
+use crate::peers::fast_surface_nets::FastSurfaceNets;
+use crate::peers::isosurface_crate::IsosurfaceCrate;
+use crate::peers::ours::Ours;
+use crate::peers::python::{PythonPeer, PythonServer};
+use crate::peers::{Job, Peer, PeerError, Protocol};
+use crate::report::{markdown_table, median, Spread};
+use isolab_algorithms::{fields, Grid, Samples};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
-use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 use std::time::{Duration, Instant};
 
 /// The experiment.
 pub struct Peers;
-
-/// The stored grid as the `isosurface` crate's `Source`: it asks for values at `(x, y, z)` in the
-/// unit cube in steps of `1 / (n - 1)`; past the far faces (where it also looks) the grid is
-/// outside.
-struct GridSource<'a> {
-    values: &'a [f32],
-    n: usize,
-}
-
-impl isosurface::source::Source for GridSource<'_> {
-    fn sample(&self, x: f32, y: f32, z: f32) -> f32 {
-        let last = (self.n - 1) as f32;
-        let index = |c: f32| (c * last).round() as usize;
-        let (i, j, k) = (index(x), index(y), index(z));
-        if i >= self.n || j >= self.n || k >= self.n {
-            return 1.0;
-        }
-        self.values[i + self.n * (j + self.n * k)]
-    }
-}
 
 const NAME: &str = "peers";
 const FIELDS: [&str; 4] = ["sphere", "gyroid", "asteroid", "terrain"];
@@ -59,19 +41,22 @@ const SIZES: [usize; 3] = [64, 128, 256];
 /// 512^3 for the fast implementations only, on every field (the slow peers take seconds a run).
 const LARGE: (usize, [&str; 4]) = (512, FIELDS);
 const SLOW_PEERS: [&str; 5] = ["vtk-marching-cubes", "skimage-lorensen", "skimage-lewiner", "pymcubes", "libigl"];
+const PROTOCOLS: [Protocol; 2] = [Protocol::OneShot, Protocol::SteadyState];
 
-/// One implementation on one grid.
+/// One implementation on one grid under one protocol.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Timing {
-    /// Implementation label.
+    /// Implementation label, threads included.
     pub implementation: String,
     /// Field.
     pub field: String,
     /// Samples along each side.
     pub n: usize,
-    /// Median extraction time, ms.
-    pub ms: f64,
-    /// Vertices and triangles of its output.
+    /// How it was timed.
+    pub protocol: Protocol,
+    /// Extraction time, ms: median and spread.
+    pub ms: Spread,
+    /// Vertices of its output.
     pub vertices: usize,
     /// Triangles.
     pub triangles: usize,
@@ -100,78 +85,14 @@ struct Data {
     skipped: Vec<String>,
 }
 
-/// The Python peer server.
-pub(crate) struct PythonPeers {
-    child: Child,
-    stdin: ChildStdin,
-    stdout: BufReader<ChildStdout>,
-}
-
-impl PythonPeers {
-    /// Starts `peers.py` in the reference environment, creating it when missing.
-    pub(crate) fn start(root: &Path) -> Result<(PythonPeers, serde_json::Value), String> {
-        let python = root.join("tests/reference/.venv/bin/python");
-        if !python.exists() {
-            let status = Command::new("bash")
-                .arg(root.join("tests/reference/run.sh"))
-                .arg("setup")
-                .status()
-                .map_err(|e| format!("cannot run tests/reference/run.sh setup: {e}"))?;
-            if !status.success() {
-                return Err("tests/reference/run.sh setup failed (no Python peers)".into());
-            }
-        }
-        let mut child = Command::new(&python)
-            .arg(root.join("tests/reference/peers.py"))
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .spawn()
-            .map_err(|e| format!("cannot start {}: {e}", python.display()))?;
-        let stdin = child.stdin.take().ok_or("no stdin")?;
-        let mut stdout = BufReader::new(child.stdout.take().ok_or("no stdout")?);
-        let mut line = String::new();
-        stdout.read_line(&mut line).map_err(|e| e.to_string())?;
-        let hello: serde_json::Value = serde_json::from_str(&line).map_err(|e| format!("peers.py said {line:?}: {e}"))?;
-        Ok((PythonPeers { child, stdin, stdout }, hello))
-    }
-
-    /// One timed run: (ms, vertices, triangles).
-    fn run(&mut self, raw: &Path, peer: &str, threads: usize) -> Result<(f64, usize, usize), String> {
-        self.request(&serde_json::json!({"raw": raw, "peer": peer, "threads": threads}))
-    }
-
-    /// pymeshlab's quadric edge collapse of `mesh` to `target` faces into `out`: (ms, vertices,
-    /// triangles).
-    pub(crate) fn decimate(&mut self, mesh: &Path, target: usize, out: &Path) -> Result<(f64, usize, usize), String> {
-        self.request(&serde_json::json!({"peer": "pymeshlab-quadric", "mesh": mesh, "target": target, "out": out}))
-    }
-
-    /// Sends one request line and reads its answer: (ms, vertices, triangles), or the peer's error.
-    pub(crate) fn request(&mut self, request: &serde_json::Value) -> Result<(f64, usize, usize), String> {
-        writeln!(self.stdin, "{request}").map_err(|e| e.to_string())?;
-        self.stdin.flush().map_err(|e| e.to_string())?;
-        let mut line = String::new();
-        self.stdout.read_line(&mut line).map_err(|e| e.to_string())?;
-        let v: serde_json::Value = serde_json::from_str(&line).map_err(|e| format!("{line:?}: {e}"))?;
-        if let Some(e) = v.get("error") {
-            return Err(e.to_string());
-        }
-        let n = |k: &str| v[k].as_u64().unwrap_or(0) as usize;
-        Ok((v["ms"].as_f64().unwrap_or(f64::NAN), n("vertices"), n("triangles")))
-    }
-}
-
-impl Drop for PythonPeers {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-/// Times one of our extractors once.
-fn ours(e: &dyn Extractor, s: &Samples, out: &mut Extraction) -> Result<Duration, ExperimentError> {
-    e.extract(s, out)?;
-    Ok(out.stats.times.extraction())
+/// One implementation as the run alternates them: its label, the peer, its threads, and whether
+/// it runs under both protocols (else one-shot only).
+struct Entry {
+    label: String,
+    peer: Box<dyn Peer>,
+    threads: usize,
+    steady: bool,
+    slow: bool,
 }
 
 /// The memory floor: one read of every sample (a sum the optimiser cannot drop) and one write of
@@ -200,6 +121,38 @@ pub(crate) fn floor(values: &[f32], bytes: usize) -> (Duration, Duration) {
     (read, write)
 }
 
+/// Every implementation the run alternates, Python peers when the server started.
+fn entries(python: Option<&std::rc::Rc<std::cell::RefCell<PythonServer>>>) -> Vec<Entry> {
+    let entry = |label: &str, peer: Box<dyn Peer>, threads: usize, steady: bool, slow: bool| Entry {
+        label: format!("{label} ({threads} thread{})", if threads == 1 { "" } else { "s" }),
+        peer,
+        threads,
+        steady,
+        slow,
+    };
+    // No normals for marching cubes, as VTK runs with ComputeNormalsOff and the other marching
+    // cubes peers make none; surface nets makes its usual normals, as `fast-surface-nets` does.
+    let mc = || Box::new(Ours::new("marching-cubes", &[("normals", "none")]));
+    let sn = || Box::new(Ours::new("surface-nets", &[("smoothing", "none")]));
+    let mut list = vec![
+        entry("isolab marching-cubes", mc(), 2, true, false),
+        entry("isolab marching-cubes", mc(), 1, true, false),
+        entry("isolab surface-nets", sn(), 2, true, false),
+        entry("isolab surface-nets", sn(), 1, true, false),
+        entry("fast-surface-nets", Box::<FastSurfaceNets>::default(), 1, true, false),
+        entry("isosurface crate", Box::<IsosurfaceCrate>::default(), 1, true, false),
+    ];
+    if let Some(server) = python {
+        for threads in [1, 2] {
+            list.push(entry("VTK vtkFlyingEdges3D", Box::new(PythonPeer::new(server, "vtk-flying-edges")), threads, true, false));
+        }
+        for name in SLOW_PEERS {
+            list.push(entry(name, Box::new(PythonPeer::new(server, name)), 1, false, true));
+        }
+    }
+    list
+}
+
 impl Experiment for Peers {
     fn name(&self) -> &'static str {
         NAME
@@ -207,38 +160,43 @@ impl Experiment for Peers {
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let root = ctx.report_dir.join("..");
-        let repeats = ctx.repeats.min(3);
+        let repeats = ctx.repeats.max(1);
         let mut versions = BTreeMap::new();
         let mut skipped = Vec::new();
-        let mut python = match PythonPeers::start(&root) {
-            Ok((p, hello)) => {
+        let server = match PythonServer::start(&root) {
+            Ok((server, hello)) => {
                 for (k, v) in hello["available"].as_object().into_iter().flatten() {
                     versions.insert(k.clone(), v.as_str().unwrap_or("installed").to_owned());
                 }
                 for (k, v) in hello["errors"].as_object().into_iter().flatten() {
                     skipped.push(format!("{k}: {v}"));
                 }
-                Some(p)
+                Some(server)
             }
             Err(e) => {
                 skipped.push(format!("all Python peers: {e}"));
                 None
             }
         };
+        let mut entries = entries(server.as_ref());
         let tmp = std::env::temp_dir().join(format!("isolab-peers-{}", std::process::id()));
         std::fs::create_dir_all(&tmp).map_err(|source| crate::io::IoError::Write { path: tmp.clone(), source })?;
         let mut grids: Vec<(&str, usize)> = FIELDS.iter().flat_map(|&f| SIZES.iter().map(move |&n| (f, n))).collect();
         grids.extend(LARGE.1.iter().map(|&f| (f, LARGE.0)));
         let bar = ctx.bar(NAME, grids.len() as u64);
-        // No normals, as the Python side runs VTK (ComputeNormalsOff) and the other peers make none.
-        let mc = MarchingCubes::new(McOptions { normals: NormalSource::None, ..Default::default() });
-        let mc1 =
-            MarchingCubes::new(McOptions { normals: NormalSource::None, parallelism: Parallelism::Serial, ..Default::default() });
-        let sn = SurfaceNets::new(SnOptions { smoothing: Smoothing::None, ..Default::default() });
-        let sn1 =
-            SurfaceNets::new(SnOptions { smoothing: Smoothing::None, parallelism: Parallelism::Serial, ..Default::default() });
         let mut timings = Vec::new();
         let mut floors = Vec::new();
+        let note = |skipped: &mut Vec<String>, e: PeerError, field: &str| {
+            let line = match &e {
+                PeerError::Failed { message, .. } if message.contains("n³") || message.contains("zero level") => {
+                    format!("{e} ({field})")
+                }
+                _ => e.to_string(),
+            };
+            if !skipped.contains(&line) {
+                skipped.push(line);
+            }
+        };
         for (field_name, n) in grids {
             let field = fields::builtin(field_name, Default::default())?;
             let grid = Grid::covering(&field.domain(), n)?;
@@ -247,79 +205,53 @@ impl Experiment for Peers {
             let raw: PathBuf = tmp.join(format!("{field_name}-{n}.raw"));
             crate::io::write_samples(&raw, &samples, None)?;
             let large = n == LARGE.0;
-            let mut runs: BTreeMap<String, (Vec<Duration>, usize, usize)> = BTreeMap::new();
-            let mut record = |label: &str, t: Duration, v: usize, f: usize| {
-                let e = runs.entry(label.to_owned()).or_insert_with(|| (Vec::new(), v, f));
-                e.0.push(t);
-            };
-            let [nx, ny, nz] = grid.dims.map(|d| d as u32);
-            let shape = RuntimeShape::<u32, 3>::new([nx, ny, nz]);
-            let mut fsn = SurfaceNetsBuffer::default();
-            let mut out = Extraction::default();
-            let mut reads = Vec::new();
-            let mut writes = Vec::new();
+            let mut runs: BTreeMap<(usize, Protocol), (Vec<f64>, usize, usize)> = BTreeMap::new();
+            let mut failed = vec![false; entries.len()];
+            let (mut reads, mut writes) = (Vec::new(), Vec::new());
+            // One unrecorded steady-state call each, so the recorded ones find their state kept.
+            for (k, e) in entries.iter_mut().enumerate() {
+                if e.steady && !(large && e.slow) {
+                    let job = Job::Grid { samples: &samples, file: &raw, threads: e.threads };
+                    if let Err(err) = e.peer.run(&job, Protocol::SteadyState) {
+                        failed[k] = true;
+                        note(&mut skipped, err, field_name);
+                    }
+                }
+            }
             for _ in 0..repeats {
-                for (label, e) in [
-                    ("isolab marching-cubes (2 threads)", &mc as &dyn Extractor),
-                    ("isolab marching-cubes (1 thread)", &mc1),
-                    ("isolab surface-nets (2 threads)", &sn),
-                    ("isolab surface-nets (1 thread)", &sn1),
-                ] {
-                    let t = ours(e, &samples, &mut out)?;
-                    record(label, t, out.surface.positions.len(), out.surface.triangles.len());
-                    if label.starts_with("isolab marching-cubes (2") {
-                        let bytes = out.surface.positions.len() * 12 + out.surface.triangles.len() * 12;
-                        let (r, w) = floor(samples.values(), bytes);
-                        reads.push(r);
-                        writes.push(w);
-                    }
-                }
-                let t = Instant::now();
-                surface_nets(samples.values(), &shape, [0; 3], [nx - 1, ny - 1, nz - 1], &mut fsn);
-                record("fast-surface-nets (1 thread)", t.elapsed(), fsn.positions.len(), fsn.indices.len() / 3);
-                if nx == ny && ny == nz {
-                    let source = GridSource { values: samples.values(), n: nx as usize };
-                    let (mut vertices, mut indices) = (Vec::new(), Vec::new());
-                    let t = Instant::now();
-                    isosurface::marching_cubes::MarchingCubes::new(nx as usize).extract(&source, &mut vertices, &mut indices);
-                    record("isosurface crate (1 thread)", t.elapsed(), vertices.len() / 3, indices.len() / 3);
-                } else {
-                    let note = format!(
-                        "isosurface crate on {field_name}: the field's grids are not n³ (the crate meshes n³ grids only)"
-                    );
-                    if !skipped.contains(&note) {
-                        skipped.push(note);
-                    }
-                }
-                if let Some(py) = python.as_mut() {
-                    let mut peers: Vec<(&str, usize, String)> = vec![
-                        ("vtk-flying-edges", 1, "VTK vtkFlyingEdges3D (1 thread)".into()),
-                        ("vtk-flying-edges", 2, "VTK vtkFlyingEdges3D (2 threads)".into()),
-                    ];
-                    if !large {
-                        peers.extend(SLOW_PEERS.iter().map(|&p| (p, 1, format!("{p} (1 thread)"))));
-                    }
-                    for (peer, threads, label) in peers {
-                        match py.run(&raw, peer, threads) {
-                            Ok((ms, v, f)) => record(&label, Duration::from_secs_f64(ms / 1e3), v, f),
-                            Err(e) => {
-                                let note = format!("{peer}: {e}");
-                                if !skipped.contains(&note) {
-                                    skipped.push(note);
+                for protocol in PROTOCOLS {
+                    for (k, e) in entries.iter_mut().enumerate() {
+                        if failed[k] || (large && e.slow) || (protocol == Protocol::SteadyState && !e.steady) {
+                            continue;
+                        }
+                        let job = Job::Grid { samples: &samples, file: &raw, threads: e.threads };
+                        match e.peer.run(&job, protocol) {
+                            Ok(run) => {
+                                let slot = runs.entry((k, protocol)).or_insert_with(|| (Vec::new(), run.vertices, run.triangles));
+                                slot.0.push(run.time.as_secs_f64() * 1e3);
+                                if k == 0 && protocol == Protocol::OneShot {
+                                    let (r, w) = floor(samples.values(), run.vertices * 12 + run.triangles * 12);
+                                    reads.push(r);
+                                    writes.push(w);
                                 }
+                            }
+                            Err(err) => {
+                                failed[k] = true;
+                                note(&mut skipped, err, field_name);
                             }
                         }
                     }
                 }
             }
-            for (label, (times, v, f)) in runs {
+            for ((k, protocol), (times, vertices, triangles)) in runs {
                 timings.push(Timing {
-                    implementation: label,
+                    implementation: entries[k].label.clone(),
                     field: field_name.into(),
                     n,
-                    ms: median(times).as_secs_f64() * 1e3,
-                    vertices: v,
-                    triangles: f,
+                    protocol,
+                    ms: Spread::of(times),
+                    vertices,
+                    triangles,
                 });
             }
             let _ = std::fs::remove_file(&raw);
@@ -331,7 +263,8 @@ impl Experiment for Peers {
             });
             bar.inc(1);
         }
-        drop(python);
+        drop(entries);
+        drop(server);
         let _ = std::fs::remove_dir_all(&tmp);
         bar.finish();
         let data = Data { repeats, timings, floors, versions, skipped };
@@ -345,13 +278,14 @@ impl Experiment for Peers {
     }
 }
 
-fn time_of<'a>(data: &'a Data, implementation: &str, field: &str, n: usize) -> Option<&'a Timing> {
-    data.timings.iter().find(|t| t.implementation == implementation && t.field == field && t.n == n)
+fn time_of<'a>(data: &'a Data, implementation: &str, protocol: Protocol, field: &str, n: usize) -> Option<&'a Timing> {
+    data.timings.iter().find(|t| t.implementation == implementation && t.protocol == protocol && t.field == field && t.n == n)
 }
 
 fn charts(dir: &Path, data: &Data) -> Result<(), ExperimentError> {
     for field in FIELDS {
-        let mut labels: Vec<&str> = data.timings.iter().filter(|t| t.field == field).map(|t| t.implementation.as_str()).collect();
+        let one_shot = || data.timings.iter().filter(|t| t.field == field && t.protocol == Protocol::OneShot);
+        let mut labels: Vec<&str> = one_shot().map(|t| t.implementation.as_str()).collect();
         labels.sort_unstable();
         labels.dedup();
         let series = labels
@@ -360,16 +294,14 @@ fn charts(dir: &Path, data: &Data) -> Result<(), ExperimentError> {
             .map(|(k, label)| Series {
                 label: (*label).to_owned(),
                 color: crate::figures::PALETTE[k % crate::figures::PALETTE.len()],
-                points: data
-                    .timings
-                    .iter()
-                    .filter(|t| t.field == field && t.implementation == *label)
-                    .map(|t| (((t.n - 1) as f64).powi(3), t.ms))
+                points: one_shot()
+                    .filter(|t| t.implementation == *label)
+                    .map(|t| (((t.n - 1) as f64).powi(3), t.ms.median))
                     .collect(),
             })
             .collect();
         let chart = XyPlot {
-            title: format!("Extraction time against cells, {field}"),
+            title: format!("One-shot extraction time against cells, {field}"),
             x_label: "cells".into(),
             y_label: "ms (median)".into(),
             x_scale: Scale::Log,
@@ -382,11 +314,93 @@ fn charts(dir: &Path, data: &Data) -> Result<(), ExperimentError> {
     Ok(())
 }
 
+/// Ratio columns: (header, ours, theirs).
+const ONE_SHOT_RATIOS: [(&str, &str, &str); 8] = [
+    ("MC vs FlyingEdges, 1 thread", "isolab marching-cubes (1 thread)", "VTK vtkFlyingEdges3D (1 thread)"),
+    ("MC vs FlyingEdges, 2 threads", "isolab marching-cubes (2 threads)", "VTK vtkFlyingEdges3D (2 threads)"),
+    ("SN vs fast-surface-nets, 1 thread", "isolab surface-nets (1 thread)", "fast-surface-nets (1 thread)"),
+    ("SN (2 threads) vs fast-surface-nets", "isolab surface-nets (2 threads)", "fast-surface-nets (1 thread)"),
+    ("MC vs skimage Lewiner", "isolab marching-cubes (1 thread)", "skimage-lewiner (1 thread)"),
+    ("MC vs vtkMarchingCubes", "isolab marching-cubes (1 thread)", "vtk-marching-cubes (1 thread)"),
+    ("MC vs libigl", "isolab marching-cubes (1 thread)", "libigl (1 thread)"),
+    ("MC vs isosurface crate", "isolab marching-cubes (1 thread)", "isosurface crate (1 thread)"),
+];
+
+/// The second thread's speed-up (one-shot): (header, one thread, two threads).
+const SCALING: [(&str, &str, &str); 3] = [
+    ("isolab MC", "isolab marching-cubes (1 thread)", "isolab marching-cubes (2 threads)"),
+    ("isolab SN", "isolab surface-nets (1 thread)", "isolab surface-nets (2 threads)"),
+    ("VTK FlyingEdges", "VTK vtkFlyingEdges3D (1 thread)", "VTK vtkFlyingEdges3D (2 threads)"),
+];
+
+fn ratio(a: Option<&Timing>, b: Option<&Timing>) -> String {
+    match (a, b) {
+        (Some(a), Some(b)) => format!("{:.2}×", b.ms.median / a.ms.median),
+        _ => "-".into(),
+    }
+}
+
+/// A ratio table over `grids` for `columns` under `protocol`.
+fn ratio_table(data: &Data, grids: &[(String, usize)], protocol: Protocol, columns: &[(&str, &str, &str)]) -> String {
+    let body: Vec<Vec<String>> = grids
+        .iter()
+        .map(|(f, n)| {
+            let t = |label: &str| time_of(data, label, protocol, f, *n);
+            let mut row = vec![format!("{f} {n}³")];
+            row.extend(columns.iter().map(|(_, ours, theirs)| ratio(t(ours), t(theirs))));
+            row
+        })
+        .collect();
+    let mut header = vec!["grid"];
+    header.extend(columns.iter().map(|c| c.0));
+    markdown_table(&header, &body)
+}
+
+/// Median (fastest-slowest) in ms.
+fn spread(t: &Timing) -> String {
+    use super::context::ms;
+    format!("{} ({}-{})", ms(t.ms.median), ms(t.ms.min), ms(t.ms.max))
+}
+
+/// A times table under `protocol`: every implementation measured under it, median and spread.
+fn times_table(data: &Data, grids: &[(String, usize)], protocol: Protocol, with_floor: bool) -> String {
+    let mut labels: Vec<&str> =
+        data.timings.iter().filter(|t| t.protocol == protocol).map(|t| t.implementation.as_str()).collect();
+    labels.sort_unstable();
+    labels.dedup();
+    let mut header = vec!["grid"];
+    if with_floor {
+        header.extend(["floor ms", "MC × floor"]);
+    }
+    header.extend(labels.iter().copied());
+    let body: Vec<Vec<String>> = grids
+        .iter()
+        .map(|(f, n)| {
+            let mut row = vec![format!("{f} {n}³")];
+            if with_floor {
+                let fl = data.floors.iter().find(|x| &x.field == f && x.n == *n);
+                let floor = fl.map_or(f64::NAN, |x| x.read_ms + x.write_ms);
+                let mc = time_of(data, "isolab marching-cubes (2 threads)", protocol, f, *n).map_or(f64::NAN, |t| t.ms.median);
+                row.extend([format!("{floor:.2}"), format!("{:.1}", mc / floor)]);
+            }
+            row.extend(labels.iter().map(|l| time_of(data, l, protocol, f, *n).map_or("-".into(), spread)));
+            row
+        })
+        .collect();
+    markdown_table(&header, &body)
+}
+
 fn section(data: &Data) -> String {
     let mut md = String::from("## Against the peers, in one run (`peers`)\n\n");
     md.push_str(&format!(
         "Every implementation on the same sampled grid (built-in fields on their default domains, n samples a side), extraction \
-         only, alternating, median of {} runs each; Python peers read the very grid isolab sampled (`tests/reference/peers.py`). \
+         only, alternating, {} runs each per protocol; Python peers read the very grid isolab sampled (`tests/reference/peers.py`). \
+         **One-shot**: fresh output and fresh state every call, as a CLI user or a first library call meets it (ours: a new \
+         extractor and a new `Extraction`; VTK: a new filter; `fast-surface-nets`: a new buffer). **Steady state**: the same \
+         call repeated with what the implementation lets a caller keep (ours: extractor and output buffers; VTK: the same \
+         filter, `Modified()` then `Update()`; `fast-surface-nets`: its buffer), after one unrecorded warm-up call. The slower \
+         peers keep nothing between calls and run one-shot only. Ratios are peer median / our median under the same protocol \
+         (above 1 means we are faster); the times tables give each median with its fastest and slowest run. \
          Our marching cubes makes no normals here, as VTK runs with ComputeNormalsOff and the other marching cubes peers make \
          none; surface nets makes its usual normals, as `fast-surface-nets` does. Peer versions: {}. Times are wall clock on a shared 2-core machine; compare ratios within this run.\n\n",
         data.repeats,
@@ -403,60 +417,16 @@ fn section(data: &Data) -> String {
     }
     let mut grids: Vec<(String, usize)> = data.floors.iter().map(|f| (f.field.clone(), f.n)).collect();
     grids.dedup();
-    let ratio = |a: Option<&Timing>, b: Option<&Timing>| match (a, b) {
-        (Some(a), Some(b)) => format!("{:.2}×", b.ms / a.ms),
-        _ => "-".into(),
-    };
-    md.push_str("### Ratios (peer time / ours: above 1 means we are faster)\n\n");
-    let body: Vec<Vec<String>> = grids
-        .iter()
-        .map(|(f, n)| {
-            let t = |label: &str| time_of(data, label, f, *n);
-            vec![
-                format!("{f} {n}³"),
-                ratio(t("isolab marching-cubes (1 thread)"), t("VTK vtkFlyingEdges3D (1 thread)")),
-                ratio(t("isolab marching-cubes (2 threads)"), t("VTK vtkFlyingEdges3D (2 threads)")),
-                ratio(t("isolab surface-nets (1 thread)"), t("fast-surface-nets (1 thread)")),
-                ratio(t("isolab surface-nets (2 threads)"), t("fast-surface-nets (1 thread)")),
-                ratio(t("isolab marching-cubes (1 thread)"), t("skimage-lewiner (1 thread)")),
-                ratio(t("isolab marching-cubes (1 thread)"), t("vtk-marching-cubes (1 thread)")),
-                ratio(t("isolab marching-cubes (1 thread)"), t("isosurface crate (1 thread)")),
-            ]
-        })
-        .collect();
-    md.push_str(&markdown_table(
-        &[
-            "grid",
-            "MC vs FlyingEdges, 1 thread",
-            "MC vs FlyingEdges, 2 threads",
-            "SN vs fast-surface-nets, 1 thread",
-            "SN (2 threads) vs fast-surface-nets",
-            "MC vs skimage Lewiner",
-            "MC vs vtkMarchingCubes",
-            "MC vs isosurface crate",
-        ],
-        &body,
-    ));
-    md.push_str("\n### Times (ms, median) and the memory floor\n\nThe floor is one streaming read of the grid plus one write of marching cubes' output bytes; `× floor` is our two-thread marching cubes over it. Triangle counts in parentheses.\n\n");
-    let mut labels: Vec<&str> = data.timings.iter().map(|t| t.implementation.as_str()).collect();
-    labels.sort_unstable();
-    labels.dedup();
-    let mut header = vec!["grid", "floor ms", "MC × floor"];
-    header.extend(labels.iter().copied());
-    let body: Vec<Vec<String>> = grids
-        .iter()
-        .map(|(f, n)| {
-            let fl = data.floors.iter().find(|x| &x.field == f && x.n == *n);
-            let floor = fl.map_or(f64::NAN, |x| x.read_ms + x.write_ms);
-            let mc = time_of(data, "isolab marching-cubes (2 threads)", f, *n).map_or(f64::NAN, |t| t.ms);
-            let mut row = vec![format!("{f} {n}³"), format!("{floor:.2}"), format!("{:.1}", mc / floor)];
-            row.extend(labels.iter().map(|l| {
-                time_of(data, l, f, *n).map_or("-".into(), |t| format!("{} ({})", super::context::ms(t.ms), t.triangles))
-            }));
-            row
-        })
-        .collect();
-    md.push_str(&markdown_table(&header, &body));
+    md.push_str("### Ratios, one-shot (peer time / ours)\n\n");
+    md.push_str(&ratio_table(data, &grids, Protocol::OneShot, &ONE_SHOT_RATIOS));
+    md.push_str("\n### Ratios, steady state (peer time / ours)\n\n");
+    md.push_str(&ratio_table(data, &grids, Protocol::SteadyState, &ONE_SHOT_RATIOS[..4]));
+    md.push_str("\n### The second thread (one-shot: one-thread time / two-thread time)\n\n");
+    md.push_str(&ratio_table(data, &grids, Protocol::OneShot, &SCALING.map(|(h, one, two)| (h, two, one))));
+    md.push_str("\n### Times, one-shot (ms: median (fastest-slowest)) and the memory floor\n\nThe floor is one streaming read of the grid plus one write of marching cubes' output bytes; `× floor` is our two-thread one-shot marching cubes over it. Triangle counts are in `data/peers.json`.\n\n");
+    md.push_str(&times_table(data, &grids, Protocol::OneShot, true));
+    md.push_str("\n### Times, steady state (ms: median (fastest-slowest))\n\n");
+    md.push_str(&times_table(data, &grids, Protocol::SteadyState, false));
     md.push_str(
         "\n| | |\n|---|---|\n| ![sphere](figures/peers/time-sphere.png) | ![gyroid](figures/peers/time-gyroid.png) |\n| ![asteroid](figures/peers/time-asteroid.png) | ![terrain](figures/peers/time-terrain.png) |\n\n",
     );

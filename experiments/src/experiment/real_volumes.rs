@@ -22,10 +22,12 @@
 //! the section says so.
 
 use super::context::{Context, Experiment, ExperimentError};
-use super::peers::PythonPeers;
 use crate::figures::render::{grid, render, save_png, RenderOptions, Shading};
 use crate::io::volume::{read_volume, Inside, VolumeOptions};
+use crate::peers::python::{PythonPeer, PythonServer};
+use crate::peers::{Job, Peer, Protocol};
 use crate::report::markdown_table;
+use crate::report::Spread;
 use crate::run::{volume_samples, LatticeKind};
 use glam::Vec3;
 use isolab_algorithms::fields::{volume::otsu_threshold, Complement, VolumeField};
@@ -48,31 +50,6 @@ struct Level {
     name: String,
     iso: f32,
     how: String,
-}
-
-/// Median and spread of repeated runs, ms.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-struct Spread {
-    median: f64,
-    min: f64,
-    max: f64,
-    runs: Vec<f64>,
-}
-
-impl Spread {
-    fn of(mut runs: Vec<f64>) -> Spread {
-        runs.retain(|v| v.is_finite());
-        let mut sorted = runs.clone();
-        sorted.sort_by(f64::total_cmp);
-        let median = if sorted.is_empty() {
-            f64::NAN
-        } else if sorted.len() % 2 == 1 {
-            sorted[sorted.len() / 2]
-        } else {
-            (sorted[sorted.len() / 2 - 1] + sorted[sorted.len() / 2]) / 2.0
-        };
-        Spread { median, min: sorted.first().copied().unwrap_or(f64::NAN), max: sorted.last().copied().unwrap_or(f64::NAN), runs }
-    }
 }
 
 /// One implementation at one iso-value.
@@ -207,7 +184,7 @@ impl Experiment for RealVolumes {
             .map(|&n| rayon::ThreadPoolBuilder::new().num_threads(n).build())
             .collect::<Result<_, _>>()
             .map_err(|e| ExperimentError::Figure(format!("thread pool: {e}")))?;
-        let (mut python, hello) = match PythonPeers::start(&root) {
+        let (server, hello) = match PythonServer::start(&root) {
             Ok(p) => p,
             Err(e) => {
                 data.skipped.push(format!("the MNI template and the Python peers: {e}"));
@@ -238,6 +215,8 @@ impl Experiment for RealVolumes {
         let surface: Vec<_> =
             extractors::INFOS.iter().filter(|i| extractors::by_name(i.name).is_some_and(|e| !e.produces_volume())).collect();
         let peers = [("vtk-flying-edges", "vtkFlyingEdges3D"), ("skimage-lewiner", "scikit-image (Lewiner)")];
+        let mut peer_runners: Vec<PythonPeer> = peers.iter().map(|(name, _)| PythonPeer::new(&server, name)).collect();
+        let mut end_to_end_peer = PythonPeer::new(&server, "vtk-flying-edges");
         let bar = ctx.bar(NAME, (data.levels.len() * (surface.len() + peers.len() + 1)) as u64);
         let tmp = tempfile_dir()?;
         let dir = ctx.figure_dir(NAME)?;
@@ -271,18 +250,23 @@ impl Experiment for RealVolumes {
                             continue; // single-threaded: timed once per round on the one-thread pass
                         }
                         let out = tmp.join(format!("{peer}.ply"));
-                        let request = serde_json::json!({"peer": "scan", "library": peer, "nifti": path, "level": level.iso,
-                                                         "threads": t + 1, "out": if last { Some(&out) } else { None }});
-                        match python.request(&request) {
-                            Ok((ms, _, _)) => {
+                        let job = Job::Scan {
+                            file: path,
+                            level: level.iso,
+                            threads: t + 1,
+                            out: last.then_some(out.as_path()),
+                            end_to_end: false,
+                        };
+                        match peer_runners[p].run(&job, Protocol::OneShot) {
+                            Ok(run) => {
                                 if !(t == 1 && *peer == "skimage-lewiner") {
-                                    times[surface.len() + p][t].push(ms);
+                                    times[surface.len() + p][t].push(run.time.as_secs_f64() * 1e3);
                                 }
                                 if last {
                                     meshes[surface.len() + p] = Some(crate::io::read_mesh(&out)?);
                                 }
                             }
-                            Err(e) => errors[p] = Some(e),
+                            Err(e) => errors[p] = Some(e.to_string()),
                         }
                     }
                 }
@@ -330,12 +314,11 @@ impl Experiment for RealVolumes {
                     })?;
                     ours.push(start.elapsed().as_secs_f64() * 1e3);
                     counts.0 = triangles;
-                    let request =
-                        serde_json::json!({"peer": "scan-end-to-end", "nifti": path, "level": level.iso, "threads": t + 1});
-                    match python.request(&request) {
-                        Ok((ms, _, triangles)) => {
-                            theirs.push(ms);
-                            counts.1 = triangles;
+                    let job = Job::Scan { file: path, level: level.iso, threads: t + 1, out: None, end_to_end: true };
+                    match end_to_end_peer.run(&job, Protocol::OneShot) {
+                        Ok(run) => {
+                            theirs.push(run.time.as_secs_f64() * 1e3);
+                            counts.1 = run.triangles;
                         }
                         Err(e) => data.skipped.push(format!("end to end at {}: {e}", level.name)),
                     }

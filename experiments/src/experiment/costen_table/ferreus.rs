@@ -1,6 +1,8 @@
 //! The side-by-side run against the `ferreus_rmt` crate (an independent, surface-following RMT).
 
 use super::*;
+use crate::peers::ferreus_rmt::FerreusRmt;
+use crate::peers::{Job, Peer, Protocol};
 
 /// Our RMT against `ferreus_rmt` on one object (BCC, same spacing), medians of interleaved runs.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -44,11 +46,13 @@ pub(super) fn against_ferreus(repeats: usize) -> Result<Vec<PeerRow>, Experiment
             ours_total.push(t.elapsed());
             ours_extraction.push(out.stats.times.extraction());
             let seeds = crate::peers::seeds_from(&out.surface, 500);
-            let run = crate::peers::ferreus_rmt(field.as_ref(), &grid.bounds(), grid.spacing, 0.0, &seeds);
+            let job = Job::Field { field: field.as_ref(), domain: grid.bounds(), spacing: grid.spacing, iso: 0.0, seeds: &seeds };
+            let run = FerreusRmt.run(&job, Protocol::OneShot)?;
             theirs.push(run.time);
             last = Some((out, run));
         }
         let Some((out, run)) = last else { continue };
+        let theirs_mesh = run.mesh.unwrap_or_default();
         rows.push(PeerRow {
             field: name.into(),
             spacing: f64::from(grid.spacing),
@@ -56,10 +60,10 @@ pub(super) fn against_ferreus(repeats: usize) -> Result<Vec<PeerRow>, Experiment
             ours_extraction_ms: millis(median(ours_extraction)),
             ours_evaluations: lattice.sample_count(),
             theirs_ms: millis(median(theirs)),
-            theirs_evaluations: run.evaluations,
+            theirs_evaluations: run.evaluations.unwrap_or(0),
             theirs_flipped: run.flipped,
             ours: MeshMetrics::measure(&out.surface, Some((field.as_ref(), 0.0))),
-            theirs: MeshMetrics::measure(&run.mesh, Some((field.as_ref(), 0.0))),
+            theirs: MeshMetrics::measure(&theirs_mesh, Some((field.as_ref(), 0.0))),
         });
     }
     Ok(rows)

@@ -1,10 +1,10 @@
-//! Peer implementations run in this process on the same field, for side-by-side comparisons.
-//!
-//! - [`ferreus_rmt()`]: the `ferreus_rmt` crate (Maptek, MIT), an independent regularised marching
-//!   tetrahedra that follows the surface from seed points instead of sampling the whole volume.
-//!   It evaluates the field itself (in batches; we evaluate each batch in parallel, as our own
-//!   sampling is), so its time is comparable with our sampling plus extraction.
+//! The `ferreus_rmt` crate (Maptek, MIT): an independent regularised marching tetrahedra that
+//! follows the surface from seed points instead of sampling the whole volume. It evaluates the
+//! field itself (in batches; we evaluate each batch in parallel, as our own sampling is), so its
+//! time is comparable with our sampling plus extraction. It keeps no state between calls, so its
+//! steady state is its one-shot run.
 
+use super::{Job, Peer, PeerError, PeerRun, Protocol};
 use glam::Vec3;
 use isolab_algorithms::geometry::Aabb;
 use isolab_algorithms::{Field, TriMesh};
@@ -13,21 +13,21 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 /// One `ferreus_rmt` run.
-pub struct FerreusRun {
+struct FerreusRun {
     /// Its mesh (wound like ours: counter-clockwise seen from outside).
-    pub mesh: TriMesh,
+    mesh: TriMesh,
     /// Wall time of `build_isosurface`, field evaluations included.
-    pub time: Duration,
+    time: Duration,
     /// Field evaluations it asked for.
-    pub evaluations: usize,
+    evaluations: usize,
     /// Whether its triangles came wound the other way and were flipped to compare.
-    pub flipped: bool,
+    flipped: bool,
 }
 
 /// Runs `ferreus_rmt::build_isosurface` with its plain averaging clustering (the paper's) on
 /// `field` over `domain` at lattice spacing `spacing`, seeded at `seeds`, leaving the surface open
 /// at the domain boundary.
-pub fn ferreus_rmt(field: &dyn Field, domain: &Aabb, spacing: f32, iso: f32, seeds: &[Vec3]) -> FerreusRun {
+fn ferreus_rmt(field: &dyn Field, domain: &Aabb, spacing: f32, iso: f32, seeds: &[Vec3]) -> FerreusRun {
     use faer::{Mat, MatRef};
     let evaluations = AtomicUsize::new(0);
     let mut f = |pts: MatRef<'_, f64>| -> Mat<f64> {
@@ -71,8 +71,24 @@ pub fn ferreus_rmt(field: &dyn Field, domain: &Aabb, spacing: f32, iso: f32, see
     FerreusRun { mesh: out, time, evaluations: evaluations.into_inner(), flipped }
 }
 
-/// Seed points for a surface-following peer: every `stride`-th vertex of a mesh of the same
-/// surface (one per 500 vertices at least one), so every component gets a seed.
-pub fn seeds_from(mesh: &TriMesh, stride: usize) -> Vec<Vec3> {
-    mesh.positions.iter().step_by(stride.max(1)).copied().collect()
+/// The `ferreus_rmt` peer (jobs: [`Job::Field`]).
+pub struct FerreusRmt;
+
+impl Peer for FerreusRmt {
+    fn name(&self) -> String {
+        "ferreus_rmt".into()
+    }
+
+    fn run(&mut self, job: &Job<'_>, _: Protocol) -> Result<PeerRun, PeerError> {
+        let Job::Field { field, domain, spacing, iso, seeds } = job else { return Err(self.unsupported()) };
+        let run = ferreus_rmt(*field, domain, *spacing, *iso, seeds);
+        Ok(PeerRun {
+            time: run.time,
+            vertices: run.mesh.positions.len(),
+            triangles: run.mesh.triangles.len(),
+            mesh: Some(run.mesh),
+            evaluations: Some(run.evaluations),
+            flipped: run.flipped,
+        })
+    }
 }

@@ -7,9 +7,9 @@
 //! non-manifold, inconsistently wound and self-intersecting inputs are named in warnings (the
 //! field still has an inside: the generalized winding number decides it).
 
+use crate::error::RunError;
 use crate::io::volume::{self, Inside, VolumeFile, VolumeOptions};
 use crate::io::{self, Coordinates};
-use crate::run::RunError;
 use isolab_algorithms::fields::{self, MeshField, VolumeField};
 use isolab_algorithms::{Field, TriMesh};
 use std::path::Path;

@@ -5,6 +5,7 @@
 //! `isolab` (the CLI) and `report` (regenerates `report/`).
 
 pub mod alloc_meter;
+pub mod error;
 pub mod experiment;
 pub mod figures;
 pub mod input;

@@ -9,10 +9,7 @@ use crate::io::{self, IoError};
 use glam::{DAffine3, DMat3, DVec3};
 use isolab_algorithms::chunks::extract_chunked;
 use isolab_algorithms::fields::Complement;
-use isolab_algorithms::{
-    extractors, fields, ExtractError, Extraction, Field, FieldError, Grid, Lattice, LatticeError, OptionError, Options,
-    SampleError, Samples,
-};
+use isolab_algorithms::{extractors, fields, Extraction, Field, Grid, Lattice, Options, Samples};
 use isolab_metrics::{volume_metrics, MeshMetrics};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -21,6 +18,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 mod report;
+
+pub use crate::error::RunError;
 
 pub use report::{ChunkReport, InputReport, RunReport, TimesMs};
 
@@ -135,73 +134,6 @@ impl RunConfig {
             options: Options::new(),
             chunk: None,
             materials: false,
-        }
-    }
-}
-
-/// Everything that can go wrong in a run. [`RunError::exit_code`] maps it to the CLI's code.
-#[derive(Debug, thiserror::Error)]
-pub enum RunError {
-    /// No extractor has that name.
-    #[error("unknown algorithm '{name}'; valid algorithms: {valid}")]
-    UnknownAlgorithm {
-        /// Name given.
-        name: String,
-        /// Valid names.
-        valid: String,
-    },
-    /// An algorithm option is unknown or out of range.
-    #[error(transparent)]
-    Option(#[from] OptionError),
-    /// No post-process has that name.
-    #[error("unknown post-process '{name}'; valid post-processes: {valid}")]
-    UnknownPost {
-        /// Name given.
-        name: String,
-        /// Valid names.
-        valid: String,
-    },
-    /// Field problems (unknown name, bad mesh).
-    #[error(transparent)]
-    Field(#[from] FieldError),
-    /// File problems.
-    #[error(transparent)]
-    Io(#[from] IoError),
-    /// Impossible lattice.
-    #[error(transparent)]
-    Lattice(#[from] LatticeError),
-    /// Non-finite samples.
-    #[error(transparent)]
-    Samples(#[from] SampleError),
-    /// Extraction failed.
-    #[error(transparent)]
-    Extract(#[from] ExtractError),
-    /// The iso-value is NaN or infinite.
-    #[error("iso-value {0} is not finite")]
-    BadIso(f32),
-    /// Not enough memory for the lattice.
-    #[error("a {dims:?} {lattice} lattice needs about {need_mib} MiB, but only {available_mib} MiB of memory is available; lower --resolution")]
-    OutOfMemory {
-        /// Samples per axis.
-        dims: [usize; 3],
-        /// Lattice kind.
-        lattice: &'static str,
-        /// Estimated need.
-        need_mib: u64,
-        /// Available.
-        available_mib: u64,
-    },
-}
-
-impl RunError {
-    /// 2 for an unknown name (usage error), 1 otherwise.
-    pub fn exit_code(&self) -> i32 {
-        match self {
-            RunError::UnknownAlgorithm { .. }
-            | RunError::UnknownPost { .. }
-            | RunError::Option(_)
-            | RunError::Field(FieldError::Unknown { .. }) => 2,
-            _ => 1,
         }
     }
 }
@@ -560,7 +492,10 @@ mod tests {
         let bunny = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/spot.obj");
         assert_eq!(load_field(bunny, 0).unwrap().name(), "spot");
         assert_eq!(load_field("torus", 0).unwrap().name(), "torus");
-        assert!(matches!(load_field("no-such-field", 0), Err(RunError::Field(FieldError::Unknown { .. }))));
-        assert_eq!(RunError::Field(FieldError::Unknown { name: String::new(), valid: String::new() }).exit_code(), 2);
+        assert!(matches!(load_field("no-such-field", 0), Err(RunError::Field(isolab_algorithms::FieldError::Unknown { .. }))));
+        assert_eq!(
+            RunError::Field(isolab_algorithms::FieldError::Unknown { name: String::new(), valid: String::new() }).exit_code(),
+            2
+        );
     }
 }

@@ -1,0 +1,72 @@
+//! The one error type of a run, shared by the input loader and the pipeline (so neither imports
+//! the other for it), with the CLI's exit code.
+
+use crate::io::IoError;
+use isolab_algorithms::{ExtractError, FieldError, LatticeError, OptionError, SampleError};
+
+/// Everything that can go wrong in a run. [`RunError::exit_code`] maps it to the CLI's code.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// No extractor has that name.
+    #[error("unknown algorithm '{name}'; valid algorithms: {valid}")]
+    UnknownAlgorithm {
+        /// Name given.
+        name: String,
+        /// Valid names.
+        valid: String,
+    },
+    /// An algorithm option is unknown or out of range.
+    #[error(transparent)]
+    Option(#[from] OptionError),
+    /// No post-process has that name.
+    #[error("unknown post-process '{name}'; valid post-processes: {valid}")]
+    UnknownPost {
+        /// Name given.
+        name: String,
+        /// Valid names.
+        valid: String,
+    },
+    /// Field problems (unknown name, bad mesh).
+    #[error(transparent)]
+    Field(#[from] FieldError),
+    /// File problems.
+    #[error(transparent)]
+    Io(#[from] IoError),
+    /// Impossible lattice.
+    #[error(transparent)]
+    Lattice(#[from] LatticeError),
+    /// Non-finite samples.
+    #[error(transparent)]
+    Samples(#[from] SampleError),
+    /// Extraction failed.
+    #[error(transparent)]
+    Extract(#[from] ExtractError),
+    /// The iso-value is NaN or infinite.
+    #[error("iso-value {0} is not finite")]
+    BadIso(f32),
+    /// Not enough memory for the lattice.
+    #[error("a {dims:?} {lattice} lattice needs about {need_mib} MiB, but only {available_mib} MiB of memory is available; lower --resolution")]
+    OutOfMemory {
+        /// Samples per axis.
+        dims: [usize; 3],
+        /// Lattice kind.
+        lattice: &'static str,
+        /// Estimated need.
+        need_mib: u64,
+        /// Available.
+        available_mib: u64,
+    },
+}
+
+impl RunError {
+    /// 2 for an unknown name (usage error), 1 otherwise.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            RunError::UnknownAlgorithm { .. }
+            | RunError::UnknownPost { .. }
+            | RunError::Option(_)
+            | RunError::Field(FieldError::Unknown { .. }) => 2,
+            _ => 1,
+        }
+    }
+}

@@ -35,20 +35,13 @@ fn all_256_cube_patterns_give_closed_manifold_outward_meshes() {
 /// every face and the outside layer around the block, each group is one closed component.
 fn components_of_inside_corners(case: u8) -> u32 {
     use isolab_algorithms::tables::marching_cubes::EDGES;
-    let mut parent: Vec<u8> = (0..8).collect();
-    fn root(p: &mut [u8], mut a: u8) -> u8 {
-        while p[a as usize] != a {
-            a = p[a as usize];
-        }
-        a
-    }
+    let mut groups = petgraph::unionfind::UnionFind::<u8>::new(8);
     for &(a, b) in &EDGES {
         if case >> a & 1 == 1 && case >> b & 1 == 1 {
-            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
-            parent[ra as usize] = rb;
+            groups.union(a, b);
         }
     }
-    (0..8u8).filter(|&c| case >> c & 1 == 1 && root(&mut parent, c) == c).count() as u32
+    (0..8u8).filter(|&c| case >> c & 1 == 1 && groups.find(c) == c).count() as u32
 }
 
 proptest! {

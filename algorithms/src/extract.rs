@@ -195,6 +195,36 @@ pub struct ExtractorInfo {
     pub options: &'static [&'static str],
     /// Builds it; unknown or bad options are errors naming the option.
     pub make: fn(&crate::options::Options) -> Result<Box<dyn Extractor>, crate::options::OptionError>,
+    /// What it promises with its default options, as data: the registry-wide contract test
+    /// (`tests/tests/contract.rs`) checks every promise of every registered extractor.
+    pub guarantees: Guarantees,
+}
+
+/// What an extractor promises, for any finite samples none of which equals the iso-value
+/// exactly. A promise not made is not a defect: it is a property the extractor does not have
+/// (its module's **Non-guarantees** say why), and the report counts it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Guarantees {
+    /// It meshes cubic grids; otherwise it refuses them with [`ExtractError::UnsupportedLattice`].
+    pub cubic: bool,
+    /// It meshes BCC lattices; otherwise it refuses them.
+    pub bcc: bool,
+    /// Closed wherever the surface stays inside the lattice: every edge in exactly two triangles.
+    pub closed: bool,
+    /// Edge- and vertex-manifold, no unused vertex.
+    pub manifold: bool,
+    /// Consistently wound with normals toward increasing `f` (a closed surface has positive
+    /// volume).
+    pub outward: bool,
+    /// No two triangles meet except at the vertices and edges they share.
+    pub intersection_free: bool,
+}
+
+impl Guarantees {
+    /// Lattices it meshes, as the CLI spells them.
+    pub fn lattices(&self) -> Vec<&'static str> {
+        [("cubic", self.cubic), ("bcc", self.bcc)].into_iter().filter(|(_, ok)| *ok).map(|(name, _)| name).collect()
+    }
 }
 
 /// How to build a post-process: [`ExtractorInfo`]'s counterpart (`pub const INFO` in its file,

@@ -71,22 +71,48 @@ pub enum Orientation {
     Consistent,
 }
 
-/// The invariant checker every extractor test ends with: closed, edge- and vertex-manifold,
-/// consistently oriented, outward, no unused vertex, every index in range, and an even Euler
-/// characteristic no larger than twice the components (a union of closed orientable surfaces).
-/// Panics with the topology report on failure; returns it otherwise.
+/// The invariant checker every extractor test ends with: not empty, closed, edge- and
+/// vertex-manifold, consistently oriented, outward, no unused vertex, every index in range, and
+/// an even Euler characteristic no larger than twice the components (a union of closed
+/// orientable surfaces). Panics with the topology report on failure; returns it otherwise. An
+/// empty mesh fails (an extractor returning nothing would pass every other check): where empty
+/// is right, use [`assert_closed_manifold_or_empty`].
 pub fn assert_closed_manifold(mesh: &TriMesh, what: &str) -> Topology {
     assert_closed_manifold_with(mesh, what, Orientation::Outward)
+}
+
+/// [`assert_closed_manifold`], accepting an empty mesh (for inputs whose field may keep its sign).
+pub fn assert_closed_manifold_or_empty(mesh: &TriMesh, what: &str) -> Topology {
+    if mesh.triangles.is_empty() {
+        assert!(mesh.positions.is_empty(), "{what}: no triangles but {} vertices", mesh.positions.len());
+        return topology(mesh);
+    }
+    assert_closed_manifold(mesh, what)
+}
+
+/// Whether the samples change sign (some below the iso-value, some above).
+pub fn changes_sign(samples: &Samples) -> bool {
+    let iso = samples.iso();
+    samples.values().iter().any(|&v| v < iso) && samples.values().iter().any(|&v| v > iso)
+}
+
+/// For an extraction of `samples`: [`assert_closed_manifold`] where the samples change sign, an
+/// empty mesh where they do not.
+pub fn assert_closed_manifold_for(samples: &Samples, mesh: &TriMesh, what: &str) -> Topology {
+    if changes_sign(samples) {
+        assert_closed_manifold(mesh, what)
+    } else {
+        assert!(mesh.triangles.is_empty() && mesh.positions.is_empty(), "{what}: the field keeps its sign, yet a mesh");
+        topology(mesh)
+    }
 }
 
 /// [`assert_closed_manifold`] with a choice of orientation demand.
 pub fn assert_closed_manifold_with(mesh: &TriMesh, what: &str, orientation: Orientation) -> Topology {
     let n = mesh.positions.len() as u32;
     assert!(mesh.triangles.iter().flatten().all(|&i| i < n), "{what}: index out of range");
+    assert!(!mesh.triangles.is_empty(), "{what}: empty mesh");
     let t = topology(mesh);
-    if mesh.triangles.is_empty() {
-        return t;
-    }
     let outward_ok = orientation == Orientation::Consistent || t.outward;
     assert!(t.is_watertight_manifold() && outward_ok && t.unused_vertices == 0, "{what}: {t:#?}");
     assert!(t.euler % 2 == 0 && t.euler <= 2 * t.components as i64, "{what}: euler {} with {} components", t.euler, t.components);

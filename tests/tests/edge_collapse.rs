@@ -5,7 +5,7 @@ use isolab_algorithms::extract::{Extraction, PostProcess};
 use isolab_algorithms::extractors::{build_post, MarchingTetrahedra};
 use isolab_algorithms::post::EdgeCollapse;
 use isolab_algorithms::{Grid, Lattice, Samples, TetMesh};
-use isolab_tests::{assert_closed_manifold, extract, lattice_samples};
+use isolab_tests::{assert_closed_manifold, assert_closed_manifold_for, extract, lattice_samples};
 use proptest::prelude::*;
 
 fn sampled(name: &str, bcc: bool, dims: [usize; 3]) -> Samples {
@@ -116,8 +116,8 @@ proptest! {
             threshold - blobs.iter().map(|&(bx, by, bz, r)| (-(p - glam::Vec3::new(bx, by, bz)).length_squared() / (r * r)).exp()).sum::<f32>()
         });
         let (mt, out) = collapsed(&EdgeCollapse::safe(collapse), &s);
-        let before = assert_closed_manifold(&mt.surface, "mt");
-        let after = assert_closed_manifold(&out.surface, "safe collapse");
+        let before = assert_closed_manifold_for(&s, &mt.surface, "mt");
+        let after = assert_closed_manifold_for(&s, &out.surface, "safe collapse");
         prop_assert_eq!(before.euler, after.euler);
     }
 }

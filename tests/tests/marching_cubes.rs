@@ -5,7 +5,7 @@ use isolab_algorithms::extractors::marching_cubes::{MarchingCubes, McOptions};
 use isolab_algorithms::slabs::Parallelism;
 use isolab_algorithms::{fields, Grid, Samples};
 use isolab_experiments::run::{run, RunConfig};
-use isolab_tests::{assert_closed_manifold, blob_field, extract, grid_samples};
+use isolab_tests::{assert_closed_manifold, assert_closed_manifold_for, blob_field, extract, grid_samples};
 use proptest::prelude::*;
 
 fn serial() -> MarchingCubes {
@@ -22,7 +22,7 @@ fn all_256_cube_patterns_give_closed_manifold_outward_meshes() {
         for (variant, magnitude) in [(0, 1.0f32), (1, 0.1), (2, 7.0)] {
             let s = embedded_case(case, |c| if variant == 0 { 1.0 } else { magnitude * (1.0 + c as f32 * 0.13) });
             let out = extract(&serial(), &s);
-            let t = assert_closed_manifold(&out.surface, &format!("case {case} variant {variant}"));
+            let t = assert_closed_manifold_for(&s, &out.surface, &format!("case {case} variant {variant}"));
             assert_eq!(out.surface.triangles.is_empty(), case == 0, "case {case}");
             if case != 0 {
                 assert_eq!(t.components as u32, components_of_inside_corners(case), "case {case}");
@@ -55,7 +55,7 @@ proptest! {
     ) {
         let s = blob_field(n, &blobs, threshold);
         let out = extract(&serial(), &s);
-        assert_closed_manifold(&out.surface, "blob field");
+        assert_closed_manifold_for(&s, &out.surface, "blob field");
     }
 
     #[test]
@@ -66,7 +66,7 @@ proptest! {
             if x == 0 || y == 0 || z == 0 || x == 7 || y == 7 || z == 7 { 1.0 } else { values[(x - 1) + 6 * ((y - 1) + 6 * (z - 1))] }
         });
         let out = extract(&serial(), &s);
-        assert_closed_manifold(&out.surface, "white noise");
+        assert_closed_manifold_for(&s, &out.surface, "white noise");
     }
 }
 

@@ -6,7 +6,7 @@ use isolab_algorithms::extractors::regularised_marching_tetrahedra::{Regularised
 use isolab_algorithms::extractors::MarchingTetrahedra;
 use isolab_algorithms::tetrahedral::{topology, TetKind, DIRECTIONS};
 use isolab_algorithms::{mesh::manifold_defects, Extractor, Grid, Lattice, Samples};
-use isolab_tests::{assert_closed_manifold, extract, lattice_samples};
+use isolab_tests::{assert_closed_manifold, assert_closed_manifold_for, extract, lattice_samples};
 use proptest::prelude::*;
 
 fn rmt() -> RegularisedMarchingTetrahedra {
@@ -76,8 +76,8 @@ proptest! {
         threshold in 0.2f32..0.9,
     ) {
         let s = blob_lattice(bcc, n, &blobs, threshold);
-        assert_closed_manifold(&extract(&MarchingTetrahedra, &s).surface, "mt blobs");
-        assert_closed_manifold(&extract(&rmt(), &s).surface, "rmt blobs");
+        assert_closed_manifold_for(&s, &extract(&MarchingTetrahedra, &s).surface, "mt blobs");
+        assert_closed_manifold_for(&s, &extract(&rmt(), &s).surface, "rmt blobs");
     }
 
     #[test]
@@ -88,8 +88,8 @@ proptest! {
             k += 1;
             values[k % values.len()]
         });
-        assert_closed_manifold(&extract(&MarchingTetrahedra, &s).surface, "mt white noise");
-        assert_closed_manifold(&extract(&rmt(), &s).surface, "rmt white noise");
+        assert_closed_manifold_for(&s, &extract(&MarchingTetrahedra, &s).surface, "mt white noise");
+        assert_closed_manifold_for(&s, &extract(&rmt(), &s).surface, "rmt white noise");
     }
 }
 

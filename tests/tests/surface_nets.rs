@@ -3,7 +3,9 @@
 
 use isolab_algorithms::extractors::surface_nets::{Smoothing, SnOptions, SurfaceNets};
 use isolab_algorithms::{fields, Grid, Samples};
-use isolab_tests::{assert_closed_manifold, assert_closed_manifold_with, blob_field, extract, Orientation};
+use isolab_tests::{
+    assert_closed_manifold, assert_closed_manifold_for, assert_closed_manifold_with, blob_field, extract, Orientation,
+};
 use proptest::prelude::*;
 
 const ALL: [Smoothing; 4] = [Smoothing::None, Smoothing::Elastic, Smoothing::Spring, Smoothing::Implicit];
@@ -56,7 +58,7 @@ fn all_two_cell_patterns_give_closed_manifold_nets() {
         });
         for smoothing in [Smoothing::None, Smoothing::Elastic] {
             let out = extract(&nets(smoothing), &s);
-            assert_closed_manifold(&out.surface, &format!("two-cell pattern {pattern:#x} {smoothing:?}"));
+            assert_closed_manifold_for(&s, &out.surface, &format!("two-cell pattern {pattern:#x} {smoothing:?}"));
         }
     }
 }
@@ -93,7 +95,7 @@ proptest! {
     ) {
         let s = blob_field(n, &blobs, threshold);
         let out = extract(&nets(Smoothing::Elastic), &s);
-        assert_closed_manifold(&out.surface, "blob field");
+        assert_closed_manifold_for(&s, &out.surface, "blob field");
     }
 
     #[test]
@@ -102,7 +104,7 @@ proptest! {
             if x == 0 || y == 0 || z == 0 || x == 7 || y == 7 || z == 7 { 1.0 } else { values[(x - 1) + 6 * ((y - 1) + 6 * (z - 1))] }
         });
         let out = extract(&nets(Smoothing::None), &s);
-        assert_closed_manifold(&out.surface, "white noise");
+        assert_closed_manifold_for(&s, &out.surface, "white noise");
     }
 }
 

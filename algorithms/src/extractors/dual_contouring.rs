@@ -40,7 +40,7 @@
 //! assert!(nearest < 0.05 * samples.grid().spacing);
 //! ```
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees};
 use crate::extractors::dual::{DualEngine, DualOptions, Placement, Smoothing};
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
@@ -70,8 +70,13 @@ impl Default for DcOptions {
 }
 
 /// Ju et al. 2002: the dual structure with vertices at the minimum of the quadric error.
-pub const INFO: ExtractorInfo =
-    ExtractorInfo { name: "dual-contouring", description: DESCRIPTION, options: OPTION_NAMES, make: from_options };
+pub const INFO: ExtractorInfo = ExtractorInfo {
+    name: "dual-contouring",
+    description: DESCRIPTION,
+    options: OPTION_NAMES,
+    make: from_options,
+    guarantees: Guarantees { cubic: true, bcc: false, closed: true, manifold: true, outward: true, intersection_free: false },
+};
 
 /// Builds dual contouring from named options.
 pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError> {

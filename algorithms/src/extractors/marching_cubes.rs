@@ -53,7 +53,7 @@
 //! assert!(out.surface.positions.iter().all(|p| (p.length() - 0.4).abs() < 2e-3));
 //! ```
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees};
 use crate::geometry::trilinear_gradient;
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
@@ -137,8 +137,13 @@ pub const DESCRIPTION: &str = "Lorensen & Cline 1987: 256-case cube table, one v
 pub const OPTION_NAMES: &[&str] = &["normals", "parallelism", "on-iso", "faces"];
 
 /// Lorensen & Cline 1987: the 256-case cube table, one vertex per crossing edge.
-pub const INFO: ExtractorInfo =
-    ExtractorInfo { name: "marching-cubes", description: DESCRIPTION, options: OPTION_NAMES, make: from_options };
+pub const INFO: ExtractorInfo = ExtractorInfo {
+    name: "marching-cubes",
+    description: DESCRIPTION,
+    options: OPTION_NAMES,
+    make: from_options,
+    guarantees: Guarantees { cubic: true, bcc: false, closed: true, manifold: true, outward: true, intersection_free: false },
+};
 
 /// Nielson & Hamann 1991: marching cubes whose ambiguous faces follow the trilinear interpolant.
 pub const DECIDER_INFO: ExtractorInfo = ExtractorInfo {
@@ -146,6 +151,7 @@ pub const DECIDER_INFO: ExtractorInfo = ExtractorInfo {
     description: DECIDER_DESCRIPTION,
     options: OPTION_NAMES,
     make: decider_from_options,
+    guarantees: Guarantees { cubic: true, bcc: false, closed: true, manifold: true, outward: true, intersection_free: false },
 };
 
 /// Builds marching cubes from named options.

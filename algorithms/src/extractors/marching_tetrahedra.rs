@@ -39,7 +39,7 @@
 //! assert_eq!(m.positions.len() as i64 - m.triangles.len() as i64 / 2, 0);
 //! ```
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees};
 use crate::lattice::Lattice;
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
@@ -53,8 +53,13 @@ pub const DESCRIPTION: &str =
 pub const OPTION_NAMES: &[&str] = &[];
 
 /// Payne & Toga 1990: the 16-case tetrahedron table on a BCC lattice or Kuhn-split cubes.
-pub const INFO: ExtractorInfo =
-    ExtractorInfo { name: "marching-tetrahedra", description: DESCRIPTION, options: OPTION_NAMES, make: from_options };
+pub const INFO: ExtractorInfo = ExtractorInfo {
+    name: "marching-tetrahedra",
+    description: DESCRIPTION,
+    options: OPTION_NAMES,
+    make: from_options,
+    guarantees: Guarantees { cubic: true, bcc: true, closed: true, manifold: true, outward: true, intersection_free: true },
+};
 
 /// Builds it from options.
 pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError> {

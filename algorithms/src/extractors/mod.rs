@@ -21,7 +21,7 @@ pub use marching_tetrahedra::MarchingTetrahedra;
 pub use regularised_marching_tetrahedra::RegularisedMarchingTetrahedra;
 pub use surface_nets::SurfaceNets;
 
-pub use crate::extract::{ExtractorInfo, PostInfo};
+pub use crate::extract::{ExtractorInfo, Guarantees, PostInfo};
 
 use crate::extract::{Extractor, PostProcess};
 use crate::options::{OptionError, Options};

@@ -68,7 +68,7 @@
 //! assert!(manifold_defects(&rmt.surface).is_empty());
 //! ```
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees};
 use crate::field::Field;
 use crate::lattice::Lattice;
 use crate::mesh::manifold_defects;
@@ -133,6 +133,7 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
     description: DESCRIPTION,
     options: OPTION_NAMES,
     make: from_options,
+    guarantees: Guarantees { cubic: true, bcc: true, closed: true, manifold: true, outward: true, intersection_free: false },
 };
 
 /// Builds it from options.

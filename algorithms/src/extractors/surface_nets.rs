@@ -66,7 +66,7 @@
 //! assert!(out.surface.positions.iter().all(|p| (p.length() - 0.4).abs() < 1.8 * h));
 //! ```
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees};
 use crate::extractors::dual::{DualEngine, Placement};
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
@@ -83,8 +83,13 @@ pub const OPTION_NAMES: &[&str] =
     &["smoothing", "iterations", "strength", "decay", "stiffness", "damping", "time-step", "parallelism"];
 
 /// Gibson 1998: one vertex per surface cell, quads across crossing edges, constrained smoothing.
-pub const INFO: ExtractorInfo =
-    ExtractorInfo { name: "surface-nets", description: DESCRIPTION, options: OPTION_NAMES, make: from_options };
+pub const INFO: ExtractorInfo = ExtractorInfo {
+    name: "surface-nets",
+    description: DESCRIPTION,
+    options: OPTION_NAMES,
+    make: from_options,
+    guarantees: Guarantees { cubic: true, bcc: false, closed: true, manifold: true, outward: true, intersection_free: false },
+};
 
 /// Builds surface nets from named options.
 pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError> {

@@ -141,6 +141,25 @@ fn parse_dims(text: &str) -> Result<[usize; 3], String> {
     <[usize; 3]>::try_from(dims).map_err(|_| format!("'{text}': expected three numbers, like 75,40,56"))
 }
 
+/// One line: the lattices an extractor meshes and what it promises (checked by the contract test).
+fn guarantees(g: &isolab_algorithms::Guarantees) -> String {
+    let promised: Vec<&str> = [
+        ("closed", g.closed),
+        ("manifold", g.manifold),
+        ("outward", g.outward),
+        ("free of self-intersections", g.intersection_free),
+    ]
+    .into_iter()
+    .filter(|(_, on)| *on)
+    .map(|(name, _)| name)
+    .collect();
+    format!(
+        "lattices: {}; guarantees: {}",
+        g.lattices().join(", "),
+        if promised.is_empty() { "none".into() } else { promised.join(", ") }
+    )
+}
+
 fn list() {
     println!("algorithms (options: --set NAME=VALUE):");
     for e in extractors::INFOS {
@@ -148,6 +167,7 @@ fn list() {
         if !e.options.is_empty() {
             println!("  {:<34} options: {}", "", e.options.join(", "));
         }
+        println!("  {:<34} {}", "", guarantees(&e.guarantees));
     }
     println!("post-processes:");
     let posts = extractors::post_processes();

@@ -79,7 +79,7 @@
 //! ```
 
 use crate::bvh::TriangleBvh;
-use crate::extract::{ExtractError, Extraction, Extractor, ExtractorInfo};
+use crate::extract::{ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees};
 use crate::geometry::{circumcentre, dihedral_angles, Aabb};
 use crate::mesh::{manifold_defects, TetMesh, TriMesh};
 use crate::options::{OptionError, Options};
@@ -188,8 +188,13 @@ pub struct BccSculpt {
 }
 
 /// Stuart et al. 2013: BCC lattice sculpted to the surface, snowflakes, ODT relaxation (volume).
-pub const INFO: ExtractorInfo =
-    ExtractorInfo { name: "bcc-sculpt", description: DESCRIPTION, options: OPTION_NAMES, make: from_options };
+pub const INFO: ExtractorInfo = ExtractorInfo {
+    name: "bcc-sculpt",
+    description: DESCRIPTION,
+    options: OPTION_NAMES,
+    make: from_options,
+    guarantees: Guarantees { cubic: true, bcc: true, closed: true, manifold: true, outward: true, intersection_free: false },
+};
 
 /// Builds `bcc-sculpt` from named options.
 pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError> {
@@ -316,6 +321,11 @@ impl Extractor for BccSculpt {
         };
         let name = samples.field().map_or("samples".to_string(), |f| f.name().to_string());
         out.stats.warnings = input_warnings(&name, surface);
+        if surface.is_empty() {
+            // Nothing to enclose: an empty volume, as every extractor gives where the field keeps its sign.
+            out.finish_counts(0);
+            return Ok(());
+        }
         let sculpted = sculpt_surface(surface, &name, &self.options)?;
         let r = &sculpted.report;
         out.stats.times.vertex = r.times[0];
@@ -338,11 +348,16 @@ impl Extractor for BccSculpt {
     }
 }
 
-/// The marching cubes surface of samples that carry no triangle mesh.
+/// The surface of samples that carry no triangle mesh: marching cubes on a cubic grid, marching
+/// tetrahedra on a BCC lattice.
 fn surface_of_samples(samples: &Samples) -> Result<TriangleBvh, ExtractError> {
-    let mc = crate::extractors::MarchingCubes::default();
+    // Marching cubes on a cubic grid; marching tetrahedra on a BCC lattice (which marching
+    // cubes refuses).
     let mut e = Extraction::default();
-    mc.extract(samples, &mut e)?;
+    match samples.lattice() {
+        crate::lattice::Lattice::Cubic(_) => crate::extractors::MarchingCubes::default().extract(samples, &mut e)?,
+        crate::lattice::Lattice::Bcc(_) => crate::extractors::MarchingTetrahedra.extract(samples, &mut e)?,
+    }
     let p = &e.surface.positions;
     Ok(TriangleBvh::new(e.surface.triangles.iter().map(|t| t.map(|i| p[i as usize])).collect()))
 }

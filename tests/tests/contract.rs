@@ -1,0 +1,211 @@
+//! The contract every registered extractor keeps, checked for every entry of
+//! `extractors::INFOS`, so an extractor is tested the day it is registered. Its promises are
+//! data (`ExtractorInfo::guarantees`); what it does not promise is not checked here.
+//!
+//! On smooth blobs and white-noise sign fields, on both lattices (random ones from proptest):
+//! - a lattice it does not declare is refused with `ExtractError::UnsupportedLattice`;
+//! - where the field changes sign inside the lattice the surface is not empty, and where it does
+//!   not the surface is empty (and no error);
+//! - closed, manifold, outward and free of self-intersections wherever it declares so;
+//! - the stats agree with the output (`finish_counts` called: vertex, triangle and tetrahedron
+//!   counts), the sampling time is copied, the stage times are filled, normals are one per
+//!   vertex or none, every index is in range;
+//! - the same output on one thread and on two;
+//! - re-extraction into a used `Extraction` equals extraction into a fresh one.
+//!
+//! `ISOLAB_CONTRACT_CASES=N` runs N random cases per property instead of 12 (a soak run).
+
+use glam::Vec3;
+use isolab_algorithms::extractors::{self, ExtractorInfo};
+use isolab_algorithms::{ExtractError, Extraction, Extractor, Options, Samples};
+use isolab_metrics::{self_intersections, topology};
+use isolab_tests::lattice_samples;
+use proptest::prelude::*;
+
+/// Samples from `value` at world points (doubled coordinates halved), outside on the border:
+/// the boundary samples and, on a BCC lattice, the centres of the boundary cells (the BCC
+/// tetrahedra do not reach past them, so the surface stays inside the tetrahedralised region).
+fn field_samples(bcc: bool, n: usize, value: impl Fn(Vec3) -> f32) -> Samples {
+    let last = 2 * (n as i32 - 1);
+    lattice_samples(bcc, [n, n, n], |d| {
+        if d.iter().any(|&c| c <= 1 || c >= last - 1) {
+            return 1.0;
+        }
+        value(Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) / last as f32)
+    })
+}
+
+/// Gaussian blobs `(centre, radius)` in the unit cube: inside where they are dense.
+fn blobs(bcc: bool, n: usize, blobs: &[(Vec3, f32)], threshold: f32) -> Samples {
+    field_samples(bcc, n, |p| threshold - blobs.iter().map(|&(c, r)| (-(p - c).length_squared() / (r * r)).exp()).sum::<f32>())
+}
+
+/// A white-noise sign field from a seed (values in ±[0.1, 1], none at the iso-value).
+fn noise(bcc: bool, n: usize, seed: u64) -> Samples {
+    let mut random = isolab_algorithms::random::Random::new(seed);
+    let mut values = Vec::new();
+    let samples = field_samples(bcc, n, |_| 0.0);
+    for _ in 0..samples.values().len() {
+        let v = 0.1 + 0.9 * random.unit() as f32;
+        values.push(if random.unit() < 0.45 { -v } else { v });
+    }
+    // Keep the border outside.
+    let border = field_samples(bcc, n, |_| -1.0);
+    for (v, b) in values.iter_mut().zip(border.values()) {
+        if *b > 0.0 {
+            *v = 1.0;
+        }
+    }
+    Samples::from_values(*samples.lattice(), values, 0.0).expect("finite values")
+}
+
+/// Random cases per property: 12, or `ISOLAB_CONTRACT_CASES` for a soak run.
+fn soak_cases() -> u32 {
+    std::env::var("ISOLAB_CONTRACT_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(12)
+}
+
+fn build(info: &ExtractorInfo) -> Box<dyn Extractor> {
+    (info.make)(&Options::new()).unwrap_or_else(|e| panic!("{}: default options fail: {e}", info.name))
+}
+
+fn supports(info: &ExtractorInfo, samples: &Samples) -> bool {
+    match samples.lattice() {
+        isolab_algorithms::Lattice::Cubic(_) => info.guarantees.cubic,
+        isolab_algorithms::Lattice::Bcc(_) => info.guarantees.bcc,
+    }
+}
+
+/// Extraction on a rayon pool of `threads`.
+fn extract_on(threads: usize, e: &dyn Extractor, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
+    pool.install(|| e.extract(samples, out))
+}
+
+/// The contract on one input, `what` naming it in failures. `crosses`: whether the field
+/// changes sign inside the lattice. `other`: a different input, extracted first into the buffer
+/// the re-extraction check reuses.
+fn check(info: &ExtractorInfo, samples: &Samples, crosses: bool, other: &Samples, what: &str) {
+    let e = build(info);
+    let what = format!("{} on {what} ({})", info.name, samples.lattice().kind());
+    let mut out = Extraction::default();
+    let result = extract_on(2, e.as_ref(), samples, &mut out);
+    if !supports(info, samples) {
+        assert!(
+            matches!(result, Err(ExtractError::UnsupportedLattice { .. })),
+            "{what}: must refuse the lattice, got {result:?}"
+        );
+        return;
+    }
+    result.unwrap_or_else(|err| panic!("{what}: {err}"));
+    let mesh = &out.surface;
+    assert_eq!(
+        mesh.triangles.is_empty(),
+        !crosses,
+        "{what}: {} triangles where the field {} sign",
+        mesh.triangles.len(),
+        if crosses { "changes" } else { "keeps its" }
+    );
+    let n = mesh.positions.len() as u32;
+    assert!(mesh.triangles.iter().flatten().all(|&i| i < n), "{what}: index out of range");
+    assert!(
+        mesh.normals.is_empty() || mesh.normals.len() == mesh.positions.len(),
+        "{what}: {} normals for {} vertices",
+        mesh.normals.len(),
+        n
+    );
+    // Stats agree with the output.
+    let s = &out.stats;
+    assert_eq!((s.vertices, s.triangles), (mesh.positions.len(), mesh.triangles.len()), "{what}: stats counts (finish_counts?)");
+    assert_eq!(s.tetrahedra, out.volume.tetrahedra.len(), "{what}: stats tetrahedra");
+    assert_eq!(s.times.sampling, samples.sampling_time(), "{what}: sampling time not copied");
+    if crosses {
+        assert!(s.times.extraction() > std::time::Duration::ZERO, "{what}: no stage time filled");
+    }
+    // Declared guarantees.
+    let g = info.guarantees;
+    if crosses {
+        let t = topology(mesh);
+        if g.closed {
+            assert!(t.closed && t.boundary_edges == 0, "{what}: declared closed: {t:#?}");
+        }
+        if g.manifold {
+            assert!(t.edge_manifold && t.vertex_manifold && t.unused_vertices == 0, "{what}: declared manifold: {t:#?}");
+        }
+        if g.outward {
+            assert!(t.oriented && t.outward, "{what}: declared outward: {t:#?}");
+        }
+        if g.intersection_free {
+            let x = self_intersections(mesh);
+            assert_eq!(x.count, 0, "{what}: declared free of self-intersections: {:?}", x.pairs);
+        }
+    }
+    // One thread and two give the same output.
+    let mut serial = Extraction::default();
+    extract_on(1, e.as_ref(), samples, &mut serial).unwrap_or_else(|err| panic!("{what}: {err}"));
+    assert!(serial.surface == out.surface && serial.volume == out.volume, "{what}: one thread and two differ");
+    // Re-extraction into a used buffer equals extraction into a fresh one.
+    let mut used = Extraction::default();
+    let _ = extract_on(2, e.as_ref(), other, &mut used);
+    extract_on(2, e.as_ref(), samples, &mut used).unwrap_or_else(|err| panic!("{what}: {err}"));
+    assert!(used.surface == out.surface && used.volume == out.volume, "{what}: a used buffer gives another output");
+    assert_eq!(
+        (used.stats.vertices, used.stats.triangles, used.stats.tetrahedra, &used.stats.warnings),
+        (s.vertices, s.triangles, s.tetrahedra, &s.warnings),
+        "{what}: a used buffer gives other stats"
+    );
+}
+
+fn every_extractor(samples: &Samples, crosses: bool, other: &Samples, what: &str) {
+    assert!(!extractors::INFOS.is_empty());
+    for info in extractors::INFOS {
+        check(info, samples, crosses, other, what);
+    }
+}
+
+#[test]
+fn fixed_fields_on_both_lattices() {
+    for bcc in [false, true] {
+        let n = if bcc { 10 } else { 14 };
+        let sphere = blobs(bcc, n, &[(Vec3::splat(0.5), 0.3)], 0.5);
+        let two = blobs(bcc, n, &[(Vec3::new(0.3, 0.4, 0.5), 0.15), (Vec3::new(0.7, 0.6, 0.5), 0.2)], 0.5);
+        let outside = field_samples(bcc, n, |_| 1.0);
+        let inside_core = field_samples(bcc, n, |_| -1.0);
+        every_extractor(&sphere, true, &two, "one blob");
+        every_extractor(&two, true, &sphere, "two blobs");
+        every_extractor(&outside, false, &sphere, "no inside");
+        // Inside everywhere but the border: one closed surface along the border.
+        every_extractor(&inside_core, true, &outside, "inside but the border");
+        every_extractor(&noise(bcc, 6, 7), true, &sphere, "white noise 6³, seed 7");
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: soak_cases(), failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_blob_fields(
+        bcc in any::<bool>(),
+        n in 7usize..13,
+        centres in prop::collection::vec((0.2f32..0.8, 0.2f32..0.8, 0.2f32..0.8, 0.08f32..0.3), 1..5),
+        threshold in 0.3f32..0.8,
+    ) {
+        let list: Vec<(Vec3, f32)> = centres.iter().map(|&(x, y, z, r)| (Vec3::new(x, y, z), r)).collect();
+        let samples = blobs(bcc, n, &list, threshold);
+        let crosses = samples.values().iter().any(|&v| v < 0.0);
+        let other = blobs(bcc, n, &[(Vec3::splat(0.5), 0.3)], 0.5);
+        every_extractor(&samples, crosses, &other, &format!("blobs {list:?} at {threshold}"));
+    }
+
+    /// White noise: surface extractors on up to 9³, volume extractors on 5³ (bcc-sculpt's cover
+    /// search grows with the number of components: a white-noise 9³ takes it seconds).
+    #[test]
+    fn random_white_noise(bcc in any::<bool>(), n in 5usize..10, seed in any::<u64>()) {
+        for info in extractors::INFOS {
+            let n = if build(info).produces_volume() { 5 } else { n };
+            let samples = noise(bcc, n, seed);
+            let crosses = samples.values().iter().any(|&v| v < 0.0);
+            let other = blobs(bcc, n, &[(Vec3::splat(0.5), 0.3)], 0.5);
+            check(info, &samples, crosses, &other, &format!("white noise {n}³, seed {seed}"));
+        }
+    }
+}

@@ -136,8 +136,10 @@ fn parse_option(text: &str) -> Result<(String, String), String> {
 
 fn parse_dims(text: &str) -> Result<[usize; 3], String> {
     let parts: Vec<&str> = text.split([',', 'x']).collect();
-    let dims: Vec<usize> =
-        parts.iter().map(|p| p.trim().parse::<usize>()).collect::<Result<_, _>>().map_err(|e| format!("'{text}': {e}"))?;
+    let dims: Vec<usize> = parts
+        .iter()
+        .map(|p| p.trim().parse::<usize>().map_err(|_| format!("'{text}': '{}' is not a whole number of samples", p.trim())))
+        .collect::<Result<_, _>>()?;
     <[usize; 3]>::try_from(dims).map_err(|_| format!("'{text}': expected three numbers, like 75,40,56"))
 }
 
@@ -274,6 +276,17 @@ fn render(
 ) -> Result<(), (i32, String)> {
     use isolab_experiments::figures::render::{self, RenderOptions, Shading};
     let mesh = io::read_mesh(file).map_err(|e| (2, e.to_string()))?;
+    let bad = mesh.positions.iter().filter(|p| !p.is_finite()).count();
+    if bad > 0 {
+        return Err((
+            1,
+            format!(
+                "'{}': {bad} {} not finite (NaN or infinite); cannot frame the picture",
+                file.display(),
+                if bad == 1 { "vertex is" } else { "vertices are" }
+            ),
+        ));
+    }
     let opts = RenderOptions {
         width: size,
         height: size,

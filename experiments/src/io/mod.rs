@@ -177,7 +177,18 @@ pub fn read_mesh_with(path: &Path, coordinates: Coordinates) -> Result<TriMesh, 
 /// Parses mesh bytes of any format we read; glTF buffers must be in the file (GLB or data URIs).
 pub fn parse_mesh(bytes: &[u8], path: &Path, coordinates: Coordinates) -> Result<TriMesh, IoError> {
     match MeshFormat::detect(bytes, path) {
-        MeshFormat::Obj => parse_obj(&String::from_utf8_lossy(bytes), path, coordinates),
+        MeshFormat::Obj => {
+            // Text with stray non-UTF-8 bytes (a Latin-1 comment) is still OBJ; a NUL byte is not.
+            if let Some(at) = bytes.iter().position(|&b| b == 0) {
+                let line = bytes[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+                return Err(IoError::Malformed {
+                    path: path.into(),
+                    line,
+                    reason: "binary data (a NUL byte): not an OBJ file, and not PLY, STL or glTF by its content".into(),
+                });
+            }
+            parse_obj(&String::from_utf8_lossy(bytes), path, coordinates)
+        }
         MeshFormat::Ply => parse_ply(bytes, path, coordinates),
         MeshFormat::Stl => stl::parse_stl(bytes, path, coordinates),
         MeshFormat::Glb | MeshFormat::Gltf => gltf::parse_gltf(bytes, path, &|uri: &str| Err(format!("external buffer '{uri}'"))),

@@ -18,7 +18,8 @@ fn stanford_bunny_with_holes_in_its_base_gives_one_closed_component() {
     // Vertices lie near the scanned surface (exact distance), except where the base is closed.
     let d = out.report.metrics.surface_distance.unwrap();
     let spacing = out.report.dims.iter().map(|&n| n as f64).fold(0.0, f64::max).recip() * 0.2;
-    assert!(d.mean < 0.05 * spacing * 100.0, "mean distance {}", d.mean);
+    // Measured: 6.1e-5 (about 2% of this spacing); the bound leaves half again for float error.
+    assert!(d.mean < 0.03 * spacing, "mean distance {} against spacing {spacing}", d.mean);
 }
 
 #[test]

@@ -138,3 +138,17 @@ fn every_seed_parses_unmutated() {
         parse(s.name, &s.bytes).unwrap_or_else(|e| panic!("{}: {e}", s.name));
     }
 }
+
+/// Inputs the fuzzers (`fuzz/`) found, one numbered file each in `tests/fuzz-regressions/`.
+#[test]
+fn fuzz_regression_0001_a_glb_with_a_non_finite_position_is_refused_as_a_field() {
+    // mesh_detect found it: glTF positions skipped the finiteness check OBJ, PLY and STL make, so
+    // a GLB with a NaN vertex was accepted as a field.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz-regressions/0001-mesh_detect-glb-nan-position.glb");
+    let bytes = std::fs::read(&path).unwrap();
+    let err = io::parse_mesh(&bytes, &path, Coordinates::Finite).expect_err("a non-finite vertex is refused");
+    assert!(err.to_string().contains("0001-mesh_detect") && err.to_string().contains("not finite"), "{err}");
+    // Measuring still reads it (and counts the vertex), as for the other formats.
+    let mesh = io::parse_mesh(&bytes, &path, Coordinates::Any).unwrap();
+    assert!(mesh.positions.iter().any(|p| !p.is_finite()));
+}

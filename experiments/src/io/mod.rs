@@ -169,9 +169,23 @@ pub fn read_mesh(path: &Path) -> Result<TriMesh, IoError> {
 pub fn read_mesh_with(path: &Path, coordinates: Coordinates) -> Result<TriMesh, IoError> {
     let bytes = read_bytes(path)?;
     match MeshFormat::detect(&bytes, path) {
-        MeshFormat::Gltf | MeshFormat::Glb => gltf::parse_gltf_beside(&bytes, path),
+        MeshFormat::Gltf | MeshFormat::Glb => finite_if_asked(gltf::parse_gltf_beside(&bytes, path)?, path, coordinates),
         _ => parse_mesh(&bytes, path, coordinates),
     }
+}
+
+/// glTF positions are binary floats with no line to name: under [`Coordinates::Finite`] a
+/// non-finite one is an error naming the vertex.
+fn finite_if_asked(mesh: TriMesh, path: &Path, coordinates: Coordinates) -> Result<TriMesh, IoError> {
+    if coordinates == Coordinates::Finite {
+        if let Some(v) = mesh.positions.iter().position(|p| !p.is_finite()) {
+            return Err(IoError::Invalid {
+                path: path.into(),
+                reason: format!("vertex {v} has a coordinate that is not finite ({:?})", mesh.positions[v].to_array()),
+            });
+        }
+    }
+    Ok(mesh)
 }
 
 /// Parses mesh bytes of any format we read; glTF buffers must be in the file (GLB or data URIs).
@@ -191,7 +205,11 @@ pub fn parse_mesh(bytes: &[u8], path: &Path, coordinates: Coordinates) -> Result
         }
         MeshFormat::Ply => parse_ply(bytes, path, coordinates),
         MeshFormat::Stl => stl::parse_stl(bytes, path, coordinates),
-        MeshFormat::Glb | MeshFormat::Gltf => gltf::parse_gltf(bytes, path, &|uri: &str| Err(format!("external buffer '{uri}'"))),
+        MeshFormat::Glb | MeshFormat::Gltf => finite_if_asked(
+            gltf::parse_gltf(bytes, path, &|uri: &str| Err(format!("external buffer '{uri}'")))?,
+            path,
+            coordinates,
+        ),
     }
 }
 

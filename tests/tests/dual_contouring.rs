@@ -2,7 +2,7 @@
 //! closed and manifold on the smooth closed fields, and a clear error without a field.
 
 use isolab_algorithms::{extractors, fields, Extraction, Grid, Samples};
-use isolab_tests::assert_closed_manifold;
+use isolab_tests::{assert_closed_manifold, assert_closed_manifold_for};
 
 fn worst_corner_distance(algorithm: &str, resolution: usize) -> f32 {
     let f = fields::builtin("csg", Default::default()).unwrap();
@@ -57,4 +57,58 @@ fn raw_values_without_a_field_take_normals_from_the_samples() {
     let (a, b) = (worst(&with_field), worst(&from_samples));
     println!("worst distance / h: field normals {a}, sample normals {b}");
     assert!(b < 0.1, "raw-sample dual contouring within 0.1 h of the sphere, got {b}");
+}
+
+/// A 4x4x4 grid whose inner cube carries pattern `case`, values varying per corner (so vertices
+/// are not all at cell centres and the QEF has something to solve).
+fn embedded_case(case: u8, variant: usize) -> Samples {
+    isolab_tests::embedded_case(case, |corner, inside| {
+        let m = [1.0, 0.1 + 0.13 * corner as f32, 7.0 - 0.5 * corner as f32][variant];
+        if inside {
+            -m
+        } else {
+            m
+        }
+    })
+}
+
+#[test]
+fn all_256_cube_patterns_give_closed_manifold_outward_meshes() {
+    let dc = extractors::by_name("dual-contouring").unwrap();
+    let mut intersecting = Vec::new();
+    for case in 0..=255u8 {
+        for variant in 0..3 {
+            let s = embedded_case(case, variant);
+            let mut out = Extraction::default();
+            dc.extract(&s, &mut out).unwrap();
+            assert_closed_manifold_for(&s, &out.surface, &format!("case {case} variant {variant}"));
+            let x = isolab_metrics::self_intersections(&out.surface).count;
+            if x > 0 {
+                intersecting.push((case, variant, x));
+            }
+        }
+    }
+    // Dual contouring does not promise freedom from self-intersections (its registry entry says
+    // so): vertices placed in the 27 cells around one cube pattern fold quads over each other on
+    // some patterns. The count is a bound, measured (so a change that adds folds fails here; the
+    // "Hardening" issue's fix is to bring it down).
+    let pairs: usize = intersecting.iter().map(|c| c.2).sum();
+    // Measured when this test was written: 85 of the 768 cases, 1,211 pairs.
+    assert!(intersecting.len() <= 85 && pairs <= 1211, "{} cases, {pairs} pairs: {intersecting:?}", intersecting.len());
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 200, failure_persistence: None, ..Default::default() })]
+
+    #[test]
+    fn random_smooth_fields_give_closed_manifold_outward_meshes(
+        n in 5usize..16,
+        blobs in proptest::collection::vec((0.1f32..0.9, 0.1f32..0.9, 0.1f32..0.9, 0.05f32..0.4), 1..6),
+        threshold in 0.2f32..0.9,
+    ) {
+        let s = isolab_tests::blob_field(n, &blobs, threshold);
+        let mut out = Extraction::default();
+        extractors::by_name("dual-contouring").unwrap().extract(&s, &mut out).unwrap();
+        assert_closed_manifold_for(&s, &out.surface, "blob field");
+    }
 }

@@ -152,3 +152,21 @@ fn fuzz_regression_0001_a_glb_with_a_non_finite_position_is_refused_as_a_field()
     let mesh = io::parse_mesh(&bytes, &path, Coordinates::Any).unwrap();
     assert!(mesh.positions.iter().any(|p| !p.is_finite()));
 }
+
+#[test]
+fn fuzz_regression_0002_a_short_gzip_stream_gets_no_more_memory_than_it_can_fill() {
+    // nifti found it: a 5 KB .nii.gz whose header claims about 4 GB of voxels made the reader
+    // reserve all of it before decompressing. The file is refused, and a claim of a terabyte
+    // from a few bytes ends with "decompresses to only", not with an allocation of a terabyte.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz-regressions/0002-nifti-gzip-header-claims-4gb.nii.gz");
+    let bytes = std::fs::read(&path).unwrap();
+    let none = |_: &str| -> Result<Vec<u8>, IoError> { Err(IoError::Invalid { path: "none".into(), reason: "none".into() }) };
+    let err = nifti::parse_nifti(&bytes, &path, VolumeOptions::default(), &none).expect_err("refused");
+    assert!(err.to_string().contains("0002-nifti"), "{err}");
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    std::io::Write::write_all(&mut gz, &[7u8; 100]).unwrap();
+    let small = gz.finish().unwrap();
+    let err = isolab_experiments::io::volume::inflate(&small, isolab_experiments::io::volume::Compression::Gzip, 1 << 40, &path)
+        .expect_err("a terabyte is not in 100 bytes");
+    assert!(err.to_string().contains("decompresses to only 100"), "{err}");
+}

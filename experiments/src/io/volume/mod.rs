@@ -201,8 +201,12 @@ pub enum Compression {
 /// truncated or corrupt stream (a bad checksum) is an error even when the data came out whole.
 /// Trailing data past `need` is read and dropped, up to a bound.
 pub fn inflate(bytes: &[u8], compression: Compression, need: usize, path: &Path) -> Result<Vec<u8>, IoError> {
+    // Deflate expands at most about 1032 times: a header claiming more than that from a short
+    // stream gets no more memory than its data can fill (the stream then ends early, an error),
+    // instead of a reservation of whatever the header says (a 5 KB fuzzed file asked for 4 GB).
+    let plausible = bytes.len().saturating_mul(1032).saturating_add(1 << 20);
     let mut out = Vec::new();
-    out.try_reserve_exact(need).map_err(|_| IoError::Invalid {
+    out.try_reserve_exact(need.min(plausible)).map_err(|_| IoError::Invalid {
         path: path.into(),
         reason: format!("the header asks for {need} bytes of data, more than this machine can hold"),
     })?;

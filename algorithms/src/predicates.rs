@@ -92,6 +92,73 @@ pub fn triangles_meet(a: &[Vec3; 3], b: &[Vec3; 3]) -> bool {
         || (0..3).any(|k| segment_meets_triangle(b[k], b[(k + 1) % 3], a))
 }
 
+/// Triangles `(s, a, b)` and `(s, c, d)` sharing only vertex `s`: do they meet elsewhere?
+fn meet_beyond_shared_vertex(s: Vec3, a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> bool {
+    let t1 = [s, a, b];
+    let t2 = [s, c, d];
+    if segment_meets_triangle(a, b, &t2) || segment_meets_triangle(c, d, &t1) {
+        return true;
+    }
+    // An edge from s lying in the other triangle's plane and pointing into its wedge at s.
+    let into_wedge = |x: Vec3, t: &[Vec3; 3], u: Vec3, v: Vec3| {
+        if o3(t[0], t[1], t[2], x) != 0 {
+            return false;
+        }
+        let axis = dominant_axis(t);
+        let w = o2(s, u, v, axis);
+        w != 0 && o2(s, u, x, axis) * w >= 0 && o2(s, x, v, axis) * w >= 0
+    };
+    into_wedge(a, &t2, c, d) || into_wedge(b, &t2, c, d) || into_wedge(c, &t1, a, b) || into_wedge(d, &t1, a, b)
+}
+
+/// Whether two non-degenerate triangles, given by vertex indices and a position for each index,
+/// intersect beyond the vertices and edges they share (the rules of CGAL's
+/// `Polygon_mesh_processing::self_intersections`): sharing an edge, only when they fold onto
+/// each other; sharing a vertex, when either's opposite edge meets the other or an edge from the
+/// shared vertex runs into the other in its plane; otherwise when they touch at all. Used by the
+/// self-intersection metric and by the safe edge collapse, so both decide alike.
+pub fn indexed_triangles_intersect(ti: [u32; 3], tj: [u32; 3], position: impl Fn(u32) -> Vec3) -> bool {
+    // No allocation: this runs for every candidate pair of the safe edge collapse.
+    let mut shared = [0u32; 3];
+    let mut count = 0;
+    for v in ti {
+        if tj.contains(&v) {
+            shared[count] = v;
+            count += 1;
+        }
+    }
+    let shared = &shared[..count];
+    let p = &position;
+    let other = |t: [u32; 3]| {
+        let mut out = [0u32; 3];
+        let mut n = 0;
+        for v in t {
+            if !shared.contains(&v) {
+                out[n] = v;
+                n += 1;
+            }
+        }
+        out
+    };
+    match count {
+        0 => triangles_meet(&ti.map(p), &tj.map(p)),
+        1 => {
+            let (a, b) = (other(ti), other(tj));
+            meet_beyond_shared_vertex(p(shared[0]), p(a[0]), p(a[1]), p(b[0]), p(b[1]))
+        }
+        2 => {
+            let (u, v) = (p(shared[0]), p(shared[1]));
+            let (x, y) = (p(other(ti)[0]), p(other(tj)[0]));
+            if o3(u, v, x, y) != 0 {
+                return false;
+            }
+            let axis = dominant_axis(&[u, v, x]);
+            o2(u, v, x, axis) * o2(u, v, y, axis) > 0
+        }
+        _ => true, // the same triangle twice
+    }
+}
+
 /// Whether `p` lies in the closed tetrahedron `t` (any orientation).
 pub fn point_in_tetrahedron(p: Vec3, t: &[Vec3; 4]) -> bool {
     let [a, b, c, d] = *t;

@@ -14,8 +14,7 @@
 
 use glam::Vec3;
 use isolab_algorithms::bvh::TriangleBvh;
-use isolab_algorithms::predicates::{dominant_axis, o2, o3};
-pub use isolab_algorithms::predicates::{segment_meets_triangle, triangles_meet};
+pub use isolab_algorithms::predicates::{indexed_triangles_intersect, segment_meets_triangle, triangles_meet};
 use isolab_algorithms::{Aabb, TriMesh};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -32,25 +31,6 @@ pub struct SelfIntersections {
     pub pairs: Vec<[u32; 2]>,
 }
 
-/// Triangles `(s, a, b)` and `(s, c, d)` sharing only vertex `s`: do they meet elsewhere?
-fn meet_beyond_shared_vertex(s: Vec3, a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> bool {
-    let t1 = [s, a, b];
-    let t2 = [s, c, d];
-    if segment_meets_triangle(a, b, &t2) || segment_meets_triangle(c, d, &t1) {
-        return true;
-    }
-    // An edge from s lying in the other triangle's plane and pointing into its wedge at s.
-    let into_wedge = |x: Vec3, t: &[Vec3; 3], u: Vec3, v: Vec3| {
-        if o3(t[0], t[1], t[2], x) != 0 {
-            return false;
-        }
-        let axis = dominant_axis(t);
-        let w = o2(s, u, v, axis);
-        w != 0 && o2(s, u, x, axis) * w >= 0 && o2(s, x, v, axis) * w >= 0
-    };
-    into_wedge(a, &t2, c, d) || into_wedge(b, &t2, c, d) || into_wedge(c, &t1, a, b) || into_wedge(d, &t1, a, b)
-}
-
 fn is_degenerate(mesh: &TriMesh, t: [u32; 3]) -> bool {
     if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
         return true;
@@ -61,27 +41,7 @@ fn is_degenerate(mesh: &TriMesh, t: [u32; 3]) -> bool {
 
 /// Whether triangles `i` and `j` of `mesh` (both non-degenerate) intersect beyond what they share.
 pub fn pair_intersects(mesh: &TriMesh, i: u32, j: u32) -> bool {
-    let (ti, tj) = (mesh.triangles[i as usize], mesh.triangles[j as usize]);
-    let shared: Vec<u32> = ti.iter().copied().filter(|v| tj.contains(v)).collect();
-    let p = |v: u32| mesh.positions[v as usize];
-    let other = |t: [u32; 3], not: &[u32]| t.into_iter().filter(|v| !not.contains(v)).collect::<Vec<u32>>();
-    match shared.len() {
-        0 => triangles_meet(&ti.map(p), &tj.map(p)),
-        1 => {
-            let (a, b) = (other(ti, &shared), other(tj, &shared));
-            meet_beyond_shared_vertex(p(shared[0]), p(a[0]), p(a[1]), p(b[0]), p(b[1]))
-        }
-        2 => {
-            let (u, v) = (p(shared[0]), p(shared[1]));
-            let (x, y) = (p(other(ti, &shared)[0]), p(other(tj, &shared)[0]));
-            if o3(u, v, x, y) != 0 {
-                return false;
-            }
-            let axis = dominant_axis(&[u, v, x]);
-            o2(u, v, x, axis) * o2(u, v, y, axis) > 0
-        }
-        _ => true, // the same triangle twice
-    }
+    indexed_triangles_intersect(mesh.triangles[i as usize], mesh.triangles[j as usize], |v| mesh.positions[v as usize])
 }
 
 /// All self-intersecting pairs of `mesh`.

@@ -416,22 +416,12 @@ fn section(data: &Data) -> String {
         s.push_str(&format!("![histogram]({h})\n\n"));
     }
     s.push_str("### Pictures (lowest resolution, flat shading with wireframe)\n\n");
-    let algorithms: Vec<String> = {
-        let mut a: Vec<String> = data.images.iter().map(|i| i.0.clone()).collect();
-        a.dedup();
-        a
-    };
+    // Each algorithm once, in first-seen order (images are listed field by field, so the same
+    // algorithm recurs non-adjacently: `Vec::dedup` kept every repeat, 91 columns for 7).
+    let algorithms: Vec<String> = first_seen(data.images.iter().map(|i| i.0.clone()));
     let mut header = vec!["field".to_string()];
     header.extend(algorithms.iter().cloned());
-    let fields_seen: Vec<String> = {
-        let mut f: Vec<String> = Vec::new();
-        for i in &data.images {
-            if !f.contains(&i.1) {
-                f.push(i.1.clone());
-            }
-        }
-        f
-    };
+    let fields_seen: Vec<String> = first_seen(data.images.iter().map(|i| i.1.clone()));
     let rows: Vec<Vec<String>> = fields_seen
         .iter()
         .map(|f| {
@@ -450,4 +440,26 @@ fn section(data: &Data) -> String {
         s.push_str(&format!("\n{a} on the {TURNTABLE_FIELD}: turntable and flat (wireframe) against smooth shading\n\n![{a} turntable]({gif}) ![{a} flat and smooth]({pair})\n"));
     }
     s
+}
+
+/// The distinct items of `items`, each once, in the order first seen.
+fn first_seen(items: impl Iterator<Item = String>) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for item in items {
+        if !out.contains(&item) {
+            out.push(item);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::first_seen;
+
+    #[test]
+    fn first_seen_drops_non_adjacent_repeats() {
+        let items = ["mc", "sn", "mc", "dc", "sn"].map(String::from);
+        assert_eq!(first_seen(items.into_iter()), ["mc", "sn", "dc"].map(String::from));
+    }
 }

@@ -116,9 +116,9 @@ fn meet_beyond_shared_vertex(s: Vec3, a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> boo
 /// `Polygon_mesh_processing::self_intersections`): sharing an edge, only when they fold onto
 /// each other; sharing a vertex, when either's opposite edge meets the other or an edge from the
 /// shared vertex runs into the other in its plane; otherwise when they touch at all. Used by the
-/// self-intersection metric and by the safe edge collapse, so both decide alike.
+/// self-intersection metric; written without allocation, as a per-edit test (such as a safe
+/// edge collapse checking its one-ring) would call it for every candidate pair.
 pub fn indexed_triangles_intersect(ti: [u32; 3], tj: [u32; 3], position: impl Fn(u32) -> Vec3) -> bool {
-    // No allocation: this runs for every candidate pair of the safe edge collapse.
     let mut shared = [0u32; 3];
     let mut count = 0;
     for v in ti {

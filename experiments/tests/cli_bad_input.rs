@@ -31,6 +31,13 @@ fn bad_mesh(dir: &Path, name: &str, bytes: &[u8], needles: &[&str]) {
     refused(&["metrics", p], 2, &with_file, &m);
 }
 
+/// A small marching cubes sphere written to `path` (a valid mesh to cut or render).
+fn sphere_mesh(path: &Path) {
+    let o =
+        isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "8", "-o", path.to_str().unwrap(), "-m", "/dev/null"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
 const PLY_HEAD: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
                         element face 1\nproperty list uchar int vertex_indices\nend_header\n";
 
@@ -47,21 +54,7 @@ fn malformed_mesh_files_name_the_file_and_what_is_wrong() {
     // PLY: truncated ascii, truncated binary, a face index past the vertices.
     bad_mesh(d, "short.ply", format!("{PLY_HEAD}0 0 0\n1 0 0\n").as_bytes(), &["short.ply:12:", "ends early"]);
     let sphere = d.join("sphere.ply");
-    assert!(isolab(&[
-        "extract",
-        "-a",
-        "marching-cubes",
-        "-f",
-        "sphere",
-        "-r",
-        "8",
-        "-o",
-        sphere.to_str().unwrap(),
-        "-m",
-        "/dev/null"
-    ])
-    .status
-    .success());
+    sphere_mesh(&sphere);
     let whole = std::fs::read(&sphere).unwrap();
     bad_mesh(d, "cut.ply", &whole[..whole.len() / 2], &["ends early"]);
     bad_mesh(d, "index.ply", format!("{PLY_HEAD}0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n").as_bytes(), &["vertex 9", "only 3 vertices"]);
@@ -114,21 +107,7 @@ fn unwritable_metrics_and_pictures_of_nothing_are_refused() {
         &nowhere,
     );
     let mesh = d.join("t.ply");
-    assert!(isolab(&[
-        "extract",
-        "-a",
-        "marching-cubes",
-        "-f",
-        "sphere",
-        "-r",
-        "8",
-        "-o",
-        mesh.to_str().unwrap(),
-        "-m",
-        "/dev/null"
-    ])
-    .status
-    .success());
+    sphere_mesh(&mesh);
     let png = d.join("t.png");
     refused(&["render", mesh.to_str().unwrap(), "-o", png.to_str().unwrap(), "--size", "0"], 2, &["--size", "0 is not in"], &png);
     let empty = d.join("empty.ply");

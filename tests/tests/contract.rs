@@ -25,7 +25,7 @@ use proptest::prelude::*;
 /// Samples from `value` at world points (doubled coordinates halved), outside on the border:
 /// the boundary samples and, on a BCC lattice, the centres of the boundary cells (the BCC
 /// tetrahedra do not reach past them, so the surface stays inside the tetrahedralised region).
-fn field_samples(bcc: bool, n: usize, value: impl Fn(Vec3) -> f32) -> Samples {
+fn field_samples(bcc: bool, n: usize, mut value: impl FnMut(Vec3) -> f32) -> Samples {
     let last = 2 * (n as i32 - 1);
     lattice_samples(bcc, [n, n, n], |d| {
         if d.iter().any(|&c| c <= 1 || c >= last - 1) {
@@ -43,20 +43,14 @@ fn blobs(bcc: bool, n: usize, blobs: &[(Vec3, f32)], threshold: f32) -> Samples 
 /// A white-noise sign field from a seed (values in ±[0.1, 1], none at the iso-value).
 fn noise(bcc: bool, n: usize, seed: u64) -> Samples {
     let mut random = isolab_algorithms::random::Random::new(seed);
-    let mut values = Vec::new();
-    let samples = field_samples(bcc, n, |_| 0.0);
-    for _ in 0..samples.values().len() {
+    field_samples(bcc, n, |_| {
         let v = 0.1 + 0.9 * random.unit() as f32;
-        values.push(if random.unit() < 0.45 { -v } else { v });
-    }
-    // Keep the border outside.
-    let border = field_samples(bcc, n, |_| -1.0);
-    for (v, b) in values.iter_mut().zip(border.values()) {
-        if *b > 0.0 {
-            *v = 1.0;
+        if random.unit() < 0.45 {
+            -v
+        } else {
+            v
         }
-    }
-    Samples::from_values(*samples.lattice(), values, 0.0).expect("finite values")
+    })
 }
 
 /// Random cases per property: 12, or `ISOLAB_CONTRACT_CASES` for a soak run.

@@ -313,23 +313,23 @@ fn yes(b: bool) -> &'static str {
     }
 }
 
-/// "closed" for a mesh of `field`: a defect (bold) only where the surface should close, that is
+/// "closed" for a mesh of a field: a defect (bold) only where the surface should close, that is
 /// where the field is outside on every sample of its domain's boundary; a field whose surface
-/// leaves its domain (terrain, gyroid) is open by design, said without bold.
-fn closed_cell(closed: bool, field: &str) -> &'static str {
-    match (closed, leaves_domain(field)) {
+/// leaves its domain (terrain, gyroid: [`leaves_domain`]) is open by design, said without bold.
+fn closed_cell(closed: bool, open_by_design: bool) -> &'static str {
+    match (closed, open_by_design) {
         (true, _) => "yes",
         (false, true) => "no (open by design)",
         (false, false) => "**no**",
     }
 }
 
-/// "watertight manifold" for a mesh of `field`: open by design (not bold) where the field leaves
+/// "watertight manifold" for a mesh of a field: open by design (not bold) where the field leaves
 /// its domain and the mesh is manifold apart from its boundary; otherwise a defect.
-fn watertight_cell(t: &isolab_metrics::Topology, field: &str) -> &'static str {
+fn watertight_cell(t: &isolab_metrics::Topology, open_by_design: bool) -> &'static str {
     if t.is_watertight_manifold() {
         "yes"
-    } else if t.edge_manifold && t.vertex_manifold && t.oriented && leaves_domain(field) {
+    } else if t.edge_manifold && t.vertex_manifold && t.oriented && open_by_design {
         "no (open by design)"
     } else {
         "**no**"
@@ -353,6 +353,9 @@ fn leaves_domain(field: &str) -> bool {
 }
 
 fn section(data: &Data) -> String {
+    // The fields whose surface leaves the domain, each sampled once.
+    let open: Vec<String> =
+        first_seen(data.rows.iter().map(|r| r.field.clone())).into_iter().filter(|f| leaves_domain(f)).collect();
     let mut s = String::from("## Comparing the algorithms (`compare_algorithms`)\n\n");
     s.push_str(&format!(
         "Every registered extractor on every built-in field (at {:?} samples along the longest side) and every shipped model \
@@ -374,7 +377,7 @@ fn section(data: &Data) -> String {
                 r.field.clone(),
                 format!("{}x{}x{}", r.dims[0], r.dims[1], r.dims[2]),
                 m.triangles.to_string(),
-                closed_cell(t.closed, &r.field).into(),
+                closed_cell(t.closed, open.contains(&r.field)).into(),
                 yes(t.edge_manifold && t.vertex_manifold && t.oriented).into(),
                 format!("{} / {}", t.euler, t.genus.map_or("-".into(), |g| g.to_string())),
                 m.self_intersections.count.to_string(),
@@ -419,7 +422,7 @@ fn section(data: &Data) -> String {
                 r.field.clone(),
                 r.resolution.to_string(),
                 m.triangles.to_string(),
-                watertight_cell(&m.topology, &r.field).into(),
+                watertight_cell(&m.topology, open.contains(&r.field)).into(),
                 m.topology.components.to_string(),
                 m.topology.genus.map_or("-".into(), |g| g.to_string()),
                 format!("{:.2}", m.quality.aspect_ratio.mean),

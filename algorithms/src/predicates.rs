@@ -119,6 +119,11 @@ fn meet_beyond_shared_vertex(s: Vec3, a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> boo
 /// self-intersection metric; written without allocation, as a per-edit test (such as a safe
 /// edge collapse checking its one-ring) would call it for every candidate pair.
 pub fn indexed_triangles_intersect(ti: [u32; 3], tj: [u32; 3], position: impl Fn(u32) -> Vec3) -> bool {
+    indexed_intersect(ti, tj, position, true)
+}
+
+/// [`indexed_triangles_intersect`], with the float filters or (for the tests) without.
+fn indexed_intersect(ti: [u32; 3], tj: [u32; 3], position: impl Fn(u32) -> Vec3, filtered: bool) -> bool {
     let mut shared = [0u32; 3];
     let mut count = 0;
     for v in ti {
@@ -140,6 +145,22 @@ pub fn indexed_triangles_intersect(ti: [u32; 3], tj: [u32; 3], position: impl Fn
         }
         out
     };
+    if filtered && count < 3 {
+        // The float filter settles most pairs without an exact predicate: the plane of one
+        // strictly separating the other's unshared corners leaves only shared points in common
+        // (and, sharing an edge, rules out the coplanar fold).
+        let unshared = |t: [u32; 3]| other(t)[..3 - count].iter().map(|&v| p(v)).collect::<ArrayPoints>();
+        if strictly_one_side(&ti.map(p), &unshared(tj)) || strictly_one_side(&tj.map(p), &unshared(ti)) {
+            return false;
+        }
+        // Coplanar pairs (flat parts of CAD models) defeat the plane filter and make the exact
+        // orientation tests prove a zero, their slowest case: a separating edge line in the
+        // projection along the plane's dominant axis settles most of them.
+        let axis = dominant_axis(&ti.map(p));
+        if separated_in_projection(ti, tj, p, axis) || separated_in_projection(tj, ti, p, axis) {
+            return false;
+        }
+    }
     match count {
         0 => triangles_meet(&ti.map(p), &tj.map(p)),
         1 => {
@@ -157,6 +178,113 @@ pub fn indexed_triangles_intersect(ti: [u32; 3], tj: [u32; 3], position: impl Fn
         }
         _ => true, // the same triangle twice
     }
+}
+
+/// Up to three points, without allocation.
+#[derive(Default)]
+struct ArrayPoints {
+    points: [Vec3; 3],
+    len: usize,
+}
+
+impl FromIterator<Vec3> for ArrayPoints {
+    fn from_iter<I: IntoIterator<Item = Vec3>>(iter: I) -> Self {
+        let mut out = ArrayPoints::default();
+        for q in iter.into_iter().take(3) {
+            out.points[out.len] = q;
+            out.len += 1;
+        }
+        out
+    }
+}
+
+/// Relative margin of [`PlaneFilter`]: far above the error of its `f64` arithmetic on `f32`
+/// inputs (a few units of 1.1e-16), so a side it reports is the exact side.
+const FILTER_MARGIN: f64 = 1e-10;
+
+/// A float filter ahead of the exact predicates: the plane of a triangle, telling which side of it
+/// a point lies on when the point is farther from it than [`FILTER_MARGIN`] of the largest value
+/// the orientation determinant could take (so the exact sign is the one reported), and "not
+/// settled" otherwise. A zero-area triangle settles nothing.
+#[derive(Clone, Copy, Debug)]
+pub struct PlaneFilter {
+    origin: glam::DVec3,
+    normal: glam::DVec3,
+    scale: f64,
+}
+
+impl PlaneFilter {
+    /// The filter of triangle `t`'s plane.
+    pub fn of(t: &[Vec3; 3]) -> Self {
+        let origin = t[0].as_dvec3();
+        let (e1, e2) = (t[1].as_dvec3() - origin, t[2].as_dvec3() - origin);
+        // |n . d| <= |e1| |e2| |d|: compared squared, with no square root.
+        let scale = FILTER_MARGIN * FILTER_MARGIN * e1.length_squared() * e2.length_squared();
+        PlaneFilter { origin, normal: e1.cross(e2), scale }
+    }
+
+    /// `1` or `-1`: the side `q` is on, as `o3` of the triangle's corners and `q` would say;
+    /// `0`: not settled (near the plane, on it, or a zero-area triangle).
+    pub fn side(&self, q: Vec3) -> i8 {
+        let d = q.as_dvec3() - self.origin;
+        let s = self.normal.dot(d);
+        if s * s <= self.scale * d.length_squared() {
+            0
+        } else if s > 0.0 {
+            1
+        } else {
+            -1
+        }
+    }
+}
+
+/// Whether every point of `others` lies strictly on one side of the plane of `t` (settled by
+/// [`PlaneFilter`]); `false` means "not settled", never "they meet".
+fn strictly_one_side(t: &[Vec3; 3], others: &ArrayPoints) -> bool {
+    let plane = PlaneFilter::of(t);
+    strictly_one_sign(others.points[..others.len].iter().map(|&q| plane.side(q)))
+}
+
+/// The side of `x` against the line `p -> q` in the plane with `axis` dropped (as [`o2`]), when a
+/// float evaluation settles it with the margin of [`PlaneFilter`]; `0` when it does not.
+fn side_2d(p: Vec3, q: Vec3, x: Vec3, axis: usize) -> i8 {
+    let (a, b, c) = (c2(p, axis), c2(q, axis), c2(x, axis));
+    let (ux, uy, vx, vy) = (b.x - a.x, b.y - a.y, c.x - a.x, c.y - a.y);
+    let det = ux * vy - uy * vx;
+    let margin = FILTER_MARGIN * FILTER_MARGIN * (ux * ux + uy * uy) * (vx * vx + vy * vy);
+    if det * det <= margin {
+        0
+    } else if det > 0.0 {
+        1
+    } else {
+        -1
+    }
+}
+
+/// A float filter for indexed triangles: whether the line of some edge of `tx`, projected along
+/// `axis`, has `tx`'s third corner strictly on one side and every corner of `ty` not on that edge
+/// strictly on the other. Then the projections meet only at shared vertices, and so do the
+/// triangles. `false` means "not settled".
+fn separated_in_projection(tx: [u32; 3], ty: [u32; 3], position: impl Fn(u32) -> Vec3, axis: usize) -> bool {
+    (0..3).any(|k| {
+        let (i, j, r) = (tx[k], tx[(k + 1) % 3], tx[(k + 2) % 3]);
+        let (p, q) = (position(i), position(j));
+        let own = side_2d(p, q, position(r), axis);
+        own != 0 && ty.iter().filter(|&&v| v != i && v != j).all(|&v| side_2d(p, q, position(v), axis) == -own)
+    })
+}
+
+/// Whether the sides are all `1` or all `-1` (and there is at least one).
+pub fn strictly_one_sign(sides: impl IntoIterator<Item = i8>) -> bool {
+    let mut seen = 0u8;
+    for s in sides {
+        seen |= match s {
+            1 => 1,
+            -1 => 2,
+            _ => return false,
+        };
+    }
+    seen == 1 || seen == 2
 }
 
 /// Whether `p` lies in the closed tetrahedron `t` (any orientation).
@@ -183,6 +311,50 @@ pub fn triangle_meets_tetrahedron(tri: &[Vec3; 3], tet: &[Vec3; 4]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand_xoshiro::rand_core::{Rng, SeedableRng};
+
+    /// The float filters never change an answer: random triangle pairs sharing 0, 1 or 2
+    /// vertices, on a small integer lattice so that coplanar, collinear and touching cases (the
+    /// ones near the filters' margins) are common, some lifted off the plane by a tiny amount.
+    #[test]
+    fn the_float_filters_agree_with_the_exact_tests() {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(20261128);
+        let coordinate = |rng: &mut rand_xoshiro::Xoshiro256PlusPlus| (rng.next_u32() % 5) as f32 - 2.0;
+        let (mut settled, mut met) = (0, 0);
+        for case in 0..200_000u32 {
+            let flat = case % 2 == 0;
+            let points: Vec<Vec3> = (0..6)
+                .map(|_| {
+                    let z = if flat { 0.0 } else { coordinate(&mut rng) };
+                    let lift = if case % 7 == 0 { (rng.next_u32() % 3) as f32 * 1e-6 } else { 0.0 };
+                    Vec3::new(coordinate(&mut rng), coordinate(&mut rng), z + lift)
+                })
+                .collect();
+            let shared = (rng.next_u32() % 3) as usize;
+            let ti = [0u32, 1, 2];
+            let mut tj = [3u32, 4, 5];
+            tj[..shared].copy_from_slice(&ti[..shared]);
+            tj.rotate_left((rng.next_u32() % 3) as usize);
+            let p = |v: u32| points[v as usize];
+            let area = |t: [u32; 3]| (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length_squared();
+            if area(ti) == 0.0 || area(tj) == 0.0 {
+                continue;
+            }
+            let exact = indexed_intersect(ti, tj, p, false);
+            assert_eq!(indexed_intersect(ti, tj, p, true), exact, "case {case}: {ti:?} {tj:?} at {points:?}");
+            met += exact as u32;
+            let plane = PlaneFilter::of(&ti.map(p));
+            for &v in &tj {
+                let side = plane.side(p(v));
+                if side != 0 {
+                    settled += 1;
+                    assert_eq!(side, -o3(p(0), p(1), p(2), p(v)), "case {case}");
+                }
+            }
+        }
+        // Both answers and both kinds of filter outcome were exercised.
+        assert!(met > 1000 && settled > 1000, "met {met}, settled {settled}");
+    }
 
     #[test]
     fn points_and_triangles_against_a_tetrahedron() {

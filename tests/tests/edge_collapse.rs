@@ -1,10 +1,12 @@
 //! Edge collapse after marching tetrahedra: the paper's sweep reduces like the paper's `*_bp`
-//! rows, the safe variant never breaks a manifold and keeps the Euler characteristic.
+//! rows, the safe variant never breaks a manifold, keeps the Euler characteristic and adds no
+//! self-intersection.
 
 use isolab_algorithms::extract::{Extraction, PostProcess};
 use isolab_algorithms::extractors::{build_post, MarchingTetrahedra};
 use isolab_algorithms::post::EdgeCollapse;
 use isolab_algorithms::{Grid, Lattice, Samples, TetMesh};
+use isolab_metrics::{self_intersections, topology};
 use isolab_tests::{assert_closed_manifold, assert_closed_manifold_for, extract, lattice_samples};
 use proptest::prelude::*;
 
@@ -38,8 +40,47 @@ fn safe_collapse_keeps_the_paper_objects_closed_and_manifold() {
             // with coincident vertices and zero-area triangles; collapsing removes them all.
             let zero_area = isolab_metrics::triangle_quality(&out.surface).degenerate_triangles;
             assert_eq!(zero_area, 0, "safe collapse {name} bcc={bcc} left zero-area triangles");
+            assert_eq!(self_intersections(&out.surface).count, 0, "safe collapse {name} bcc={bcc}");
         }
     }
+}
+
+/// Every shipped model on both lattices: marching tetrahedra has no self-intersection and the
+/// safe collapse adds none. Without the test (`intersections=allow`) the bunny on the cubic
+/// lattice gets some, so this can fail.
+#[test]
+fn safe_collapse_adds_no_self_intersection_on_the_shipped_models() {
+    let refuse = build_post("edge-collapse-safe").unwrap().unwrap();
+    let allow = build_post("edge-collapse-safe:intersections=allow").unwrap().unwrap();
+    let mut made_without_the_test = Vec::new();
+    let models = std::fs::read_dir(isolab_tests::model("")).unwrap();
+    let mut names: Vec<String> =
+        models.map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| n.ends_with(".obj")).collect();
+    names.sort();
+    assert!(names.len() >= 6, "{names:?}");
+    for name in &names {
+        let field = isolab_tests::object_field(name);
+        let grid = Grid::covering(&field.domain(), 48).unwrap();
+        for bcc in [true, false] {
+            let lattice = if bcc { Lattice::Bcc(grid) } else { Lattice::Cubic(grid) };
+            let s = Samples::sample(field.clone(), lattice, 0.0).unwrap();
+            let what = format!("{name} bcc={bcc}");
+            let (mt, out) = collapsed(refuse.as_ref(), &s);
+            assert_eq!(self_intersections(&mt.surface).count, 0, "marching tetrahedra of {what}");
+            assert_eq!(self_intersections(&out.surface).count, 0, "safe collapse of {what}");
+            let after = assert_closed_manifold(&out.surface, &what);
+            assert_eq!(topology(&mt.surface).euler, after.euler, "{what}");
+            let (_, unchecked) = collapsed(allow.as_ref(), &s);
+            let count = self_intersections(&unchecked.surface).count;
+            if count > 0 {
+                made_without_the_test.push((what, count));
+            }
+        }
+    }
+    assert!(
+        made_without_the_test.iter().any(|(w, _)| w == "stanford-bunny.obj bcc=false"),
+        "the models no longer show what the test prevents: {made_without_the_test:?}"
+    );
 }
 
 /// The BCC sphere at 51³ has samples exactly on the surface: 264 zero-area triangles whose
@@ -121,5 +162,34 @@ proptest! {
         let before = assert_closed_manifold_for(&s, &mt.surface, "mt");
         let after = assert_closed_manifold_for(&s, &out.surface, "safe collapse");
         prop_assert_eq!(before.euler, after.euler);
+        prop_assert_eq!(self_intersections(&out.surface).count, 0);
+    }
+
+    /// Down to a target with no length limit: most of the mesh collapses, long edges included,
+    /// which is where a collapse can fold the surface into itself.
+    #[test]
+    fn safe_collapse_to_a_target_adds_no_self_intersection(
+        bcc in any::<bool>(),
+        n in 8usize..18,
+        blobs in prop::collection::vec((0.1f32..0.9, 0.1f32..0.9, 0.1f32..0.9, 0.03f32..0.4), 1..8),
+        threshold in 0.2f32..0.9,
+        keep in 0.02f64..0.3,
+        max_turn_deg in 30f32..180.0,
+    ) {
+        let max = 2 * (n as i32 - 1);
+        let s = lattice_samples(bcc, [n, n, n], |q| {
+            if q.iter().any(|&c| c <= 1 || c >= max - 1) { return 1.0; }
+            let p = glam::Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) / max as f32;
+            threshold - blobs.iter().map(|&(bx, by, bz, r)| (-(p - glam::Vec3::new(bx, by, bz)).length_squared() / (r * r)).exp()).sum::<f32>()
+        });
+        let mt = extract(&MarchingTetrahedra, &s);
+        let target = ((mt.surface.triangles.len() as f64 * keep) as usize).max(1);
+        let post = EdgeCollapse { target, threshold: f32::INFINITY, max_turn_deg, ..EdgeCollapse::safe(0.5) };
+        let mut out = mt.clone();
+        post.apply(&s, &mut out).unwrap();
+        let before = assert_closed_manifold_for(&s, &mt.surface, "mt");
+        let after = assert_closed_manifold_for(&s, &out.surface, "safe collapse to a target");
+        prop_assert_eq!(before.euler, after.euler);
+        prop_assert_eq!(self_intersections(&out.surface).count, 0);
     }
 }

@@ -2,5 +2,6 @@
 //! [`crate::extractors::POST_INFOS`].
 
 pub mod edge_collapse;
+pub mod triangle_grid;
 
 pub use edge_collapse::EdgeCollapse;

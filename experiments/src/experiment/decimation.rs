@@ -8,7 +8,10 @@
 //! `tests/reference/run.sh setup` builds against Debian's libcgal-dev and libopenmesh-dev; each
 //! times its own collapse in process. Measured with our metrics (validated against pymeshlab,
 //! CGAL and VTK): aspect ratio, minimum angle and zero-area triangles, two-sided Hausdorff
-//! distance to the unsimplified surface (vertices and face samples), manifoldness, median time.
+//! distance to the unsimplified surface (vertices and face samples), manifoldness, self-intersecting
+//! triangle pairs, median time. Our safe collapse runs twice: refusing collapses that would make
+//! two triangles meet (its default) and with `intersections=allow`, so the test's cost and what it
+//! prevents are both in the table.
 //! A decimator that is not installed is listed as not run, with the reason.
 
 use super::context::{load_object, Context, Experiment, ExperimentError};
@@ -55,6 +58,9 @@ pub struct Row {
     pub hausdorff_h: f64,
     /// Closed, manifold and consistently oriented.
     pub manifold: bool,
+    /// Self-intersecting triangle pairs (the input has none).
+    #[serde(default)]
+    pub self_intersections: usize,
     /// Median time, ms.
     pub ms: f64,
 }
@@ -79,6 +85,7 @@ fn row(object: &str, input: &TriMesh, target: usize, decimator: &str, mesh: &Tri
         degenerate: q.degenerate_triangles,
         hausdorff_h: hausdorff(mesh, input, Sampling::VerticesAndFaces).max / f64::from(h),
         manifold: isolab_metrics::topology(mesh).is_watertight_manifold(),
+        self_intersections: isolab_metrics::self_intersections(mesh).count,
         ms: median(times).as_secs_f64() * 1e3,
     }
 }
@@ -188,15 +195,20 @@ impl Experiment for Decimation {
             let first = out.surface.triangles.len();
             rows.push(row(name, &input, first, "edge-collapse (paper sweep, 0.5 h)", &out.surface, sweep, grid.spacing));
             for target in [first, input.triangles.len() / 4] {
-                let mut times = Vec::new();
-                let mut safe = mt.clone();
-                for _ in 0..repeats {
-                    safe = mt.clone();
-                    let post = EdgeCollapse { target, threshold: f32::INFINITY, ..EdgeCollapse::safe(0.5) };
-                    post.apply(&samples, &mut safe)?;
-                    times.push(safe.stats.times.post);
+                for (refuse_intersections, label) in
+                    [(true, "edge-collapse-safe (shortest first)"), (false, "edge-collapse-safe, intersections=allow")]
+                {
+                    let mut times = Vec::new();
+                    let mut safe = mt.clone();
+                    for _ in 0..repeats {
+                        safe = mt.clone();
+                        let post =
+                            EdgeCollapse { target, threshold: f32::INFINITY, refuse_intersections, ..EdgeCollapse::safe(0.5) };
+                        post.apply(&samples, &mut safe)?;
+                        times.push(safe.stats.times.post);
+                    }
+                    rows.push(row(name, &input, target, label, &safe.surface, times, grid.spacing));
                 }
-                rows.push(row(name, &input, target, "edge-collapse-safe (shortest first)", &safe.surface, times, grid.spacing));
                 if let Some(py) = pymeshlab.as_mut() {
                     let out_path = tmp.join(format!("{name}-{target}.obj"));
                     let mut times = Vec::new();
@@ -242,7 +254,8 @@ impl Experiment for Decimation {
              vertices where they were). The C++ decimators are the programs in `tests/reference/decimators/`, timing their \
              own collapse in process (file reading excluded); pymeshlab's time is its filter's. Shape columns cover the \
              triangles with an area; *zero-area* counts the others. Hausdorff is two-sided to the unsimplified surface, \
-             sampled at vertices, face centroids and edge midpoints, in grid spacings. Median of {} runs.\n\n",
+             sampled at vertices, face centroids and edge midpoints, in grid spacings. Our safe collapse runs with its \
+             self-intersection test (the default) and without it (`intersections=allow`). Median of {} runs.\n\n",
             data.repeats
         ));
         let body: Vec<Vec<String>> = data
@@ -258,6 +271,7 @@ impl Experiment for Decimation {
                     r.degenerate.to_string(),
                     format!("{:.3}", r.hausdorff_h),
                     if r.manifold { "yes".into() } else { "**no**".into() },
+                    if r.self_intersections == 0 { "0".into() } else { format!("**{}**", r.self_intersections) },
                     super::context::ms(r.ms),
                 ]
             })
@@ -272,6 +286,7 @@ impl Experiment for Decimation {
                 "zero-area",
                 "Hausdorff (h)",
                 "closed manifold",
+                "self-intersecting pairs",
                 "ms",
             ],
             &body,

@@ -97,6 +97,30 @@ fn all_256_cube_patterns_give_closed_manifold_outward_meshes() {
     assert!(intersecting.len() <= 85 && pairs <= 1211, "{} cases, {pairs} pairs: {intersecting:?}", intersecting.len());
 }
 
+/// Vertices at features fold quads: split along the shorter diagonal, dual contouring of the
+/// cheburashka and the teapot at 64 self-intersected. Splitting a folded quad along its other
+/// diagonal leaves every shipped model without a self-intersecting pair.
+#[test]
+fn no_shipped_model_self_intersects_at_64() {
+    let dc = extractors::by_name("dual-contouring").unwrap();
+    let mut names: Vec<String> = std::fs::read_dir(isolab_tests::model(""))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".obj"))
+        .collect();
+    names.sort();
+    assert!(names.len() >= 6, "{names:?}");
+    for name in &names {
+        let field = isolab_tests::object_field(name);
+        let grid = isolab_algorithms::Grid::covering(&field.domain(), 64).unwrap();
+        let s = Samples::sample_cubic(field, grid, 0.0).unwrap();
+        let mut out = Extraction::default();
+        dc.extract(&s, &mut out).unwrap();
+        assert_closed_manifold(&out.surface, name);
+        assert_eq!(isolab_metrics::self_intersections(&out.surface).count, 0, "{name}");
+    }
+}
+
 proptest::proptest! {
     #![proptest_config(proptest::prelude::ProptestConfig { cases: 200, failure_persistence: None, ..Default::default() })]
 

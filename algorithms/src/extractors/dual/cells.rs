@@ -155,11 +155,16 @@ impl Ctx<'_> {
         let positions = &mesh.positions;
         let at = |i: u32| if i & EXTERN == 0 { positions[i as usize] } else { ghost[(i & !EXTERN) as usize] };
         let mut links = links;
+        let least_folded = matches!(self.placement, Placement::Qef { .. });
         let mut emit = |c: [u32; 4], flip: bool, triangles: &mut Vec<[u32; 3]>| {
             let [c00, c10, c11, c01] = c;
-            let d0 = at(c00).distance_squared(at(c11));
-            let d1 = at(c10).distance_squared(at(c01));
-            let (t0, t1) = if d0 <= d1 { ([c00, c10, c11], [c00, c11, c01]) } else { ([c10, c11, c01], [c10, c01, c00]) };
+            let along_00_11 = if least_folded {
+                let p = [c00, c10, c11, c01].map(at);
+                split_least_folded(p, (p[2] - p[0]).cross(p[3] - p[1]))
+            } else {
+                at(c00).distance_squared(at(c11)) <= at(c10).distance_squared(at(c01))
+            };
+            let (t0, t1) = if along_00_11 { ([c00, c10, c11], [c00, c11, c01]) } else { ([c10, c11, c01], [c10, c01, c00]) };
             for t in [t0, t1] {
                 triangles.push(if flip { [t[0], t[2], t[1]] } else { t });
             }
@@ -309,5 +314,37 @@ impl Tables {
         } else {
             &FACE_CHOICE_TABLE[code as usize]
         }
+    }
+}
+
+/// Cosine of the largest turn of a triangle from its quad's mean normal that the shorter
+/// diagonal may keep (60 degrees).
+const FOLD_COS: f32 = 0.5;
+
+/// Which diagonal to split the quad `p` (corners in order) along, for vertices that sit on
+/// features (dual contouring): `true` for `p[0]-p[2]`. The shorter diagonal, unless one of its
+/// triangles turns more than 60 degrees away from `expected` (the quad's mean normal, its vector
+/// area) and the other split's worse triangle turns less: a quad whose feature-placed vertices
+/// fold it is then split where it does not turn back on itself. On the shipped models and
+/// built-in fields this removed most of dual contouring's self-intersections (the tests hold the
+/// shipped models at none) and left the 768 cube-pattern cases as they were.
+pub(super) fn split_least_folded(p: [Vec3; 4], expected: Vec3) -> bool {
+    let facing = |a: Vec3, b: Vec3, c: Vec3| {
+        let n = (b - a).cross(c - a);
+        let l = n.length() * expected.length();
+        if l > 0.0 {
+            n.dot(expected) / l
+        } else {
+            0.0
+        }
+    };
+    let first = facing(p[0], p[1], p[2]).min(facing(p[0], p[2], p[3]));
+    let second = facing(p[1], p[2], p[3]).min(facing(p[1], p[3], p[0]));
+    let shorter = p[0].distance_squared(p[2]) <= p[1].distance_squared(p[3]);
+    let (kept, other) = if shorter { (first, second) } else { (second, first) };
+    if kept > FOLD_COS || other <= kept + 1e-4 {
+        shorter
+    } else {
+        !shorter
     }
 }

@@ -4,7 +4,8 @@
 //! every cell whose corners disagree gets one vertex per separate piece of surface in it (the
 //! polygons of the cell's marching cubes case, [`crate::tables::marching_cubes`]), every crossing
 //! lattice edge inside the grid a quad joining the vertices of its four cells, split along the
-//! shorter diagonal and wound so normals point toward increasing `f`. Only the vertex
+//! shorter diagonal (for dual contouring, the other one where the shorter folds the quad:
+//! `cells::split_least_folded`) and wound so normals point toward increasing `f`. Only the vertex
 //! [`Placement`] differs: the mass point of the piece's crossings (surface nets) or the minimum of
 //! its quadric error ([`qef`], dual contouring). Cells are swept in layers along z, slabs of
 //! layers in parallel ([`crate::slabs`]); each slab recomputes the cell layer below it, whose

@@ -10,7 +10,13 @@ Libraries (pinned in requirements.txt):
   RadiusRatio. Verdict's MinAngle takes the angle between face normals that are not consistently
   oriented, so at edges 02 and 13 it measures 180 degrees minus the dihedral angle: the goldens
   keep what it says, and the test reproduces that quirk explicitly;
-- libigl: all six dihedral angles of each tetrahedron (the true ones);
+- libigl: all six dihedral angles of each tetrahedron (the true ones); edge-manifoldness and
+  the count of non-manifold vertices;
+- defect meshes (`defect_meshes`): small meshes built from cubes with one defect each (a
+  non-manifold edge, a non-manifold vertex, an inside-out cube, two closed cubes through each
+  other), measured by all of the above, so the metrics' defect branches have goldens. CGAL's
+  polygon-soup import drops faces at a non-manifold edge or vertex, so the tests compare CGAL's
+  values only on the two-manifold ones;
 - marching cubes equivalence: VTK's vtkFlyingEdges3D and scikit-image's marching cubes (Lorensen
   and Lewiner) run on the very grid isolab sampled (`isolab extract --samples-out`, raw f32), and
   their meshes are compared with isolab's `marching-cubes --set on-iso=exact`: the same vertex
@@ -33,7 +39,9 @@ Modes:
   golden  write tests/reference/golden/*.json (and the isolab meshes they measure, in
           tests/reference/meshes/; the volume fixtures in tests/reference/volumes/), which
           `cargo test` compares our metrics and meshes against;
-  live    recompute the references for the committed golden meshes (catching a drift in the
+  golden-defects  write only the defect meshes and their goldens;
+  live    recompute the references for the committed golden meshes, the tetrahedron angles and
+          the Hausdorff distances (catching a drift in the
           libraries), and for meshes the current isolab writes, compared with `isolab metrics`
           (catching a drift in isolab); and `isolab metrics` on the peers' own marching cubes
           meshes (VTK, scikit-image) against the libraries' measures of them. Ends with 'N passed, M failed'; exits 1 on any failure.
@@ -154,6 +162,65 @@ def meshlab_measures(verts, faces):
     }
 
 
+def igl_measures(verts, faces):
+    import igl
+
+    f = np.asarray(faces, dtype=np.int64)
+    edge = igl.is_edge_manifold(f)
+    edge = bool(edge[0] if isinstance(edge, tuple) else edge)
+    # One flag per vertex (this libigl returns the array alone).
+    vertex = igl.is_vertex_manifold(f)
+    per_vertex = np.asarray(vertex[-1] if isinstance(vertex, tuple) else vertex, dtype=bool).ravel()
+    used = np.zeros(len(verts), dtype=bool)
+    used[f.ravel()] = True
+    return {"edge_manifold": edge, "non_manifold_vertices": int(np.count_nonzero(~per_vertex[used[:per_vertex.size]]))}
+
+
+def cube(lo, hi):
+    """A closed, outward cube: 8 vertices, 12 triangles."""
+    (x0, y0, z0), (x1, y1, z1) = lo, hi
+    v = [(x0, y0, z0), (x1, y0, z0), (x1, y1, z0), (x0, y1, z0), (x0, y0, z1), (x1, y0, z1), (x1, y1, z1), (x0, y1, z1)]
+    f = [(0, 2, 1), (0, 3, 2), (4, 5, 6), (4, 6, 7), (0, 1, 5), (0, 5, 4), (2, 3, 7), (2, 7, 6), (1, 2, 6), (1, 6, 5),
+         (0, 4, 7), (0, 7, 3)]
+    return v, f
+
+
+def joined(*parts, share=()):
+    """Meshes as one, welding the vertex pairs in `share` ((part, vertex) of the second part to (part,
+    vertex) of the first)."""
+    verts, faces, offset, index = [], [], 0, {}
+    for p, (v, f) in enumerate(parts):
+        for i, x in enumerate(v):
+            target = next((index[a] for (a, b) in share if b == (p, i)), None)
+            if target is None:
+                index[(p, i)] = len(verts)
+                verts.append(x)
+            else:
+                index[(p, i)] = target
+        faces += [tuple(index[(p, i)] for i in t) for t in f]
+    return np.array(verts, dtype=np.float64), np.array(faces, dtype=np.int64)
+
+
+def defect_meshes():
+    """Small meshes with one defect each, whose right answers are known by construction, so the
+    metrics' defect branches have goldens: (name, vertices, faces)."""
+    a = cube((0, 0, 0), (1, 1, 1))
+    # Shares the edge x = 1, y = 1 (vertices 2 and 6 of a) with the second cube's edge 0-4.
+    b = cube((1, 1, 0), (2, 2, 1))
+    edge = joined(a, b, share=[((0, 2), (1, 0)), ((0, 6), (1, 4))])
+    # Shares only the corner (1, 1, 1).
+    c = cube((1, 1, 1), (2, 2, 2))
+    vertex = joined(a, c, share=[((0, 6), (1, 0))])
+    # Inside out: every face reversed.
+    v, f = cube((0, 0, 0), (1, 1, 1))
+    inside_out = (np.array(v, dtype=np.float64), np.array([(t[0], t[2], t[1]) for t in f], dtype=np.int64))
+    # Two closed cubes through each other: closed, manifold, outward, self-intersecting.
+    d = cube((0.5, 0.25, 0.25), (1.5, 0.75, 0.75))
+    crossing = joined(a, d)
+    return [("defect-non-manifold-edge", *edge), ("defect-non-manifold-vertex", *vertex),
+            ("defect-inside-out", *inside_out), ("defect-self-intersecting", *crossing)]
+
+
 def meshlab_hausdorff(sampled, target):
     import pymeshlab
 
@@ -240,7 +307,7 @@ def reference_tets():
 
 def measure(verts, faces):
     return {"vertices": len(verts), "triangles": len(faces), "cgal": cgal_measures(verts, faces),
-            "meshlab": meshlab_measures(verts, faces), "vtk": vtk_measures(verts, faces)}
+            "meshlab": meshlab_measures(verts, faces), "vtk": vtk_measures(verts, faces), "igl": igl_measures(verts, faces)}
 
 
 def extract(isolab, field, resolution, path):
@@ -411,6 +478,7 @@ def golden(isolab):
         extract(isolab, field, res, path)
         os.remove(path + ".json")
         paths[name] = path
+    golden_defects()
     for name, path in paths.items():
         verts, faces = read_mesh(path)
         g = {"mesh": os.path.relpath(path, ROOT), **measure(verts, faces)}
@@ -425,6 +493,16 @@ def golden(isolab):
         json.dump(mc_equivalence(isolab, tmp), open(os.path.join(HERE, "golden", "mc-equivalence.json"), "w"), indent=1)
     print("golden mc-equivalence")
     volumes.golden()
+
+
+def golden_defects():
+    """The defect meshes and their goldens (`golden-defects` writes only these)."""
+    for name, verts, faces in defect_meshes():
+        path = os.path.join(HERE, "meshes", name + ".obj")
+        write_obj(path, verts, faces)
+        g = {"mesh": os.path.relpath(path, ROOT), **measure(verts, faces)}
+        json.dump(g, open(os.path.join(HERE, "golden", name + ".json"), "w"), indent=1)
+        print("golden", name)
 
 
 class Checks:
@@ -472,10 +550,30 @@ def live(isolab):
             continue
         g = json.load(open(os.path.join(HERE, "golden", file)))
         now = measure(*read_mesh(os.path.join(ROOT, g["mesh"])))
-        for lib in ("cgal", "meshlab", "vtk"):
-            for k, v in g[lib].items():
+        for lib in ("cgal", "meshlab", "vtk", "igl"):
+            for k, v in g.get(lib, {}).items():
                 same = close(now[lib][k], v, 1e-9) if isinstance(v, float) else now[lib][k] == v
                 check(f"golden {file} {lib}.{k}", same, f"committed {v} now {now[lib][k]}")
+    # 1b. The tetrahedron and Hausdorff goldens, recomputed by the libraries.
+    def same_tree(a, b):
+        if isinstance(a, dict):
+            return isinstance(b, dict) and a.keys() == b.keys() and all(same_tree(a[k], b[k]) for k in a)
+        if isinstance(a, list):
+            return isinstance(b, list) and len(a) == len(b) and all(same_tree(x, y) for x, y in zip(a, b))
+        if isinstance(a, float) or isinstance(b, float):
+            return close(float(a), float(b), 1e-9)
+        return a == b
+
+    committed = json.load(open(os.path.join(HERE, "golden", "tets-kuhn-jittered.json")))
+    now = json.loads(json.dumps(reference_tets()))
+    check("golden tets-kuhn-jittered (VTK, libigl)", same_tree(committed, now), "recomputed equals committed")
+    for sampled, target in HAUSDORFF:
+        g = json.load(open(os.path.join(HERE, "golden", sampled + ".json")))
+        h = g["hausdorff_to"]
+        now = meshlab_hausdorff(read_mesh(os.path.join(ROOT, g["mesh"])), read_mesh(os.path.join(ROOT, h["target"])))
+        committed = {k: v for k, v in h.items() if k != "target"}
+        check(f"golden {sampled} Hausdorff to {target} (pymeshlab)", same_tree(committed, json.loads(json.dumps(now))),
+              f"committed {committed} now {now}")
     # 2. Meshes the current isolab writes: our metrics against the libraries, live.
     cases = [("sphere", 48, 0), ("torus", 48, 1), ("csg", 64, 0), ("asteroid", 64, 0), ("models/rocker-arm.obj", 96, 1),
              ("models/stanford-bunny.obj", 64, 0)]
@@ -570,11 +668,13 @@ def write_obj(path, verts, faces):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("mode", choices=["golden", "live"])
+    ap.add_argument("mode", choices=["golden", "golden-defects", "live"])
     ap.add_argument("--isolab", default=os.path.join(ROOT, "target", "release", "isolab"))
     args = ap.parse_args()
     if args.mode == "golden":
         golden(args.isolab)
+    elif args.mode == "golden-defects":
+        golden_defects()
     else:
         sys.exit(0 if live(args.isolab) else 1)
 

@@ -238,6 +238,20 @@ pub struct PostInfo {
     pub options: &'static [&'static str],
     /// Builds it; unknown or bad options are errors naming the option.
     pub make: fn(&crate::options::Options) -> Result<Box<dyn PostProcess>, crate::options::OptionError>,
+    /// What it keeps of its input, with its default options (checked by `tests/tests/contract.rs`).
+    pub guarantees: PostGuarantees,
+}
+
+/// What a post-process promises to keep of a closed, manifold, outward surface with no
+/// self-intersection, as data (the extractors' [`Guarantees`] for post-processes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PostGuarantees {
+    /// The output is closed and manifold with the input's Euler characteristic.
+    pub keeps_closed_manifold: bool,
+    /// Triangles keep facing the way they faced (an outward input stays outward).
+    pub keeps_outward: bool,
+    /// No two triangles come to meet that did not meet in the input.
+    pub adds_no_intersection: bool,
 }
 
 /// An isosurface or volume extractor. Dyn-compatible: experiments iterate over

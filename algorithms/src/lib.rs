@@ -47,7 +47,9 @@ pub mod slabs;
 pub mod tables;
 pub mod tetrahedral;
 
-pub use extract::{Chunking, ExtractError, Extraction, Extractor, Guarantees, Origins, PostProcess, StageTimes, Stats};
+pub use extract::{
+    Chunking, ExtractError, Extraction, Extractor, Guarantees, Origins, PostGuarantees, PostProcess, StageTimes, Stats,
+};
 pub use field::{Field, FieldError};
 pub use geometry::Aabb;
 pub use lattice::{Grid, Lattice, LatticeError};

@@ -13,6 +13,9 @@
 //! - the same output on one thread and on two;
 //! - re-extraction into a used `Extraction` equals extraction into a fresh one.
 //!
+//! Every post-process in `POST_INFOS` likewise keeps what its `guarantees` promise, on marching
+//! tetrahedra of random blobs, and fills its stats and post time.
+//!
 //! `ISOLAB_CONTRACT_CASES=N` runs N random cases per property instead of 12 (a soak run).
 
 use glam::Vec3;
@@ -173,8 +176,69 @@ fn fixed_fields_on_both_lattices() {
     }
 }
 
+/// Every post-process in `POST_INFOS` on `input` (marching tetrahedra of `samples`: closed,
+/// manifold, outward, no self-intersection), with its default options and, if it takes a
+/// `target`, down to a quarter of the triangles: the stats agree with the output, the post time
+/// is filled, normals are one per vertex or none, indices are in range, the output is the same
+/// on a second run, and it keeps whatever its `guarantees` promise.
+fn every_post_process(samples: &Samples, input: &Extraction, what: &str) {
+    let before = topology(&input.surface);
+    for info in extractors::POST_INFOS {
+        let mut settings = vec![Options::new()];
+        if info.options.contains(&"target") {
+            let mut o = Options::new();
+            o.set("target", &(input.surface.triangles.len() / 4).max(1).to_string());
+            settings.push(o);
+        }
+        for options in settings {
+            let post = (info.make)(&options).unwrap_or_else(|e| panic!("{}: {e}", info.name));
+            let what = format!("{} {options:?} on {what}", info.name);
+            let mut out = input.clone();
+            post.apply(samples, &mut out).unwrap_or_else(|e| panic!("{what}: {e}"));
+            let mesh = &out.surface;
+            assert_eq!((out.stats.vertices, out.stats.triangles), (mesh.positions.len(), mesh.triangles.len()), "{what}: stats");
+            assert!(out.stats.times.post > std::time::Duration::ZERO, "{what}: post time not filled");
+            assert!(mesh.normals.is_empty() || mesh.normals.len() == mesh.positions.len(), "{what}: normals");
+            let n = mesh.positions.len() as u32;
+            assert!(mesh.triangles.iter().flatten().all(|&i| i < n), "{what}: index out of range");
+            let mut again = input.clone();
+            post.apply(samples, &mut again).unwrap();
+            assert!(again.surface == out.surface, "{what}: a second run differs");
+            let g = info.guarantees;
+            let after = topology(mesh);
+            if g.keeps_closed_manifold {
+                assert!(after.is_watertight_manifold(), "{what}: not a closed manifold: {after:?}");
+                assert_eq!(after.euler, before.euler, "{what}: Euler characteristic");
+            }
+            if g.keeps_outward {
+                assert!(after.outward, "{what}: not outward");
+            }
+            if g.adds_no_intersection {
+                assert_eq!(self_intersections(mesh).count, 0, "{what}: self-intersections");
+            }
+        }
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: soak_cases(), failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// The post-processes' contract, on marching tetrahedra of random blobs.
+    #[test]
+    fn post_processes_keep_what_they_declare(
+        bcc in any::<bool>(),
+        n in 7usize..13,
+        centres in prop::collection::vec((0.2f32..0.8, 0.2f32..0.8, 0.2f32..0.8, 0.08f32..0.3), 1..5),
+        threshold in 0.3f32..0.8,
+    ) {
+        let list: Vec<(Vec3, f32)> = centres.iter().map(|&(x, y, z, r)| (Vec3::new(x, y, z), r)).collect();
+        let samples = blobs(bcc, n, &list, threshold);
+        let mut input = Extraction::default();
+        extractors::by_name("marching-tetrahedra").unwrap().extract(&samples, &mut input).unwrap();
+        if !input.surface.triangles.is_empty() {
+            every_post_process(&samples, &input, &format!("blobs {list:?} at {threshold}"));
+        }
+    }
 
     #[test]
     fn random_blob_fields(

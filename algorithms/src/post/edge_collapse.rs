@@ -66,7 +66,7 @@
 //! meet it, and is most of the safe collapse's time (the `decimation` section times both
 //! settings).
 
-use crate::extract::{ExtractError, Extraction, PostInfo, PostProcess};
+use crate::extract::{ExtractError, Extraction, PostGuarantees, PostInfo, PostProcess};
 use crate::mesh::TriMesh;
 use crate::options::{OptionError, Options};
 use crate::post::triangle_grid::TriangleGrid;
@@ -133,12 +133,22 @@ impl EdgeCollapse {
 pub const DEFAULT_THRESHOLD: f32 = 0.5;
 
 /// Costen 2026, section 2.6: merge short edges in one sweep, drop degenerate triangles.
-pub const PAPER_INFO: PostInfo =
-    PostInfo { name: "edge-collapse", description: PAPER_DESCRIPTION, options: PAPER_OPTION_NAMES, make: paper_from_options };
+pub const PAPER_INFO: PostInfo = PostInfo {
+    name: "edge-collapse",
+    description: PAPER_DESCRIPTION,
+    options: PAPER_OPTION_NAMES,
+    make: paper_from_options,
+    guarantees: PostGuarantees { keeps_closed_manifold: false, keeps_outward: false, adds_no_intersection: false },
+};
 
 /// Shortest-first collapse under the link condition and a normal test.
-pub const SAFE_INFO: PostInfo =
-    PostInfo { name: "edge-collapse-safe", description: SAFE_DESCRIPTION, options: SAFE_OPTION_NAMES, make: safe_from_options };
+pub const SAFE_INFO: PostInfo = PostInfo {
+    name: "edge-collapse-safe",
+    description: SAFE_DESCRIPTION,
+    options: SAFE_OPTION_NAMES,
+    make: safe_from_options,
+    guarantees: PostGuarantees { keeps_closed_manifold: true, keeps_outward: true, adds_no_intersection: true },
+};
 
 /// The paper's sweep from named options.
 pub fn paper_from_options(options: &Options) -> Result<Box<dyn PostProcess>, OptionError> {

@@ -172,12 +172,22 @@ fn list() {
         println!("  {:<34} {}", "", guarantees(&e.guarantees));
     }
     println!("post-processes:");
-    let posts = extractors::post_processes();
-    if posts.is_empty() {
-        println!("  (none yet)");
-    }
-    for p in posts {
-        println!("  {:<34} {}", p.name(), p.description());
+    for p in extractors::POST_INFOS {
+        println!("  {:<34} {}", p.name, p.description);
+        if !p.options.is_empty() {
+            println!("  {:<34} options: {}", "", p.options.join(", "));
+        }
+        let g = &p.guarantees;
+        let kept: Vec<&str> = [
+            ("closed manifold and Euler characteristic", g.keeps_closed_manifold),
+            ("orientation", g.keeps_outward),
+            ("no new self-intersection", g.adds_no_intersection),
+        ]
+        .into_iter()
+        .filter(|(_, on)| *on)
+        .map(|(name, _)| name)
+        .collect();
+        println!("  {:<34} keeps: {}", "", if kept.is_empty() { "nothing promised".into() } else { kept.join(", ") });
     }
     println!(
         "fields (or a path to a mesh file: .obj .ply .stl .glb .gltf; or a volume file: .nii .nii.gz .nrrd .nhdr .mhd .mha):"

@@ -10,11 +10,12 @@ Libraries (pinned in requirements.txt):
   RadiusRatio. Verdict's MinAngle takes the angle between face normals that are not consistently
   oriented, so at edges 02 and 13 it measures 180 degrees minus the dihedral angle: the goldens
   keep what it says, and the test reproduces that quirk explicitly;
-- libigl: all six dihedral angles of each tetrahedron (the true ones); edge-manifoldness and
-  the count of non-manifold vertices;
+- libigl: all six dihedral angles of each tetrahedron (the true ones); edge-manifoldness, the
+  count of non-manifold vertices, and faces out of step with their component's orientation
+  (from `bfs_orient`);
 - defect meshes (`defect_meshes`): small meshes built from cubes with one defect each (a
-  non-manifold edge, a non-manifold vertex, an inside-out cube, two closed cubes through each
-  other), measured by all of the above, so the metrics' defect branches have goldens. CGAL's
+  non-manifold edge, a non-manifold vertex, an inside-out cube, a cube with one face reversed,
+  two closed cubes through each other), measured by all of the above, so the metrics' defect branches have goldens. CGAL's
   polygon-soup import drops faces at a non-manifold edge or vertex, so the tests compare CGAL's
   values only on the two-manifold ones;
 - marching cubes equivalence: VTK's vtkFlyingEdges3D and scikit-image's marching cubes (Lorensen
@@ -173,7 +174,15 @@ def igl_measures(verts, faces):
     per_vertex = np.asarray(vertex[-1] if isinstance(vertex, tuple) else vertex, dtype=bool).ravel()
     used = np.zeros(len(verts), dtype=bool)
     used[f.ravel()] = True
-    return {"edge_manifold": edge, "non_manifold_vertices": int(np.count_nonzero(~per_vertex[used[:per_vertex.size]]))}
+    # Faces out of step with the majority orientation of their component (bfs_orient reorients
+    # every component like its first face; the smaller side is what is flipped).
+    reoriented, component = igl.bfs_orient(f)
+    changed = (np.asarray(reoriented) != f).any(axis=1)
+    component = np.asarray(component).ravel()
+    flipped = sum(min(int(changed[component == c].sum()), int((component == c).sum() - changed[component == c].sum()))
+                  for c in np.unique(component))
+    return {"edge_manifold": edge, "non_manifold_vertices": int(np.count_nonzero(~per_vertex[used[:per_vertex.size]])),
+            "flipped_faces": int(flipped)}
 
 
 def cube(lo, hi):
@@ -214,11 +223,13 @@ def defect_meshes():
     # Inside out: every face reversed.
     v, f = cube((0, 0, 0), (1, 1, 1))
     inside_out = (np.array(v, dtype=np.float64), np.array([(t[0], t[2], t[1]) for t in f], dtype=np.int64))
+    # One face of a closed cube reversed.
+    flipped = (np.array(v, dtype=np.float64), np.array([(t[0], t[2], t[1]) if k == 0 else t for k, t in enumerate(f)], dtype=np.int64))
     # Two closed cubes through each other: closed, manifold, outward, self-intersecting.
     d = cube((0.5, 0.25, 0.25), (1.5, 0.75, 0.75))
     crossing = joined(a, d)
     return [("defect-non-manifold-edge", *edge), ("defect-non-manifold-vertex", *vertex),
-            ("defect-inside-out", *inside_out), ("defect-self-intersecting", *crossing)]
+            ("defect-inside-out", *inside_out), ("defect-flipped-face", *flipped), ("defect-self-intersecting", *crossing)]
 
 
 def meshlab_hausdorff(sampled, target):

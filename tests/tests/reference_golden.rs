@@ -122,13 +122,20 @@ fn triangle_metrics_match_cgal_meshlab_and_vtk() {
 
 /// Small meshes with one defect each (`reference.py golden-defects` builds them from cubes, so
 /// the right answers are also known by construction): our topology against pymeshlab and libigl,
-/// and against CGAL where CGAL can read the mesh (its polygon-soup import drops faces at a
-/// non-manifold edge or vertex: it measures 8 and 9 of the 12 units of area there).
+/// and against CGAL where CGAL can read the mesh (its polygon-soup import drops faces where the
+/// soup is not an oriented manifold: it measures 8 and 9 of the 12 units of area at the
+/// non-manifold edge and vertex, 4.5 of 6 on the cube with one face reversed).
 #[test]
 fn defect_meshes_match_meshlab_libigl_and_cgal() {
     let dir = root().join("tests/reference/golden");
     let mut seen = Vec::new();
-    for name in ["defect-non-manifold-edge", "defect-non-manifold-vertex", "defect-inside-out", "defect-self-intersecting"] {
+    for name in [
+        "defect-non-manifold-edge",
+        "defect-non-manifold-vertex",
+        "defect-inside-out",
+        "defect-flipped-face",
+        "defect-self-intersecting",
+    ] {
         let g: Value = serde_json::from_str(&std::fs::read_to_string(dir.join(format!("{name}.json"))).unwrap()).unwrap();
         let mesh = load(&g);
         let m = MeshMetrics::measure(&mesh, None);
@@ -149,7 +156,14 @@ fn defect_meshes_match_meshlab_libigl_and_cgal() {
             // fan); pymeshlab and libigl count only vertices that are non-manifold by themselves.
             assert_eq!(t.non_manifold_vertices as u64, theirs + 2, "{name} non-manifold vertices");
         }
-        if ml["two_manifold"].as_bool().unwrap() {
+        // libigl's bfs_orient: faces out of step with their component's orientation. Each
+        // reversed face of a closed manifold (none adjacent) makes its three edges misoriented.
+        let flipped = igl["flipped_faces"].as_u64().unwrap();
+        assert_eq!(t.oriented, flipped == 0 && t.non_manifold_edges == 0, "{name} oriented");
+        if t.non_manifold_edges == 0 {
+            assert_eq!(t.misoriented_edges as u64, 3 * flipped, "{name} misoriented edges");
+        }
+        if ml["two_manifold"].as_bool().unwrap() && flipped == 0 {
             assert_eq!(t.closed, cgal["closed"].as_bool().unwrap(), "{name} closed");
             assert!(rel_close(m.area, cgal["area"].as_f64().unwrap(), 1e-6), "{name} area {} vs {}", m.area, cgal["area"]);
             assert!(
@@ -162,12 +176,25 @@ fn defect_meshes_match_meshlab_libigl_and_cgal() {
             let pairs = cgal["self_intersections"].as_u64().unwrap() as usize;
             assert_eq!(m.self_intersections.count, pairs, "{name} self-intersections");
         }
-        seen.push((name, t.non_manifold_edges, t.non_manifold_vertices, t.outward, m.self_intersections.count));
+        seen.push((
+            name,
+            t.non_manifold_edges,
+            t.non_manifold_vertices,
+            t.outward,
+            t.misoriented_edges,
+            m.self_intersections.count,
+        ));
     }
     // Each mesh shows its defect (so the goldens above are not all zeros).
     assert_eq!(
-        seen.iter().map(|s| (s.1 > 0, s.2 > 0, !s.3, s.4 > 0)).collect::<Vec<_>>(),
-        [(true, true, true, false), (false, true, false, false), (false, false, true, false), (false, false, false, true)],
+        seen.iter().map(|s| (s.1 > 0, s.2 > 0, !s.3, s.4 > 0, s.5 > 0)).collect::<Vec<_>>(),
+        [
+            (true, true, true, false, false),
+            (false, true, false, false, false),
+            (false, false, true, false, false),
+            (false, false, true, true, false),
+            (false, false, false, false, true)
+        ],
         "{seen:?}"
     );
 }

@@ -29,6 +29,14 @@ const METHODS: [(&str, Smoothing); 4] = [
 /// The blog post's smoothing times for its 32^3 chunk, ms (implicit: "> 30000").
 const POST_MS: [(&str, f64); 3] = [("elastic", 17.0), ("spring", 84.0), ("implicit", 30000.0)];
 
+/// Our smoothing names against the post's section headings (its "Results" list): what each of
+/// ours implements of the post's description.
+const POST_NAMES: [(&str, &str, &str); 3] = [
+    ("elastic", "Linear Interpolation", "move each vertex part of the way to its neighbours' mean, repeated"),
+    ("spring", "Explicit Matrix", "a spring-damper step from current and previous positions, explicit in time"),
+    ("implicit", "Implicit Matrix", "backward Euler on the graph Laplacian (we solve it by conjugate gradients)"),
+];
+
 #[derive(Serialize, Deserialize)]
 struct Row {
     field: String,
@@ -166,14 +174,20 @@ impl Experiment for SurfaceNetsSmoothing {
              has an exact reference), meshed by `surface-nets` with each smoothing at {} iterations, every vertex kept in its \
              cell. Times are medians of {} runs (smoothing alone, and the whole extraction). *Signed dist.* is the mean of \
              f/|∇f| at the vertices in grid spacings: negative means the mesh moved inward (shrinkage). The post measured, \
-             for its 32^3 chunk in Unity: {}.\n\n",
+             for its 32^3 chunk in Unity: {}. Our names for the post's methods: {}; every one then clamps vertices to their \
+             cells, as the post does.\n\n",
             data.iterations,
             data.repeats,
             POST_MS
                 .iter()
                 .map(|(m, t)| format!("{m} {}{t} ms", if *m == "implicit" { "> " } else { "about " }))
                 .collect::<Vec<_>>()
-                .join(", ")
+                .join(", "),
+            POST_NAMES
+                .iter()
+                .map(|(ours, post, what)| format!("`{ours}` is its \"{post}\" ({what})"))
+                .collect::<Vec<_>>()
+                .join("; ")
         ));
         let rows: Vec<Vec<String>> = data
             .rows

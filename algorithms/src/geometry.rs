@@ -70,6 +70,20 @@ impl Aabb {
     }
 }
 
+/// Smallest distance of a vertex from the ends of its lattice edge, as a fraction of the edge:
+/// far enough that `f32` positions stay distinct up to grids of about 10^4 samples per side. A
+/// sample exactly at the iso-value would otherwise put the vertices of all its edges at one
+/// point: distinct vertices there touch (self-intersections, as CGAL counts them) and make
+/// zero-area triangles. The gyroid is exactly zero on whole planes of grid points.
+pub const MIN_EDGE_FRACTION: f32 = 1e-4;
+
+/// Where the iso-value crosses the edge from a sample valued `from` to one valued `to` (which
+/// differ in sign about `iso`), as a fraction of the edge from `from`, kept
+/// [`MIN_EDGE_FRACTION`] away from both ends.
+pub fn edge_crossing_fraction(from: f32, to: f32, iso: f32) -> f32 {
+    ((iso - from) / (to - from)).clamp(MIN_EDGE_FRACTION, 1.0 - MIN_EDGE_FRACTION)
+}
+
 /// The closest point to `p` on triangle `(a, b, c)` (Ericson, Real-Time Collision Detection, 5.1.5).
 pub fn closest_point_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     let ab = b - a;

@@ -173,7 +173,16 @@ fn fixed_fields_on_both_lattices() {
         // Inside everywhere but the border: one closed surface along the border.
         every_extractor(&inside_core, true, &outside, "inside but the border");
         every_extractor(&noise(bcc, 6, 7), true, &sphere, "white noise 6³, seed 7");
+        // Many samples exactly at the iso-value (the gyroid has whole planes of them): vertices
+        // must not meet at those samples.
+        every_extractor(&on_iso(bcc, n, 11), true, &sphere, "values in {-1, 0, 1}");
     }
+}
+
+/// Random values in {-1, 0, 1} (a third of them exactly at the iso-value), outside on the border.
+fn on_iso(bcc: bool, n: usize, seed: u64) -> Samples {
+    let mut random = isolab_algorithms::random::Random::new(seed);
+    field_samples(bcc, n, |_| (random.unit() * 3.0).floor().min(2.0) as f32 - 1.0)
 }
 
 /// Every post-process in `POST_INFOS` on `input` (marching tetrahedra of `samples`: closed,

@@ -100,9 +100,8 @@ pub enum OnIsoSamples {
 }
 
 /// Smallest distance of a vertex from an edge's ends, as a fraction of the spacing, under
-/// [`OnIsoSamples::Separate`]: far enough that `f32` positions stay distinct up to grids of
-/// about 10^4 samples per side.
-pub const MIN_EDGE_FRACTION: f32 = 1e-4;
+/// [`OnIsoSamples::Separate`] (shared with the tetrahedral extractors).
+pub use crate::geometry::MIN_EDGE_FRACTION;
 
 /// How ambiguous faces (two diagonal corners inside, two outside) are resolved.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -16,7 +16,11 @@
 //! **Guarantees.** No ambiguity: a tetrahedron's pattern fixes its surface, so the mesh is closed
 //! wherever the surface stays inside the lattice, manifold, and wound outward (tests: every
 //! pattern of a tetrahedron and of a sample's 24-tetrahedron star, random fields, the closed
-//! built-in fields and models, on both lattices).
+//! built-in fields and models, on both lattices), and free of self-intersections: every vertex
+//! stays strictly inside its edge, [`crate::geometry::MIN_EDGE_FRACTION`] of the edge from its
+//! ends, so a sample exactly at the iso-value (the gyroid has whole planes of them) does not put
+//! the vertices of all its edges at one point, where distinct vertices would touch and
+//! triangles lose their area (tests: the contract's field of values in {-1, 0, 1}).
 //!
 //! **Non-guarantees.** Triangle shape: a crossing next to a sample makes slivers and needles (the
 //! paper's mean aspect ratios of 5.81 to 1207 unmerged); that is what clustering and edge collapse

@@ -351,7 +351,7 @@ impl VertexPass<'_> {
                         let k = bits.trailing_zeros() as usize;
                         bits &= bits - 1;
                         let vj = values[neighbour(k).expect("flagged neighbours exist")];
-                        star.crossings[k] = origin + self.steps[k] * ((iso - vi) / (vj - vi));
+                        star.crossings[k] = origin + self.steps[k] * edge_crossing_fraction(vi, vj, iso);
                     }
                     let islands =
                         if self.no_merge[i] { NoClustering.islands(&star, topo) } else { self.clustering.islands(&star, topo) };

@@ -56,6 +56,7 @@
 
 use crate::extract::{ExtractError, Extraction};
 use crate::field::Field;
+use crate::geometry::edge_crossing_fraction;
 use crate::lattice::{Grid, Lattice};
 use crate::samples::Samples;
 use crate::sign_rows::{classify_rows, span, Row};

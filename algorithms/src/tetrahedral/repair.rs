@@ -31,7 +31,7 @@ pub fn unmerge_and_regenerate(samples: &Samples, scratch: &mut TetScratch, out: 
             let vj = values[j];
             if (vj < iso) != (vi < iso) && owns(i, vi, j, vj, iso) {
                 let step = Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * (0.5 * at.corners.spacing);
-                out.surface.positions.push(at.position(q) + step * ((iso - vi) / (vj - vi)));
+                out.surface.positions.push(at.position(q) + step * edge_crossing_fraction(vi, vj, iso));
                 scratch.owner.push((sample, 1, k as u8));
                 packed |= slot << (4 * k);
                 slot += 1;

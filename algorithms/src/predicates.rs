@@ -203,7 +203,7 @@ impl FromIterator<Vec3> for ArrayPoints {
 const FILTER_MARGIN: f64 = 1e-10;
 
 /// A float filter ahead of the exact predicates: the plane of a triangle, telling which side of it
-/// a point lies on when the point is farther from it than [`FILTER_MARGIN`] of the largest value
+/// a point lies on when the point is farther from it than `FILTER_MARGIN` of the largest value
 /// the orientation determinant could take (so the exact sign is the one reported), and "not
 /// settled" otherwise. A zero-area triangle settles nothing.
 #[derive(Clone, Copy, Debug)]

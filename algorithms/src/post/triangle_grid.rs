@@ -8,7 +8,7 @@
 //! without touching the mesh) and its generation when filed: filing a triangle again (after it
 //! moved) makes its older entries stale. A query ignores stale and dead entries, and compacts a
 //! cell it reads once the cell has doubled since its last compaction (and holds more than
-//! [`COMPACT_AT`] entries), so cells do not grow with the edits and compaction costs amortised
+//! `COMPACT_AT` entries), so cells do not grow with the edits and compaction costs amortised
 //! constant time per entry. A stale entry costs a comparison, never a wrong answer.
 
 use glam::Vec3;
@@ -61,7 +61,7 @@ pub struct TriangleGrid {
 
 impl TriangleGrid {
     /// An empty grid over `lo..=hi` with cells of about `size` (larger if the box would need more
-    /// than [`MAX_CELLS`]) for triangle ids below `triangles`.
+    /// than `MAX_CELLS`) for triangle ids below `triangles`.
     pub fn new(lo: Vec3, hi: Vec3, size: f32, triangles: usize) -> Self {
         let extent = (hi - lo).max(Vec3::ZERO);
         let mut size = if size.is_finite() && size > 0.0 { size } else { extent.max_element().max(1.0) };

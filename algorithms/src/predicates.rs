@@ -180,6 +180,13 @@ fn indexed_intersect(ti: [u32; 3], tj: [u32; 3], position: impl Fn(u32) -> Vec3,
     }
 }
 
+/// Whether a triangle has no area, exactly (its corners' cross product in `f64`, where the
+/// products of `f32` differences are exact enough to be zero only for collinear corners). The
+/// self-intersection metric skips such triangles, and the safe edge collapse follows it.
+pub fn has_zero_area(p: [Vec3; 3]) -> bool {
+    (p[1] - p[0]).as_dvec3().cross((p[2] - p[0]).as_dvec3()).length_squared() == 0.0
+}
+
 /// Up to three points, without allocation.
 #[derive(Default)]
 struct ArrayPoints {

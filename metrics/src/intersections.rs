@@ -14,6 +14,7 @@
 
 use glam::Vec3;
 use isolab_algorithms::bvh::TriangleBvh;
+use isolab_algorithms::predicates::has_zero_area;
 pub use isolab_algorithms::predicates::{indexed_triangles_intersect, segment_meets_triangle, triangles_meet};
 use isolab_algorithms::{Aabb, TriMesh};
 use rayon::prelude::*;
@@ -35,8 +36,7 @@ fn is_degenerate(mesh: &TriMesh, t: [u32; 3]) -> bool {
     if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
         return true;
     }
-    let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
-    (b - a).as_dvec3().cross((c - a).as_dvec3()).length_squared() == 0.0
+    has_zero_area(t.map(|i| mesh.positions[i as usize]))
 }
 
 /// Whether triangles `i` and `j` of `mesh` (both non-degenerate) intersect beyond what they share.

@@ -55,6 +55,28 @@ pub fn lattice_samples(bcc: bool, dims: [usize; 3], mut value: impl FnMut([i32; 
     Samples::from_values(lattice, values, 0.0).expect("finite values")
 }
 
+/// Samples on a cubic or BCC lattice of `n`³ corners from `value` at world points in the unit
+/// cube, outside on the border: the boundary samples and, on a BCC lattice, the centres of the
+/// boundary cells (the BCC tetrahedra do not reach past them, so the surface stays inside the
+/// tetrahedralised region).
+pub fn unit_cube_samples(bcc: bool, n: usize, mut value: impl FnMut(Vec3) -> f32) -> Samples {
+    let last = 2 * (n as i32 - 1);
+    lattice_samples(bcc, [n, n, n], |d| {
+        if d.iter().any(|&c| c <= 1 || c >= last - 1) {
+            return 1.0;
+        }
+        value(Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) / last as f32)
+    })
+}
+
+/// Gaussian blobs `(centre, radius)` in the unit cube on either lattice ([`unit_cube_samples`]):
+/// inside where their summed density exceeds `threshold`.
+pub fn lattice_blobs(bcc: bool, n: usize, blobs: &[(Vec3, f32)], threshold: f32) -> Samples {
+    unit_cube_samples(bcc, n, |p| {
+        threshold - blobs.iter().map(|&(c, r)| (-(p - c).length_squared() / (r * r)).exp()).sum::<f32>()
+    })
+}
+
 /// Runs `extractor` on `samples`.
 pub fn extract(extractor: &dyn Extractor, samples: &Samples) -> Extraction {
     let mut out = Extraction::default();

@@ -22,25 +22,23 @@ use glam::Vec3;
 use isolab_algorithms::extractors::{self, ExtractorInfo};
 use isolab_algorithms::{ExtractError, Extraction, Extractor, Options, Samples};
 use isolab_metrics::{self_intersections, topology};
-use isolab_tests::lattice_samples;
+use isolab_tests::{lattice_blobs, unit_cube_samples};
 use proptest::prelude::*;
 
-/// Samples from `value` at world points (doubled coordinates halved), outside on the border:
-/// the boundary samples and, on a BCC lattice, the centres of the boundary cells (the BCC
-/// tetrahedra do not reach past them, so the surface stays inside the tetrahedralised region).
-fn field_samples(bcc: bool, n: usize, mut value: impl FnMut(Vec3) -> f32) -> Samples {
-    let last = 2 * (n as i32 - 1);
-    lattice_samples(bcc, [n, n, n], |d| {
-        if d.iter().any(|&c| c <= 1 || c >= last - 1) {
-            return 1.0;
-        }
-        value(Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) / last as f32)
-    })
+/// [`isolab_tests::unit_cube_samples`] under the name the tests here use.
+fn field_samples(bcc: bool, n: usize, value: impl FnMut(Vec3) -> f32) -> Samples {
+    unit_cube_samples(bcc, n, value)
 }
 
 /// Gaussian blobs `(centre, radius)` in the unit cube: inside where they are dense.
 fn blobs(bcc: bool, n: usize, blobs: &[(Vec3, f32)], threshold: f32) -> Samples {
-    field_samples(bcc, n, |p| threshold - blobs.iter().map(|&(c, r)| (-(p - c).length_squared() / (r * r)).exp()).sum::<f32>())
+    lattice_blobs(bcc, n, blobs, threshold)
+}
+
+/// Random blobs for the property tests: 1 to 4 `(centre, radius)` well inside the unit cube.
+fn random_blobs() -> impl Strategy<Value = Vec<(Vec3, f32)>> {
+    prop::collection::vec((0.2f32..0.8, 0.2f32..0.8, 0.2f32..0.8, 0.08f32..0.3), 1..5)
+        .prop_map(|v| v.into_iter().map(|(x, y, z, r)| (Vec3::new(x, y, z), r)).collect())
 }
 
 /// A white-noise sign field from a seed (values in ±[0.1, 1], none at the iso-value).
@@ -237,10 +235,9 @@ proptest! {
     fn post_processes_keep_what_they_declare(
         bcc in any::<bool>(),
         n in 7usize..13,
-        centres in prop::collection::vec((0.2f32..0.8, 0.2f32..0.8, 0.2f32..0.8, 0.08f32..0.3), 1..5),
+        list in random_blobs(),
         threshold in 0.3f32..0.8,
     ) {
-        let list: Vec<(Vec3, f32)> = centres.iter().map(|&(x, y, z, r)| (Vec3::new(x, y, z), r)).collect();
         let samples = blobs(bcc, n, &list, threshold);
         let mut input = Extraction::default();
         extractors::by_name("marching-tetrahedra").unwrap().extract(&samples, &mut input).unwrap();
@@ -253,10 +250,9 @@ proptest! {
     fn random_blob_fields(
         bcc in any::<bool>(),
         n in 7usize..13,
-        centres in prop::collection::vec((0.2f32..0.8, 0.2f32..0.8, 0.2f32..0.8, 0.08f32..0.3), 1..5),
+        list in random_blobs(),
         threshold in 0.3f32..0.8,
     ) {
-        let list: Vec<(Vec3, f32)> = centres.iter().map(|&(x, y, z, r)| (Vec3::new(x, y, z), r)).collect();
         let samples = blobs(bcc, n, &list, threshold);
         let crosses = samples.values().iter().any(|&v| v < 0.0);
         let other = blobs(bcc, n, &[(Vec3::splat(0.5), 0.3)], 0.5);

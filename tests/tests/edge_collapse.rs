@@ -7,7 +7,7 @@ use isolab_algorithms::extractors::{build_post, MarchingTetrahedra};
 use isolab_algorithms::post::EdgeCollapse;
 use isolab_algorithms::{Grid, Lattice, Samples, TetMesh};
 use isolab_metrics::{self_intersections, topology};
-use isolab_tests::{assert_closed_manifold, assert_closed_manifold_for, extract, lattice_samples};
+use isolab_tests::{assert_closed_manifold, assert_closed_manifold_for, extract, lattice_blobs};
 use proptest::prelude::*;
 
 fn sampled(name: &str, bcc: bool, dims: [usize; 3]) -> Samples {
@@ -163,12 +163,8 @@ proptest! {
         threshold in 0.2f32..0.9,
         collapse in 0.2f32..1.5,
     ) {
-        let max = 2 * (n as i32 - 1);
-        let s = lattice_samples(bcc, [n, n, n], |q| {
-            if q.iter().any(|&c| c <= 1 || c >= max - 1) { return 1.0; }
-            let p = glam::Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) / max as f32;
-            threshold - blobs.iter().map(|&(bx, by, bz, r)| (-(p - glam::Vec3::new(bx, by, bz)).length_squared() / (r * r)).exp()).sum::<f32>()
-        });
+        let list: Vec<(glam::Vec3, f32)> = blobs.iter().map(|&(x, y, z, r)| (glam::Vec3::new(x, y, z), r)).collect();
+        let s = lattice_blobs(bcc, n, &list, threshold);
         let (mt, out) = collapsed(&EdgeCollapse::safe(collapse), &s);
         let before = assert_closed_manifold_for(&s, &mt.surface, "mt");
         let after = assert_closed_manifold_for(&s, &out.surface, "safe collapse");
@@ -187,12 +183,8 @@ proptest! {
         keep in 0.02f64..0.3,
         max_turn_deg in 30f32..180.0,
     ) {
-        let max = 2 * (n as i32 - 1);
-        let s = lattice_samples(bcc, [n, n, n], |q| {
-            if q.iter().any(|&c| c <= 1 || c >= max - 1) { return 1.0; }
-            let p = glam::Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) / max as f32;
-            threshold - blobs.iter().map(|&(bx, by, bz, r)| (-(p - glam::Vec3::new(bx, by, bz)).length_squared() / (r * r)).exp()).sum::<f32>()
-        });
+        let list: Vec<(glam::Vec3, f32)> = blobs.iter().map(|&(x, y, z, r)| (glam::Vec3::new(x, y, z), r)).collect();
+        let s = lattice_blobs(bcc, n, &list, threshold);
         let mt = extract(&MarchingTetrahedra, &s);
         let target = ((mt.surface.triangles.len() as f64 * keep) as usize).max(1);
         let post = EdgeCollapse { target, threshold: f32::INFINITY, max_turn_deg, ..EdgeCollapse::safe(0.5) };

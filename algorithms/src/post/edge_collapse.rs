@@ -70,7 +70,7 @@ use crate::extract::{ExtractError, Extraction, PostGuarantees, PostInfo, PostPro
 use crate::mesh::TriMesh;
 use crate::options::{OptionError, Options};
 use crate::post::triangle_grid::TriangleGrid;
-use crate::predicates::{indexed_triangles_intersect, strictly_one_sign, PlaneFilter};
+use crate::predicates::{has_zero_area, indexed_triangles_intersect, strictly_one_sign, PlaneFilter};
 use crate::samples::Samples;
 use glam::Vec3;
 use petgraph::unionfind::UnionFind;
@@ -543,7 +543,7 @@ impl Collapse {
         // blocks the edits around it nor can be added to.
         // (The metric skips zero-area triangles, so a pair with one had no meeting to keep.)
         let met_before = |x: [u32; 3], y: [u32; 3]| {
-            !is_degenerate(x.map(now)) && !is_degenerate(y.map(now)) && indexed_triangles_intersect(x, y, now)
+            !has_zero_area(x.map(now)) && !has_zero_area(y.map(now)) && indexed_triangles_intersect(x, y, now)
         };
         let new_meeting = |x: &Moved, y_after: [u32; 3], y_before: [u32; 3]| {
             indexed_triangles_intersect(x.ids, y_after, after) && !met_before(x.before, y_before)
@@ -555,7 +555,7 @@ impl Collapse {
             if alive[t as usize] && !self.shared.contains(&t) {
                 let ids = tris[t as usize].map(|w| self.label(w));
                 let p = ids.map(after);
-                if !is_degenerate(p) {
+                if !has_zero_area(p) {
                     let corners = ids.map(|w| local_index(points, w, after(w)));
                     moved.push(Moved { ids, before: tris[t as usize], corners, bounds: bounds(p) });
                 }
@@ -581,7 +581,7 @@ impl Collapse {
             let q = other.map(|w| position[w as usize]);
             let box_u = bounds(q);
             let mut near_moved = moved.iter().filter(|m| !apart(m.bounds, box_u)).peekable();
-            if near_moved.peek().is_none() || is_degenerate(q) {
+            if near_moved.peek().is_none() || has_zero_area(q) {
                 return false;
             }
             // Which side of u's plane each moved corner is on, once per candidate: most pairs are
@@ -617,11 +617,6 @@ fn bounds(p: [Vec3; 3]) -> (Vec3, Vec3) {
 /// Whether two closed boxes are disjoint.
 fn apart(x: (Vec3, Vec3), y: (Vec3, Vec3)) -> bool {
     x.0.cmpgt(y.1).any() || y.0.cmpgt(x.1).any()
-}
-
-/// Whether a triangle has no area (the self-intersection metric skips such triangles).
-fn is_degenerate(p: [Vec3; 3]) -> bool {
-    (p[1] - p[0]).as_dvec3().cross((p[2] - p[0]).as_dvec3()).length_squared() == 0.0
 }
 
 /// The vertices sharing a live triangle with `v`, each once (fans are small: a linear test).

@@ -143,23 +143,25 @@ fn parse_dims(text: &str) -> Result<[usize; 3], String> {
     <[usize; 3]>::try_from(dims).map_err(|_| format!("'{text}': expected three numbers, like 75,40,56"))
 }
 
+/// The names whose flag is set, joined, or `none` when no flag is.
+fn promised(flags: &[(&str, bool)], none: &str) -> String {
+    let on: Vec<&str> = flags.iter().filter(|(_, on)| *on).map(|(name, _)| *name).collect();
+    if on.is_empty() {
+        none.into()
+    } else {
+        on.join(", ")
+    }
+}
+
 /// One line: the lattices an extractor meshes and what it promises (checked by the contract test).
 fn guarantees(g: &isolab_algorithms::Guarantees) -> String {
-    let promised: Vec<&str> = [
+    let flags = [
         ("closed", g.closed),
         ("manifold", g.manifold),
         ("outward", g.outward),
         ("free of self-intersections", g.intersection_free),
-    ]
-    .into_iter()
-    .filter(|(_, on)| *on)
-    .map(|(name, _)| name)
-    .collect();
-    format!(
-        "lattices: {}; guarantees: {}",
-        g.lattices().join(", "),
-        if promised.is_empty() { "none".into() } else { promised.join(", ") }
-    )
+    ];
+    format!("lattices: {}; guarantees: {}", g.lattices().join(", "), promised(&flags, "none"))
 }
 
 fn list() {
@@ -178,16 +180,12 @@ fn list() {
             println!("  {:<34} options: {}", "", p.options.join(", "));
         }
         let g = &p.guarantees;
-        let kept: Vec<&str> = [
+        let flags = [
             ("closed manifold and Euler characteristic", g.keeps_closed_manifold),
             ("orientation", g.keeps_outward),
             ("no new self-intersection", g.adds_no_intersection),
-        ]
-        .into_iter()
-        .filter(|(_, on)| *on)
-        .map(|(name, _)| name)
-        .collect();
-        println!("  {:<34} keeps: {}", "", if kept.is_empty() { "nothing promised".into() } else { kept.join(", ") });
+        ];
+        println!("  {:<34} keeps: {}", "", promised(&flags, "nothing promised"));
     }
     println!(
         "fields (or a path to a mesh file: .obj .ply .stl .glb .gltf; or a volume file: .nii .nii.gz .nrrd .nhdr .mhd .mha):"

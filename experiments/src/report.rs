@@ -26,6 +26,18 @@ pub fn markdown_table(header: &[&str], rows: &[Vec<String>]) -> String {
     s
 }
 
+/// The distinct items of `items`, each once, in the order first seen (unlike `Vec::dedup`,
+/// which only drops adjacent repeats).
+pub fn first_seen<T: PartialEq>(items: impl IntoIterator<Item = T>) -> Vec<T> {
+    let mut out: Vec<T> = Vec::new();
+    for item in items {
+        if !out.contains(&item) {
+            out.push(item);
+        }
+    }
+    out
+}
+
 /// A duration in milliseconds.
 pub fn millis(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
@@ -53,6 +65,11 @@ mod tests {
         assert_eq!(median(vec![d(3), d(1), d(2)]), d(2));
         assert_eq!(median(vec![d(4), d(1), d(2), d(3)]), Duration::from_micros(2500));
         assert_eq!(median(vec![]), Duration::ZERO);
+    }
+
+    #[test]
+    fn first_seen_drops_non_adjacent_repeats() {
+        assert_eq!(first_seen(["mc", "sn", "mc", "dc", "sn"]), ["mc", "sn", "dc"]);
     }
 
     #[test]

@@ -6,7 +6,7 @@ use super::context::{measure, model_path, ms, Context, Experiment, ExperimentErr
 use crate::figures::color_of;
 use crate::figures::plot::{self, HistogramPlot, Scale, Series, Style, XyPlot};
 use crate::figures::render::{render, save_png, save_turntable, side_by_side, RenderOptions, Shading};
-use crate::report::markdown_table;
+use crate::report::{first_seen, markdown_table};
 use crate::run::{lattice_for, load_field, RunConfig};
 use isolab_algorithms::{extractors, fields, Samples};
 use isolab_metrics::Histogram;
@@ -26,20 +26,20 @@ pub const MODELS: [&str; 6] = ["stanford-bunny", "spot", "fandisk", "rocker-arm"
 const TURNTABLE_FIELD: &str = "asteroid";
 
 #[derive(Serialize, Deserialize)]
-struct Data {
-    field_levels: Vec<usize>,
-    model_levels: Vec<usize>,
-    repeats: usize,
-    rows: Vec<Measured>,
+pub(crate) struct Data {
+    pub(crate) field_levels: Vec<usize>,
+    pub(crate) model_levels: Vec<usize>,
+    pub(crate) repeats: usize,
+    pub(crate) rows: Vec<Measured>,
     /// (algorithm, field, image path relative to the report)
-    images: Vec<(String, String, String)>,
+    pub(crate) images: Vec<(String, String, String)>,
     /// (algorithm, path) of turntable GIFs and flat/smooth pairs.
-    turntables: Vec<(String, String)>,
-    pairs: Vec<(String, String)>,
-    scatter: String,
-    overshading: String,
-    bars: String,
-    histograms: Vec<String>,
+    pub(crate) turntables: Vec<(String, String)>,
+    pub(crate) pairs: Vec<(String, String)>,
+    pub(crate) scatter: String,
+    pub(crate) overshading: String,
+    pub(crate) bars: String,
+    pub(crate) histograms: Vec<String>,
 }
 
 fn inputs() -> Vec<(String, String, [usize; 3])> {
@@ -52,6 +52,10 @@ fn inputs() -> Vec<(String, String, [usize; 3])> {
 impl Experiment for CompareAlgorithms {
     fn name(&self) -> &'static str {
         NAME
+    }
+
+    fn question(&self) -> &'static str {
+        "How do the extractors compare on every field and model in shape, topology, accuracy and cost?"
     }
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
@@ -116,6 +120,12 @@ impl Experiment for CompareAlgorithms {
         let data: Data = ctx.read_data(NAME)?;
         Ok(section(&data))
     }
+}
+
+/// The at-a-glance table (middle resolution, one row per extractor), for the front page.
+pub fn glance(ctx: &Context) -> Result<String, ExperimentError> {
+    let data: Data = ctx.read_data(NAME)?;
+    Ok(summary(&data))
 }
 
 /// The algorithm's colour as a surface tint (lightened palette colour).
@@ -357,13 +367,14 @@ fn section(data: &Data) -> String {
     let open: Vec<String> =
         first_seen(data.rows.iter().map(|r| r.field.clone())).into_iter().filter(|f| leaves_domain(f)).collect();
     let mut s = String::from("## Comparing the algorithms (`compare_algorithms`)\n\n");
+    let view = isolab_metrics::View::default();
     s.push_str(&format!(
         "Every registered extractor on every built-in field (at {:?} samples along the longest side) and every shipped model \
          (at {:?}), sampled once per resolution. Extraction time is the median of {} runs on the same samples. Meshes of the \
          gyroid and the terrain are cut by the domain, so they are open there by design. Distances are in grid spacings `h`; \
          *normal dev.* is the mean angle between vertex normals and the field's gradient; *overshading* is pixel-shader \
-         invocations per covered pixel when GPUs shade 2x2 quads (1024x1024, early depth test; 1 is ideal).\n\n",
-        data.field_levels, data.model_levels, data.repeats
+         invocations per covered pixel when GPUs shade 2x2 quads ({}x{}, early depth test; 1 is ideal).\n\n",
+        data.field_levels, data.model_levels, data.repeats, view.width, view.height
     ));
     s.push_str("### At a glance (middle resolution, every field and model)\n\n");
     s.push_str(&summary(data));
@@ -482,26 +493,4 @@ fn section(data: &Data) -> String {
         s.push_str(&format!("\n{a} on the {TURNTABLE_FIELD}: turntable and flat (wireframe) against smooth shading\n\n![{a} turntable]({gif}) ![{a} flat and smooth]({pair})\n"));
     }
     s
-}
-
-/// The distinct items of `items`, each once, in the order first seen.
-fn first_seen(items: impl Iterator<Item = String>) -> Vec<String> {
-    let mut out: Vec<String> = Vec::new();
-    for item in items {
-        if !out.contains(&item) {
-            out.push(item);
-        }
-    }
-    out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::first_seen;
-
-    #[test]
-    fn first_seen_drops_non_adjacent_repeats() {
-        let items = ["mc", "sn", "mc", "dc", "sn"].map(String::from);
-        assert_eq!(first_seen(items.into_iter()), ["mc", "sn", "dc"].map(String::from));
-    }
 }

@@ -114,7 +114,7 @@ impl Context {
         serde_json::from_str(&text).map_err(|e| ExperimentError::Data { path, reason: e.to_string() })
     }
 
-    /// A path relative to the report directory, for links in `REPORT.md`.
+    /// A path relative to the report directory, for links in the report's pages.
     pub fn link(&self, path: &Path) -> String {
         path.strip_prefix(&self.report_dir).unwrap_or(path).to_string_lossy().replace('\\', "/")
     }
@@ -126,7 +126,9 @@ pub trait Experiment: Send + Sync {
     fn name(&self) -> &'static str;
     /// Runs it: writes its data and figures.
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError>;
-    /// Its section of `REPORT.md`, from its data file.
+    /// The question its page answers, one sentence for the front page's list.
+    fn question(&self) -> &'static str;
+    /// Its page (`report/<name>.md`, headed by one `## ` title), from its data file.
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError>;
 }
 

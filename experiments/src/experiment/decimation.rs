@@ -66,10 +66,10 @@ pub struct Row {
 }
 
 #[derive(Serialize, Deserialize)]
-struct Data {
-    repeats: usize,
-    rows: Vec<Row>,
-    skipped: Vec<String>,
+pub(crate) struct Data {
+    pub(crate) repeats: usize,
+    pub(crate) rows: Vec<Row>,
+    pub(crate) skipped: Vec<String>,
 }
 
 fn row(object: &str, input: &TriMesh, target: usize, decimator: &str, mesh: &TriMesh, times: Vec<Duration>, h: f32) -> Row {
@@ -158,6 +158,10 @@ impl Experiment for Decimation {
         NAME
     }
 
+    fn question(&self) -> &'static str {
+        "How does our edge collapse compare with established decimators at equal triangle counts?"
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let repeats = ctx.repeats.min(3);
         let root = ctx.report_dir.join("..");
@@ -193,7 +197,8 @@ impl Experiment for Decimation {
                 sweep.push(out.stats.times.post);
             }
             let first = out.surface.triangles.len();
-            rows.push(row(name, &input, first, "edge-collapse (paper sweep, 0.5 h)", &out.surface, sweep, grid.spacing));
+            let label = format!("edge-collapse (paper sweep, {} h)", isolab_algorithms::post::edge_collapse::DEFAULT_THRESHOLD);
+            rows.push(row(name, &input, first, &label, &out.surface, sweep, grid.spacing));
             for target in [first, input.triangles.len() / 4] {
                 for (refuse_intersections, label) in
                     [(true, "edge-collapse-safe (shortest first)"), (false, "edge-collapse-safe, intersections=allow")]
@@ -271,7 +276,11 @@ impl Experiment for Decimation {
                     r.degenerate.to_string(),
                     format!("{:.3}", r.hausdorff_h),
                     if r.manifold { "yes".into() } else { "**no**".into() },
-                    if r.self_intersections == 0 { "0".into() } else { format!("**{}**", r.self_intersections) },
+                    if r.self_intersections == 0 {
+                        r.self_intersections.to_string()
+                    } else {
+                        format!("**{}**", r.self_intersections)
+                    },
                     super::context::ms(r.ms),
                 ]
             })

@@ -22,6 +22,8 @@ pub struct LargeWorld;
 const NAME: &str = "large_world";
 const CHUNK: usize = 32;
 const DEFAULT_DIMS: [usize; 3] = [2049, 513, 2049];
+/// The issue's example world, cells (samples are one more a side).
+const ISSUE_WORLD_CELLS: [usize; 3] = [8192, 512, 8192];
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct Data {
@@ -70,6 +72,10 @@ fn machine_gib() -> Option<f64> {
 impl Experiment for LargeWorld {
     fn name(&self) -> &'static str {
         NAME
+    }
+
+    fn question(&self) -> &'static str {
+        "Can a world of billions of samples be meshed chunk by chunk, at what throughput and memory?"
     }
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
@@ -166,12 +172,21 @@ impl Experiment for LargeWorld {
             vec!["most chunk-mesh memory held".into(), format!("{:.0} MiB (one slab)", d.peak_slab_mib)],
         ];
         md.push_str(&markdown_table(&["measure", "value"], &rows));
-        md.push_str(
+        let [x, y, z] = ISSUE_WORLD_CELLS.map(|c| (c + 1) as f64);
+        let issue_samples = x * y * z;
+        let times = issue_samples / d.samples.max(1) as f64;
+        let slab = (x * y) / (d.dims[0] * d.dims[1]).max(1) as f64;
+        md.push_str(&format!(
             "\nSampling the noise field dominates the time (about ten noise evaluations per sample; most chunks turn out empty or \
              full only after sampling). Memory grows with one slab (the world's x and y extent), not with its z extent. \
-             `ISOLAB_WORLD=8192,512,8192 cargo run --release -p isolab-experiments --bin large_world` runs the issue's example \
-             size (137 GiB dense; 16 times these samples, about 16 times the time at this throughput, four times the slab memory).\n",
-        );
+             `ISOLAB_WORLD={},{},{} cargo run --release -p isolab-experiments --bin large_world` runs the issue's example \
+             size ({:.0} GiB dense; {times:.0} times these samples, about {times:.0} times the time at this throughput, {slab:.0} \
+             times the slab memory).\n",
+            ISSUE_WORLD_CELLS[0],
+            ISSUE_WORLD_CELLS[1],
+            ISSUE_WORLD_CELLS[2],
+            issue_samples * 4.0 / f64::from(1u32 << 30),
+        ));
         Ok(md)
     }
 }

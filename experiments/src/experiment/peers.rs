@@ -123,8 +123,8 @@ pub(crate) fn floor(values: &[f32], bytes: usize) -> (Duration, Duration) {
 
 /// Every implementation the run alternates, Python peers when the server started.
 fn entries(python: Option<&std::rc::Rc<std::cell::RefCell<PythonServer>>>) -> Vec<Entry> {
-    let entry = |label: &str, peer: Box<dyn Peer>, threads: usize, steady: bool, slow: bool| Entry {
-        label: format!("{label} ({threads} thread{})", if threads == 1 { "" } else { "s" }),
+    let entry = |name: &str, peer: Box<dyn Peer>, threads: usize, steady: bool, slow: bool| Entry {
+        label: label(name, threads),
         peer,
         threads,
         steady,
@@ -135,19 +135,19 @@ fn entries(python: Option<&std::rc::Rc<std::cell::RefCell<PythonServer>>>) -> Ve
     let mc = || Box::new(Ours::new("marching-cubes", &[("normals", "none")]));
     let sn = || Box::new(Ours::new("surface-nets", &[("smoothing", "none")]));
     let mut list = vec![
-        entry("isolab marching-cubes", mc(), 2, true, false),
-        entry("isolab marching-cubes", mc(), 1, true, false),
-        entry("isolab surface-nets", sn(), 2, true, false),
-        entry("isolab surface-nets", sn(), 1, true, false),
-        entry("fast-surface-nets", Box::<FastSurfaceNets>::default(), 1, true, false),
-        entry("isosurface crate", Box::<IsosurfaceCrate>::default(), 1, true, false),
+        entry(OUR_MC, mc(), TWO, true, false),
+        entry(OUR_MC, mc(), ONE, true, false),
+        entry(OUR_SN, sn(), TWO, true, false),
+        entry(OUR_SN, sn(), ONE, true, false),
+        entry(FSN, Box::<FastSurfaceNets>::default(), ONE, true, false),
+        entry(ISOSURFACE, Box::<IsosurfaceCrate>::default(), ONE, true, false),
     ];
     if let Some(server) = python {
-        for threads in [1, 2] {
-            list.push(entry("VTK vtkFlyingEdges3D", Box::new(PythonPeer::new(server, "vtk-flying-edges")), threads, true, false));
+        for threads in [ONE, TWO] {
+            list.push(entry(VTK_FE, Box::new(PythonPeer::new(server, "vtk-flying-edges")), threads, true, false));
         }
         for name in SLOW_PEERS {
-            list.push(entry(name, Box::new(PythonPeer::new(server, name)), 1, false, true));
+            list.push(entry(name, Box::new(PythonPeer::new(server, name)), ONE, false, true));
         }
     }
     list
@@ -156,6 +156,10 @@ fn entries(python: Option<&std::rc::Rc<std::cell::RefCell<PythonServer>>>) -> Ve
 impl Experiment for Peers {
     fn name(&self) -> &'static str {
         NAME
+    }
+
+    fn question(&self) -> &'static str {
+        "How fast are our extractors against the peer libraries on the same grids, one-shot and steady state?"
     }
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
@@ -313,25 +317,48 @@ fn charts(dir: &Path, data: &Data) -> Result<(), ExperimentError> {
     Ok(())
 }
 
-/// Ratio columns: (header, ours, theirs).
-const ONE_SHOT_RATIOS: [(&str, &str, &str); 8] = [
-    ("MC vs FlyingEdges, 1 thread", "isolab marching-cubes (1 thread)", "VTK vtkFlyingEdges3D (1 thread)"),
-    ("MC vs FlyingEdges, 2 threads", "isolab marching-cubes (2 threads)", "VTK vtkFlyingEdges3D (2 threads)"),
-    ("SN vs fast-surface-nets, 1 thread", "isolab surface-nets (1 thread)", "fast-surface-nets (1 thread)"),
-    ("SN (2 threads) vs fast-surface-nets", "isolab surface-nets (2 threads)", "fast-surface-nets (1 thread)"),
-    ("MC vs skimage Lewiner", "isolab marching-cubes (1 thread)", "skimage-lewiner (1 thread)"),
-    ("MC vs vtkMarchingCubes", "isolab marching-cubes (1 thread)", "vtk-marching-cubes (1 thread)"),
-    ("MC vs libigl", "isolab marching-cubes (1 thread)", "libigl (1 thread)"),
-    ("MC vs isosurface crate", "isolab marching-cubes (1 thread)", "isosurface crate (1 thread)"),
-];
+/// The thread counts compared: one, and the second thread.
+const ONE: usize = 1;
+/// See [`ONE`].
+const TWO: usize = 2;
+const OUR_MC: &str = "isolab marching-cubes";
+const OUR_SN: &str = "isolab surface-nets";
+const VTK_FE: &str = "VTK vtkFlyingEdges3D";
+const FSN: &str = "fast-surface-nets";
+const ISOSURFACE: &str = "isosurface crate";
 
-/// The second thread's speed-up (one-shot): (header, one thread, two threads).
-const SCALING: [(&str, &str, &str); 3] = [
-    ("isolab MC", "isolab marching-cubes (1 thread)", "isolab marching-cubes (2 threads)"),
-    ("isolab SN", "isolab surface-nets (1 thread)", "isolab surface-nets (2 threads)"),
-    ("VTK FlyingEdges", "VTK vtkFlyingEdges3D (1 thread)", "VTK vtkFlyingEdges3D (2 threads)"),
-];
+/// An implementation's label in the data: its name and threads.
+fn label(name: &str, threads: usize) -> String {
+    format!("{name} ({threads} thread{})", if threads == 1 { "" } else { "s" })
+}
 
+/// A ratio column: header, then (name, threads) of ours and of the peer.
+type Column = (String, (&'static str, usize), (&'static str, usize));
+
+/// Ratio columns, one-shot; the first four also steady state.
+fn one_shot_ratios() -> Vec<Column> {
+    let t = |n: usize| format!("{n} thread{}", if n == 1 { "" } else { "s" });
+    vec![
+        (format!("MC vs FlyingEdges, {}", t(ONE)), (OUR_MC, ONE), (VTK_FE, ONE)),
+        (format!("MC vs FlyingEdges, {}", t(TWO)), (OUR_MC, TWO), (VTK_FE, TWO)),
+        (format!("SN vs fast-surface-nets, {}", t(ONE)), (OUR_SN, ONE), (FSN, ONE)),
+        (format!("SN ({}) vs fast-surface-nets", t(TWO)), (OUR_SN, TWO), (FSN, ONE)),
+        ("MC vs skimage Lewiner".into(), (OUR_MC, ONE), ("skimage-lewiner", ONE)),
+        ("MC vs vtkMarchingCubes".into(), (OUR_MC, ONE), ("vtk-marching-cubes", ONE)),
+        ("MC vs libigl".into(), (OUR_MC, ONE), ("libigl", ONE)),
+        ("MC vs isosurface crate".into(), (OUR_MC, ONE), (ISOSURFACE, ONE)),
+    ]
+}
+
+/// The second thread's speed-up (one-shot): header, then two threads against one.
+fn scaling_columns() -> Vec<Column> {
+    [("isolab MC", OUR_MC), ("isolab SN", OUR_SN), ("VTK FlyingEdges", VTK_FE)]
+        .into_iter()
+        .map(|(h, name)| (h.to_owned(), (name, TWO), (name, ONE)))
+        .collect()
+}
+
+/// Peer median over ours, or a dash.
 fn ratio(a: Option<&Timing>, b: Option<&Timing>) -> String {
     match (a, b) {
         (Some(a), Some(b)) => format!("{:.2}×", b.ms.median / a.ms.median),
@@ -340,18 +367,18 @@ fn ratio(a: Option<&Timing>, b: Option<&Timing>) -> String {
 }
 
 /// A ratio table over `grids` for `columns` under `protocol`.
-fn ratio_table(data: &Data, grids: &[(String, usize)], protocol: Protocol, columns: &[(&str, &str, &str)]) -> String {
+fn ratio_table(data: &Data, grids: &[(String, usize)], protocol: Protocol, columns: &[Column]) -> String {
     let body: Vec<Vec<String>> = grids
         .iter()
         .map(|(f, n)| {
             let t = |label: &str| time_of(data, label, protocol, f, *n);
             let mut row = vec![format!("{f} {n}³")];
-            row.extend(columns.iter().map(|(_, ours, theirs)| ratio(t(ours), t(theirs))));
+            row.extend(columns.iter().map(|(_, ours, theirs)| ratio(t(&label(ours.0, ours.1)), t(&label(theirs.0, theirs.1)))));
             row
         })
         .collect();
     let mut header = vec!["grid"];
-    header.extend(columns.iter().map(|c| c.0));
+    header.extend(columns.iter().map(|c| c.0.as_str()));
     markdown_table(&header, &body)
 }
 
@@ -379,7 +406,7 @@ fn times_table(data: &Data, grids: &[(String, usize)], protocol: Protocol, with_
             if with_floor {
                 let fl = data.floors.iter().find(|x| &x.field == f && x.n == *n);
                 let floor = fl.map_or(f64::NAN, |x| x.read_ms + x.write_ms);
-                let mc = time_of(data, "isolab marching-cubes (2 threads)", protocol, f, *n).map_or(f64::NAN, |t| t.ms.median);
+                let mc = time_of(data, &label(OUR_MC, TWO), protocol, f, *n).map_or(f64::NAN, |t| t.ms.median);
                 row.extend([format!("{floor:.2}"), format!("{:.1}", mc / floor)]);
             }
             row.extend(labels.iter().map(|l| time_of(data, l, protocol, f, *n).map_or("-".into(), spread)));
@@ -399,9 +426,9 @@ fn section(data: &Data) -> String {
          call repeated with what the implementation lets a caller keep (ours: extractor and output buffers; VTK: the same \
          filter, `Modified()` then `Update()`; `fast-surface-nets`: its buffer), after one unrecorded warm-up call. The slower \
          peers keep nothing between calls and run one-shot only. Ratios are peer median / our median under the same protocol \
-         (above 1 means we are faster); the times tables give each median with its fastest and slowest run. \
+         (above one means we are faster); the times tables give each median with its fastest and slowest run. \
          Our marching cubes makes no normals here, as VTK runs with ComputeNormalsOff and the other marching cubes peers make \
-         none; surface nets makes its usual normals, as `fast-surface-nets` does. Peer versions: {}. Times are wall clock on a shared 2-core machine; compare ratios within this run.\n\n",
+         none; surface nets makes its usual normals, as `fast-surface-nets` does. Peer versions: {}. Times are wall clock on a shared machine; compare ratios within this run.\n\n",
         data.repeats,
         if data.versions.is_empty() {
             "none available".to_owned()
@@ -417,11 +444,11 @@ fn section(data: &Data) -> String {
     let mut grids: Vec<(String, usize)> = data.floors.iter().map(|f| (f.field.clone(), f.n)).collect();
     grids.dedup();
     md.push_str("### Ratios, one-shot (peer time / ours)\n\n");
-    md.push_str(&ratio_table(data, &grids, Protocol::OneShot, &ONE_SHOT_RATIOS));
+    md.push_str(&ratio_table(data, &grids, Protocol::OneShot, &one_shot_ratios()));
     md.push_str("\n### Ratios, steady state (peer time / ours)\n\n");
-    md.push_str(&ratio_table(data, &grids, Protocol::SteadyState, &ONE_SHOT_RATIOS[..4]));
+    md.push_str(&ratio_table(data, &grids, Protocol::SteadyState, &one_shot_ratios()[..4]));
     md.push_str("\n### The second thread (one-shot: one-thread time / two-thread time)\n\n");
-    md.push_str(&ratio_table(data, &grids, Protocol::OneShot, &SCALING.map(|(h, one, two)| (h, two, one))));
+    md.push_str(&ratio_table(data, &grids, Protocol::OneShot, &scaling_columns()));
     md.push_str("\n### Times, one-shot (ms: median (fastest-slowest)) and the memory floor\n\nThe floor is one streaming read of the grid plus one write of marching cubes' output bytes; `× floor` is our two-thread one-shot marching cubes over it. Triangle counts are in `data/peers.json`.\n\n");
     md.push_str(&times_table(data, &grids, Protocol::OneShot, true));
     md.push_str("\n### Times, steady state (ms: median (fastest-slowest))\n\n");

@@ -46,37 +46,37 @@ const NAME: &str = "real_volumes";
 
 /// An iso-value and how it was found.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-struct Level {
-    name: String,
-    iso: f32,
-    how: String,
+pub(crate) struct Level {
+    pub(crate) name: String,
+    pub(crate) iso: f32,
+    pub(crate) how: String,
 }
 
 /// One implementation at one iso-value.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-struct Row {
-    implementation: String,
-    ours: bool,
-    level: String,
+pub(crate) struct Row {
+    pub(crate) implementation: String,
+    pub(crate) ours: bool,
+    pub(crate) level: String,
     /// Extraction time on one thread (ours in a one-thread rayon pool; VTK's Sequential backend).
-    time_1: Spread,
+    pub(crate) time_1: Spread,
     /// On two threads (rayon's pool; VTK's STDThread backend); none for single-threaded peers.
-    time_2: Option<Spread>,
-    vertices: usize,
-    triangles: usize,
-    min_angle_deg: f64,
-    aspect_mean: f64,
-    aspect_max: f64,
-    components: usize,
-    genus: Option<i64>,
-    closed: bool,
-    manifold: bool,
-    outward: bool,
-    oriented: bool,
-    self_intersections: usize,
+    pub(crate) time_2: Option<Spread>,
+    pub(crate) vertices: usize,
+    pub(crate) triangles: usize,
+    pub(crate) min_angle_deg: f64,
+    pub(crate) aspect_mean: f64,
+    pub(crate) aspect_max: f64,
+    pub(crate) components: usize,
+    pub(crate) genus: Option<i64>,
+    pub(crate) closed: bool,
+    pub(crate) manifold: bool,
+    pub(crate) outward: bool,
+    pub(crate) oriented: bool,
+    pub(crate) self_intersections: usize,
     /// Mean and max distance of vertices to the trilinear level set, in voxels (1 mm).
-    distance_mean: f64,
-    distance_max: f64,
+    pub(crate) distance_mean: f64,
+    pub(crate) distance_max: f64,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -93,22 +93,22 @@ struct EndToEnd {
 }
 
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
-struct Data {
-    source: String,
-    shape: [usize; 3],
-    data_type: String,
-    spacing: [f64; 3],
-    file_bytes: u64,
+pub(crate) struct Data {
+    pub(crate) source: String,
+    pub(crate) shape: [usize; 3],
+    pub(crate) data_type: String,
+    pub(crate) spacing: [f64; 3],
+    pub(crate) file_bytes: u64,
     /// Voxels that are exactly 0 (outside the brain mask of a brain-extracted template).
-    zero_fraction: f64,
-    levels: Vec<Level>,
-    rows: Vec<Row>,
+    pub(crate) zero_fraction: f64,
+    pub(crate) levels: Vec<Level>,
+    pub(crate) rows: Vec<Row>,
     end_to_end: Vec<EndToEnd>,
-    images: Vec<(String, String)>,
-    versions: BTreeMap<String, String>,
-    skipped: Vec<String>,
-    repeats: usize,
-    threads: usize,
+    pub(crate) images: Vec<(String, String)>,
+    pub(crate) versions: BTreeMap<String, String>,
+    pub(crate) skipped: Vec<String>,
+    pub(crate) repeats: usize,
+    pub(crate) threads: usize,
 }
 
 /// The iso-values: Otsu of all voxels, then Otsu of the voxels above the first.
@@ -174,6 +174,10 @@ fn picture_options(size: u32) -> RenderOptions {
 impl Experiment for RealVolumes {
     fn name(&self) -> &'static str {
         NAME
+    }
+
+    fn question(&self) -> &'static str {
+        "Do the extractors mesh a real MRI cleanly, and how fast against VTK and scikit-image?"
     }
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
@@ -380,7 +384,7 @@ impl Experiment for RealVolumes {
         s.push_str(&format!(
             "The MNI ICBM152 2009a symmetric T1 template, {}: {a} x {b} x {c} voxels of {} ({:.0} x {:.0} x {:.0} mm), {:.1} MB \
              gzipped, read by isolab's NIfTI reader and meshed on its own voxel grid (no resampling) in RAS world coordinates. \
-             This copy is brain-extracted ({:.0}% of its voxels are 0), so it has no skin to mesh, and the issue's \"skin\" \
+             This copy is brain-extracted ({:.0}% of its voxels are zero), so it has no skin to mesh, and the issue's \"skin\" \
              level is the brain's outer surface here. Iso-values, computed by the experiment: {}. Inside is above the \
              iso-value (`--inside above`, the default for volume files).\n\n",
             data.source,
@@ -399,10 +403,10 @@ impl Experiment for RealVolumes {
              `vtkFlyingEdges3D` and a fresh scikit-image call on the array nibabel loaded. VTK meshes that \
              array as stored ({}); isolab's samples are f32 (four bytes a voxel), converted \
              beforehand (the conversion is in the end-to-end times below). Distance: the mean over vertices of the first-order distance \
-             `|f - iso| / |grad f|` to the trilinear interpolant's level set, in voxels (1 mm; the maximum is not shown: \
+             `|f - iso| / |grad f|` to the trilinear interpolant's level set, in voxels ({:.0} mm; the maximum is not shown: \
              where the interpolant is nearly flat this estimate is meaningless). Every mesh is measured by isolab's metrics, checked against CGAL, pymeshlab and VTK \
              elsewhere in this report.\n\n",
-            data.repeats, data.threads, data.data_type
+            data.repeats, data.threads, data.data_type, data.spacing[0]
         ));
         for level in &data.levels {
             s.push_str(&format!("**{} (iso {:.1})**\n\n", level.name, level.iso));
@@ -438,8 +442,8 @@ impl Experiment for RealVolumes {
                 &[
                     "implementation",
                     "triangles",
-                    "ms, 1 thread",
-                    "ms, 2 threads",
+                    "ms, one thread",
+                    &format!("ms, {} threads", data.threads),
                     "min angle",
                     "aspect mean / max",
                     "components",
@@ -472,7 +476,7 @@ impl Experiment for RealVolumes {
         s.push_str(
             "End to end, one process each, one-shot: isolab reading the `.nii.gz`, taking the voxels as samples, marching cubes \
              and the map to world coordinates, against nibabel loading the same file, the array into a `vtkImageData` and \
-             `vtkFlyingEdges3D`, both on the same number of threads (ratio: peer time over ours, above 1 when isolab is \
+             `vtkFlyingEdges3D`, both on the same number of threads (ratio: peer time over ours, above one when isolab is \
              faster):\n\n",
         );
         s.push_str(&markdown_table(

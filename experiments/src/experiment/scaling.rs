@@ -34,6 +34,12 @@ const SIZES: [usize; 5] = [32, 64, 128, 256, 512];
 const THREADS: [usize; 2] = [1, 2];
 /// A one-thread run longer than this (seconds) stops an extractor's climb to larger grids.
 const BUDGET_S: f64 = 6.0;
+/// Runs per configuration at most (the report's repeats, capped).
+const MAX_REPEATS: usize = 3;
+/// From this grid size on, one run per configuration.
+const SINGLE_RUN_FROM: usize = 512;
+/// The slopes are fitted from this grid size on.
+const SLOPE_FROM: usize = 64;
 
 /// One extractor on one grid.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -106,6 +112,10 @@ impl Experiment for Scaling {
         NAME
     }
 
+    fn question(&self) -> &'static str {
+        "How do time and memory grow with the grid and with the threads?"
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let pools = THREADS
             .iter()
@@ -125,7 +135,7 @@ impl Experiment for Scaling {
             let grid = Grid::covering(&field.domain(), n)?;
             let samples = Samples::sample_cubic(field.clone(), grid, 0.0)?;
             let grid_bytes = samples.values().len() * 4;
-            let runs = if n >= 512 { 1 } else { ctx.repeats.min(3) };
+            let runs = if n >= SINGLE_RUN_FROM { 1 } else { ctx.repeats.min(MAX_REPEATS) };
             for (index, info) in INFOS.iter().enumerate() {
                 bar.set_message(format!("{} {n}³", info.name));
                 if !alive[index] {
@@ -167,9 +177,11 @@ impl Experiment for Scaling {
                 let one_thread_s = ms[0].max(first.as_secs_f64() * 1e3) / 1e3;
                 if one_thread_s > BUDGET_S && n != *SIZES.last().unwrap_or(&n) {
                     alive[index] = false;
+                    let next = SIZES.iter().find(|&&m| m > n).copied().unwrap_or(n);
                     skipped.push(format!(
-                        "{} above {n}³: one thread took {one_thread_s:.1} s at {n}³ (over the {BUDGET_S} s budget; the next grid has 8× the cells)",
-                        info.name
+                        "{} above {n}³: one thread took {one_thread_s:.1} s at {n}³ (over the {BUDGET_S} s budget; the next grid has {}× the cells)",
+                        info.name,
+                        (next * next * next) / (n * n * n).max(1)
                     ));
                 }
                 bar.inc(1);
@@ -234,23 +246,27 @@ fn section(ctx: &Context, data: &Data) -> String {
     let mut md = String::from("## Scaling with the grid and the threads (`scaling`)\n\n");
     md.push_str(&format!(
         "Every extractor on the built-in `{}` sampled on cubic grids of n³ samples (extraction only, the samples shared), with rayon \
-         limited to {} threads by a pool of that size, alternating; medians of 3 runs (one at 512³). *× floor* is the one-thread \
+         limited to {} threads by a pool of that size, alternating; medians of up to {MAX_REPEATS} runs (one from {SINGLE_RUN_FROM}³ on). *× floor* is the one-thread \
          time over this machine's memory floor for the grid and that extractor's output (one streaming read of the samples plus \
          one write of the output bytes, measured in the same run). *Peak* is the heap the extraction added at its highest, \
          counted by a global allocator on a fresh extractor and output; *grid + output* is the least any extractor must hold \
-         (the samples are already there, so a ratio near 1 means the output is nearly all it keeps). Times are wall clock on a \
-         shared 2-core machine.\n\n",
+         (the samples are already there, so a ratio near one means the output is nearly all it keeps). Times are wall clock on a \
+         shared machine.\n\n",
         data.field,
         threads.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(" and "),
     ));
     // Slopes.
-    md.push_str("### Slopes of log time against log cells (64³ and up)\n\n");
+    md.push_str(&format!("### Slopes of log time against log cells ({SLOPE_FROM}³ and up)\n\n"));
     let mut slopes = Vec::new();
     for name in algorithms(data) {
         let mut row = vec![name.clone()];
         for k in 0..threads.len() {
-            let pts: Vec<(f64, f64)> =
-                data.rows.iter().filter(|r| r.algorithm == name && r.n >= 64).map(|r| (r.cells as f64, r.ms[k])).collect();
+            let pts: Vec<(f64, f64)> = data
+                .rows
+                .iter()
+                .filter(|r| r.algorithm == name && r.n >= SLOPE_FROM)
+                .map(|r| (r.cells as f64, r.ms[k]))
+                .collect();
             row.push(log_slope(&pts).map_or("-".into(), |s| format!("{s:.2}")));
         }
         let largest = data.rows.iter().filter(|r| r.algorithm == name).map(|r| r.n).max().unwrap_or(0);

@@ -16,24 +16,28 @@ const NAME: &str = "sharp_features";
 const RESOLUTIONS: [usize; 3] = [32, 64, 128];
 
 #[derive(Serialize, Deserialize)]
-struct Row {
-    algorithm: String,
-    resolution: usize,
-    worst_corner_h: f64,
-    mean_corner_h: f64,
-    self_intersections: usize,
-    manifold: bool,
+pub(crate) struct Row {
+    pub(crate) algorithm: String,
+    pub(crate) resolution: usize,
+    pub(crate) worst_corner_h: f64,
+    pub(crate) mean_corner_h: f64,
+    pub(crate) self_intersections: usize,
+    pub(crate) manifold: bool,
 }
 
 #[derive(Serialize, Deserialize)]
-struct Data {
-    rows: Vec<Row>,
-    images: Vec<(String, String)>,
+pub(crate) struct Data {
+    pub(crate) rows: Vec<Row>,
+    pub(crate) images: Vec<(String, String)>,
 }
 
 impl Experiment for SharpFeatures {
     fn name(&self) -> &'static str {
         NAME
+    }
+
+    fn question(&self) -> &'static str {
+        "Which extractors keep a CAD shape's sharp corners?"
     }
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {

@@ -16,26 +16,30 @@ const NAME: &str = "sphere_convergence";
 const RESOLUTIONS: [usize; 5] = [16, 32, 64, 128, 256];
 
 #[derive(Serialize, Deserialize)]
-struct Row {
-    algorithm: String,
-    resolution: usize,
-    triangles: usize,
-    volume_error: f64,
-    area_error: f64,
-    mean_distance_over_spacing: f64,
-    max_distance_over_spacing: f64,
+pub(crate) struct Row {
+    pub(crate) algorithm: String,
+    pub(crate) resolution: usize,
+    pub(crate) triangles: usize,
+    pub(crate) volume_error: f64,
+    pub(crate) area_error: f64,
+    pub(crate) mean_distance_over_spacing: f64,
+    pub(crate) max_distance_over_spacing: f64,
 }
 
 #[derive(Serialize, Deserialize)]
-struct Data {
-    radius: f64,
-    rows: Vec<Row>,
-    plot: String,
+pub(crate) struct Data {
+    pub(crate) radius: f64,
+    pub(crate) rows: Vec<Row>,
+    pub(crate) plot: String,
 }
 
 impl Experiment for SphereConvergence {
     fn name(&self) -> &'static str {
         NAME
+    }
+
+    fn question(&self) -> &'static str {
+        "How fast does each extractor's error on the sphere shrink as the grid gets finer?"
     }
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {

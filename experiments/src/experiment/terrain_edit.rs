@@ -24,8 +24,14 @@ const DIMS: [usize; 3] = [257, 129, 257];
 const CHUNK: usize = 32;
 const EDITS: usize = 200;
 const SEED: u64 = 2026;
-/// A 60 Hz frame, ms.
-const FRAME_MS: f64 = 1000.0 / 60.0;
+/// A game's frame rate, Hz.
+const FRAME_HZ: f64 = 60.0;
+/// One frame at [`FRAME_HZ`], ms.
+pub(crate) const FRAME_MS: f64 = 1000.0 / FRAME_HZ;
+/// A brush's radius, cells: from the first to the second, uniformly.
+const BRUSH_RADIUS: (f32, f32) = (3.0, 10.0);
+/// A brush's falloff, cells: from the first to the second, uniformly.
+const BRUSH_FALLOFF: (f32, f32) = (0.0, 3.0);
 /// Every this many edits, a GIF frame.
 const GIF_EVERY: usize = 10;
 
@@ -53,13 +59,22 @@ pub struct Run {
 }
 
 #[derive(Serialize, Deserialize)]
-struct Data {
-    runs: Vec<Run>,
-    not_run: Vec<String>,
-    before: String,
-    after: String,
-    gif: String,
-    plot: String,
+pub(crate) struct Data {
+    pub(crate) runs: Vec<Run>,
+    pub(crate) not_run: Vec<String>,
+    pub(crate) before: String,
+    pub(crate) after: String,
+    pub(crate) gif: String,
+    pub(crate) plot: String,
+}
+
+/// What an extractor reads to mesh one chunk, in words.
+fn chunk_reads(algorithm: &str) -> String {
+    match isolab_algorithms::extractors::by_name(algorithm).map(|e| e.chunking()) {
+        Some(isolab_algorithms::Chunking::CellLocal) => "reads exactly its chunk's samples".into(),
+        Some(isolab_algorithms::Chunking::Apron(a)) => format!("also reads an apron of {a} samples of its neighbours"),
+        _ => "does not chunk".into(),
+    }
 }
 
 /// The scripted edits: a sphere on the current surface of a random column, radius 3-10 cells,
@@ -71,7 +86,8 @@ fn script(grid: &Grid, values: &dyn Fn(usize, usize) -> Option<usize>) -> Vec<Br
     let mut brushes = Vec::with_capacity(EDITS);
     while brushes.len() < EDITS {
         let (x, z) = ((next() * (DIMS[0] - 1) as f32) as usize, (next() * (DIMS[2] - 1) as f32) as usize);
-        let (radius, falloff) = (3.0 + 7.0 * next(), 3.0 * next());
+        let radius = BRUSH_RADIUS.0 + (BRUSH_RADIUS.1 - BRUSH_RADIUS.0) * next();
+        let falloff = BRUSH_FALLOFF.0 + (BRUSH_FALLOFF.1 - BRUSH_FALLOFF.0) * next();
         let Some(y) = values(x, z) else { continue };
         brushes.push(Brush {
             centre: grid.position(x, y, z),
@@ -94,6 +110,10 @@ fn percentile(sorted: &[f64], q: f64) -> f64 {
 impl Experiment for TerrainEdit {
     fn name(&self) -> &'static str {
         NAME
+    }
+
+    fn question(&self) -> &'static str {
+        "How long does re-meshing a chunked terrain after a brush edit take, and do the seams stay closed?"
     }
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
@@ -190,7 +210,7 @@ impl Experiment for TerrainEdit {
             })
             .collect();
         series.push(Series {
-            label: "16.7 ms frame".into(),
+            label: format!("{FRAME_MS:.1} ms frame"),
             color: (0, 0, 0),
             points: vec![(1.0, FRAME_MS), (EDITS as f64, FRAME_MS)],
         });
@@ -213,17 +233,20 @@ impl Experiment for TerrainEdit {
         let mut md = String::from("## Editable chunked terrain (`terrain_edit`)\n\n");
         md.push_str(&format!(
             "`terrain` at {}x{}x{} samples in {CHUNK}³-cell chunks ({} chunks), meshed once, then {EDITS} scripted brush edits \
-             (seed {SEED}: a sphere of radius 3-10 cells on the surface of a random column, falloff 0-3 cells, alternately \
-             carving and adding clay). An edit's time is the sample edit plus re-meshing every chunk it dirtied (in parallel on 2 \
-             cores); the welded mesh is only assembled for pictures. Against the 16.7 ms of a 60 Hz frame. Every surface \
-             extractor chunks: marching cubes and marching tetrahedra read exactly their chunk's samples, surface nets, dual \
-             contouring and regularised MT also an apron of their neighbours' (6, 2 and 3 samples), so an edit dirties more of \
-             their chunks and each chunk costs more (dual contouring here takes its normals from the samples, since edits leave \
-             the field behind).\n\n",
+             (seed {SEED}: a sphere of radius {}-{} cells on the surface of a random column, falloff {}-{} cells, alternately \
+             carving and adding clay). An edit's time is the sample edit plus re-meshing every chunk it dirtied (in parallel); \
+             the welded mesh is only assembled for pictures. Against the {FRAME_MS:.1} ms of a {FRAME_HZ} Hz frame. Every surface \
+             extractor chunks: {}. An apron makes an edit dirty more chunks and each chunk cost more (dual contouring here \
+             takes its normals from the samples, since edits leave the field behind).\n\n",
             DIMS[0],
             DIMS[1],
             DIMS[2],
-            (DIMS[0] - 1) / CHUNK * (DIMS[1] - 1) / CHUNK * (DIMS[2] - 1) / CHUNK
+            (DIMS[0] - 1) / CHUNK * (DIMS[1] - 1) / CHUNK * (DIMS[2] - 1) / CHUNK,
+            BRUSH_RADIUS.0,
+            BRUSH_RADIUS.1,
+            BRUSH_FALLOFF.0,
+            BRUSH_FALLOFF.1,
+            data.runs.iter().map(|r| format!("`{}` {}", r.algorithm, chunk_reads(&r.algorithm))).collect::<Vec<_>>().join("; "),
         ));
         let body: Vec<Vec<String>> = data
             .runs
@@ -250,7 +273,7 @@ impl Experiment for TerrainEdit {
                 "edit median (ms)",
                 "edit p99 (ms)",
                 "slowest (ms)",
-                "within 16.7 ms",
+                &format!("within {FRAME_MS:.1} ms"),
                 "chunks per edit",
                 "triangles",
                 "manifold after",

@@ -46,6 +46,10 @@ impl Experiment for TerrainLod {
         NAME
     }
 
+    fn question(&self) -> &'static str {
+        "Do levels of detail meet without cracks, and how many triangles do they save?"
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let field = fields::builtin("terrain", Default::default())?;
         let grid = Grid::with_dims(&field.domain(), DIMS)?;
@@ -140,14 +144,17 @@ impl Experiment for TerrainLod {
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
         let d: Data = ctx.read_data(NAME)?;
         let mut md = String::from("## Levels of detail without cracks (`terrain_lod`)\n\n");
-        md.push_str(
-            "The 256×128×256-cell `terrain` in 32³-cell chunks, each meshed by marching cubes at full resolution or at half \
+        md.push_str(&format!(
+            "The {}×{}×{}-cell `terrain` in {CHUNK}³-cell chunks, each meshed by marching cubes at full resolution or at half \
              resolution (every other sample). Where levels meet, the fine side's samples on the seam are restricted to what the \
              coarse side sees and each coarse seam triangle is fanned over the fine boundary path (`algorithms::lod`; Lengyel's \
              Transvoxel is the reference approach, this one needs no transition table). *Stitched* counts the coarse seam edges, \
              each of which would be a crack without stitching; *open seam edges* counts boundary edges left anywhere but on the \
-             world's boundary. Times are medians of 5 runs, sampling excluded.\n\n",
-        );
+             world's boundary. Times are medians of {RUNS} runs, sampling excluded.\n\n",
+            DIMS[0] - 1,
+            DIMS[1] - 1,
+            DIMS[2] - 1,
+        ));
         let body: Vec<Vec<String>> = d
             .rows
             .iter()

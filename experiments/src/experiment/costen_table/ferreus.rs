@@ -45,7 +45,7 @@ pub(super) fn against_ferreus(repeats: usize) -> Result<Vec<PeerRow>, Experiment
             RegularisedMarchingTetrahedra::default().extract(&samples, &mut out)?;
             ours_total.push(t.elapsed());
             ours_extraction.push(out.stats.times.extraction());
-            let seeds = crate::peers::seeds_from(&out.surface, 500);
+            let seeds = crate::peers::seeds_from(&out.surface, SEED_EVERY);
             let job = Job::Field { field: field.as_ref(), domain: grid.bounds(), spacing: grid.spacing, iso: 0.0, seeds: &seeds };
             let run = FerreusRmt.run(&job, Protocol::OneShot)?;
             theirs.push(run.time);
@@ -69,13 +69,16 @@ pub(super) fn against_ferreus(repeats: usize) -> Result<Vec<PeerRow>, Experiment
     Ok(rows)
 }
 
+/// `ferreus_rmt` starts from every this many vertices of our mesh.
+const SEED_EVERY: usize = 500;
+
 pub(super) fn peer_section(rows: &[PeerRow]) -> String {
     if rows.is_empty() {
         return String::new();
     }
-    let mut md = String::from(
-        "\n### Against `ferreus_rmt`\n\nThe `ferreus_rmt` crate (0.1, Maptek) is an independent regularised marching tetrahedra \
-         that follows the surface from seed points (here every 500th vertex of our mesh) instead of sampling the whole volume, \
+    let mut md = format!(
+        "\n### Against `ferreus_rmt`\n\nThe `ferreus_rmt` crate (Maptek; its version is in `Cargo.lock`) is an independent regularised marching tetrahedra \
+         that follows the surface from seed points (here every {SEED_EVERY}th vertex of our mesh) instead of sampling the whole volume, \
          on Treece's stacked-plane lattice at the same spacing. Both evaluate the field in parallel; its time includes its field \
          evaluations, so compare it with our sampling + extraction. Same field, same spacing, runs alternating, medians.\n\n",
     );

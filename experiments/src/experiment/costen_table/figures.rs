@@ -2,15 +2,22 @@
 
 use super::*;
 
+/// The defect close-up's radius around the first faulty vertex, in grid spacings.
+const CLOSE_UP_H: f32 = 3.0;
+
 /// Figs. 21-23: bunny at the benchmark resolution, a low-resolution sphere, a medium-resolution
 /// asteroid; BCC, integrated clustering (our defaults); flat shading beside smooth shading.
 pub(super) fn pictures(ctx: &Context, dir: &std::path::Path) -> Result<Vec<Picture>, ExperimentError> {
     let mut pictures = Vec::new();
-    for (name, dims, label) in [
-        ("stanford-bunny", [76, 41, 57], "Stanford bunny, 75 × 40 × 56 cells (Fig. 21)"),
-        ("sphere", [17, 17, 17], "sphere, 16³ cells (Fig. 22)"),
-        ("asteroid", [51, 51, 51], "asteroid, 50³ cells (Fig. 23)"),
-    ] {
+    for (name, dims, figure) in
+        [("stanford-bunny", [76, 41, 57], "Fig. 21"), ("sphere", [17, 17, 17], "Fig. 22"), ("asteroid", [51, 51, 51], "Fig. 23")]
+    {
+        let [x, y, z] = dims.map(|n: usize| n - 1);
+        let label = if x == y && y == z {
+            format!("{name}, {x}³ cells ({figure})")
+        } else {
+            format!("{name}, {x} × {y} × {z} cells ({figure})")
+        };
         let field = load_object(name)?;
         let grid = Grid::with_dims(&field.domain(), dims)?;
         let samples = Samples::sample(field, Lattice::Bcc(grid), 0.0)?;
@@ -43,7 +50,7 @@ pub(super) fn defect_closeup(
     let defects = manifold_defects(mesh);
     let Some(&v) = defects.first() else { return Ok(None) };
     let centre = mesh.positions[v as usize];
-    let near = |t: &[u32; 3]| t.iter().any(|&i| mesh.positions[i as usize].distance(centre) < 3.0 * spacing);
+    let near = |t: &[u32; 3]| t.iter().any(|&i| mesh.positions[i as usize].distance(centre) < CLOSE_UP_H * spacing);
     let mut crop = isolab_algorithms::TriMesh {
         positions: mesh.positions.clone(),
         normals: Vec::new(),
@@ -71,7 +78,7 @@ pub(super) fn defect_closeup(
     save_png(&path, &render(&crop, &opts))?;
     Ok(Some(Picture {
         caption: format!(
-            "{id}: where it is not manifold ({} vertices at fault; close-up within 3 h of the first)",
+            "{id}: where it is not manifold ({} vertices at fault; close-up within {CLOSE_UP_H} h of the first)",
             defects.len()
         ),
         path: ctx.link(&path),

@@ -161,6 +161,10 @@ impl Experiment for CostenTable {
         NAME
     }
 
+    fn question(&self) -> &'static str {
+        "Does regularised marching tetrahedra reproduce Costen's benchmark: counts, times and quality?"
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let dir = ctx.figure_dir(NAME)?;
         let repeats = ctx.repeats;
@@ -259,6 +263,33 @@ fn paper_integrated_reduction() -> (f64, f64) {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)))
 }
 
+/// The paper's processor, as it names it.
+const PAPER_CPU: &str = "an Intel i7-11700";
+/// Its logical processors.
+const PAPER_LOGICAL_PROCESSORS: usize = 16;
+
+/// The paper's edge scratch per sample on the simple cubic lattice (`B_edges` over the samples of
+/// the first object's `*_su` row), bytes.
+fn paper_edge_bytes_per_sample() -> f64 {
+    let (id, dims) = (format!("{}_su", OBJECTS[0].0), OBJECTS[0].2);
+    PAPER.iter().find(|p| p.0 == id).map_or(f64::NAN, |p| p.10 as f64 / dims.iter().product::<usize>() as f64)
+}
+
+/// The paper's mean `F_discard` (%) over the rows of one clustering (`i` or `p`): its text's
+/// "average reduction of 79.53%" (integrated) and "72.20%" (post-processed), recomputed.
+fn paper_mean_discard(method: char) -> f64 {
+    let v: Vec<f64> = PAPER.iter().filter(|p| p.0.ends_with(method)).map(|p| p.14).collect();
+    v.iter().sum::<f64>() / v.len().max(1) as f64
+}
+
+/// The range of the paper's mean aspect ratio over the rows of one clustering (`u`, `i`, `p`).
+fn paper_aspect_range(method: char) -> (f64, f64) {
+    PAPER
+        .iter()
+        .filter(|p| p.0.ends_with(method))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.15), hi.max(p.15)))
+}
+
 fn pct(x: f64) -> String {
     format!("{:.1}%", 100.0 * x)
 }
@@ -287,19 +318,36 @@ fn f_discard(r: &Row) -> f64 {
 
 fn section(ctx: &Context, data: &Data) -> String {
     let mut md = String::from("## Regularised marching tetrahedra: the paper's benchmark (`costen_table`)\n\n");
+    let cells = |dims: [usize; 3]| dims.map(|n| n - 1);
+    let [cube, ..] = cells(OBJECTS[0].2);
+    let [bx, by, bz] = cells(OBJECTS[2].2);
+    let radius = isolab_algorithms::fields::builtin("sphere", Default::default())
+        .ok()
+        .and_then(|f| f.analytic_volume(0.0))
+        .map_or(f64::NAN, |v| (3.0 * v / (4.0 * std::f64::consts::PI)).cbrt());
+    let samples = |dims: [usize; 3]| dims.iter().product::<usize>().max(1) as f64;
+    let (edge_lo, edge_hi) = data
+        .rows
+        .iter()
+        .filter(|r| r.lattice == "cubic")
+        .map(|r| r.b_edges as f64 / samples(r.dims))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), b| (lo.min(b), hi.max(b)));
     md.push_str(&format!(
-        "Appendix B of Costen (2026) regenerated: 3 objects × 2 lattices (`b` BCC, `s` simple cubic, six tetrahedra per cube) × \
-         3 clusterings (`u` none, `i` integrated as published, `p` plain marching tetrahedra then the paper's edge collapse; the \
-         paper gives no threshold; ours is {} h, chosen as the value whose reduction on our asteroid comes nearest its `as_bp`), at 50 cells a side (bunny 75 × 40 × 56), {} interleaved runs each, medians. Each cell reads **ours (paper)**. \
+        "Appendix B of Costen (2026) regenerated: {} objects × two lattices (`b` BCC, `s` simple cubic, six tetrahedra per cube) × \
+         {} clusterings (`u` none, `i` integrated as published, `p` plain marching tetrahedra then the paper's edge collapse; the \
+         paper gives no threshold; ours is {} h, chosen as the value whose reduction on our asteroid comes nearest its `as_bp`), at {cube} cells a side (bunny {bx} × {by} × {bz}), {} interleaved runs each, medians. Each cell reads **ours (paper)**. \
          Rows `i+` are our RMT defaults (boundary samples merge; the manifold guard repairs what the local graph test misses), \
-         rows `p+` the topology-safe edge collapse; the paper has neither. The objects are ours: a sphere of radius 0.4 in the unit \
+         rows `p+` the topology-safe edge collapse; the paper has neither. The objects are ours: a sphere of radius {radius:.2} in the unit \
          cube, our asteroid (a noise-displaced sphere, not the paper's), the bunny as a signed-distance field of the shipped \
-         model; so counts compare in kind, not digit for digit. Times are from a shared 2-core machine (the paper: an i7-11700 \
-         with 16 logical processors, its sampling pass parallel on a thread count it does not state), B_edges is our per-sample scratch (14 bytes: vertex base, 4-bit slots, two flags; the paper \
-         stores 58). F_discard is the paper's definition, discarded / (discarded + kept); `removed` is 1 − triangles / \
+         model; so counts compare in kind, not digit for digit. Times are from a shared machine (the paper: {PAPER_CPU} \
+         with {PAPER_LOGICAL_PROCESSORS} logical processors, its sampling pass parallel on a thread count it does not state), B_edges is our per-sample scratch ({edge_lo:.1}-{edge_hi:.1} bytes a sample on the simple cubic lattice: vertex base, half-byte slots, two flags; the paper \
+         stores {:.0}). F_discard is the paper's definition, discarded / (discarded + kept); `removed` is one minus triangles / \
          triangles of `u`.\n\n",
+        OBJECTS.len(),
+        METHODS.len() - 2,
         isolab_algorithms::post::edge_collapse::DEFAULT_THRESHOLD,
-        data.repeats
+        data.repeats,
+        paper_edge_bytes_per_sample(),
     ));
     let paper = |id: &str| PAPER.iter().find(|p| p.0 == id);
     let rows = &data.rows;
@@ -432,6 +480,7 @@ fn summary(rows: &[Row]) -> String {
     };
     let broken =
         |suffix: &str| rows.iter().filter(|r| r.id.ends_with(suffix) && !r.metrics.topology.is_watertight_manifold()).count();
+    let count = |suffix: &str| rows.iter().filter(|r| r.id.ends_with(suffix)).count();
     let (ui, ua) = range("u");
     let (ii, ia) = range("i");
     let (pi, pa) = range("p");
@@ -439,28 +488,40 @@ fn summary(rows: &[Row]) -> String {
     let paper_removed = paper_integrated_reduction();
     format!(
         "\n**Headline numbers, ours against the paper's.** Integrated clustering discards on average {} of candidate triangles \
-         (the paper: 79.53%) and keeps {} fewer triangles than plain marching tetrahedra (the paper's own counts give {}-{}); \
-         the paper's edge collapse: {} discarded (paper: 72.20%), {} fewer. Mean aspect ratio: unmerged {:.2}-{:.2} (paper \
-         5.81-1207), integrated {:.2}-{:.2} (paper 1.16-2.16), post-processed {:.2}-{:.2} (paper 1.23-1.39), our guarded RMT \
-         {:.2}-{:.2}. Non-manifold outputs: {} of 6 `i` rows, {} of 6 `p` rows, {} of 6 `i+` rows and {} of 6 `p+` rows.\n",
+         (the paper: {:.2}%) and keeps {} fewer triangles than plain marching tetrahedra (the paper's own counts give {}-{}); \
+         the paper's edge collapse: {} discarded (paper: {:.2}%), {} fewer. Mean aspect ratio: unmerged {:.2}-{:.2} (paper \
+         {}-{}), integrated {:.2}-{:.2} (paper {}-{}), post-processed {:.2}-{:.2} (paper {}-{}), our guarded RMT \
+         {:.2}-{:.2}. Non-manifold outputs: {} of {} `i` rows, {} of {} `p` rows, {} of {} `i+` rows and {} of {} `p+` rows.\n",
         pct(mean("i", &f_discard)),
+        paper_mean_discard('i'),
         pct(mean("i", &|r| r.removed)),
         pct(paper_removed.0),
         pct(paper_removed.1),
         pct(mean("p", &f_discard)),
+        paper_mean_discard('p'),
         pct(mean("p", &|r| r.removed)),
         ui,
         ua,
+        num(paper_aspect_range('u').0),
+        num(paper_aspect_range('u').1),
         ii,
         ia,
+        num(paper_aspect_range('i').0),
+        num(paper_aspect_range('i').1),
         pi,
         pa,
+        num(paper_aspect_range('p').0),
+        num(paper_aspect_range('p').1),
         gi,
         ga,
         broken("i"),
+        count("i"),
         broken("p"),
+        count("p"),
         broken("i+"),
+        count("i+"),
         broken("p+"),
+        count("p+"),
     )
 }
 
@@ -472,5 +533,25 @@ mod tests {
     fn the_papers_own_counts_give_its_integrated_reduction() {
         let (lo, hi) = paper_integrated_reduction();
         assert_eq!((pct(lo), pct(hi)), ("72.5%".to_string(), "74.1%".to_string()));
+    }
+
+    #[test]
+    fn the_papers_edge_scratch_is_58_bytes_a_sample_on_every_cubic_row() {
+        assert_eq!(format!("{:.0}", paper_edge_bytes_per_sample()), "58");
+        for (prefix, _, dims) in OBJECTS {
+            let p = PAPER.iter().find(|p| p.0 == format!("{prefix}_su")).unwrap();
+            let per_sample = p.10 as f64 / dims.iter().product::<usize>() as f64;
+            assert!((per_sample - 58.0).abs() < 0.1, "{prefix}: {per_sample}");
+        }
+    }
+
+    #[test]
+    fn the_papers_table_gives_its_texts_averages_and_aspect_ranges() {
+        // Section 4.1: "an average reduction of 79.53%" and "72.20%".
+        assert_eq!(format!("{:.2}", paper_mean_discard('i')), "79.53");
+        assert_eq!(format!("{:.2}", paper_mean_discard('p')), "72.20");
+        assert_eq!(paper_aspect_range('u'), (5.81, 1207.37));
+        assert_eq!(paper_aspect_range('i'), (1.16, 2.16));
+        assert_eq!(paper_aspect_range('p'), (1.23, 1.39));
     }
 }

@@ -1,0 +1,299 @@
+//! The generated report: its pages assemble from the committed data and match what is committed,
+//! every link resolves, the front page recommends for every use case and stays short, and no
+//! number is typed into the experiments' prose (every number is computed from the data or from a
+//! labelled constant).
+
+use isolab_experiments::experiment::{all, assemble, Context};
+use std::path::{Path, PathBuf};
+
+/// The front page must fit on a few screens.
+const FRONT_PAGE_MAX_LINES: usize = 60;
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn report_dir() -> PathBuf {
+    workspace().join("report")
+}
+
+/// The report assembled afresh from the committed data, in a temporary directory.
+fn assembled() -> tempfile::TempDir {
+    let tmp = tempfile::tempdir().expect("temporary directory");
+    let data = tmp.path().join("data");
+    std::fs::create_dir_all(&data).expect("data directory");
+    for entry in std::fs::read_dir(report_dir().join("data")).expect("report/data") {
+        let entry = entry.expect("entry");
+        std::fs::copy(entry.path(), data.join(entry.file_name())).expect("copy data");
+    }
+    assemble(&Context::new(tmp.path().to_path_buf(), 1)).expect("assemble");
+    tmp
+}
+
+/// The relative link targets of a Markdown page (`](target)`), without anchors.
+fn links(md: &str) -> Vec<String> {
+    md.split("](")
+        .skip(1)
+        .filter_map(|rest| rest.split(')').next())
+        .map(|t| t.split('#').next().unwrap_or("").to_owned())
+        .filter(|t| !t.is_empty() && !t.starts_with("http"))
+        .collect()
+}
+
+#[test]
+fn pages_assemble_from_the_committed_data_and_match_what_is_committed() {
+    let tmp = assembled();
+    let mut names: Vec<String> = all().iter().map(|e| format!("{}.md", e.name())).collect();
+    names.push("REPORT.md".into());
+    for name in &names {
+        let fresh = std::fs::read_to_string(tmp.path().join(name)).expect("assembled page");
+        assert!(!fresh.contains("Not generated yet"), "{name}: a section is missing its data");
+        let committed = std::fs::read_to_string(report_dir().join(name))
+            .unwrap_or_else(|_| panic!("report/{name} is not committed: run the report's --assemble-only"));
+        assert!(fresh == committed, "report/{name} is stale: rerun `--bin report -- --assemble-only` and commit it");
+        for target in links(&fresh) {
+            assert!(report_dir().join(&target).exists(), "{name}: link to '{target}', which does not exist");
+        }
+    }
+}
+
+#[test]
+fn the_front_page_recommends_for_every_use_case_links_every_page_and_is_short() {
+    let tmp = assembled();
+    let front = std::fs::read_to_string(tmp.path().join("REPORT.md")).expect("front page");
+    assert!(front.contains("## Choosing an extractor"));
+    assert!(!front.contains("no recommendation yet"), "a use case has no recommendation:\n{front}");
+    let picks = front.lines().filter(|l| l.starts_with("- **") && l.contains(": `")).count();
+    assert!(picks >= 5, "{picks} use cases recommended");
+    for e in all() {
+        assert!(front.contains(&format!("]({}.md)", e.name())), "front page does not link {}", e.name());
+    }
+    let lines = front.lines().count();
+    assert!(lines <= FRONT_PAGE_MAX_LINES, "front page has {lines} lines (at most {FRONT_PAGE_MAX_LINES})");
+}
+
+/// A string literal of a Rust source file: its text and line.
+struct Literal {
+    text: String,
+    line: usize,
+}
+
+/// The string literals of Rust source, outside comments and char literals (a small lexer: plain,
+/// raw and byte strings; a test module at the end is left out).
+fn string_literals(src: &str) -> Vec<Literal> {
+    let src = src.split("#[cfg(test)]\nmod tests").next().unwrap_or(src);
+    let b = src.as_bytes();
+    let (mut i, mut line, mut out) = (0usize, 1usize, Vec::new());
+    while i < b.len() {
+        match b[i] {
+            b'\n' => {
+                line += 1;
+                i += 1;
+            }
+            b'/' if b.get(i + 1) == Some(&b'/') => {
+                while i < b.len() && b[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            b'/' if b.get(i + 1) == Some(&b'*') => {
+                while i + 1 < b.len() && !(b[i] == b'*' && b[i + 1] == b'/') {
+                    line += usize::from(b[i] == b'\n');
+                    i += 1;
+                }
+                i += 2;
+            }
+            b'\'' => {
+                // A char literal ('x', '\n', '\'') or a lifetime ('a): skip either.
+                if b.get(i + 1) == Some(&b'\\') {
+                    i += 2;
+                    while i < b.len() && b[i] != b'\'' {
+                        i += 1;
+                    }
+                    i += 1;
+                } else {
+                    let len = src[i + 1..].chars().next().map_or(1, char::len_utf8);
+                    i += if b.get(i + 1 + len) == Some(&b'\'') { len + 2 } else { 1 };
+                }
+            }
+            b'r' if (b.get(i + 1) == Some(&b'"') || b.get(i + 1) == Some(&b'#'))
+                && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_')) =>
+            {
+                let hashes = b[i + 1..].iter().take_while(|&&c| c == b'#').count();
+                if b.get(i + 1 + hashes) != Some(&b'"') {
+                    i += 1;
+                    continue;
+                }
+                let start = i + 2 + hashes;
+                let close = format!("\"{}", "#".repeat(hashes));
+                let end = src[start..].find(&close).map_or(b.len(), |k| start + k);
+                out.push(Literal { text: src[start..end].to_owned(), line });
+                line += src[start..end].matches('\n').count();
+                i = end + close.len();
+            }
+            b'"' => {
+                let start = i + 1;
+                i = start;
+                while i < b.len() && b[i] != b'"' {
+                    i += if b[i] == b'\\' { 2 } else { 1 };
+                }
+                let text = &src[start..i.min(b.len())];
+                out.push(Literal { text: text.to_owned(), line });
+                line += text.matches('\n').count();
+                i += 1;
+            }
+            _ => i += 1,
+        }
+    }
+    out
+}
+
+/// A literal's text with its format placeholders (`{...}`) removed and `{{`/`}}` kept as braces.
+fn without_placeholders(text: &str) -> String {
+    let (mut out, mut chars) = (String::new(), text.chars().peekable());
+    while let Some(c) = chars.next() {
+        match c {
+            '{' if chars.peek() == Some(&'{') => {
+                chars.next();
+                out.push('{');
+            }
+            '}' if chars.peek() == Some(&'}') => {
+                chars.next();
+                out.push('}');
+            }
+            '{' => {
+                for d in chars.by_ref() {
+                    if d == '}' {
+                        break;
+                    }
+                }
+                out.push('∎');
+            }
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// Words after which a number is a reference into a paper, not a measurement.
+const REFERENCES: [&str; 11] =
+    ["Table", "Tables", "Fig.", "Figs.", "Figure", "Figures", "section", "Section", "Appendix", "et al.", "Eq."];
+
+/// The typed numbers of one literal: the numbers of its words that are not names (a word that
+/// starts with a letter or a placeholder: `log10`, `x86_64`, `i7-11700`, `{n}^3`), references into
+/// a paper (`Table 2`, `Figs. 7-10`) or years of a citation (`Costen (2026)`, `Svoboda 2020`).
+fn typed_numbers(text: &str) -> Vec<String> {
+    let t = without_placeholders(text);
+    let chars: Vec<char> = t.chars().collect();
+    let in_word = |c: char| c.is_alphanumeric() || "_-.^∎'".contains(c);
+    let mut found = Vec::new();
+    let mut k = 0;
+    while k < chars.len() {
+        if !in_word(chars[k]) {
+            k += 1;
+            continue;
+        }
+        let start = k;
+        while k < chars.len() && in_word(chars[k]) {
+            k += 1;
+        }
+        let word: String = chars[start..k].iter().collect();
+        let first = word.trim_start_matches(['.', '-', '\'']).chars().next().unwrap_or(' ');
+        if !first.is_ascii_digit() || word.starts_with("3D") || word.starts_with("2D") {
+            continue;
+        }
+        let before: String = chars[..start].iter().collect();
+        // A list or range of references continues the reference ("Figs. 7-10", "Tables 1, 2").
+        let lead = before.trim_end_matches(|c: char| c.is_ascii_digit() || ", -–".contains(c));
+        if REFERENCES.iter().any(|r| lead.ends_with(r)) {
+            continue;
+        }
+        let digits: String = word.chars().take_while(char::is_ascii_digit).collect();
+        let previous = before.trim_end().rsplit(|c: char| c.is_whitespace()).next().unwrap_or("");
+        let cites = before.ends_with('(') || previous.chars().next().is_some_and(char::is_uppercase);
+        if digits.len() == 4 && (digits.starts_with("19") || digits.starts_with("20")) && cites {
+            continue;
+        }
+        let mut number = String::new();
+        for c in word.chars().chain([' ']) {
+            if c.is_ascii_digit() || (c == '.' && !number.is_empty()) {
+                number.push(c);
+            } else if !number.is_empty() {
+                found.push(number.trim_end_matches('.').to_owned());
+                number.clear();
+            }
+        }
+    }
+    found
+}
+
+/// Reviewed literals whose numbers are not measurements: (file, fragment of the literal, why).
+const REVIEWED: &[(&str, &str, &str)] = &[
+    ("compare_algorithms.rs", "(1 is ideal)", "a plot axis: the measure's ideal value, by its definition"),
+    (
+        "compare_algorithms.rs",
+        "when GPUs shade 2x2 quads",
+        "how GPUs shade (2x2 pixel quads) and the measure's ideal value, by definition",
+    ),
+    (
+        "sphere_convergence.rs",
+        "4/3 π r³ and 4 π r²",
+        "the sphere's volume and area formulas, and the slope second-order convergence has",
+    ),
+    (
+        "scaling.rs",
+        "A slope near 1 means",
+        "the slopes that cost proportional to cells (1) and to surface area (2/3) have, by definition",
+    ),
+];
+
+#[test]
+fn no_number_is_typed_into_the_experiments_prose() {
+    let dir = workspace().join("experiments/src/experiment");
+    let mut files = Vec::new();
+    let mut stack = vec![dir.clone()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).expect("experiment sources") {
+            let path = entry.expect("entry").path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    let mut typed = Vec::new();
+    for path in &files {
+        let src = std::fs::read_to_string(path).expect("source");
+        let rel = path.strip_prefix(&dir).unwrap_or(path).to_string_lossy().into_owned();
+        for lit in string_literals(&src) {
+            let numbers = typed_numbers(&lit.text);
+            if numbers.is_empty() || REVIEWED.iter().any(|(f, frag, _)| *f == rel && lit.text.contains(frag)) {
+                continue;
+            }
+            typed.push(format!("{rel}:{}: {:?} in {:?}", lit.line, numbers, lit.text.chars().take(100).collect::<String>()));
+        }
+    }
+    assert!(
+        typed.is_empty(),
+        "{} literals type a number into the report; compute it from the data or a labelled constant:\n{}",
+        typed.len(),
+        typed.join("\n")
+    );
+}
+
+#[test]
+fn the_audit_finds_typed_numbers_and_spares_references_and_placeholders() {
+    assert_eq!(typed_numbers("the paper's own counts give 72.5-73.3%"), ["72.5", "73.3"]);
+    assert_eq!(typed_numbers("sampling on 16 threads"), ["16"]);
+    assert!(typed_numbers("{:.1} ms over {n}³ and {x:>8.3}").is_empty());
+    assert!(typed_numbers("Table 2 and Figs. 7-10, section 4.1, Stuart et al. 2013, Appendices C-D").is_empty());
+    assert!(typed_numbers("log10 of x86_64 `f32` {{literal braces}} an i7-11700, {n}^3, in 3D").is_empty());
+    assert!(typed_numbers("Costen (2026) and Svoboda 2020").is_empty());
+    assert_eq!(typed_numbers("default + clearance=0.5, 2x2 quads, at 64³."), ["0.5", "2", "2", "64"]);
+    let lits =
+        string_literals("// \"7 in a comment\"\nlet a = 'x'; let s = \"a 5\"; fn f<'a>() {}\nlet r = r#\"raw \"9\" \"#;\n");
+    let texts: Vec<&str> = lits.iter().map(|l| l.text.as_str()).collect();
+    assert_eq!(texts, ["a 5", "raw \"9\" "]);
+    assert_eq!(lits[1].line, 3);
+}

@@ -23,6 +23,7 @@ pub mod surface_nets_smoothing;
 pub mod svoboda_timing;
 pub mod terrain_edit;
 pub mod terrain_lod;
+pub mod viewer;
 
 pub use context::*;
 
@@ -46,6 +47,7 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(terrain_edit::TerrainEdit),
         Box::new(terrain_lod::TerrainLod),
         Box::new(large_world::LargeWorld),
+        Box::new(viewer::Viewer),
     ]
 }
 
@@ -68,6 +70,9 @@ pub fn assemble(ctx: &Context) -> Result<PathBuf, ExperimentError> {
     let md = front_page(ctx, &pages);
     let path = ctx.report_dir.join("REPORT.md");
     write_atomic(&path, |w| std::io::Write::write_all(w, md.as_bytes()))?;
+    let html = viewer::page(ctx, &md);
+    write_atomic(&ctx.report_dir.join("index.html"), |w| std::io::Write::write_all(w, html.as_bytes()))?;
+    write_atomic(&ctx.report_dir.join("viewer.js"), |w| std::io::Write::write_all(w, viewer::SCRIPT.as_bytes()))?;
     Ok(path)
 }
 
@@ -100,6 +105,10 @@ fn front_page(ctx: &Context, pages: &[(&str, String, &str)]) -> String {
         }
         Err(e) => md.push_str(&format!("## Every extractor at a glance\n\n_Not generated yet: {e}_\n\n")),
     }
+    md.push_str(
+        "[`index.html`](index.html) shows this page beside a viewer that turns any two extractors' meshes of an input \
+         in 3D ([viewer](viewer.md) says how to open it).\n\n",
+    );
     md.push_str("## The experiments\n\n");
     let rows: Vec<Vec<String>> =
         pages.iter().map(|(name, title, question)| vec![format!("[{title}]({name}.md)"), (*question).to_owned()]).collect();

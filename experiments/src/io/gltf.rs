@@ -27,6 +27,11 @@ const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 const FLOAT: u32 = 5126;
 const UNSIGNED_BYTE: u32 = 5121;
 const UNSIGNED_INT: u32 = 5125;
+const UNSIGNED_SHORT: u32 = 5123;
+/// Bits of a quantized coordinate ([`write_glb_quantized`]).
+pub const QUANT_BITS: u32 = 16;
+/// The largest quantized coordinate.
+const QUANT_MAX: f32 = ((1u32 << QUANT_BITS) - 1) as f32;
 
 /// How the buffer is stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -147,6 +152,92 @@ pub fn write_gltf(
             w.write_all(b"\n")
         }
     }
+}
+
+/// Writes `mesh` as a small binary glTF for web viewers: positions quantized to 16 bits over the
+/// mesh's bounding box (`KHR_mesh_quantization`; the node's translation and scale map them back,
+/// so the error is at most half a box / 65535 per axis), 16-bit indices where they fit, and no
+/// normals (a viewer computes them). About a third of [`write_gltf`]'s bytes.
+pub fn write_glb_quantized(w: &mut impl Write, mesh: &TriMesh, generator: &str) -> std::io::Result<()> {
+    let (doc, bin) = quantized_document(mesh, generator);
+    let json = serde_json::to_vec(&doc).map_err(std::io::Error::other)?;
+    let glb = gltf::binary::Glb {
+        header: gltf::binary::Header { magic: *b"glTF", version: 2, length: 0 },
+        json: Cow::Owned(json),
+        bin: (!bin.is_empty()).then_some(Cow::Owned(bin)),
+    };
+    glb.to_writer(w).map_err(std::io::Error::other)
+}
+
+/// The quantized glTF JSON and buffer (see [`write_glb_quantized`]).
+fn quantized_document(mesh: &TriMesh, generator: &str) -> (serde_json::Value, Vec<u8>) {
+    if mesh.triangles.is_empty() || mesh.positions.is_empty() {
+        return document(mesh, None, generator);
+    }
+    let (lo, hi) = mesh
+        .positions
+        .iter()
+        .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let extent = (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
+    let quantized: Vec<[u16; 3]> = mesh
+        .positions
+        .iter()
+        .map(|&p| ((p - lo) / extent * QUANT_MAX).round().clamp(Vec3::ZERO, Vec3::splat(QUANT_MAX)).to_array().map(|c| c as u16))
+        .collect();
+    let mut bin = Vec::new();
+    let wide = mesh.positions.len() > usize::from(u16::MAX);
+    for &i in mesh.triangles.iter().flatten() {
+        if wide {
+            bin.extend_from_slice(&i.to_le_bytes());
+        } else {
+            bin.extend_from_slice(&(i as u16).to_le_bytes());
+        }
+    }
+    let index_bytes = bin.len();
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let position_offset = bin.len();
+    for q in &quantized {
+        // Vertex attribute elements are 4-byte aligned: three shorts and two bytes of padding.
+        for c in q {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+        bin.extend_from_slice(&[0, 0]);
+    }
+    let (qmin, qmax) = quantized.iter().fold(([u16::MAX; 3], [0u16; 3]), |(mut a, mut b), q| {
+        for k in 0..3 {
+            a[k] = a[k].min(q[k]);
+            b[k] = b[k].max(q[k]);
+        }
+        (a, b)
+    });
+    let max_index = mesh.triangles.iter().flatten().copied().max().unwrap_or(0);
+    let min_index = mesh.triangles.iter().flatten().copied().min().unwrap_or(0);
+    let scale = extent / QUANT_MAX;
+    let doc = json!({
+        "asset": { "version": "2.0", "generator": generator },
+        "extensionsUsed": ["KHR_mesh_quantization"],
+        "extensionsRequired": ["KHR_mesh_quantization"],
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0, "name": "isolab", "translation": lo.to_array(), "scale": scale.to_array() }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 1 }, "indices": 0, "material": 0, "mode": 4 }] }],
+        "materials": [{ "pbrMetallicRoughness": { "baseColorFactor": [0.8, 0.8, 0.8, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8 } }],
+        "accessors": [
+            { "bufferView": 0, "componentType": if wide { UNSIGNED_INT } else { UNSIGNED_SHORT }, "count": 3 * mesh.triangles.len(),
+              "type": "SCALAR", "min": [min_index], "max": [max_index] },
+            { "bufferView": 1, "componentType": UNSIGNED_SHORT, "count": quantized.len(), "type": "VEC3",
+              "min": qmin, "max": qmax },
+        ],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": index_bytes, "target": ELEMENT_ARRAY_BUFFER },
+            { "buffer": 0, "byteOffset": position_offset, "byteLength": bin.len() - position_offset, "byteStride": 8,
+              "target": ARRAY_BUFFER },
+        ],
+        "buffers": [{ "byteLength": bin.len() }],
+    });
+    (doc, bin)
 }
 
 /// Reads the triangles of every mesh in a glTF file's default scene (node transforms applied),
@@ -384,6 +475,62 @@ fn read_accessor(root: &gltf::json::Root, index: usize, buffers: &[Vec<u8>]) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Decodes what `write_glb_quantized` wrote: positions (node transform applied) and triangles.
+    fn decode_quantized(bytes: &[u8]) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let glb = gltf::binary::Glb::from_slice(bytes).unwrap();
+        let doc: serde_json::Value = serde_json::from_slice(&glb.json).unwrap();
+        assert_eq!(doc["extensionsRequired"][0], "KHR_mesh_quantization");
+        let bin = glb.bin.unwrap();
+        let v3 = |v: &serde_json::Value| {
+            Vec3::new(v[0].as_f64().unwrap() as f32, v[1].as_f64().unwrap() as f32, v[2].as_f64().unwrap() as f32)
+        };
+        let (t, s) = (v3(&doc["nodes"][0]["translation"]), v3(&doc["nodes"][0]["scale"]));
+        let view = &doc["bufferViews"][1];
+        let (offset, n) =
+            (view["byteOffset"].as_u64().unwrap() as usize, doc["accessors"][1]["count"].as_u64().unwrap() as usize);
+        let short = |at: usize| f32::from(u16::from_le_bytes([bin[at], bin[at + 1]]));
+        let positions = (0..n)
+            .map(|k| t + s * Vec3::new(short(offset + 8 * k), short(offset + 8 * k + 2), short(offset + 8 * k + 4)))
+            .collect();
+        let wide = doc["accessors"][0]["componentType"] == UNSIGNED_INT;
+        let count = doc["accessors"][0]["count"].as_u64().unwrap() as usize;
+        let index = |k: usize| {
+            if wide {
+                u32::from_le_bytes([bin[4 * k], bin[4 * k + 1], bin[4 * k + 2], bin[4 * k + 3]])
+            } else {
+                u32::from(u16::from_le_bytes([bin[2 * k], bin[2 * k + 1]]))
+            }
+        };
+        let triangles = (0..count / 3).map(|t| [index(3 * t), index(3 * t + 1), index(3 * t + 2)]).collect();
+        (positions, triangles)
+    }
+
+    #[test]
+    fn quantized_glb_round_trips_within_half_a_step_and_is_smaller() {
+        let mut mesh = tetrahedron();
+        mesh.positions =
+            vec![Vec3::new(-1.5, 0.25, 3.0), Vec3::new(2.0, 0.3, 3.1), Vec3::new(0.1, 7.0, 2.9), Vec3::new(0.7, 1.0, -4.0)];
+        let mut q = Vec::new();
+        write_glb_quantized(&mut q, &mesh, "test").unwrap();
+        let (positions, triangles) = decode_quantized(&q);
+        assert_eq!(triangles, mesh.triangles);
+        let step = Vec3::new(3.5, 6.75, 7.1) / QUANT_MAX;
+        for (a, b) in positions.iter().zip(&mesh.positions) {
+            assert!(((*a - *b).abs() - 0.51 * step).max_element() <= 1e-6, "{a} {b}");
+        }
+        let mut full = Vec::new();
+        write_gltf(&mut full, &mesh, None, Container::Binary, "test").unwrap();
+        assert!(q.len() < full.len(), "{} >= {}", q.len(), full.len());
+        let big = TriMesh {
+            positions: (0..70_000).map(|k| Vec3::new(k as f32, 0.0, (k % 7) as f32)).collect(),
+            normals: vec![],
+            triangles: vec![[0, 1, 69_999]],
+        };
+        let mut wide = Vec::new();
+        write_glb_quantized(&mut wide, &big, "test").unwrap();
+        assert_eq!(decode_quantized(&wide).1, big.triangles, "32-bit indices past 65535 vertices");
+    }
 
     fn tetrahedron() -> TriMesh {
         TriMesh {

@@ -1,0 +1,231 @@
+//! `viewer`: every extractor's mesh of every pictured input at the lowest resolution of
+//! `compare_algorithms`, written as small quantized binary glTF (`report/meshes/*.glb`,
+//! `io::gltf::write_glb_quantized`) for the report's interactive page `report/index.html`, where a
+//! reader turns two of them side by side. The inputs go in by their meshes' total size, smallest
+//! first, until [`MESH_BUDGET_BYTES`]; the page names any left out.
+//!
+//! The page itself is written by the assembler ([`page`]), from `REPORT.md` and this experiment's
+//! data, with the viewer's JavaScript pinned in `report/vendor/` (see `viewer/README.md`).
+
+use super::compare_algorithms::{FIELD_LEVELS, MODELS, MODEL_LEVELS};
+use super::context::{model_path, Context, Experiment, ExperimentError};
+use crate::io::{write_atomic, IoError};
+use crate::report::markdown_table;
+use crate::run::{lattice_for, load_field, RunConfig};
+use isolab_algorithms::{extractors, fields, Extraction, Samples};
+use serde::{Deserialize, Serialize};
+
+/// The experiment.
+pub struct Viewer;
+
+const NAME: &str = "viewer";
+/// The most bytes of meshes the report commits for the page.
+pub const MESH_BUDGET_BYTES: usize = 8 << 20;
+
+/// One mesh on the page.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Mesh {
+    /// Extractor.
+    pub algorithm: String,
+    /// Input (built-in field or shipped model).
+    pub input: String,
+    /// Samples along the longest side.
+    pub resolution: usize,
+    /// Triangles.
+    pub triangles: usize,
+    /// The `.glb`, relative to the report.
+    pub path: String,
+    /// Its size.
+    pub bytes: usize,
+}
+
+/// The experiment's data.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Data {
+    /// The meshes written, input by input.
+    pub meshes: Vec<Mesh>,
+    /// Inputs left out by the budget, with their meshes' total size.
+    pub left_out: Vec<(String, usize)>,
+}
+
+/// The inputs: (name, field spec, resolution), as `compare_algorithms` pictures them.
+fn inputs() -> Vec<(String, String, usize)> {
+    let mut v: Vec<(String, String, usize)> =
+        fields::registry().iter().map(|f| (f.name.to_owned(), f.name.to_owned(), FIELD_LEVELS[0])).collect();
+    v.extend(MODELS.iter().map(|m| (m.to_string(), model_path(m), MODEL_LEVELS[0])));
+    v
+}
+
+/// Picks whole inputs, smallest total first, while the running total stays within `budget`:
+/// returns the indices kept (in input order) and those left out.
+pub fn within_budget(totals: &[usize], budget: usize) -> (Vec<usize>, Vec<usize>) {
+    let mut order: Vec<usize> = (0..totals.len()).collect();
+    order.sort_by_key(|&k| totals[k]);
+    let (mut kept, mut left, mut sum) = (Vec::new(), Vec::new(), 0usize);
+    for k in order {
+        if sum + totals[k] <= budget {
+            sum += totals[k];
+            kept.push(k);
+        } else {
+            left.push(k);
+        }
+    }
+    kept.sort_unstable();
+    left.sort_unstable();
+    (kept, left)
+}
+
+impl Experiment for Viewer {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn question(&self) -> &'static str {
+        "What do the extractors' meshes look like from every side?"
+    }
+
+    fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
+        let extractors = extractors::registry();
+        let inputs = inputs();
+        let bar = ctx.bar(NAME, (inputs.len() * extractors.len()) as u64);
+        // Every input's meshes in memory first, so the budget can choose whole inputs.
+        let mut encoded: Vec<Vec<(Mesh, Vec<u8>)>> = Vec::new();
+        for (name, spec, resolution) in &inputs {
+            let field = load_field(spec, fields::DEFAULT_SEED)?;
+            let lattice = lattice_for(field.as_ref(), &RunConfig::new("", spec, *resolution))?;
+            let samples = Samples::sample(field.clone(), lattice, 0.0)?;
+            let mut meshes = Vec::new();
+            for extractor in &extractors {
+                bar.set_message(format!("{} {name}", extractor.name()));
+                let mut out = Extraction::default();
+                extractor.extract(&samples, &mut out)?;
+                let mut bytes = Vec::new();
+                crate::io::gltf::write_glb_quantized(&mut bytes, &out.surface, "isolab report viewer")
+                    .map_err(|source| IoError::Write { path: "glb in memory".into(), source })?;
+                let path = format!("meshes/{}-{name}.glb", extractor.name());
+                let mesh = Mesh {
+                    algorithm: extractor.name().into(),
+                    input: name.clone(),
+                    resolution: *resolution,
+                    triangles: out.surface.triangles.len(),
+                    path,
+                    bytes: bytes.len(),
+                };
+                meshes.push((mesh, bytes));
+                bar.inc(1);
+            }
+            encoded.push(meshes);
+        }
+        bar.finish_with_message("done");
+        let totals: Vec<usize> = encoded.iter().map(|m| m.iter().map(|(mesh, _)| mesh.bytes).sum()).collect();
+        let (kept, left) = within_budget(&totals, MESH_BUDGET_BYTES);
+        let dir = ctx.report_dir.join("meshes");
+        if dir.exists() {
+            std::fs::remove_dir_all(&dir).map_err(|source| IoError::Write { path: dir.clone(), source })?;
+        }
+        std::fs::create_dir_all(&dir).map_err(|source| IoError::Write { path: dir.clone(), source })?;
+        let mut data = Data::default();
+        for k in kept {
+            for (mesh, bytes) in &encoded[k] {
+                write_atomic(&ctx.report_dir.join(&mesh.path), |w| std::io::Write::write_all(w, bytes))?;
+                data.meshes.push(mesh.clone());
+            }
+        }
+        data.left_out = left.into_iter().map(|k| (inputs[k].0.clone(), totals[k])).collect();
+        ctx.write_data(NAME, &data)
+    }
+
+    fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
+        let data: Data = ctx.read_data(NAME)?;
+        let mut md = String::from("## Meshes to turn in 3D (`viewer`)\n\n");
+        let total: usize = data.meshes.iter().map(|m| m.bytes).sum();
+        md.push_str(&format!(
+            "[`index.html`](index.html) shows the front page beside a viewer that turns any two of these meshes side by side \
+             (wireframe on or off). Each is an extractor's mesh of an input at the lowest resolution `compare_algorithms` \
+             pictures, as binary glTF with {}-bit quantized positions (`KHR_mesh_quantization`), {} meshes and {:.1} MB in all \
+             (budget {:.1} MB). The page loads them with `fetch`, which browsers refuse for `file://` pages: serve the \
+             directory, for example `python3 -m http.server --directory report`, and open the address it prints.\n\n",
+            crate::io::gltf::QUANT_BITS,
+            data.meshes.len(),
+            total as f64 / 1e6,
+            MESH_BUDGET_BYTES as f64 / 1e6,
+        ));
+        if !data.left_out.is_empty() {
+            md.push_str(&format!(
+                "Left out by the budget: {}.\n\n",
+                data.left_out.iter().map(|(n, b)| format!("`{n}` ({:.1} MB)", *b as f64 / 1e6)).collect::<Vec<_>>().join(", ")
+            ));
+        }
+        let rows: Vec<Vec<String>> = data
+            .meshes
+            .iter()
+            .map(|m| {
+                vec![
+                    m.input.clone(),
+                    m.algorithm.clone(),
+                    m.resolution.to_string(),
+                    m.triangles.to_string(),
+                    format!("[{:.0} KB]({})", m.bytes as f64 / 1e3, m.path),
+                ]
+            })
+            .collect();
+        md.push_str(&markdown_table(&["input", "extractor", "samples", "triangles", "glb"], &rows));
+        Ok(md)
+    }
+}
+
+/// The viewer's own script, written beside the page.
+pub const SCRIPT: &str = include_str!("viewer.js");
+
+/// `report/index.html`: the viewer above the front page (`front_md`, rendered to HTML), with the
+/// meshes of this experiment's data (none when it has not run: the page says so).
+pub fn page(ctx: &Context, front_md: &str) -> String {
+    let data: Data = ctx.read_data(NAME).unwrap_or_default();
+    let meshes = serde_json::to_string(&data.meshes).unwrap_or_else(|_| "[]".into()).replace("</", "<\\/");
+    let mut body = String::new();
+    let options = pulldown_cmark::Options::ENABLE_TABLES;
+    pulldown_cmark::html::push_html(&mut body, pulldown_cmark::Parser::new_ext(front_md, options));
+    TEMPLATE.replacen("%MESHES%", &meshes, 1).replacen("%BODY%", &body, 1)
+}
+
+/// The page around the viewer and the front page: `%MESHES%` and `%BODY%` are filled in.
+const TEMPLATE: &str = include_str!("viewer.html");
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_page_renders_the_front_page_and_escapes_the_mesh_list() {
+        let dir = tempfile::tempdir().unwrap();
+        let ctx = Context::new(dir.path().to_path_buf(), 1);
+        let html = page(&ctx, "# Title\n\n| a | b |\n|---|---|\n| 1 | 2 |\n");
+        assert!(html.contains("<h1>Title</h1>") && html.contains("<table>"), "{html}");
+        assert!(html.contains("window.ISOLAB_MESHES = [];"));
+        ctx.write_data(
+            NAME,
+            &Data {
+                meshes: vec![Mesh {
+                    algorithm: "mc".into(),
+                    input: "</script><b>".into(),
+                    resolution: 2,
+                    triangles: 1,
+                    path: "meshes/x.glb".into(),
+                    bytes: 3,
+                }],
+                left_out: vec![],
+            },
+        )
+        .unwrap();
+        let html = page(&ctx, "");
+        assert!(!html.contains("</script><b>"), "a mesh name must not close the script");
+    }
+
+    #[test]
+    fn the_budget_keeps_the_smallest_inputs_whole() {
+        let (kept, left) = within_budget(&[5, 40, 10, 30], 50);
+        assert_eq!(kept, [0, 2, 3]);
+        assert_eq!(left, [1]);
+        assert_eq!(within_budget(&[], 10), (vec![], vec![]));
+    }
+}

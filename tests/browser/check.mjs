@@ -1,0 +1,87 @@
+// The report's interactive page in a real headless Chromium (Debian's chromium, driven by
+// playwright-core): served over HTTP, it must load with no console error or page error, draw a
+// mesh in both views (pixels that differ from the background), and load every listed mesh with
+// the triangle count the report lists. Writes a screenshot to target/browser-check.png.
+// Usage: node check.mjs [report directory] [chromium path]
+import { chromium } from "playwright-core";
+import http from "node:http";
+import fs from "node:fs";
+import path from "node:path";
+
+const root = path.resolve(process.argv[2] || new URL("../../report", import.meta.url).pathname);
+const executablePath = process.argv[3] || process.env.CHROMIUM || "/usr/bin/chromium";
+const types = { ".html": "text/html", ".js": "text/javascript", ".glb": "model/gltf-binary", ".md": "text/markdown", ".png": "image/png" };
+const server = http.createServer((req, res) => {
+  const file = path.join(root, decodeURIComponent(new URL(req.url, "http://x").pathname));
+  if (!file.startsWith(root) || !fs.existsSync(file) || !fs.statSync(file).isFile()) {
+    res.writeHead(404).end();
+    return;
+  }
+  res.writeHead(200, { "content-type": types[path.extname(file)] || "application/octet-stream" });
+  fs.createReadStream(file).pipe(res);
+});
+await new Promise((r) => server.listen(0, "127.0.0.1", r));
+const url = `http://127.0.0.1:${server.address().port}/index.html`;
+
+const problems = [];
+const browser = await chromium.launch({
+  executablePath,
+  args: ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"],
+});
+try {
+  const page = await browser.newPage({ viewport: { width: 1280, height: 900 } });
+  page.on("console", (m) => { if (m.type() === "error") problems.push(`console error: ${m.text()}`); });
+  page.on("pageerror", (e) => problems.push(`page error: ${e.message}`));
+  page.on("requestfailed", (r) => problems.push(`request failed: ${r.url()}`));
+  page.on("response", (r) => { if (r.status() >= 400) problems.push(`HTTP ${r.status()}: ${r.url()}`); });
+  await page.goto(url);
+  await page.waitForFunction(() => ["ready", "error", "file"].includes(document.body.dataset.status), null, { timeout: 60000 });
+  const status = await page.evaluate(() => [document.body.dataset.status, document.getElementById("status").textContent]);
+  if (status[0] !== "ready") problems.push(`viewer status ${status[0]}: ${status[1]}`);
+  // Each view must show a mesh: count pixels unlike the background (the canvases keep their buffer).
+  const drawn = await page.evaluate(() => ["canvas-left", "canvas-right"].map((id) => {
+    const c = document.getElementById(id);
+    const t = document.createElement("canvas");
+    t.width = c.width; t.height = c.height;
+    const g = t.getContext("2d");
+    g.drawImage(c, 0, 0);
+    const px = g.getImageData(0, 0, t.width, t.height).data;
+    let n = 0;
+    for (let i = 0; i < px.length; i += 4) if (Math.abs(px[i] - 246) + Math.abs(px[i + 1] - 246) + Math.abs(px[i + 2] - 246) > 30) n++;
+    return n / (px.length / 4);
+  }));
+  drawn.forEach((f, k) => { if (!(f > 0.02)) problems.push(`view ${k}: only ${(100 * f).toFixed(2)}% of pixels show a mesh`); });
+  fs.mkdirSync(new URL("../../target", import.meta.url).pathname, { recursive: true });
+  const shot = new URL("../../target/browser-check.png", import.meta.url).pathname;
+  await page.screenshot({ path: shot });
+  // Every mesh the page lists loads, with the listed triangle count.
+  const loaded = status[0] !== "ready" ? { count: -1, bad: [] } : await page.evaluate(async () => {
+    const loader = new THREE.GLTFLoader();
+    const bad = [];
+    for (const m of window.ISOLAB_MESHES) {
+      try {
+        const gltf = await loader.loadAsync(m.path);
+        let triangles = 0;
+        gltf.scene.traverse((o) => { if (o.isMesh) triangles += o.geometry.index.count / 3; });
+        if (triangles !== m.triangles) bad.push(`${m.path}: ${triangles} triangles, listed ${m.triangles}`);
+      } catch (e) {
+        bad.push(`${m.path}: ${e.message}`);
+      }
+    }
+    return { count: window.ISOLAB_MESHES.length, bad };
+  });
+  problems.push(...loaded.bad);
+  if (loaded.count === 0) problems.push("the page lists no meshes");
+  // Turning the wireframe off must change the picture.
+  await page.click("#wireframe");
+  await page.waitForTimeout(200);
+  console.log(`index.html: status ${status[0]}, mesh pixels ${drawn.map((f) => (100 * f).toFixed(1) + "%").join(" / ")}, ` +
+    `${loaded.count} meshes loaded, screenshot ${path.relative(process.cwd(), shot)}`);
+} finally {
+  await browser.close();
+  server.close();
+}
+if (problems.length) {
+  console.error(`index.html failed ${problems.length} check(s):\n` + problems.join("\n"));
+  process.exit(1);
+}

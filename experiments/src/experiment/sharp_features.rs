@@ -31,6 +31,15 @@ pub(crate) struct Data {
     pub(crate) images: Vec<(String, String)>,
 }
 
+/// The distance from each of the `csg` field's true sharp corners to the nearest mesh vertex, in
+/// grid spacings `h` (how far the mesh rounds the corner off).
+pub(crate) fn corner_distances_h(mesh: &isolab_algorithms::TriMesh, spacing: f32) -> Vec<f64> {
+    fields::Csg::sharp_corners()
+        .iter()
+        .map(|c| f64::from(mesh.positions.iter().map(|p| p.distance(*c)).fold(f32::INFINITY, f32::min) / spacing))
+        .collect()
+}
+
 impl Experiment for SharpFeatures {
     fn name(&self) -> &'static str {
         NAME
@@ -53,14 +62,7 @@ impl Experiment for SharpFeatures {
             for e in &all {
                 let mut out = Extraction::default();
                 e.extract(&samples, &mut out)?;
-                let d: Vec<f64> = fields::Csg::sharp_corners()
-                    .iter()
-                    .map(|c| {
-                        f64::from(
-                            out.surface.positions.iter().map(|p| p.distance(*c)).fold(f32::INFINITY, f32::min) / grid.spacing,
-                        )
-                    })
-                    .collect();
+                let d = corner_distances_h(&out.surface, grid.spacing);
                 let t = isolab_metrics::topology(&out.surface);
                 rows.push(Row {
                     algorithm: e.name().into(),

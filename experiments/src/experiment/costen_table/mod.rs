@@ -26,10 +26,12 @@ use std::time::Duration;
 mod ablations;
 mod ferreus;
 mod figures;
+mod sphere_match;
 
 use ablations::*;
 use ferreus::*;
 use figures::*;
+use sphere_match::*;
 
 /// The experiment.
 pub struct CostenTable;
@@ -137,6 +139,8 @@ struct Data {
     peers: Vec<PeerRow>,
     #[serde(default)]
     projection: Vec<ProjectionRow>,
+    #[serde(default)]
+    matched_sphere: Vec<MatchedRow>,
 }
 
 /// Extracts with method `m` (one of [`METHODS`]).
@@ -239,8 +243,9 @@ impl Experiment for CostenTable {
         charts(&dir, &rows)?;
         let peers = against_ferreus(repeats)?;
         let projection = projection(repeats)?;
+        let matched_sphere = matched_sphere(&rows)?;
         bar.finish();
-        ctx.write_data(NAME, &Data { repeats, rows, pictures, peers, projection })
+        ctx.write_data(NAME, &Data { repeats, rows, pictures, peers, projection, matched_sphere })
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
@@ -458,6 +463,7 @@ fn section(ctx: &Context, data: &Data) -> String {
         &body,
     ));
     md.push_str(&summary(rows));
+    md.push_str(&matched_section(&data.matched_sphere));
     md.push_str(&projection_section(&data.projection));
     md.push_str(&peer_section(&data.peers));
     md.push_str("\n| | | |\n|---|---|---|\n| ![triangles](figures/costen_table/triangles.png) | ![pass times](figures/costen_table/pass-times.png) | ![aspect ratio](figures/costen_table/aspect-ratio.png) |\n\n");

@@ -12,7 +12,9 @@ use crate::report::{markdown_table, median};
 use isolab_algorithms::extractors;
 use isolab_algorithms::{fields, Extraction, Grid, Lattice, Samples};
 use serde::{Deserialize, Serialize};
-use std::time::Duration;
+use std::time::{Duration, Instant};
+
+mod paper;
 
 /// The experiment.
 pub struct SvobodaTiming;
@@ -43,9 +45,125 @@ pub struct Row {
     pub runs: usize,
 }
 
+/// The paper's field and algorithm beside ours, one thread, one shot (a fresh output every run).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct LikeRow {
+    /// Cubes a side.
+    pub cubes: usize,
+    /// The paper's marching cubes (unshared vertices) here, median ms.
+    pub unshared_ms: f64,
+    /// Our marching cubes (shared vertices), median ms.
+    pub shared_ms: f64,
+    /// Triangles (the same for both).
+    pub triangles: usize,
+    /// Vertices of the unshared and the shared mesh.
+    pub vertices: [usize; 2],
+    /// Runs timed.
+    pub runs: usize,
+}
+
 #[derive(Serialize, Deserialize)]
 struct Data {
     rows: Vec<Row>,
+    #[serde(default)]
+    like_for_like: Vec<LikeRow>,
+}
+
+/// The paper's sizes on the paper's field: its unshared marching cubes and ours, alternating, on
+/// one thread, each with fresh output.
+fn like_for_like() -> Result<Vec<LikeRow>, ExperimentError> {
+    let field: std::sync::Arc<dyn isolab_algorithms::Field> = std::sync::Arc::new(paper::PaperField::default());
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .map_err(|e| ExperimentError::Figure(format!("a one-thread pool: {e}")))?;
+    let mc = extractors::by_name("marching-cubes").ok_or_else(|| ExperimentError::Figure("no marching-cubes".into()))?;
+    let mut rows = Vec::new();
+    for (cubes, _) in PAPER {
+        let n = cubes + 1;
+        let grid = Grid::with_dims(&field.domain(), [n, n, n])?;
+        let samples = Samples::sample(field.clone(), Lattice::Cubic(grid), 0.0)?;
+        let runs = runs_for(cubes);
+        let (mut unshared, mut shared) = (Vec::with_capacity(runs), Vec::with_capacity(runs));
+        let (mut triangles, mut vertices) = (0, [0, 0]);
+        for _ in 0..runs {
+            let start = Instant::now();
+            let (v, t) = paper::unshared_marching_cubes(samples.values(), &grid, samples.iso());
+            unshared.push(start.elapsed());
+            let out = pool.install(|| {
+                let start = Instant::now();
+                let mut out = Extraction::default();
+                let result = mc.extract(&samples, &mut out);
+                shared.push(start.elapsed());
+                result.map(|()| out)
+            })?;
+            triangles = t;
+            vertices = [v.len(), out.surface.positions.len()];
+        }
+        rows.push(LikeRow {
+            cubes,
+            unshared_ms: median(unshared).as_secs_f64() * 1e3,
+            shared_ms: median(shared).as_secs_f64() * 1e3,
+            triangles,
+            vertices,
+            runs,
+        });
+    }
+    Ok(rows)
+}
+
+/// The like-for-like table and the ratio it gives.
+fn like_section(rows: &[LikeRow]) -> String {
+    if rows.is_empty() {
+        return String::new();
+    }
+    let mut md = format!(
+        "\n**Like for like**: the paper's field (Perlin noise at (x, z) times y, zoom {}, iso-value {}: both unstated in the \
+         paper, ours) and the paper's algorithm (unshared vertices: three new ones per triangle, one thread, fresh output \
+         each run) here, beside our marching cubes on one thread with fresh output (one-shot), alternating; medians.\n\n",
+        paper::ZOOM,
+        paper::ISO
+    );
+    let body: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            let p = PAPER.iter().find(|p| p.0 == r.cubes).map_or(f64::NAN, |p| p.1);
+            vec![
+                format!("{}³", r.cubes),
+                format!("{p}"),
+                super::context::ms(r.unshared_ms),
+                super::context::ms(r.shared_ms),
+                format!("{} ({} / {})", r.triangles, r.vertices[0], r.vertices[1]),
+                // The paper's first entry is an upper bound ("< 1"): no ratio.
+                if r.cubes == PAPER[0].0 { "-".into() } else { format!("{:.0}×", p / r.unshared_ms.max(1e-9)) },
+                format!("{:.1}×", r.unshared_ms / r.shared_ms.max(1e-9)),
+            ]
+        })
+        .collect();
+    md.push_str(&markdown_table(
+        &[
+            "cubes",
+            "paper ms",
+            "paper's algorithm here, ms",
+            "our marching cubes, one thread, ms",
+            "triangles (vertices unshared / shared)",
+            "paper / its algorithm here",
+            "unshared / ours",
+        ],
+        &body,
+    ));
+    if let Some(last) = rows.last() {
+        let p = PAPER.iter().find(|p| p.0 == last.cubes).map_or(f64::NAN, |p| p.1);
+        md.push_str(&format!(
+            "\nAt {}³ the paper's algorithm runs {:.0}× faster here than in the paper (Rust against Unity C#, and this \
+             machine against the paper's; the algorithm is the same), and sharing vertices makes ours a further {:.1}× \
+             faster on one thread.\n",
+            last.cubes,
+            p / last.unshared_ms.max(1e-9),
+            last.unshared_ms / last.shared_ms.max(1e-9)
+        ));
+    }
+    md
 }
 
 /// More runs for small grids, where one run is microseconds.
@@ -132,7 +250,8 @@ impl Experiment for SvobodaTiming {
             series,
         };
         plot::xy(&dir.join("time"), &chart).map_err(ExperimentError::Figure)?;
-        ctx.write_data(NAME, &Data { rows })
+        let like_for_like = like_for_like()?;
+        ctx.write_data(NAME, &Data { rows, like_for_like })
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
@@ -206,6 +325,7 @@ impl Experiment for SvobodaTiming {
             ));
         }
         md.push_str("\n![time to triangulate](figures/svoboda_timing/time.png)\n");
+        md.push_str(&like_section(&data.like_for_like));
         Ok(md)
     }
 }

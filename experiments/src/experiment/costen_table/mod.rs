@@ -26,11 +26,15 @@ use std::time::Duration;
 mod ablations;
 mod ferreus;
 mod figures;
+mod passes;
+mod questionnaire;
 mod sphere_match;
 
 use ablations::*;
 use ferreus::*;
 use figures::*;
+use passes::*;
+use questionnaire::*;
 use sphere_match::*;
 
 /// The experiment.
@@ -141,6 +145,8 @@ struct Data {
     projection: Vec<ProjectionRow>,
     #[serde(default)]
     matched_sphere: Vec<MatchedRow>,
+    #[serde(default)]
+    pass_changes: Vec<PassChange>,
 }
 
 /// Extracts with method `m` (one of [`METHODS`]).
@@ -244,8 +250,9 @@ impl Experiment for CostenTable {
         let peers = against_ferreus(repeats)?;
         let projection = projection(repeats)?;
         let matched_sphere = matched_sphere(&rows)?;
+        let pass_changes = pass_changes(PASS_RUNS)?;
         bar.finish();
-        ctx.write_data(NAME, &Data { repeats, rows, pictures, peers, projection, matched_sphere })
+        ctx.write_data(NAME, &Data { repeats, rows, pictures, peers, projection, matched_sphere, pass_changes })
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
@@ -463,6 +470,8 @@ fn section(ctx: &Context, data: &Data) -> String {
         &body,
     ));
     md.push_str(&summary(rows));
+    md.push_str(&passes_section(&data.pass_changes));
+    md.push_str(&questionnaire_section());
     md.push_str(&matched_section(&data.matched_sphere));
     md.push_str(&projection_section(&data.projection));
     md.push_str(&peer_section(&data.peers));

@@ -46,7 +46,9 @@ const USE_CASES: [UseCase; 5] = [
     },
     UseCase {
         title: "Fewest triangles at a given error",
-        choose: |ctx| fewest(&ctx.read_data("sphere_convergence")?, &ctx.read_data("decimation")?),
+        choose: |ctx| {
+            fewest(&ctx.read_data("sphere_convergence")?, &ctx.read_data("decimation")?, &ctx.read_data("compare_algorithms")?)
+        },
     },
 ];
 
@@ -218,23 +220,30 @@ fn sharp(data: &sharp_features::Data, compared: &compare_algorithms::Data) -> Re
     } else {
         why.push('.');
     }
+    why.push_str(&intersection_caveat(&best.algorithm, compared));
+    Ok(Choice { pick: best.algorithm.clone(), why, pages: vec!["sharp_features", "compare_algorithms"] })
+}
+
+/// A sentence on `algorithm`'s self-intersecting pairs over the compared inputs at the middle
+/// resolution, or nothing when it has none.
+fn intersection_caveat(algorithm: &str, compared: &compare_algorithms::Data) -> String {
     let level = compared.field_levels.get(1).copied().unwrap_or(0);
     let model_level = compared.model_levels.get(1).copied().unwrap_or(0);
     let middle: Vec<&super::Measured> = compared
         .rows
         .iter()
-        .filter(|r| r.algorithm == best.algorithm && (r.resolution == level || r.resolution == model_level))
+        .filter(|r| r.algorithm == algorithm && (r.resolution == level || r.resolution == model_level))
         .collect();
     let pairs: usize = middle.iter().map(|r| r.metrics.self_intersections.count).sum();
     let hit = middle.iter().filter(|r| r.metrics.self_intersections.count > 0).count();
-    if pairs > 0 {
-        why.push_str(&format!(
-            " Its vertex placement costs self-intersections elsewhere: {pairs} pairs on {hit} of the {} compared inputs \
-             at the middle resolution.",
-            middle.len()
-        ));
+    if pairs == 0 {
+        return String::new();
     }
-    Ok(Choice { pick: best.algorithm.clone(), why, pages: vec!["sharp_features", "compare_algorithms"] })
+    format!(
+        " Its vertex placement costs self-intersections elsewhere: {pairs} pairs on {hit} of the {} compared inputs at the \
+         middle resolution.",
+        middle.len()
+    )
 }
 
 /// A distance in grid spacings: two decimals, or two significant digits when smaller.
@@ -313,7 +322,11 @@ pub fn triangles_at_error(points: &[(usize, f64)], target: f64) -> Option<(f64, 
 /// Fewest triangles at a given error: on the sphere, the extractor needing the fewest triangles to
 /// bring the volume error under [`VOLUME_ERROR_TARGET`]; for reducing a finished mesh, the
 /// decimator with the smallest Hausdorff distance on the most objects at equal count.
-fn fewest(convergence: &sphere_convergence::Data, decimation: &decimation::Data) -> Result<Choice, ExperimentError> {
+fn fewest(
+    convergence: &sphere_convergence::Data,
+    decimation: &decimation::Data,
+    compared: &compare_algorithms::Data,
+) -> Result<Choice, ExperimentError> {
     let names = first_seen(convergence.rows.iter().map(|r| r.algorithm.as_str()));
     let mut needs: Vec<(&str, f64, bool)> = names
         .iter()
@@ -337,6 +350,7 @@ fn fewest(convergence: &sphere_convergence::Data, decimation: &decimation::Data)
         why.push_str(&format!(", against {}", others.join(", ")));
     }
     why.push_str(" (interpolated between resolutions in log-log).");
+    why.push_str(&intersection_caveat(pick, compared));
     let objects = first_seen(decimation.rows.iter().map(|r| (r.object.as_str(), r.target)));
     let mut wins: Vec<(&str, usize)> = Vec::new();
     for (object, target) in &objects {
@@ -359,7 +373,7 @@ fn fewest(convergence: &sphere_convergence::Data, decimation: &decimation::Data)
             objects.len()
         ));
     }
-    Ok(Choice { pick: pick.into(), why, pages: vec!["sphere_convergence", "decimation"] })
+    Ok(Choice { pick: pick.into(), why, pages: vec!["sphere_convergence", "decimation", "compare_algorithms"] })
 }
 
 #[cfg(test)]

@@ -42,7 +42,8 @@ pub(crate) struct Data {
     pub(crate) histograms: Vec<String>,
 }
 
-fn inputs() -> Vec<(String, String, [usize; 3])> {
+/// Every compared input: (name, field spec, its three resolutions); built-in fields, then models.
+pub(crate) fn inputs() -> Vec<(String, String, [usize; 3])> {
     let mut v: Vec<(String, String, [usize; 3])> =
         fields::registry().iter().map(|f| (f.name.to_owned(), f.name.to_owned(), FIELD_LEVELS)).collect();
     v.extend(MODELS.iter().map(|m| (m.to_string(), model_path(m), MODEL_LEVELS)));

@@ -7,8 +7,7 @@
 //! The page itself is written by the assembler ([`page`]), from `REPORT.md` and this experiment's
 //! data, with the viewer's JavaScript pinned in `report/vendor/` (see `viewer/README.md`).
 
-use super::compare_algorithms::{FIELD_LEVELS, MODELS, MODEL_LEVELS};
-use super::context::{model_path, Context, Experiment, ExperimentError};
+use super::context::{Context, Experiment, ExperimentError};
 use crate::io::{write_atomic, IoError};
 use crate::report::markdown_table;
 use crate::run::{lattice_for, load_field, RunConfig};
@@ -48,12 +47,10 @@ pub struct Data {
     pub left_out: Vec<(String, usize)>,
 }
 
-/// The inputs: (name, field spec, resolution), as `compare_algorithms` pictures them.
+/// The inputs: (name, field spec, resolution), as `compare_algorithms` pictures them (its lowest
+/// resolution).
 fn inputs() -> Vec<(String, String, usize)> {
-    let mut v: Vec<(String, String, usize)> =
-        fields::registry().iter().map(|f| (f.name.to_owned(), f.name.to_owned(), FIELD_LEVELS[0])).collect();
-    v.extend(MODELS.iter().map(|m| (m.to_string(), model_path(m), MODEL_LEVELS[0])));
-    v
+    super::compare_algorithms::inputs().into_iter().map(|(name, spec, levels)| (name, spec, levels[0])).collect()
 }
 
 /// Picks whole inputs, smallest total first, while the running total stays within `budget`:

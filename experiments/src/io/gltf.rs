@@ -133,15 +133,7 @@ pub fn write_gltf(
 ) -> std::io::Result<()> {
     let (mut doc, bin) = document(mesh, colours, generator);
     match container {
-        Container::Binary => {
-            let json = serde_json::to_vec(&doc).map_err(std::io::Error::other)?;
-            let glb = gltf::binary::Glb {
-                header: gltf::binary::Header { magic: *b"glTF", version: 2, length: 0 },
-                json: Cow::Owned(json),
-                bin: (!bin.is_empty()).then_some(Cow::Owned(bin)),
-            };
-            glb.to_writer(w).map_err(std::io::Error::other)
-        }
+        Container::Binary => write_glb(w, &doc, bin),
         Container::Embedded => {
             if !bin.is_empty() {
                 let uri =
@@ -160,7 +152,12 @@ pub fn write_gltf(
 /// normals (a viewer computes them). About a third of [`write_gltf`]'s bytes.
 pub fn write_glb_quantized(w: &mut impl Write, mesh: &TriMesh, generator: &str) -> std::io::Result<()> {
     let (doc, bin) = quantized_document(mesh, generator);
-    let json = serde_json::to_vec(&doc).map_err(std::io::Error::other)?;
+    write_glb(w, &doc, bin)
+}
+
+/// The GLB container (the crate's writer): a JSON chunk and, when there is one, a BIN chunk.
+fn write_glb(w: &mut impl Write, doc: &serde_json::Value, bin: Vec<u8>) -> std::io::Result<()> {
+    let json = serde_json::to_vec(doc).map_err(std::io::Error::other)?;
     let glb = gltf::binary::Glb {
         header: gltf::binary::Header { magic: *b"glTF", version: 2, length: 0 },
         json: Cow::Owned(json),

@@ -333,10 +333,7 @@ fn section(ctx: &Context, data: &Data) -> String {
     let cells = |dims: [usize; 3]| dims.map(|n| n - 1);
     let [cube, ..] = cells(OBJECTS[0].2);
     let [bx, by, bz] = cells(OBJECTS[2].2);
-    let radius = isolab_algorithms::fields::builtin("sphere", Default::default())
-        .ok()
-        .and_then(|f| f.analytic_volume(0.0))
-        .map_or(f64::NAN, |v| (3.0 * v / (4.0 * std::f64::consts::PI)).cbrt());
+    let radius = load_object(OBJECTS[0].1).map_or(f64::NAN, |f| sphere_radius(f.as_ref(), 0.0));
     let samples = |dims: [usize; 3]| dims.iter().product::<usize>().max(1) as f64;
     let (edge_lo, edge_hi) = data
         .rows

@@ -31,11 +31,16 @@ pub struct MatchedRow {
     pub ours_default: usize,
 }
 
+/// The radius of the sphere a field encloses at `iso`, from its analytic volume (NaN without one).
+pub(super) fn sphere_radius(field: &dyn isolab_algorithms::Field, iso: f32) -> f64 {
+    field.analytic_volume(iso).map_or(f64::NAN, |v| (3.0 * v / (4.0 * std::f64::consts::PI)).cbrt())
+}
+
 /// Runs `u` and `i` on both lattices on the radius-0.5 sphere.
 pub(super) fn matched_sphere(rows: &[Row]) -> Result<Vec<MatchedRow>, ExperimentError> {
     let (prefix, name, dims) = OBJECTS[0];
     let field = load_object(name)?;
-    let radius = field.analytic_volume(MATCHED_ISO).map_or(f64::NAN, |v| (3.0 * v / (4.0 * std::f64::consts::PI)).cbrt());
+    let radius = sphere_radius(field.as_ref(), MATCHED_ISO);
     let mut out_rows = Vec::new();
     for (code, bcc) in [("b", true), ("s", false)] {
         let grid = Grid::with_dims(&field.domain(), dims)?;

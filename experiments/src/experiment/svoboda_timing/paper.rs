@@ -55,15 +55,16 @@ pub fn unshared_marching_cubes(values: &[f32], grid: &Grid, iso: f32) -> (Vec<Ve
     for z in 0..nz.saturating_sub(1) {
         for y in 0..ny.saturating_sub(1) {
             for x in 0..nx.saturating_sub(1) {
-                let corner = |c: usize| {
+                // Like the paper's `GridCell`: the cube's eight points read once, then its triangles.
+                let corners: [(f32, Vec3); 8] = std::array::from_fn(|c| {
                     let [dx, dy, dz] = CORNERS[c].map(usize::from);
                     (at(x + dx, y + dy, z + dz), grid.position(x + dx, y + dy, z + dz))
-                };
-                let case = (0..8).fold(0usize, |case, c| case | (usize::from(corner(c).0 < iso) << c));
+                });
+                let case = corners.iter().enumerate().fold(0usize, |case, (c, p)| case | (usize::from(p.0 < iso) << c));
                 for triangle in TABLE[case].triangles() {
                     for &e in triangle {
                         let (a, b) = EDGES[usize::from(e)];
-                        let ((va, pa), (vb, pb)) = (corner(usize::from(a)), corner(usize::from(b)));
+                        let ((va, pa), (vb, pb)) = (corners[usize::from(a)], corners[usize::from(b)]);
                         let t = if vb != va { ((iso - va) / (vb - va)).clamp(0.0, 1.0) } else { 0.5 };
                         vertices.push(pa + t * (pb - pa));
                     }

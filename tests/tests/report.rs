@@ -175,8 +175,8 @@ fn without_placeholders(text: &str) -> String {
 }
 
 /// Words after which a number is a reference into a paper, not a measurement.
-const REFERENCES: [&str; 11] =
-    ["Table", "Tables", "Fig.", "Figs.", "Figure", "Figures", "section", "Section", "Appendix", "et al.", "Eq."];
+const REFERENCES: [&str; 12] =
+    ["Table", "Tables", "Fig.", "Figs.", "Figure", "Figures", "section", "Section", "Appendix", "et al.", "Eq.", "equation"];
 
 /// The typed numbers of one literal: the numbers of its words that are not names (a word that
 /// starts with a letter or a placeholder: `log10`, `x86_64`, `i7-11700`, `{n}^3`), references into

@@ -19,7 +19,7 @@
 //!
 //! Used by the `peers`, `real_volumes`, `decimation` and `costen_table` experiments. The
 //! tetrahedral meshers of `stuart_tables` (TetGen, CGAL Mesh_3) run offline in
-//! `stuart_tables_peers.py`, whose committed output that experiment reads, because they take
+//! `stuart_tables/peers.py`, whose committed output that experiment reads, because they take
 //! minutes and need no run-to-run timing.
 
 use glam::Vec3;

@@ -160,6 +160,9 @@ pub struct SculptOptions {
     /// Smallest dihedral angle, degrees, a relaxation step may leave in a tetrahedron it changes
     /// (0: the paper's unguarded update).
     pub quality_floor: f32,
+    /// Record every relaxation iteration in [`SculptReport::trace`] (for studies of the
+    /// relaxation; a library setting, not an option name).
+    pub trace: bool,
 }
 
 impl Default for SculptOptions {
@@ -176,6 +179,7 @@ impl Default for SculptOptions {
             quality_floor: 20.0,
             attract: false,
             clearance: 0.0,
+            trace: false,
         }
     }
 }
@@ -241,6 +245,7 @@ pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError
         quality_floor,
         attract,
         clearance,
+        trace: false,
     };
     Ok(Box::new(BccSculpt { options }))
 }
@@ -282,6 +287,27 @@ pub struct SculptReport {
     pub attempts_run: usize,
     /// Time of each phase: lattice + sculpting, defusing + compaction, relaxation.
     pub times: [Duration; 3],
+    /// One entry per relaxation iteration when [`SculptOptions::trace`] is set (the state before
+    /// the iteration's steps, then what the steps did).
+    pub trace: Vec<RelaxIteration>,
+}
+
+/// One relaxation iteration, recorded with [`SculptOptions::trace`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RelaxIteration {
+    /// Farthest boundary vertex from `S` before the iteration, in `h`.
+    pub max_distance_h: f32,
+    /// Smallest dihedral angle of the mesh before the iteration, degrees.
+    pub min_dihedral: f64,
+    /// Boundary vertices that moved.
+    pub boundary_moved: usize,
+    /// Boundary vertices whose step was refused after halving (a step too short to make counts
+    /// as neither moved nor refused).
+    pub boundary_refused: usize,
+    /// Interior vertices that moved.
+    pub interior_moved: usize,
+    /// Interior vertices whose step was refused.
+    pub interior_refused: usize,
 }
 
 /// A sculpted, relaxed tetrahedral mesh.
@@ -470,6 +496,7 @@ fn run_attempt(
     report.iterations = relaxed.iterations;
     report.converged = relaxed.converged;
     report.max_distance = relaxed.max_distance;
+    report.trace = relaxed.trace;
     report.times[2] = start.elapsed();
     let (volume, boundary) = mesh.into_meshes();
     report.tetrahedra = volume.tetrahedra.len();
@@ -479,10 +506,14 @@ fn run_attempt(
 
 /// Smallest and largest dihedral angle over all tetrahedra, degrees.
 fn dihedral_range(mesh: &TetMesh) -> [f64; 2] {
-    mesh.tetrahedra
-        .par_iter()
+    tets_dihedral_range(&mesh.positions, &mesh.tetrahedra)
+}
+
+/// Smallest and largest dihedral angle over the tetrahedra `tets` of `positions`, degrees.
+fn tets_dihedral_range(positions: &[Vec3], tets: &[[u32; 4]]) -> [f64; 2] {
+    tets.par_iter()
         .map(|t| {
-            let a = dihedral_angles(t.map(|v| mesh.positions[v as usize]));
+            let a = dihedral_angles(t.map(|v| positions[v as usize]));
             [a.iter().copied().fold(180.0, f64::min), a.iter().copied().fold(0.0, f64::max)]
         })
         .reduce(|| [180.0, 0.0], |a, b| [a[0].min(b[0]), a[1].max(b[1])])
@@ -595,6 +626,26 @@ mod tests {
         }
     }
 
+    #[test]
+    fn the_trace_records_every_iteration_and_changes_nothing() {
+        let surface = octahedron(1.0);
+        let options = SculptOptions { spacing: Some(0.4), offset_ratio: 0.3, ..Default::default() };
+        let plain = sculpt_surface(&surface, "octahedron", &options).unwrap();
+        assert!(plain.report.trace.is_empty(), "no trace unless asked");
+        let traced = sculpt_surface(&surface, "octahedron", &SculptOptions { trace: true, ..options }).unwrap();
+        let t = &traced.report.trace;
+        assert_eq!(traced.volume.positions, plain.volume.positions, "tracing changes no step");
+        assert_eq!(t.len(), traced.report.iterations);
+        assert!(!t.is_empty());
+        // The first entry is the sculpted lattice: every dihedral angle 60° or 90°, farthest
+        // vertex beyond the offset (else no iteration would run).
+        assert!((t[0].min_dihedral - 60.0).abs() < 1e-3, "{:?}", t[0]);
+        assert!(t[0].max_distance_h > options.offset_ratio);
+        assert!(t.iter().all(|i| i.min_dihedral >= f64::from(options.quality_floor) - 1e-9), "the floor holds: {t:?}");
+        assert!(t.iter().all(|i| i.boundary_moved + i.interior_moved > 0), "every iteration moves something: {t:?}");
+        // Distances shrink overall: the last recorded iteration is closer than the first.
+        assert!(t[t.len() - 1].max_distance_h < t[0].max_distance_h);
+    }
     #[test]
     fn bad_settings_are_refused_by_name() {
         let surface = octahedron(1.0);

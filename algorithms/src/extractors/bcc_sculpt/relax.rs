@@ -81,6 +81,8 @@ pub(super) struct Relaxed {
     pub(super) iterations: usize,
     pub(super) converged: bool,
     pub(super) max_distance: f32,
+    /// Per iteration, with [`SculptOptions::trace`].
+    pub(super) trace: Vec<RelaxIteration>,
 }
 
 /// Iterations in a row without the farthest boundary vertex coming [`STALL_PROGRESS`] `h` closer
@@ -107,6 +109,7 @@ pub(super) fn relax(
     let mut iterations = 0;
     let mut best_distance = f32::INFINITY;
     let limits = StepLimits { min_volume, still, quality_floor: options.quality_floor, clearance: options.clearance * offset };
+    let mut trace = Vec::new();
     loop {
         let max_distance = (0..mesh.positions.len())
             .into_par_iter()
@@ -122,14 +125,30 @@ pub(super) fn relax(
         }
         let out_of_time = deadline.is_some_and(|d| Instant::now() >= d);
         if converged || iterations >= options.max_iterations || stalled >= STALL_ITERATIONS || out_of_time {
-            return Relaxed { iterations, converged, max_distance };
+            return Relaxed { iterations, converged, max_distance, trace };
         }
         iterations += 1;
+        let mut record = options.trace.then(|| RelaxIteration {
+            max_distance_h: max_distance / h as f32,
+            min_dihedral: tets_dihedral_range(&mesh.positions, &mesh.tets)[0],
+            ..Default::default()
+        });
         let targets = odt_targets(mesh);
         for (v, &target) in targets.iter().enumerate() {
             let p = mesh.positions[v];
             let step = (target - p.as_dvec3()) * f64::from(options.time_step);
-            if try_step(mesh, surface, v, step, &limits) || !options.attract {
+            let moved = try_step(mesh, surface, v, step, &limits);
+            // A step shorter than `still` is not a refusal: the vertex is where it wants to be.
+            if let Some(r) = record.as_mut().filter(|_| step.length() as f32 > still) {
+                let counter = match (mesh.is_boundary(v), moved) {
+                    (true, true) => &mut r.boundary_moved,
+                    (true, false) => &mut r.boundary_refused,
+                    (false, true) => &mut r.interior_moved,
+                    (false, false) => &mut r.interior_refused,
+                };
+                *counter += 1;
+            }
+            if moved || !options.attract {
                 continue;
             }
             // A boundary vertex the ODT step cannot bring closer: step toward its closest point on
@@ -144,6 +163,7 @@ pub(super) fn relax(
                 try_step(mesh, surface, v, pull, &limits);
             }
         }
+        trace.extend(record);
     }
 }
 

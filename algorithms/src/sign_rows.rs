@@ -174,6 +174,16 @@ pub fn next_bits(row: &[u64], w: usize) -> u64 {
     row[w] >> 1 | row[w + 1] << 63
 }
 
+/// How many `x` in `lo..=hi` have their bit set in `word(w)` (`w = x / 64`): what
+/// [`for_each_bit`] would visit, counted a word at a time.
+#[inline]
+pub fn count_bits(lo: usize, hi: usize, word: impl Fn(usize) -> u64) -> usize {
+    if lo > hi {
+        return 0;
+    }
+    (lo / 64..=hi / 64).map(|w| (word(w) & range_mask(w, lo, hi)).count_ones() as usize).sum()
+}
+
 /// Calls `visit(x)` for every `x` in `lo..=hi` whose bit is set in `word(w)` (`w = x / 64`).
 #[inline]
 pub fn for_each_bit(lo: usize, hi: usize, mut word: impl FnMut(usize) -> u64, mut visit: impl FnMut(usize)) {
@@ -219,6 +229,80 @@ pub fn for_each_surface_cell(rows: [&[u64]; 4], lo: usize, hi: usize, mut visit:
             visit(64 * w + b as usize, case);
         }
     }
+}
+
+/// Calls `edges(y, axis, lo, hi, word)` for every row `y` of sample layer `z` (of a grid of
+/// `dims` samples, held by `signs`) that may hold crossing x-edges (`axis` 0) or y-edges (`axis`
+/// 1): the edge from sample `x` along `axis` crosses for each `x` in `lo..=hi` whose bit is set
+/// in `word(x / 64)`.
+#[inline]
+pub fn layer_edge_words(
+    signs: &LayerSigns,
+    dims: [usize; 3],
+    z: usize,
+    mut edges: impl FnMut(usize, usize, usize, usize, &dyn Fn(usize) -> u64),
+) {
+    let [nx, ny, _] = dims;
+    for y in 0..ny {
+        let row = signs.row(y, z);
+        let here = signs.bits(y, z);
+        if row.first <= row.last {
+            let lo = (row.first as usize).saturating_sub(1);
+            let hi = (row.last as usize).min(nx - 2);
+            edges(y, 0, lo, hi, &|w| here[w] ^ next_bits(here, w));
+        }
+        if y + 1 < ny {
+            if let Some((lo, hi)) = span(&[row, signs.row(y + 1, z)], nx) {
+                let next = signs.bits(y + 1, z);
+                edges(y, 1, lo, hi, &|w| here[w] ^ next[w]);
+            }
+        }
+    }
+}
+
+/// Like [`layer_edge_words`] for the z-edges between sample layers `z` and `z + 1` (`axis` 2).
+#[inline]
+pub fn z_edge_words(
+    signs: &LayerSigns,
+    dims: [usize; 3],
+    z: usize,
+    mut edges: impl FnMut(usize, usize, usize, usize, &dyn Fn(usize) -> u64),
+) {
+    let [nx, ny, _] = dims;
+    for y in 0..ny {
+        if let Some((lo, hi)) = span(&[signs.row(y, z), signs.row(y, z + 1)], nx) {
+            let (here, above) = (signs.bits(y, z), signs.bits(y, z + 1));
+            edges(y, 2, lo, hi, &|w| here[w] ^ above[w]);
+        }
+    }
+}
+
+/// The crossing lattice edges of cell layers `z0..z1` (the x- and y-edges of sample layers
+/// `z0 + 1..=z1`, and of `z0` when `bottom`, and the z-edges between), counted a word at a time:
+/// a sign pass without per-edge work, so an extractor can size a fresh output once (marching
+/// cubes makes one vertex per crossing edge; surface nets one quad per interior one).
+pub fn count_crossing_edges(
+    signs: &mut LayerSigns,
+    values: &[f32],
+    dims: [usize; 3],
+    iso: f32,
+    z0: usize,
+    z1: usize,
+    bottom: bool,
+) -> usize {
+    signs.reset(dims[0], dims[1]);
+    signs.classify(values, dims, iso, z0);
+    let mut n = 0;
+    let mut count = |_: usize, _: usize, lo: usize, hi: usize, word: &dyn Fn(usize) -> u64| n += count_bits(lo, hi, word);
+    if bottom {
+        layer_edge_words(signs, dims, z0, &mut count);
+    }
+    for z in z0..z1 {
+        signs.classify(values, dims, iso, z + 1);
+        z_edge_words(signs, dims, z, &mut count);
+        layer_edge_words(signs, dims, z + 1, &mut count);
+    }
+    n
 }
 
 #[cfg(test)]

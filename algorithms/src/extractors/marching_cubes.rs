@@ -58,7 +58,9 @@ use crate::geometry::trilinear_gradient;
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
 use crate::samples::Samples;
-use crate::sign_rows::{for_each_bit, for_each_surface_cell, next_bits, span, LayerSigns};
+use crate::sign_rows::{
+    count_crossing_edges, for_each_bit, for_each_surface_cell, layer_edge_words, span, z_edge_words, LayerSigns,
+};
 use crate::slabs::{slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN};
 use crate::tables::marching_cubes::{
     decider_joins_inside, Case, AMBIGUOUS_FACES, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, TABLE,
@@ -304,54 +306,19 @@ impl Ctx<'_> {
 
     /// Vertices on the x- and y-edges of sample layer `z`.
     fn layer_vertices(&self, signs: &LayerSigns, z: usize, xs: &mut [u32], ys: &mut [u32], mesh: &mut TriMesh) {
-        let [nx, ny, _] = self.grid.dims;
-        for y in 0..ny {
-            let row = signs.row(y, z);
-            let here = signs.bits(y, z);
-            if row.first <= row.last {
-                let lo = (row.first as usize).saturating_sub(1);
-                let hi = (row.last as usize).min(nx - 2);
-                for_each_bit(
-                    lo,
-                    hi,
-                    |w| here[w] ^ next_bits(here, w),
-                    |x| {
-                        xs[x + nx * y] = self.push_vertex(mesh, [x, y, z], 0);
-                    },
-                );
-            }
-            if y + 1 < ny {
-                if let Some((lo, hi)) = span(&[row, signs.row(y + 1, z)], nx) {
-                    let next = signs.bits(y + 1, z);
-                    for_each_bit(
-                        lo,
-                        hi,
-                        |w| here[w] ^ next[w],
-                        |x| {
-                            ys[x + nx * y] = self.push_vertex(mesh, [x, y, z], 1);
-                        },
-                    );
-                }
-            }
-        }
+        let nx = self.grid.dims[0];
+        layer_edge_words(signs, self.grid.dims, z, |y, axis, lo, hi, word| {
+            let ids = if axis == 0 { &mut *xs } else { &mut *ys };
+            for_each_bit(lo, hi, word, |x| ids[x + nx * y] = self.push_vertex(mesh, [x, y, z], axis));
+        });
     }
 
     /// Vertices on the z-edges between sample layers `z` and `z + 1`.
     fn z_vertices(&self, signs: &LayerSigns, z: usize, zs: &mut [u32], mesh: &mut TriMesh) {
-        let [nx, ny, _] = self.grid.dims;
-        for y in 0..ny {
-            if let Some((lo, hi)) = span(&[signs.row(y, z), signs.row(y, z + 1)], nx) {
-                let (here, above) = (signs.bits(y, z), signs.bits(y, z + 1));
-                for_each_bit(
-                    lo,
-                    hi,
-                    |w| here[w] ^ above[w],
-                    |x| {
-                        zs[x + nx * y] = self.push_vertex(mesh, [x, y, z], 2);
-                    },
-                );
-            }
-        }
+        let nx = self.grid.dims[0];
+        z_edge_words(signs, self.grid.dims, z, |y, axis, lo, hi, word| {
+            for_each_bit(lo, hi, word, |x| zs[x + nx * y] = self.push_vertex(mesh, [x, y, z], axis));
+        });
     }
 
     /// Triangles of the cells between sample layers `z` and `z + 1`. When `extern_bottom`, the
@@ -455,8 +422,14 @@ impl Ctx<'_> {
         let [nx, ny, _] = self.grid.dims;
         s.prepare(nx * ny);
         let mut signs = std::mem::take(&mut s.signs);
-        signs.reset(nx, ny);
         let start = Instant::now();
+        if s.mesh.positions.capacity() == 0 {
+            // A fresh output (one-shot): count the vertices and allocate once, instead of
+            // growing the vectors by doubling, which copies them and touches twice the pages.
+            let vertices = count_crossing_edges(&mut signs, self.values, self.grid.dims, self.iso, z0, z1, !extern_bottom);
+            reserve_for(&mut s.mesh, vertices, self.sample_normals);
+        }
+        signs.reset(nx, ny);
         signs.classify(self.values, self.grid.dims, self.iso, z0);
         if !extern_bottom {
             self.layer_vertices(&signs, z0, &mut s.x_lo, &mut s.y_lo, &mut s.mesh);
@@ -476,6 +449,19 @@ impl Ctx<'_> {
         }
         s.signs = signs;
     }
+}
+
+/// Reserves room for `vertices` vertices (a little more, for the decider's cell-interior
+/// vertices) and the triangles they usually make: a closed surface of genus `g` has
+/// `2 V + 4 (g - 1)` triangles, so `2 V` plus a margin for high genus (the gyroid); an open one
+/// fewer. Capacity never written is never touched, so the margin costs no time.
+fn reserve_for(mesh: &mut TriMesh, vertices: usize, normals: bool) {
+    let positions = vertices + vertices / 64 + 16;
+    mesh.positions.reserve_exact(positions);
+    if normals {
+        mesh.normals.reserve_exact(positions);
+    }
+    mesh.triangles.reserve_exact(2 * vertices + vertices / 8 + 64);
 }
 
 /// Resolves a slab-local index to a global one.
@@ -562,6 +548,10 @@ impl Extractor for MarchingCubes {
         if tasks > 1 {
             let offsets = slab_offsets(scratches.iter().map(|s| s.mesh.positions.len()), self.name())?;
             let surface = &mut out.surface;
+            surface.positions.reserve_exact(offsets[tasks]);
+            if ctx.sample_normals {
+                surface.normals.reserve_exact(offsets[tasks]);
+            }
             for s in scratches.iter() {
                 surface.positions.extend_from_slice(&s.mesh.positions);
                 surface.normals.extend_from_slice(&s.mesh.normals);
@@ -622,6 +612,39 @@ mod tests {
     fn sphere_samples(n: usize) -> Samples {
         let f = fields::builtin("sphere", Default::default()).unwrap();
         Samples::sample_cubic(f.clone(), Grid::covering(&f.domain(), n).unwrap(), 0.0).unwrap()
+    }
+
+    #[test]
+    fn the_vertex_count_before_the_sweep_is_exact_and_a_fresh_output_never_grows() {
+        for (name, n) in [("sphere", 37), ("gyroid", 41), ("terrain", 33), ("asteroid", 29)] {
+            let f = fields::builtin(name, Default::default()).unwrap();
+            let s = Samples::sample_cubic(f.clone(), Grid::covering(&f.domain(), n).unwrap(), 0.0).unwrap();
+            let Lattice::Cubic(grid) = *s.lattice() else { unreachable!() };
+            let ctx =
+                Ctx { values: s.values(), grid, iso: s.iso(), sample_normals: false, t_min: MIN_EDGE_FRACTION, decider: false };
+            let mut out = Extraction::default();
+            let mc = MarchingCubes::new(McOptions {
+                normals: NormalSource::None,
+                parallelism: Parallelism::Serial,
+                ..Default::default()
+            });
+            mc.extract(&s, &mut out).unwrap();
+            let nz = grid.dims[2];
+            let mut signs = LayerSigns::default();
+            let count = |signs: &mut LayerSigns, z0, z1, bottom| {
+                count_crossing_edges(signs, ctx.values, grid.dims, ctx.iso, z0, z1, bottom)
+            };
+            assert_eq!(count(&mut signs, 0, nz - 1, true), out.surface.positions.len(), "{name}");
+            // Slabs: the bottom layer of a slab above the first is counted by the slab below.
+            let mid = nz / 2;
+            let split = count(&mut signs, 0, mid, true) + count(&mut signs, mid, nz - 1, false);
+            assert_eq!(split, out.surface.positions.len(), "{name}, two slabs");
+            // Allocated once: the capacity is the reservation, not a doubling.
+            let v = out.surface.positions.len();
+            assert_eq!(out.surface.positions.capacity(), v + v / 64 + 16, "{name}");
+            assert!(out.surface.triangles.len() <= out.surface.triangles.capacity());
+            assert_eq!(out.surface.triangles.capacity(), 2 * v + v / 8 + 64, "{name}: the triangles fit the estimate");
+        }
     }
 
     #[test]

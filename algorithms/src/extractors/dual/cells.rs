@@ -257,8 +257,19 @@ impl Ctx<'_> {
         s.vertex_time = std::time::Duration::ZERO;
         s.geometry_time = std::time::Duration::ZERO;
         let mut signs = std::mem::take(&mut s.signs);
-        signs.reset(nx, ny);
         let (values, dims, iso) = (self.values, self.grid.dims, self.iso);
+        if s.mesh.positions.capacity() == 0 {
+            // A fresh output (one-shot): size it once from the crossing edges instead of growing
+            // by doubling. A closed quad mesh has about as many vertices as quads, one quad per
+            // interior crossing edge; capacity never written is never touched.
+            let edges = count_crossing_edges(&mut signs, values, dims, iso, z0, z1, true);
+            let vertices = edges + edges / 8 + 64;
+            s.mesh.positions.reserve_exact(vertices);
+            s.mesh.normals.reserve_exact(vertices);
+            s.cell_min.reserve_exact(vertices);
+            s.mesh.triangles.reserve_exact(2 * edges + 64);
+        }
+        signs.reset(nx, ny);
         if z0 > 0 {
             let t = Instant::now();
             signs.classify(values, dims, iso, z0 - 1);

@@ -28,7 +28,7 @@ use crate::geometry::trilinear_gradient;
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
 use crate::samples::Samples;
-use crate::sign_rows::{for_each_bit, for_each_surface_cell, next_bits, span, LayerSigns};
+use crate::sign_rows::{count_crossing_edges, for_each_bit, for_each_surface_cell, next_bits, span, LayerSigns};
 use crate::slabs::{slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN};
 use crate::tables::marching_cubes::{opposite_face, Case, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, RING_FACES, TABLE};
 use glam::Vec3;
@@ -248,6 +248,11 @@ impl DualEngine {
             let offsets = slab_offsets(slabs.iter().map(|slab| slab.mesh.positions.len()), self.name)?;
             s.cell_min.clear();
             s.links.clear();
+            let total = offsets[tasks];
+            out.surface.positions.reserve_exact(total);
+            out.surface.normals.reserve_exact(total);
+            s.cell_min.reserve_exact(total);
+            out.surface.triangles.reserve_exact(slabs.iter().map(|slab| slab.mesh.triangles.len()).sum());
             for (t, slab) in slabs.iter().enumerate() {
                 let offset = offsets[t] as u32;
                 let below = if t > 0 { offsets[t - 1] as u32 + slabs[t - 1].last_layer_start } else { 0 };
@@ -313,6 +318,28 @@ mod tests {
     fn samples(name: &str, n: usize) -> Samples {
         let f = fields::builtin(name, Default::default()).unwrap();
         Samples::sample_cubic(f.clone(), Grid::covering(&f.domain(), n).unwrap(), 0.0).unwrap()
+    }
+
+    #[test]
+    fn a_fresh_output_is_sized_once_from_the_crossing_edges() {
+        for (name, n) in [("sphere", 37), ("gyroid", 41), ("terrain", 33), ("asteroid", 29)] {
+            let s = samples(name, n);
+            for placement in [Placement::MassPoint, Placement::Qef { tolerance: 0.1, clamp: true }] {
+                let engine = DualEngine::new(
+                    DualOptions { parallelism: Parallelism::Serial, smoothing: Smoothing::None, ..Default::default() },
+                    placement,
+                    "surface-nets",
+                );
+                let mut out = Extraction::default();
+                engine.extract(&s, &mut out).unwrap();
+                let dims = s.grid().dims;
+                let edges = count_crossing_edges(&mut LayerSigns::default(), s.values(), dims, s.iso(), 0, dims[2] - 1, true);
+                let (v, t) = (out.surface.positions.len(), out.surface.triangles.len());
+                // Allocated once: the capacity is the reservation, so nothing grew by doubling.
+                assert_eq!(out.surface.positions.capacity(), edges + edges / 8 + 64, "{name}: {v} vertices, {edges} edges");
+                assert_eq!(out.surface.triangles.capacity(), 2 * edges + 64, "{name}: {t} triangles, {edges} edges");
+            }
+        }
     }
 
     #[test]

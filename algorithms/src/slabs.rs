@@ -58,6 +58,22 @@ pub fn split_slab_time(slab_wall: Duration, join: Duration, cpu_vertex: f64, cpu
     (slab_wall.mul_f64(share), slab_wall.mul_f64(1.0 - share) + join)
 }
 
+/// Grows `buffer` to at least `len` elements of `T::default()`. A new buffer is allocated zeroed
+/// (`vec![0; len]`, which the allocator serves with untouched zero pages), not filled: a slab's per-layer index
+/// arrays are written only where the surface passes, so a one-shot call touches only those pages
+/// instead of zero-filling every slab's arrays.
+pub fn grow_zeroed<T: Copy + Default>(buffer: &mut Vec<T>, len: usize) {
+    if buffer.len() >= len {
+        return;
+    }
+    if buffer.capacity() == 0 {
+        // For integers, `vec![0; n]` is `alloc_zeroed` (calloc): fresh zero pages, not a fill.
+        *buffer = vec![T::default(); len];
+    } else {
+        buffer.resize(len, T::default());
+    }
+}
+
 /// Scratch buffers for concurrent calls of one extractor (chunks meshed in parallel): each call
 /// takes a set (a new one when all are in use) and gives it back, so calls never wait on each
 /// other's buffers and, once the pool holds a set per concurrent caller, re-meshing allocates

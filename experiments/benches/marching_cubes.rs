@@ -1,5 +1,6 @@
 //! Criterion benchmarks: marching cubes alone (sampling excluded) on `sphere` and `gyroid` at
-//! 64^3, 128^3 and 256^3, and sampling the bunny field at the RMT paper's 75x40x56.
+//! 64^3, 128^3 and 256^3, steady state (extractor and output reused) and one-shot (both new every
+//! call, dropped outside the timing), and sampling the bunny field at the RMT paper's 75x40x56.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use isolab_algorithms::{extractors::MarchingCubes, fields, Extraction, Extractor, Grid, Lattice, Samples};
@@ -19,6 +20,14 @@ fn marching_cubes(c: &mut Criterion) {
             let mut out = Extraction::default();
             group.bench_with_input(BenchmarkId::new(name, n), &samples, |b, s| {
                 b.iter(|| mc.extract(black_box(s), &mut out).unwrap())
+            });
+            // One-shot: a new extractor and a new output every call (dropped outside the timing).
+            group.bench_with_input(BenchmarkId::new(format!("{name}/one-shot"), n), &samples, |b, s| {
+                b.iter_with_large_drop(|| {
+                    let mut fresh = Extraction::default();
+                    MarchingCubes::default().extract(black_box(s), &mut fresh).unwrap();
+                    fresh
+                })
             });
         }
     }

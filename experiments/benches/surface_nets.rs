@@ -1,6 +1,8 @@
 //! Criterion benchmarks: our surface nets (no smoothing, and the default elastic smoothing) side by
 //! side with the `fast-surface-nets` crate in one run, on the same sampled grids (sphere and
-//! gyroid, 64^3 to 256^3), sampling excluded; and the smoothing methods on a 32^3 terrain chunk.
+//! gyroid, 64^3 to 256^3), sampling excluded, steady state (buffers reused) and one-shot (a new
+//! extractor and output, or a new `SurfaceNetsBuffer`, every call; dropped outside the timing);
+//! and the smoothing methods on a 32^3 terrain chunk.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use fast_surface_nets::ndshape::{RuntimeShape, Shape};
@@ -33,6 +35,20 @@ fn side_by_side(c: &mut Criterion) {
             group.bench_with_input(BenchmarkId::new(format!("isolab-serial/{name}"), n), &samples, |b, s| {
                 b.iter(|| serial.extract(black_box(s), &mut out).unwrap())
             });
+            // One-shot: a new extractor and a new output every call (dropped outside the timing).
+            group.bench_with_input(BenchmarkId::new(format!("isolab-serial-one-shot/{name}"), n), &samples, |b, s| {
+                b.iter_with_large_drop(|| {
+                    let mut fresh = Extraction::default();
+                    SurfaceNets::new(SnOptions {
+                        smoothing: Smoothing::None,
+                        parallelism: Parallelism::Serial,
+                        ..Default::default()
+                    })
+                    .extract(black_box(s), &mut fresh)
+                    .unwrap();
+                    fresh
+                })
+            });
             group.bench_with_input(BenchmarkId::new(format!("isolab-elastic/{name}"), n), &samples, |b, s| {
                 b.iter(|| smoothed.extract(black_box(s), &mut out).unwrap())
             });
@@ -42,6 +58,13 @@ fn side_by_side(c: &mut Criterion) {
             let mut buffer = SurfaceNetsBuffer::default();
             group.bench_with_input(BenchmarkId::new(format!("fast-surface-nets/{name}"), n), &samples, |b, s| {
                 b.iter(|| surface_nets(black_box(s.values()), &shape, [0; 3], [nx - 1, ny - 1, nz - 1], &mut buffer))
+            });
+            group.bench_with_input(BenchmarkId::new(format!("fast-surface-nets-one-shot/{name}"), n), &samples, |b, s| {
+                b.iter_with_large_drop(|| {
+                    let mut fresh = SurfaceNetsBuffer::default();
+                    surface_nets(black_box(s.values()), &shape, [0; 3], [nx - 1, ny - 1, nz - 1], &mut fresh);
+                    fresh
+                })
             });
         }
     }

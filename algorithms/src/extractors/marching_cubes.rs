@@ -61,7 +61,7 @@ use crate::samples::Samples;
 use crate::sign_rows::{
     count_crossing_edges, for_each_bit, for_each_surface_cell, layer_edge_words, span, z_edge_words, LayerSigns,
 };
-use crate::slabs::{slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN};
+use crate::slabs::{grow_zeroed, slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN};
 use crate::tables::marching_cubes::{
     decider_joins_inside, Case, AMBIGUOUS_FACES, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, TABLE,
 };
@@ -234,9 +234,7 @@ struct Scratch {
 impl Scratch {
     fn prepare(&mut self, layer: usize) {
         for b in [&mut self.x_lo, &mut self.y_lo, &mut self.x_hi, &mut self.y_hi, &mut self.z_mid] {
-            if b.len() < layer {
-                b.resize(layer, 0);
-            }
+            grow_zeroed(b, layer);
         }
         self.mesh.clear();
         self.vertex_time = Duration::ZERO;
@@ -285,18 +283,20 @@ impl Ctx<'_> {
     }
 
     /// Creates the vertex on the edge from sample `a` to the next sample along `axis`.
-    #[inline]
+    #[inline(always)]
     fn push_vertex(&self, mesh: &mut TriMesh, a: [usize; 3], axis: usize) -> u32 {
-        let mut b = a;
-        b[axis] += 1;
         let g = &self.grid;
-        let (va, vb) = (self.values[g.index(a[0], a[1], a[2])], self.values[g.index(b[0], b[1], b[2])]);
+        let i = g.index(a[0], a[1], a[2]);
+        let stride = [1, g.dims[0], g.dims[0] * g.dims[1]][axis];
+        let (va, vb) = (self.values[i], self.values[i + stride]);
         let t = ((self.iso - va) / (vb - va)).clamp(self.t_min, 1.0 - self.t_min);
         let mut p = g.position(a[0], a[1], a[2]);
         p[axis] += t * g.spacing;
         let index = mesh.positions.len() as u32;
         mesh.positions.push(p);
         if self.sample_normals {
+            let mut b = a;
+            b[axis] += 1;
             let ga = self.sample_gradient(a[0], a[1], a[2]);
             let gb = self.sample_gradient(b[0], b[1], b[2]);
             mesh.normals.push(ga.lerp(gb, t).normalize_or_zero());
@@ -464,6 +464,25 @@ fn reserve_for(mesh: &mut TriMesh, vertices: usize, normals: bool) {
     mesh.triangles.reserve_exact(2 * vertices + vertices / 8 + 64);
 }
 
+/// Elements a join task copies at least (keeps rayon's splitting coarse).
+const JOIN_CHUNK: usize = 1 << 14;
+
+/// Which slab an output element comes from, remembered between consecutive elements of one join
+/// task (they are consecutive indices, so the slab changes rarely).
+#[derive(Default)]
+struct SlabCursor(usize);
+
+impl SlabCursor {
+    /// The slab `t` with `offsets[t] <= i < offsets[t + 1]`.
+    #[inline]
+    fn slab_of(&mut self, offsets: &[usize], i: usize) -> usize {
+        if i < offsets[self.0] || i >= offsets[self.0 + 1] {
+            self.0 = offsets.partition_point(|&o| o <= i) - 1;
+        }
+        self.0
+    }
+}
+
 /// Resolves a slab-local index to a global one.
 #[inline]
 fn resolve(i: u32, offset: u32, below: Option<(&Scratch, u32)>) -> u32 {
@@ -547,32 +566,41 @@ impl Extractor for MarchingCubes {
         let t_join = Instant::now();
         if tasks > 1 {
             let offsets = slab_offsets(scratches.iter().map(|s| s.mesh.positions.len()), self.name())?;
+            // Written in parallel straight into the output's capacity (a fresh output's pages are
+            // first touched here, by both threads, instead of by a serial fill).
             let surface = &mut out.surface;
-            surface.positions.reserve_exact(offsets[tasks]);
-            if ctx.sample_normals {
-                surface.normals.reserve_exact(offsets[tasks]);
-            }
-            for s in scratches.iter() {
-                surface.positions.extend_from_slice(&s.mesh.positions);
-                surface.normals.extend_from_slice(&s.mesh.normals);
-            }
-            let tri_total: usize = scratches.iter().map(|s| s.mesh.triangles.len()).sum();
-            surface.triangles.resize(tri_total, [0; 3]);
-            let mut rest = surface.triangles.as_mut_slice();
-            let mut parts = Vec::with_capacity(tasks);
-            for s in scratches.iter() {
-                let (head, tail) = rest.split_at_mut(s.mesh.triangles.len());
-                parts.push(head);
-                rest = tail;
-            }
+            let total = offsets[tasks];
             let scratches: &[Scratch] = scratches;
-            parts.into_par_iter().enumerate().for_each(|(t, dst)| {
-                let offset = offsets[t] as u32;
-                let below = (t > 0).then(|| (&scratches[t - 1], offsets[t - 1] as u32));
-                for (d, src) in dst.iter_mut().zip(&scratches[t].mesh.triangles) {
-                    *d = src.map(|i| resolve(i, offset, below));
-                }
-            });
+            let tri_offsets: Vec<usize> = std::iter::once(0)
+                .chain(scratches.iter().scan(0, |sum, s| {
+                    *sum += s.mesh.triangles.len();
+                    Some(*sum)
+                }))
+                .collect();
+            surface.positions.par_extend((0..total).into_par_iter().with_min_len(JOIN_CHUNK).map_init(
+                SlabCursor::default,
+                |c, i| {
+                    let t = c.slab_of(&offsets, i);
+                    scratches[t].mesh.positions[i - offsets[t]]
+                },
+            ));
+            if ctx.sample_normals {
+                surface.normals.par_extend((0..total).into_par_iter().with_min_len(JOIN_CHUNK).map_init(
+                    SlabCursor::default,
+                    |c, i| {
+                        let t = c.slab_of(&offsets, i);
+                        scratches[t].mesh.normals[i - offsets[t]]
+                    },
+                ));
+            }
+            surface.triangles.par_extend((0..tri_offsets[tasks]).into_par_iter().with_min_len(JOIN_CHUNK).map_init(
+                SlabCursor::default,
+                |c, i| {
+                    let t = c.slab_of(&tri_offsets, i);
+                    let below = (t > 0).then(|| (&scratches[t - 1], offsets[t - 1] as u32));
+                    scratches[t].mesh.triangles[i - tri_offsets[t]].map(|v| resolve(v, offsets[t] as u32, below))
+                },
+            ));
         } else if out.surface.positions.len() >= EXTERN as usize {
             return Err(ExtractError::TooLarge { algorithm: self.name(), vertices: out.surface.positions.len() });
         }

@@ -240,14 +240,10 @@ impl Ctx<'_> {
         let [nx, ny, _] = self.grid.dims;
         let layer = (nx - 1) * (ny - 1);
         for b in [&mut s.prev, &mut s.cur] {
-            if b.len() < layer {
-                b.resize(layer, 0);
-            }
+            crate::slabs::grow_zeroed(b, layer);
         }
         for b in [&mut s.prev_case, &mut s.cur_case] {
-            if b.len() < layer {
-                b.resize(layer, 0);
-            }
+            crate::slabs::grow_zeroed(b, layer);
         }
         s.mesh.clear();
         s.ghost.clear();

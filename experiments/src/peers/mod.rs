@@ -18,9 +18,9 @@
 //!   in that script, so on this side they are one file: a name sent with each request.
 //!
 //! Used by the `peers`, `real_volumes`, `decimation` and `costen_table` experiments. The
-//! tetrahedral meshers of `stuart_tables` (TetGen, CGAL Mesh_3) run offline in
-//! `stuart_tables/peers.py`, whose committed output that experiment reads, because they take
-//! minutes and need no run-to-run timing.
+//! tetrahedral meshers of `stuart_tables` (TetGen, CGAL Mesh_3, NETGEN, fTetWild, on an offset
+//! surface the script builds) run offline in `stuart_tables/peers.py`, whose committed output that
+//! experiment reads: they are compared by element count and quality, not by run-to-run timing.
 
 use glam::Vec3;
 use isolab_algorithms::geometry::Aabb;

@@ -134,7 +134,7 @@ pub(super) fn section(runs: &[StudyRun], floor: f32, plot: Option<&str>) -> Stri
     let body: Vec<Vec<String>> = runs
         .iter()
         .map(|r| {
-            let below = r.first_below(f64::from(floor.max(1.0)));
+            let below = r.first_below(f64::from(floor));
             vec![
                 r.model.clone(),
                 if r.quality_floor > 0.0 { format!("ours, {}° floor", r.quality_floor) } else { "paper's update".into() },

@@ -31,7 +31,26 @@ struct Node {
     normal_sum: DVec3,
     /// Largest distance from `centre` to a vertex of the node's triangles.
     radius: f64,
+    /// Total area of the node's triangles (bounds its dipole's variation).
+    area: f64,
 }
+
+/// What [`TriangleBvh::winding_interval`] knows of the winding number over a box: the exact
+/// winding number moves by at most `error` across the box, and every point of the box is at least
+/// `distance` from every triangle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WindingInterval {
+    /// The fast winding number at the box's centre.
+    pub centre: f64,
+    /// Bound on how far the exact winding number anywhere in the box is from `centre`.
+    pub error: f64,
+    /// Lower bound on the distance from any point of the box to the mesh.
+    pub distance: f32,
+}
+
+/// Largest share of [`TriangleBvh::winding_interval`]'s budget one far node's dipole may take;
+/// a node whose bound exceeds it is opened instead.
+const NODE_ERROR_SHARE: f64 = 0.02;
 
 /// A triangle BVH. Triangles are stored by value, in tree order.
 #[derive(Clone, Debug)]
@@ -118,11 +137,21 @@ impl TriangleBvh {
         self.closest(p).map(|(q, d, _)| (q, d))
     }
 
+    /// The closest point on any triangle to `p` and its squared distance, if one is nearer than
+    /// `radius` (a query that stops early: far points cost almost nothing).
+    pub fn closest_point_within(&self, p: Vec3, radius: f32) -> Option<(Vec3, f32)> {
+        self.closest_within(p, radius * radius).map(|(q, d, _)| (q, d))
+    }
+
     fn closest(&self, p: Vec3) -> Option<(Vec3, f32, u32)> {
+        self.closest_within(p, f32::INFINITY)
+    }
+
+    fn closest_within(&self, p: Vec3, radius_squared: f32) -> Option<(Vec3, f32, u32)> {
         if self.nodes.is_empty() {
             return None;
         }
-        let mut best = (Vec3::ZERO, f32::INFINITY, u32::MAX);
+        let mut best = (Vec3::ZERO, radius_squared, u32::MAX);
         let mut stack = [0u32; 64];
         let mut top = 1;
         while top > 0 {
@@ -151,7 +180,7 @@ impl TriangleBvh {
                 top += 2;
             }
         }
-        Some(best)
+        (best.2 != u32::MAX).then_some(best)
     }
 
     /// The generalized winding number at `p`: about 1 inside a closed outward mesh, 0 outside, and
@@ -184,10 +213,82 @@ impl TriangleBvh {
         }
         total / (4.0 * std::f64::consts::PI)
     }
+
+    /// The fast winding number at the centre of a box, with a bound on how much the exact winding
+    /// number varies across the box, so that a box whose interval keeps clear of a threshold can
+    /// take one inside/outside answer for all its points.
+    ///
+    /// The centre's value is [`TriangleBvh::winding_number`]'s. The variation bound comes from
+    /// the kernel `k(y) = y / |y|^3` of the solid angle, whose Jacobian has norm `2 / |y|^3`: the
+    /// solid angle of triangles of total area `A`, all at least `D > 0` from the box, moves by at
+    /// most `2 A R / D^3` across a box of half-diagonal `R`. A node is taken whole when its term
+    /// is at most [`NODE_ERROR_SHARE`] of the budget, and opened otherwise; `D` is the distance
+    /// between bounding boxes, or for a single triangle the larger of that and its distance from
+    /// the box's centre less `R`.
+    ///
+    /// Returns `None` when the bound exceeds `budget` (in winding-number units) or a triangle's
+    /// bounding box touches the box: the caller splits the box and asks again.
+    pub fn winding_interval(&self, region: &Aabb, budget: f64) -> Option<WindingInterval> {
+        let (error, distance) = self.winding_variation(region, budget * 4.0 * std::f64::consts::PI)?;
+        let scale = 1.0 / (4.0 * std::f64::consts::PI);
+        Some(WindingInterval { centre: self.winding_number(region.centre()), error: error * scale, distance })
+    }
+
+    /// The variation bound of [`TriangleBvh::winding_interval`] in steradians, and the distance
+    /// from the box to the nearest bounding box taken.
+    fn winding_variation(&self, region: &Aabb, budget: f64) -> Option<(f64, f32)> {
+        if self.nodes.is_empty() {
+            return Some((0.0, f32::INFINITY));
+        }
+        let half_diagonal = 0.5 * region.extent().as_dvec3().length();
+        let centre = region.centre();
+        let node_budget = NODE_ERROR_SHARE * budget;
+        let (mut error, mut distance) = (0.0, f64::INFINITY);
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = &self.nodes[stack[top] as usize];
+            let gap = box_distance(region, &node.bounds);
+            let node_error = if gap > 0.0 { 2.0 * node.area * half_diagonal / gap.powi(3) } else { f64::INFINITY };
+            if node_error <= node_budget {
+                error += node_error;
+                distance = distance.min(gap);
+            } else if node.count > 0 {
+                for t in &self.triangles[node.start as usize..(node.start + node.count) as usize] {
+                    let mut b = Aabb::empty();
+                    t.iter().for_each(|&v| b.grow(v));
+                    let to_triangle = closest_point_on_triangle(centre, t[0], t[1], t[2]).distance(centre) as f64;
+                    let gap = box_distance(region, &b).max(to_triangle - half_diagonal);
+                    if gap <= 0.0 {
+                        return None;
+                    }
+                    let area = 0.5 * (t[1] - t[0]).as_dvec3().cross((t[2] - t[0]).as_dvec3()).length();
+                    error += 2.0 * area * half_diagonal / gap.powi(3);
+                    distance = distance.min(gap);
+                }
+            } else {
+                stack[top] = node.start;
+                stack[top + 1] = node.start + 1;
+                top += 2;
+            }
+            if error > budget {
+                return None;
+            }
+        }
+        // Shaved by a relative 1e-5 so that rounding never lifts the bound above a distance.
+        Some((error, (distance * (1.0 - 1e-5)) as f32))
+    }
+}
+
+/// Distance between two boxes (0 when they touch or overlap).
+fn box_distance(a: &Aabb, b: &Aabb) -> f64 {
+    let gap = (a.min - b.max).max(b.min - a.max).max(Vec3::ZERO);
+    gap.as_dvec3().length()
 }
 
 fn placeholder() -> Node {
-    Node { bounds: Aabb::empty(), start: 0, count: 0, centre: DVec3::ZERO, normal_sum: DVec3::ZERO, radius: 0.0 }
+    Node { bounds: Aabb::empty(), start: 0, count: 0, centre: DVec3::ZERO, normal_sum: DVec3::ZERO, radius: 0.0, area: 0.0 }
 }
 
 /// Builds the subtree for `tris` (a slice starting at triangle `offset`) into `nodes[index]`.
@@ -211,7 +312,7 @@ fn build(nodes: &mut Vec<Node>, tris: &mut [([Vec3; 3], u32)], offset: usize, in
     }
     let centre = if area_sum > 0.0 { weighted / area_sum } else { bounds.centre().as_dvec3() };
     let radius = tris.iter().flat_map(|(t, _)| t.iter()).map(|v| v.as_dvec3().distance(centre)).fold(0.0, f64::max);
-    let node = Node { bounds, start: offset as u32, count: tris.len() as u32, centre, normal_sum, radius };
+    let node = Node { bounds, start: offset as u32, count: tris.len() as u32, centre, normal_sum, radius, area: area_sum };
     if tris.len() <= LEAF_SIZE {
         nodes[index] = node;
         return;

@@ -1,7 +1,9 @@
 //! The [`Field`] trait: a scalar function of space whose level set is the surface.
 
 use crate::geometry::Aabb;
+use crate::lattice::Grid;
 use glam::Vec3;
+use rayon::prelude::*;
 
 /// The material id a field has where it says nothing else: 0, rock in `crate::materials`
 /// (which depends on fields, not the other way round).
@@ -62,6 +64,15 @@ pub trait Field: Send + Sync {
         DEFAULT_MATERIAL
     }
 
+    /// Fills `out` with the field's values at every sample of `grid` (x fastest, then y, then z)
+    /// for a surface at `iso`. The default evaluates [`Field::value`] at every sample
+    /// ([`sample_pointwise`]); a field that can do better for a whole grid overrides it, as mesh
+    /// fields do (exact values only in a narrow band around the level set, a bound beyond).
+    fn sample_grid(&self, grid: &Grid, iso: f32, out: &mut [f32]) {
+        let _ = iso;
+        sample_pointwise(self, grid, out);
+    }
+
     /// The analytic volume enclosed by the level set `iso` within the default domain, where known.
     fn analytic_volume(&self, _iso: f32) -> Option<f64> {
         None
@@ -71,6 +82,21 @@ pub trait Field: Send + Sync {
     fn analytic_area(&self, _iso: f32) -> Option<f64> {
         None
     }
+}
+
+/// [`Field::value`] at every sample of `grid`, in parallel (one z-slice per rayon task).
+pub fn sample_pointwise<F: Field + ?Sized>(field: &F, grid: &Grid, out: &mut [f32]) {
+    let [nx, ny, _] = grid.dims;
+    if nx == 0 || ny == 0 {
+        return;
+    }
+    out.par_chunks_mut(nx * ny).enumerate().for_each(|(z, slice)| {
+        for y in 0..ny {
+            for x in 0..nx {
+                slice[x + nx * y] = field.value(grid.position(x, y, z));
+            }
+        }
+    });
 }
 
 /// Central-difference gradient of any field.

@@ -70,9 +70,9 @@ impl Samples {
         let mut values = vec![0.0f32; lattice.sample_count()];
         let grid = *lattice.grid();
         let (corners, centres) = values.split_at_mut(grid.len());
-        fill_grid(field.as_ref(), &grid, corners);
+        field.sample_grid(&grid, iso, corners);
         if let Lattice::Bcc(_) = lattice {
-            fill_grid(field.as_ref(), &grid.centres(), centres);
+            field.sample_grid(&grid.centres(), iso, centres);
         }
         let sampling_time = start.elapsed();
         check_finite(field.name(), &lattice, &values)?;
@@ -146,20 +146,6 @@ impl Samples {
     pub fn bytes(&self) -> usize {
         self.values.len() * std::mem::size_of::<f32>()
     }
-}
-
-fn fill_grid(field: &dyn Field, grid: &Grid, out: &mut [f32]) {
-    let [nx, ny, _] = grid.dims;
-    if nx == 0 || ny == 0 {
-        return;
-    }
-    out.par_chunks_mut(nx * ny).enumerate().for_each(|(z, slice)| {
-        for y in 0..ny {
-            for x in 0..nx {
-                slice[x + nx * y] = field.value(grid.position(x, y, z));
-            }
-        }
-    });
 }
 
 fn check_finite(name: &str, lattice: &Lattice, values: &[f32]) -> Result<(), SampleError> {

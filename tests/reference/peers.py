@@ -8,7 +8,10 @@ timing only the extraction call (grid conversion excluded), and prints {"ms": T,
 "steady-state" (VTK: the filter of the previous call on this grid, Modified() then Update(); the
 other peers keep no state, so both protocols run them the same way). Peers: vtk-flying-edges (threads 1 or 2: VTK's STDThread SMP backend),
 vtk-marching-cubes, skimage-lorensen, skimage-lewiner, pymcubes, libigl. And one decimator:
-{"peer": "pymeshlab-quadric", "mesh": PATH, "target": FACES, "out": PATH}.
+{"peer": "pymeshlab-quadric", "mesh": PATH, "target": FACES, "out": PATH}. And one mesh field:
+{"peer": "libigl-signed-distance", "mesh": PATH, "origin": [x, y, z], "spacing": H, "dims": [NX, NY, NZ],
+"out": PATH, "exact_out": PATH or absent} (the `mesh_fields` experiment; `exact_out` also gets libigl's
+`point_mesh_squared_distance`, square-rooted, untimed).
 
 Scans (the `real_volumes` experiment): {"peer": "scan", "library": "vtk-flying-edges" or
 "skimage-lewiner", "nifti": PATH, "level": V, "out": PATH or null} meshes the NIfTI file's array
@@ -245,6 +248,37 @@ def decimate(req):
     return ms, m.vertex_number(), m.face_number()
 
 
+sdf_meshes = {}
+
+
+def signed_distance(req):
+    """libigl's signed distance of the mesh `mesh` (OBJ) with the fast winding number sign
+    (`SIGNED_DISTANCE_TYPE_FAST_WINDING_NUMBER`) at every sample of the grid `origin`, `spacing`,
+    `dims` (x fastest), as isolab samples it; the mesh and the points are built outside the
+    timing (cached between requests), libigl uses its default threads. Writes the values as
+    little-endian float32 to `out` and answers the count of negative values as "vertices" and the
+    sample count as "triangles"."""
+    key = req["mesh"]
+    if key not in sdf_meshes:
+        sdf_meshes.clear()
+        v, f = igl.read_triangle_mesh(key)[:2]
+        sdf_meshes[key] = (np.ascontiguousarray(v, dtype=np.float64), np.ascontiguousarray(f, dtype=np.int64))
+    v, f = sdf_meshes[key]
+    o, h, (nx, ny, nz) = req["origin"], req["spacing"], req["dims"]
+    axes = [o[i] + h * np.arange(n, dtype=np.float64) for i, n in enumerate((nx, ny, nz))]
+    zz, yy, xx = np.meshgrid(axes[2], axes[1], axes[0], indexing="ij")
+    points = np.stack([xx.ravel(), yy.ravel(), zz.ravel()], 1)
+    t = time.perf_counter()
+    s = igl.signed_distance(points, v, f, sign_type=igl.SIGNED_DISTANCE_TYPE_FAST_WINDING_NUMBER)[0]
+    ms = (time.perf_counter() - t) * 1e3
+    np.asarray(s, dtype="<f4").tofile(req["out"])
+    if req.get("exact_out"):
+        # libigl's own exact distance (untimed), to check ours against and its FWN mode's magnitudes.
+        d = np.sqrt(igl.point_mesh_squared_distance(points, v, f)[0])
+        np.asarray(d, dtype="<f4").tofile(req["exact_out"])
+    return ms, int((s < 0).sum()), len(s)
+
+
 def main():
     try:
         import pymeshlab
@@ -268,7 +302,8 @@ def main():
             continue
         try:
             req = json.loads(line)
-            handler = {"pymeshlab-quadric": decimate, "scan": scan, "scan-end-to-end": scan_end_to_end}.get(req.get("peer"), run)
+            handler = {"pymeshlab-quadric": decimate, "scan": scan, "scan-end-to-end": scan_end_to_end,
+                       "libigl-signed-distance": signed_distance}.get(req.get("peer"), run)
             ms, nv, nf = handler(req)
             print(json.dumps({"ms": ms, "vertices": int(nv), "triangles": int(nf)}), flush=True)
         except Exception as e:  # noqa: BLE001

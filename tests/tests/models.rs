@@ -1,7 +1,12 @@
 //! The shipped models as signed-distance fields, meshed by marching cubes.
 
+use isolab_algorithms::extractors::INFOS;
+use isolab_algorithms::fields::MeshField;
+use isolab_algorithms::{Extraction, Field, Grid, Lattice, Options, Samples};
+use isolab_experiments::io::read_mesh;
 use isolab_experiments::run::{run, RunConfig};
 use isolab_tests::{assert_closed_manifold, model};
+use std::sync::Arc;
 
 #[test]
 fn rocker_arm_keeps_its_hole_at_96() {
@@ -30,5 +35,37 @@ fn closed_genus_0_models_stay_one_genus_0_component_once_resolved() {
         let out = run(&RunConfig::new("marching-cubes", &model(name), resolution)).unwrap();
         let t = assert_closed_manifold(&out.extraction.surface, name);
         assert_eq!((t.components, t.genus), (1, Some(0)), "{name}");
+    }
+}
+
+/// Mesh fields sample a grid exactly only in a narrow band (the default); every registered
+/// extractor must make the very mesh it makes from exact samples, on a closed model and on the
+/// two open ones (whose inside comes from the winding number across their holes).
+#[test]
+fn narrow_band_sampling_changes_no_extractor_output() {
+    for name in ["stanford-bunny.obj", "teapot.obj", "rocker-arm.obj"] {
+        let mesh = read_mesh(std::path::Path::new(&model(name))).unwrap();
+        let banded = MeshField::new(name, &mesh.positions, &mesh.triangles).unwrap();
+        let grid = Grid::covering(&banded.domain(), 40).unwrap();
+        let exact: Arc<dyn Field> = Arc::new(banded.clone().with_band_cells(f32::INFINITY));
+        let banded: Arc<dyn Field> = Arc::new(banded);
+        for lattice in [Lattice::Cubic(grid), Lattice::Bcc(grid)] {
+            let a = Samples::sample(banded.clone(), lattice, 0.0).unwrap();
+            let b = Samples::sample(exact.clone(), lattice, 0.0).unwrap();
+            let differing = a.values().iter().zip(b.values()).filter(|(x, y)| x != y).count();
+            assert!(differing > 0, "{name}: the band should leave far samples as bounds");
+            for info in
+                INFOS.iter().filter(|i| if matches!(lattice, Lattice::Cubic(_)) { i.guarantees.cubic } else { i.guarantees.bcc })
+            {
+                let extractor = (info.make)(&Options::new()).unwrap();
+                let (mut x, mut y) = (Extraction::default(), Extraction::default());
+                extractor.extract(&a, &mut x).unwrap();
+                extractor.extract(&b, &mut y).unwrap();
+                assert!(!x.surface.triangles.is_empty(), "{name}: {} made nothing", info.name);
+                assert_eq!(x.surface.positions, y.surface.positions, "{name}: {} moved vertices", info.name);
+                assert_eq!(x.surface.triangles, y.surface.triangles, "{name}: {}", info.name);
+                assert_eq!(x.volume.tetrahedra, y.volume.tetrahedra, "{name}: {}", info.name);
+            }
+        }
     }
 }

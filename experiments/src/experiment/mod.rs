@@ -13,6 +13,7 @@ pub mod context;
 pub mod costen_table;
 pub mod decimation;
 pub mod large_world;
+pub mod mesh_fields;
 pub mod peers;
 pub mod real_volumes;
 pub mod scaling;
@@ -39,6 +40,7 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(sharp_features::SharpFeatures),
         Box::new(costen_table::CostenTable),
         Box::new(peers::Peers),
+        Box::new(mesh_fields::MeshFields),
         Box::new(real_volumes::RealVolumes),
         Box::new(scaling::Scaling),
         Box::new(decimation::Decimation),

@@ -56,7 +56,7 @@ impl PythonServer {
     }
 
     /// Sends one request line and reads its answer: (ms, vertices, triangles), or the peer's error.
-    fn request(&mut self, request: &serde_json::Value) -> Result<(f64, usize, usize), String> {
+    pub(crate) fn request(&mut self, request: &serde_json::Value) -> Result<(f64, usize, usize), String> {
         writeln!(self.stdin, "{request}").map_err(|e| e.to_string())?;
         self.stdin.flush().map_err(|e| e.to_string())?;
         let mut line = String::new();

@@ -27,7 +27,7 @@
 //! The sign does not need a winding number per sample. The grid is split recursively into boxes;
 //! [`TriangleBvh::winding_interval`] bounds the exact winding number over a whole box, and a box
 //! whose bound keeps clear of `|w| = 1/2` takes one answer for all its samples. Only boxes near
-//! the surface (or near the `|w| = 1/2` sheet spanning a hole) split down to single samples, which
+//! the surface (or near the `|w| = 1/2` sheet spanning a hole) split down to small boxes whose samples
 //! get the per-point fast winding number. Distances come from closest-point queries that give up
 //! beyond the band, only in boxes that may reach into it. Last, every bound that ends (or
 //! neighbours the end of) a grid edge whose sign changes is made exact: across a hole the level
@@ -51,6 +51,10 @@ pub const DEFAULT_BAND_CELLS: f32 = 3.0;
 
 /// Largest uncertainty of the winding number over a box worth finishing a bound for.
 const WINDING_BUDGET: f64 = 0.5;
+
+/// Boxes of at most this many samples are not bounded (near the surface, where they end up, the
+/// bound almost always fails): each of their samples gets its own winding number.
+const SMALLEST_TRIED: usize = 16;
 
 /// z-layers per parallel task when sampling a grid.
 const SLAB_LAYERS: usize = 8;
@@ -223,8 +227,8 @@ impl BandFill<'_> {
         let [x, y, z] = &ranges;
         let region =
             Aabb::new(self.grid.position(x.start, y.start, z.start), self.grid.position(x.end - 1, y.end - 1, z.end - 1));
-        let single = ranges.iter().all(|r| r.len() == 1);
-        let certified = if single {
+        let count: usize = ranges.iter().map(|r| r.len()).product();
+        let certified = if count <= SMALLEST_TRIED {
             None
         } else {
             self.bvh.winding_interval(&region, WINDING_BUDGET).and_then(|w| Some((inside(&w)?, w.distance)))
@@ -232,10 +236,8 @@ impl BandFill<'_> {
         match certified {
             Some((inside, far)) if far >= self.band => self.fill(&ranges, slab, |_| sign(inside) * far),
             Some((inside, _)) => self.fill(&ranges, slab, |p| sign(inside) * self.band_distance(p)),
-            None if single => {
-                let p = region.min;
-                let inside = self.bvh.winding_number(p).abs() >= 0.5;
-                self.fill(&ranges, slab, |_| sign(inside) * self.band_distance(p));
+            None if count <= SMALLEST_TRIED => {
+                self.fill(&ranges, slab, |p| sign(self.bvh.winding_number(p).abs() >= 0.5) * self.band_distance(p));
             }
             None => {
                 let axis = (0..3).max_by_key(|&a| ranges[a].len()).unwrap_or(0);

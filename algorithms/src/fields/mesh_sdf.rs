@@ -173,12 +173,7 @@ impl Field for MeshField {
         &self.name
     }
     fn value(&self, p: Vec3) -> f32 {
-        let d = self.unsigned_distance(p);
-        if self.bvh.winding_number(p).abs() >= 0.5 {
-            -d
-        } else {
-            d
-        }
+        sign(winds_inside(&self.bvh, p)) * self.unsigned_distance(p)
     }
 
     fn sample_grid(&self, grid: &Grid, iso: f32, out: &mut [f32]) {
@@ -237,7 +232,7 @@ impl BandFill<'_> {
             Some((inside, far)) if far >= self.band => self.fill(&ranges, slab, |_| sign(inside) * far),
             Some((inside, _)) => self.fill(&ranges, slab, |p| sign(inside) * self.band_distance(p)),
             None if count <= SMALLEST_TRIED => {
-                self.fill(&ranges, slab, |p| sign(self.bvh.winding_number(p).abs() >= 0.5) * self.band_distance(p));
+                self.fill(&ranges, slab, |p| sign(winds_inside(self.bvh, p)) * self.band_distance(p));
             }
             None => {
                 let axis = (0..3).max_by_key(|&a| ranges[a].len()).unwrap_or(0);
@@ -283,6 +278,12 @@ fn inside(w: &crate::bvh::WindingInterval) -> Option<bool> {
     }
 }
 
+/// The field's inside: `|w| >= 1/2` (see the module doc).
+fn winds_inside(bvh: &TriangleBvh, p: Vec3) -> bool {
+    bvh.winding_number(p).abs() >= 0.5
+}
+
+/// -1 inside, +1 outside.
 fn sign(inside: bool) -> f32 {
     if inside {
         -1.0

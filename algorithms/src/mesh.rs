@@ -35,22 +35,24 @@ impl TriMesh {
         self.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + offset)));
     }
 
-    /// Recomputes normals as the area-weighted mean of incident triangle normals.
+    /// Recomputes normals as the area-weighted mean of incident triangle normals, in the normals'
+    /// own buffer (no allocation once it has grown).
     pub fn compute_face_weighted_normals(&mut self) {
-        self.normals = self.face_weighted_normals();
+        let mut acc = std::mem::take(&mut self.normals);
+        acc.clear();
+        acc.resize(self.positions.len(), Vec3::ZERO);
+        accumulate_face_normals(&self.positions, &self.triangles, &mut acc);
+        for n in &mut acc {
+            *n = n.normalize_or_zero();
+        }
+        self.normals = acc;
     }
 
     /// The area-weighted mean of each vertex's incident triangle normals, unit length (zero where
     /// only degenerate triangles meet), without changing the mesh.
     pub fn face_weighted_normals(&self) -> Vec<Vec3> {
         let mut acc = vec![Vec3::ZERO; self.positions.len()];
-        for t in &self.triangles {
-            let [a, b, c] = t.map(|i| self.positions[i as usize]);
-            let n = (b - a).cross(c - a);
-            for &i in t {
-                acc[i as usize] += n;
-            }
-        }
+        accumulate_face_normals(&self.positions, &self.triangles, &mut acc);
         acc.into_iter().map(|n| n.normalize_or_zero()).collect()
     }
 
@@ -75,6 +77,17 @@ impl TriMesh {
     }
 }
 
+/// Adds each triangle's vector area (twice it) to its three vertices' entries of `acc`.
+fn accumulate_face_normals(positions: &[Vec3], triangles: &[[u32; 3]], acc: &mut [Vec3]) {
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let n = (b - a).cross(c - a);
+        for &i in t {
+            acc[i as usize] += n;
+        }
+    }
+}
+
 /// The vertices where `mesh` is not a consistently oriented 2-manifold (with boundary): ends of
 /// edges with more than two triangles or two triangles wound the same way, and vertices whose
 /// triangles form more than one fan. Sorted, without repeats. O(triangles) with no hashing or
@@ -82,25 +95,45 @@ impl TriMesh {
 /// winding) must be one simple path or cycle. Used by extractors that repair their own output
 /// (regularised marching tetrahedra's guard); the metrics crate lists offenders for reports.
 pub fn manifold_defects(mesh: &TriMesh) -> Vec<u32> {
-    let n = mesh.positions.len();
-    let around = Incidence::of(n, &mesh.triangles);
-    let mut link = Vec::new();
-    let mut bad = Vec::new();
-    for v in 0..n {
-        link.clear();
-        link.extend(around.of_vertex(v as u32).iter().map(|&t| {
-            let tri = mesh.triangles[t as usize];
-            let k = tri.iter().position(|&x| x == v as u32).unwrap_or(0);
-            (tri[(k + 1) % 3], tri[(k + 2) % 3])
-        }));
-        if let Some(others) = link_defects(&link) {
-            bad.push(v as u32);
-            bad.extend(others);
+    ManifoldCheck::default().defects_among(mesh, |_| true).to_vec()
+}
+
+/// [`manifold_defects`] with its buffers kept between calls, and restricted to a subset of the
+/// vertices: a caller that repairs in steady state (regularised marching tetrahedra's guard on a
+/// re-meshed chunk) allocates nothing once the buffers have grown.
+#[derive(Clone, Debug, Default)]
+pub struct ManifoldCheck {
+    around: Incidence,
+    link: Vec<(u32, u32)>,
+    bad: Vec<u32>,
+}
+
+impl ManifoldCheck {
+    /// The vertices `v` with `wanted(v)` where `mesh` is not a consistently oriented 2-manifold,
+    /// sorted, without repeats, plus the wanted link vertices at fault there. Every defect is
+    /// seen from both ends (an edge with more than two triangles, or two alike-wound ones, is
+    /// in both its ends' links), so with every vertex wanted this is [`manifold_defects`], and
+    /// with a subset it is that list restricted to the subset.
+    pub fn defects_among(&mut self, mesh: &TriMesh, wanted: impl Fn(u32) -> bool) -> &[u32] {
+        let n = mesh.positions.len();
+        self.around.rebuild(n, &mesh.triangles);
+        self.bad.clear();
+        for v in (0..n as u32).filter(|&v| wanted(v)) {
+            self.link.clear();
+            self.link.extend(self.around.of_vertex(v).iter().map(|&t| {
+                let tri = mesh.triangles[t as usize];
+                let k = tri.iter().position(|&x| x == v).unwrap_or(0);
+                (tri[(k + 1) % 3], tri[(k + 2) % 3])
+            }));
+            if !link_is_consistent_fan(&self.link) {
+                self.bad.push(v);
+                self.bad.extend(repeated_link_ends(&self.link).filter(|&a| wanted(a)));
+            }
         }
+        self.bad.sort_unstable();
+        self.bad.dedup();
+        &self.bad
     }
-    bad.sort_unstable();
-    bad.dedup();
-    bad
 }
 
 /// The elements (triangles or tetrahedra) around each vertex, in compressed rows: vertex `v`'s
@@ -122,7 +155,26 @@ impl Incidence {
 
     /// The incidence of the elements `ids` (increasing) of `elements`.
     pub fn of_subset<const K: usize>(vertices: usize, elements: &[[u32; K]], ids: impl Iterator<Item = u32> + Clone) -> Self {
-        let mut start = vec![0u32; vertices + 1];
+        let mut incidence = Self::default();
+        incidence.rebuild_subset(vertices, elements, ids);
+        incidence
+    }
+
+    /// [`Incidence::of`] into this incidence's buffers.
+    pub fn rebuild<const K: usize>(&mut self, vertices: usize, elements: &[[u32; K]]) {
+        self.rebuild_subset(vertices, elements, 0..elements.len() as u32)
+    }
+
+    /// [`Incidence::of_subset`] into this incidence's buffers.
+    pub fn rebuild_subset<const K: usize>(
+        &mut self,
+        vertices: usize,
+        elements: &[[u32; K]],
+        ids: impl Iterator<Item = u32> + Clone,
+    ) {
+        let (start, items) = (&mut self.start, &mut self.items);
+        start.clear();
+        start.resize(vertices + 1, 0);
         for e in ids.clone() {
             for &v in &elements[e as usize] {
                 start[v as usize + 1] += 1;
@@ -131,15 +183,19 @@ impl Incidence {
         for v in 0..vertices {
             start[v + 1] += start[v];
         }
-        let mut fill = start.clone();
-        let mut items = vec![0u32; start[vertices] as usize];
+        items.clear();
+        items.resize(start[vertices] as usize, 0);
+        // Fill with start[v] as vertex v's cursor (it ends at start[v + 1]), then shift back.
         for e in ids {
             for &v in &elements[e as usize] {
-                items[fill[v as usize] as usize] = e;
-                fill[v as usize] += 1;
+                items[start[v as usize] as usize] = e;
+                start[v as usize] += 1;
             }
         }
-        Self { start, items }
+        for v in (1..=vertices).rev() {
+            start[v] = start[v - 1];
+        }
+        start[0] = 0;
     }
 
     /// The elements around vertex `v`.
@@ -170,27 +226,36 @@ pub fn link_is_one_fan(link: &[(u32, u32)]) -> bool {
     (1..verts.len()).all(|i| pieces.equiv(0, i))
 }
 
-/// Checks one vertex's link, given as directed edges `a -> b` (one per incident triangle
-/// `(v, a, b)`): `None` when it is one simple path or cycle, otherwise the link vertices at
-/// fault (an edge `v-a` with more than two triangles or two alike-wound ones), possibly empty
-/// when the fault is a second fan.
-fn link_defects(link: &[(u32, u32)]) -> Option<Vec<u32>> {
-    let mut faulty = Vec::new();
-    for (i, &(a, b)) in link.iter().enumerate() {
-        for &(c, d) in &link[i + 1..] {
-            if a == c {
-                faulty.push(a);
-            }
-            if b == d {
-                faulty.push(b);
-            }
+/// The link vertices at fault in one vertex's link, given as directed edges `a -> b` (one per
+/// incident triangle `(v, a, b)`): those that are the tail, or the head, of two edges (an edge
+/// `v-a` with more than two triangles or two alike-wound ones).
+fn repeated_link_ends(link: &[(u32, u32)]) -> impl Iterator<Item = u32> + '_ {
+    link.iter().enumerate().flat_map(move |(i, &(a, b))| {
+        link[i + 1..].iter().flat_map(move |&(c, d)| [(a == c).then_some(a), (b == d).then_some(b)].into_iter().flatten())
+    })
+}
+
+/// Whether one vertex's link, given as directed edges `a -> b` (one per incident triangle
+/// `(v, a, b)`), is one directed simple path or cycle: no link vertex is the tail or the head of
+/// two edges, and following heads to tails from the path's start (or any edge of a cycle)
+/// visits every edge. Without allocating (links are short: a scan per step).
+fn link_is_consistent_fan(link: &[(u32, u32)]) -> bool {
+    if repeated_link_ends(link).next().is_some() {
+        return false;
+    }
+    let Some(first) = link.iter().position(|&(a, _)| link.iter().all(|&(_, b)| b != a)).or((!link.is_empty()).then_some(0))
+    else {
+        return true;
+    };
+    let mut at = first;
+    for visited in 1..=link.len() {
+        let head = link[at].1;
+        match link.iter().position(|&(a, _)| a == head) {
+            Some(next) if next != first => at = next,
+            _ => return visited == link.len(),
         }
     }
-    if !faulty.is_empty() {
-        return Some(faulty);
-    }
-    // Each link vertex is now the tail and the head of at most one edge: one piece?
-    (!link_is_one_fan(link)).then(Vec::new)
+    false
 }
 
 /// A tetrahedral mesh. Tetrahedra `[a, b, c, d]` have positive orientation:

@@ -120,6 +120,72 @@ impl LayerSigns {
     }
 }
 
+/// The inside bits (`value < iso`) of every x-row of a whole grid, 64 samples to a word, each row
+/// followed by one word that is always zero: what the tetrahedral engine reads on a cubic grid
+/// to find the samples with a crossing on one of their 14 lattice edges, and the cubes with
+/// surface, 64 at a time.
+#[derive(Clone, Debug, Default)]
+pub struct GridSigns {
+    dims: [usize; 3],
+    words: usize,
+    bits: Vec<u64>,
+}
+
+/// Rows per rayon task when packing a grid's signs.
+const MIN_SAMPLES_PER_PACK_TASK: usize = 1 << 16;
+
+impl GridSigns {
+    /// Packs the signs of `values` (`dims` samples, x fastest) against `iso`.
+    pub fn classify(&mut self, values: &[f32], dims: [usize; 3], iso: f32) {
+        let [nx, ny, nz] = dims;
+        self.dims = dims;
+        self.words = nx.div_ceil(64) + 1;
+        self.bits.clear();
+        self.bits.resize(ny * nz * self.words, 0);
+        let per_task = (MIN_SAMPLES_PER_PACK_TASK / nx.max(1)).max(1);
+        self.bits.par_chunks_mut(self.words).zip(values.par_chunks(nx)).with_min_len(per_task).for_each(|(out, v)| {
+            for (word, chunk) in out.iter_mut().zip(v.chunks(64)) {
+                *word = inside_bits(chunk, iso);
+            }
+        });
+    }
+
+    /// The inside bits of row `(y, z)` (one zero word past its samples).
+    #[inline]
+    pub fn bits(&self, y: usize, z: usize) -> &[u64] {
+        let r = y + self.dims[1] * z;
+        &self.bits[r * self.words..(r + 1) * self.words]
+    }
+
+    /// Word `w` of the samples `x` of row `(y, z)` whose state differs from their neighbour at
+    /// sample offset `offset` (x offset -1, 0 or 1); zero where that neighbour is outside the grid.
+    #[inline]
+    pub fn changes_toward(&self, y: usize, z: usize, offset: [isize; 3], w: usize) -> u64 {
+        let [nx, ny, nz] = self.dims;
+        let (ry, rz) = (y as isize + offset[1], z as isize + offset[2]);
+        if ry < 0 || rz < 0 || ry as usize >= ny || rz as usize >= nz || (offset[0] != 0 && nx < 2) {
+            return 0;
+        }
+        let (own, other) = (self.bits(y, z), self.bits(ry as usize, rz as usize));
+        let (shifted, valid) = match offset[0] {
+            1 => (next_bits(other, w), range_mask(w, 0, nx - 2)),
+            -1 => (other[w] << 1 | if w > 0 { other[w - 1] >> 63 } else { 0 }, range_mask(w, 1, nx - 1)),
+            _ => (other[w], range_mask(w, 0, nx - 1)),
+        };
+        (own[w] ^ shifted) & valid
+    }
+
+    /// Whether these are the signs of a grid of `dims` samples (classified, not empty).
+    pub fn holds(&self, dims: [usize; 3]) -> bool {
+        self.dims == dims && !self.bits.is_empty()
+    }
+
+    /// Bytes held.
+    pub fn capacity_bytes(&self) -> usize {
+        8 * self.bits.capacity()
+    }
+}
+
 /// Bit `k` set when `values[k] < iso`, for up to 64 values; four at a time with SIMD compares.
 #[inline]
 fn inside_bits(values: &[f32], iso: f32) -> u64 {
@@ -199,6 +265,22 @@ pub fn for_each_bit(lo: usize, hi: usize, mut word: impl FnMut(usize) -> u64, mu
     }
 }
 
+/// The cells whose corners disagree, one bit per cell (its lower corner's x), from word `w` of
+/// the four sample rows `(y, z)`, `(y + 1, z)`, `(y, z + 1)`, `(y + 1, z + 1)`; `hi` must be below
+/// the row's last sample (the bits past it are meaningless).
+#[inline]
+pub fn surface_cell_word(rows: [&[u64]; 4], w: usize, lo: usize, hi: usize) -> u64 {
+    surface_cells(rows.map(|r| r[w]), rows.map(|r| next_bits(r, w))) & range_mask(w, lo, hi)
+}
+
+/// Cells whose eight corners (`a`: the rows' words, `s`: the same shifted by one sample) disagree.
+#[inline]
+fn surface_cells(a: [u64; 4], s: [u64; 4]) -> u64 {
+    let any = a[0] | a[1] | a[2] | a[3] | s[0] | s[1] | s[2] | s[3];
+    let all = a[0] & a[1] & a[2] & a[3] & s[0] & s[1] & s[2] & s[3];
+    any & !all
+}
+
 /// Calls `visit(x, case)` for every cell `x` in `lo..=hi` (its lower corner's x) whose corners
 /// disagree, with its sign case (bit `c` set: marching cubes corner `c` inside). `rows` are the
 /// sample rows `(y, z)`, `(y + 1, z)`, `(y, z + 1)`, `(y + 1, z + 1)`; `hi` must be below the
@@ -211,9 +293,7 @@ pub fn for_each_surface_cell(rows: [&[u64]; 4], lo: usize, hi: usize, mut visit:
     for w in lo / 64..=hi / 64 {
         let a = rows.map(|r| r[w]);
         let s = rows.map(|r| next_bits(r, w));
-        let any = a[0] | a[1] | a[2] | a[3] | s[0] | s[1] | s[2] | s[3];
-        let all = a[0] & a[1] & a[2] & a[3] & s[0] & s[1] & s[2] & s[3];
-        let mut m = (any & !all) & range_mask(w, lo, hi);
+        let mut m = surface_cells(a, s) & range_mask(w, lo, hi);
         while m != 0 {
             let b = m.trailing_zeros();
             m &= m - 1;

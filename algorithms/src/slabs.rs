@@ -26,6 +26,11 @@ pub const EXTERN: u32 = 1 << 31;
 /// Cells per slab task below which the whole grid is one slab.
 const MIN_CELLS_PER_SLAB: usize = 32 * 32 * 32;
 
+/// Elements per rayon task in per-vertex passes (smoothing, normals): below it a pass runs as
+/// one task on the calling thread, since waking a second thread for a few thousand vertices
+/// costs more than it saves (a dirty terrain chunk has about three thousand).
+pub const MIN_VERTICES_PER_TASK: usize = 8192;
+
 /// How many slabs to cut `layers` cell layers of `cells` cells into: one when serial or small,
 /// otherwise up to four per rayon thread.
 pub fn task_count(parallelism: Parallelism, cells: usize, layers: usize) -> usize {

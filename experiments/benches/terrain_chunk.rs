@@ -1,7 +1,8 @@
 //! Criterion benchmark of issue 8's frame budget item: re-meshing one dirty 32³-cell terrain
 //! chunk (33³ samples at the `terrain_edit` world's spacing, placed across the surface), sampling
-//! included, output and scratch buffers reused as in steady state. Targets: at most 0.5 ms for
-//! marching cubes and surface nets, 1 ms for regularised marching tetrahedra (median).
+//! included, output and scratch buffers reused as in steady state. Targets (issue 15, meshing
+//! alone, median): marching cubes at most 0.4 ms, surface nets 0.5 ms (its default four elastic
+//! smoothing passes included), regularised marching tetrahedra 1 ms.
 //!
 //! Three measures per extractor: `sampling+extraction` (the chunk's 33³ samples from the noise
 //! field, then meshing), `extraction` (meshing alone), and `brush-edit`: in a 3x3x3-chunk

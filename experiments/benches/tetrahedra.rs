@@ -35,13 +35,13 @@ fn stage(c: &mut Criterion, name: &str, e: &dyn Extractor, s: &Samples, pick: fn
 
 fn passes(c: &mut Criterion) {
     let s = asteroid_bcc();
-    let paper = RegularisedMarchingTetrahedra { options: RmtOptions::paper() };
+    let paper = RegularisedMarchingTetrahedra::new(RmtOptions::paper());
     let ours = RegularisedMarchingTetrahedra::default();
     stage(c, "asteroid-50-bcc/rmt-paper/vertex-pass", &paper, &s, |o| o.stats.times.vertex);
     stage(c, "asteroid-50-bcc/rmt-paper/geometry-pass", &paper, &s, |o| o.stats.times.geometry);
     stage(c, "asteroid-50-bcc/rmt-guarded/vertex-pass", &ours, &s, |o| o.stats.times.vertex);
     stage(c, "asteroid-50-bcc/rmt-guarded/geometry-pass", &ours, &s, |o| o.stats.times.geometry);
-    stage(c, "asteroid-50-bcc/mt/extraction", &MarchingTetrahedra, &s, |o| o.stats.times.extraction());
+    stage(c, "asteroid-50-bcc/mt/extraction", &MarchingTetrahedra::default(), &s, |o| o.stats.times.extraction());
 }
 
 fn against_ferreus(c: &mut Criterion) {

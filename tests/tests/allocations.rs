@@ -18,14 +18,22 @@ fn chunk_samples(seed: i32) -> Samples {
     Samples::sample(field, Lattice::Cubic(grid), 0.0).unwrap()
 }
 
-/// The cubic-grid surface extractors re-mesh a 32³ chunk without allocating. (The tetrahedral
-/// engine still allocates its per-sample scratch on every call: not yet covered.)
+/// The surface extractors re-mesh a 32³ chunk without allocating: the cubic-grid ones and the
+/// tetrahedral engine (plain and regularised marching tetrahedra, whose guard's check and
+/// repairs keep their buffers too).
 #[test]
 fn steady_state_remeshing_allocates_nothing() {
     let _turn = TURN.lock().unwrap_or_else(|e| e.into_inner());
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     let (a, b) = (chunk_samples(1), chunk_samples(2));
-    for name in ["marching-cubes", "marching-cubes-decider", "surface-nets", "dual-contouring"] {
+    for name in [
+        "marching-cubes",
+        "marching-cubes-decider",
+        "surface-nets",
+        "dual-contouring",
+        "marching-tetrahedra",
+        "regularised-marching-tetrahedra",
+    ] {
         let e = extractors::by_name(name).unwrap();
         let mut out = Extraction::default();
         let counts = pool.install(|| {
@@ -57,7 +65,7 @@ fn steady_state_brush_edits_allocate_nothing() {
     let inside = |y: usize| samples.values()[grid.index(32, y, 32)] < 0.0;
     let y = (1..32).find(|&y| inside(y) != inside(y + 1)).unwrap();
     let centre = grid.position(32, y, 32);
-    for name in ["marching-cubes", "surface-nets", "dual-contouring"] {
+    for name in ["marching-cubes", "surface-nets", "dual-contouring", "marching-tetrahedra", "regularised-marching-tetrahedra"] {
         let e = extractors::by_name(name).unwrap();
         let mut world = ChunkedVolume::new(e.as_ref(), samples.clone(), 16).unwrap();
         let counts = pool.install(|| {

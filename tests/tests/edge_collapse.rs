@@ -17,7 +17,7 @@ fn sampled(name: &str, bcc: bool, dims: [usize; 3]) -> Samples {
 }
 
 fn collapsed(post: &dyn PostProcess, s: &Samples) -> (Extraction, Extraction) {
-    let mt = extract(&MarchingTetrahedra, s);
+    let mt = extract(&MarchingTetrahedra::default(), s);
     let mut out = mt.clone();
     post.apply(s, &mut out).unwrap();
     (mt, out)
@@ -91,7 +91,7 @@ fn safe_collapse_adds_no_self_intersection_on_the_shipped_models() {
 #[test]
 fn zero_area_triangles_of_the_input_are_collapsed_away() {
     let s = sampled("sphere", true, [51, 51, 51]);
-    let mut mt = extract(&MarchingTetrahedra, &s);
+    let mut mt = extract(&MarchingTetrahedra::default(), &s);
     let mut moved = vec![false; mt.surface.positions.len()];
     for t in mt.surface.triangles.clone().iter().step_by(97) {
         let (a, b) = (t[0] as usize, t[1] as usize);
@@ -185,7 +185,7 @@ proptest! {
     ) {
         let list: Vec<(glam::Vec3, f32)> = blobs.iter().map(|&(x, y, z, r)| (glam::Vec3::new(x, y, z), r)).collect();
         let s = lattice_blobs(bcc, n, &list, threshold);
-        let mt = extract(&MarchingTetrahedra, &s);
+        let mt = extract(&MarchingTetrahedra::default(), &s);
         let target = ((mt.surface.triangles.len() as f64 * keep) as usize).max(1);
         let post = EdgeCollapse { target, threshold: f32::INFINITY, max_turn_deg, ..EdgeCollapse::safe(0.5) };
         let mut out = mt.clone();

@@ -14,7 +14,7 @@ fn rmt() -> RegularisedMarchingTetrahedra {
 }
 
 fn paper_rmt() -> RegularisedMarchingTetrahedra {
-    RegularisedMarchingTetrahedra { options: RmtOptions::paper() }
+    RegularisedMarchingTetrahedra::new(RmtOptions::paper())
 }
 
 /// A lattice where one sample (at doubled `centre`) and its 14 neighbours carry `pattern` (bit 0:
@@ -43,7 +43,7 @@ fn every_star_pattern_gives_a_closed_manifold_outward_surface() {
     for bcc in [true, false] {
         for pattern in 1..1u16 << 15 {
             let s = star_pattern(bcc, pattern);
-            for (name, e) in [("mt", &MarchingTetrahedra as &dyn Extractor), ("rmt", &rmt())] {
+            for (name, e) in [("mt", &MarchingTetrahedra::default() as &dyn Extractor), ("rmt", &rmt())] {
                 let out = extract(e, &s);
                 assert!(!out.surface.triangles.is_empty(), "{name} bcc={bcc} pattern {pattern:#x}: empty");
                 assert_closed_manifold(&out.surface, &format!("{name} bcc={bcc} star pattern {pattern:#x}"));
@@ -76,7 +76,7 @@ proptest! {
         threshold in 0.2f32..0.9,
     ) {
         let s = blob_lattice(bcc, n, &blobs, threshold);
-        assert_closed_manifold_for(&s, &extract(&MarchingTetrahedra, &s).surface, "mt blobs");
+        assert_closed_manifold_for(&s, &extract(&MarchingTetrahedra::default(), &s).surface, "mt blobs");
         assert_closed_manifold_for(&s, &extract(&rmt(), &s).surface, "rmt blobs");
     }
 
@@ -88,7 +88,7 @@ proptest! {
             k += 1;
             values[k % values.len()]
         });
-        assert_closed_manifold_for(&s, &extract(&MarchingTetrahedra, &s).surface, "mt white noise");
+        assert_closed_manifold_for(&s, &extract(&MarchingTetrahedra::default(), &s).surface, "mt white noise");
         assert_closed_manifold_for(&s, &extract(&rmt(), &s).surface, "rmt white noise");
     }
 }
@@ -108,7 +108,7 @@ fn closed_builtin_fields_are_closed_and_manifold_on_both_lattices() {
     for (name, euler) in [("sphere", 2), ("torus", 0), ("asteroid", 2), ("csg", 2), ("thin", 8)] {
         for bcc in [true, false] {
             let s = sampled(name, bcc, None, 64);
-            for (algo, e) in [("mt", &MarchingTetrahedra as &dyn Extractor), ("rmt", &rmt())] {
+            for (algo, e) in [("mt", &MarchingTetrahedra::default() as &dyn Extractor), ("rmt", &rmt())] {
                 let t = assert_closed_manifold(&extract(e, &s).surface, &format!("{algo} {name} bcc={bcc}"));
                 assert_eq!(t.euler, euler, "{algo} {name} bcc={bcc}");
             }
@@ -126,7 +126,7 @@ fn rmt_reduces_triangles_and_regularises_them_on_the_paper_objects() {
     for (name, dims) in [("sphere", [51, 51, 51]), ("asteroid", [51, 51, 51]), ("stanford-bunny.obj", [76, 41, 57])] {
         for bcc in [true, false] {
             let s = sampled(name, bcc, Some(dims), 0);
-            let mt = extract(&MarchingTetrahedra, &s);
+            let mt = extract(&MarchingTetrahedra::default(), &s);
             let out = extract(&rmt(), &s);
             assert_closed_manifold(&out.surface, &format!("rmt {name} bcc={bcc}"));
             let removed = 1.0 - out.surface.triangles.len() as f64 / mt.surface.triangles.len() as f64;
@@ -140,24 +140,34 @@ fn rmt_reduces_triangles_and_regularises_them_on_the_paper_objects() {
 
 /// The paper's algorithm without our guard: count the places its local graph test misses, per
 /// field and lattice, and check that the guard leaves none and only unmerges where one was found.
+/// One extractor also meshes every case in turn, twice: its kept scratch (the guard's repairs
+/// included) must not change the next call's mesh.
 #[test]
 fn the_guard_repairs_exactly_the_cases_the_paper_misses() {
     let mut missed = Vec::new();
+    let reused = rmt();
+    let mut repaired = 0;
     for name in ["sphere", "torus", "asteroid", "csg", "thin", "gyroid", "terrain"] {
         for bcc in [true, false] {
             let s = sampled(name, bcc, None, 51);
             let paper = extract(&paper_rmt(), &s);
             let guarded = extract(&rmt(), &s);
+            for call in ["first", "second"] {
+                let again = extract(&reused, &s);
+                assert!(again.surface == guarded.surface, "{name} bcc={bcc}: a reused extractor's {call} call differs");
+            }
             let paper_defects = manifold_defects(&paper.surface).len();
             assert!(manifold_defects(&guarded.surface).is_empty(), "{name} bcc={bcc}: guard left defects");
-            let unguarded =
-                extract(&RegularisedMarchingTetrahedra { options: RmtOptions { guard: false, ..Default::default() } }, &s);
+            let unguarded = extract(&RegularisedMarchingTetrahedra::new(RmtOptions { guard: false, ..Default::default() }), &s);
             if manifold_defects(&unguarded.surface).is_empty() {
                 assert_eq!(unguarded.surface, guarded.surface, "{name} bcc={bcc}: the guard changed a manifold mesh");
+            } else {
+                repaired += 1;
             }
             missed.push(format!("{name}/{}: {paper_defects}", if bcc { "bcc" } else { "cubic" }));
         }
     }
+    assert!(repaired > 0, "no case exercised the guard's repairs");
     println!("defective vertices of the paper's RMT (guard off): {}", missed.join(", "));
 }
 
@@ -168,7 +178,7 @@ fn closed_shipped_models_give_closed_manifold_surfaces() {
     for name in ["stanford-bunny.obj", "spot.obj", "fandisk.obj", "rocker-arm.obj", "cheburashka.obj"] {
         for bcc in [true, false] {
             let s = sampled(name, bcc, None, 48);
-            for (algo, e) in [("mt", &MarchingTetrahedra as &dyn Extractor), ("rmt", &rmt())] {
+            for (algo, e) in [("mt", &MarchingTetrahedra::default() as &dyn Extractor), ("rmt", &rmt())] {
                 assert_closed_manifold(&extract(e, &s).surface, &format!("{algo} {name} bcc={bcc}"));
             }
         }
@@ -182,7 +192,7 @@ fn closed_shipped_models_give_closed_manifold_surfaces() {
 fn slabbed_passes_give_the_same_mesh_on_any_thread_count() {
     for bcc in [false, true] {
         let s = sampled("asteroid", bcc, None, 90);
-        for e in [&MarchingTetrahedra as &dyn Extractor, &rmt()] {
+        for e in [&MarchingTetrahedra::default() as &dyn Extractor, &rmt()] {
             let run = |threads: usize| {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                 pool.install(|| extract(e, &s))

@@ -47,6 +47,7 @@ use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInf
 use crate::lattice::Lattice;
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
+use crate::slabs::ScratchPool;
 use crate::tetrahedral::{extract_tetrahedral, NoClustering, TetScratch};
 
 /// One line for listings.
@@ -68,12 +69,15 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
 /// Builds it from options.
 pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError> {
     options.reader(INFO.name, OPTION_NAMES).finish()?;
-    Ok(Box::new(MarchingTetrahedra))
+    Ok(Box::new(MarchingTetrahedra::default()))
 }
 
-/// Plain marching tetrahedra on a BCC lattice or a Kuhn-split cubic grid.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct MarchingTetrahedra;
+/// Plain marching tetrahedra on a BCC lattice or a Kuhn-split cubic grid. Keeps its per-sample
+/// scratch between calls, so re-meshing a same-sized chunk allocates nothing.
+#[derive(Default)]
+pub struct MarchingTetrahedra {
+    scratch: ScratchPool<TetScratch>,
+}
 
 impl Extractor for MarchingTetrahedra {
     fn name(&self) -> &'static str {
@@ -93,12 +97,15 @@ impl Extractor for MarchingTetrahedra {
     }
 
     fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
-        let mut scratch = TetScratch::default();
-        extract_tetrahedral(samples, &NoClustering, &mut scratch, out)?;
-        if out.origins.wanted && matches!(samples.lattice(), Lattice::Cubic(_)) {
+        let mut scratch = self.scratch.take();
+        let result = extract_tetrahedral(samples, &NoClustering, &mut scratch, out);
+        if result.is_ok() && out.origins.wanted && matches!(samples.lattice(), Lattice::Cubic(_)) {
             scratch.fill_origins(samples.grid(), usize::MAX, &mut out.origins);
         }
-        out.finish_counts(scratch.bytes());
+        let bytes = scratch.bytes();
+        self.scratch.give(scratch);
+        result?;
+        out.finish_counts(bytes);
         Ok(())
     }
 }

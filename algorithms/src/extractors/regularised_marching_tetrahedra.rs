@@ -71,9 +71,10 @@
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees};
 use crate::field::Field;
 use crate::lattice::Lattice;
-use crate::mesh::manifold_defects;
+use crate::mesh::ManifoldCheck;
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
+use crate::slabs::ScratchPool;
 use crate::tetrahedral::{
     extract_tetrahedral, finish_repair, unmerge_and_regenerate, Clustering, Islands, NoClustering, Star, TetScratch, TetTopology,
     DIRECTIONS,
@@ -148,14 +149,34 @@ pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError
         guard: r.choice("guard", d.guard, &[("true", true), ("false", false)])?,
     };
     r.finish()?;
-    Ok(Box::new(RegularisedMarchingTetrahedra { options: o }))
+    Ok(Box::new(RegularisedMarchingTetrahedra::new(o)))
 }
 
-/// Regularised marching tetrahedra with the paper's integrated clustering.
-#[derive(Clone, Copy, Debug, Default)]
+/// Regularised marching tetrahedra with the paper's integrated clustering. Keeps its scratch
+/// (the engine's per-sample bookkeeping and the guard's buffers) between calls, so re-meshing a
+/// same-sized chunk allocates nothing.
+#[derive(Default)]
 pub struct RegularisedMarchingTetrahedra {
     /// The options.
     pub options: RmtOptions,
+    scratch: ScratchPool<RmtScratch>,
+}
+
+impl RegularisedMarchingTetrahedra {
+    /// With `options`.
+    pub fn new(options: RmtOptions) -> Self {
+        Self { options, scratch: ScratchPool::default() }
+    }
+}
+
+/// The buffers one extraction uses, kept between calls.
+#[derive(Default)]
+struct RmtScratch {
+    tet: TetScratch,
+    /// The guard's manifold check.
+    check: ManifoldCheck,
+    /// The guard's vertex renumbering.
+    renumber: Vec<u32>,
 }
 
 /// The bits of `mask` reachable from `seed` through `adjacency` without leaving `mask`.
@@ -264,16 +285,27 @@ impl Extractor for RegularisedMarchingTetrahedra {
     }
 
     fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
-        let mut scratch = TetScratch::default();
-        extract_tetrahedral(samples, &self.options, &mut scratch, out)?;
+        let mut held = self.scratch.take();
+        let result = self.extract_with(samples, out, &mut held);
+        self.scratch.give(held);
+        result
+    }
+}
+
+impl RegularisedMarchingTetrahedra {
+    fn extract_with(&self, samples: &Samples, out: &mut Extraction, s: &mut RmtScratch) -> Result<(), ExtractError> {
+        extract_tetrahedral(samples, &self.options, &mut s.tet, out)?;
         let first_pass_vertices = out.surface.positions.len();
         let mut repaired = false;
         if self.options.guard {
-            // The checks and the re-run geometry passes count as geometry time.
+            // The checks and the re-run geometry passes count as geometry time. Only merged
+            // vertices can be repaired (unmerging is all the guard does), so only they are
+            // checked: the same defects the whole mesh's check lists among them.
             let (first_pass, t) = (out.stats.times.geometry, Instant::now());
             loop {
-                let defects = manifold_defects(&out.surface);
-                if defects.is_empty() || !unmerge_and_regenerate(samples, &mut scratch, out, &defects) {
+                let tet = &s.tet;
+                let defects = s.check.defects_among(&out.surface, |v| tet.is_merged(v));
+                if defects.is_empty() || !unmerge_and_regenerate(samples, &mut s.tet, out, defects) {
                     break;
                 }
                 repaired = true;
@@ -281,12 +313,12 @@ impl Extractor for RegularisedMarchingTetrahedra {
             out.stats.times.geometry = first_pass + t.elapsed();
         }
         if out.origins.wanted && matches!(samples.lattice(), Lattice::Cubic(_)) {
-            scratch.fill_origins(samples.grid(), first_pass_vertices, &mut out.origins);
+            s.tet.fill_origins(samples.grid(), first_pass_vertices, &mut out.origins);
         }
         if repaired {
-            finish_repair(out);
+            finish_repair(out, &mut s.renumber);
         }
-        out.finish_counts(scratch.bytes());
+        out.finish_counts(s.tet.bytes() + s.renumber.capacity() * 4);
         Ok(())
     }
 }

@@ -66,6 +66,45 @@ pub struct TetScratch {
     /// directions (with the sample, a key for the vertex that does not depend on the lattice's
     /// extent).
     pub(super) owner: Vec<(u32, u8, u8)>,
+    /// Row summaries of the lattice's grids, the rows near one row, and the vertex pass's slabs:
+    /// kept so that re-meshing a chunk allocates nothing.
+    pub(super) rows: Vec<Vec<Row>>,
+    pub(super) near: Vec<Row>,
+    /// Kuhn (cubic grids): every sample's sign, 64 to a word.
+    pub(super) signs: GridSigns,
+    pub(super) slabs: Vec<(usize, usize, usize)>,
+    /// The index layout of the last lattice meshed (rebuilt when the lattice's shape changes).
+    pub(super) plan: Option<Plan>,
+}
+
+/// What both passes derive from a lattice's shape alone: the grids' index layout, the rows a
+/// sample's neighbours lie in, and the tetrahedra templates' index offsets from their anchor.
+#[derive(Clone, Debug)]
+pub(super) struct Plan {
+    kind: TetKind,
+    dims: [usize; 3],
+    pub(super) layout: Layout,
+    pub(super) row_offsets: [Vec<(bool, isize, isize)>; 2],
+    pub(super) template_offsets: Vec<[(bool, isize); 4]>,
+}
+
+impl Plan {
+    pub(super) fn new(lattice: &Lattice) -> Plan {
+        let topo = topology(TetKind::of(lattice));
+        let at = Addresser::new(lattice);
+        let layout = Layout::new(&at, topo);
+        let anchor_part = match topo.kind {
+            TetKind::Bcc => &layout.parts[1],
+            TetKind::Kuhn => &layout.parts[0],
+        };
+        let template_offsets = topo.templates.iter().map(|t| t.map(|d| anchor_part.offset_of(d))).collect();
+        Plan { kind: topo.kind, dims: lattice.grid().dims, row_offsets: row_neighbours(topo), template_offsets, layout }
+    }
+
+    /// Whether this plan was made for a lattice of `lattice`'s kind and shape.
+    pub(super) fn fits(&self, lattice: &Lattice) -> bool {
+        self.kind == TetKind::of(lattice) && self.dims == lattice.grid().dims
+    }
 }
 
 impl TetScratch {
@@ -76,6 +115,8 @@ impl TetScratch {
             + self.touch.capacity()
             + self.no_merge.capacity()
             + self.owner.capacity() * 8
+            + self.rows.iter().map(|r| r.capacity() * std::mem::size_of::<Row>()).sum::<usize>()
+            + self.signs.capacity_bytes()
     }
 
     /// Fills `origins` with each vertex's owning sample and the lowest direction of its crossings
@@ -87,6 +128,11 @@ impl TetScratch {
             (s as usize, u32::from(k) + tag)
         });
         origins.fill_with_ordinals(grid, owners);
+    }
+
+    /// Whether vertex `v` merged two or more crossings (only those can be unmerged).
+    pub fn is_merged(&self, v: u32) -> bool {
+        self.owner.get(v as usize).is_some_and(|&(_, members, _)| members >= 2)
     }
 
     /// Samples currently forbidden to merge.
@@ -141,6 +187,7 @@ impl Addresser {
 
 /// One of the lattice's cubic grids (corners, or BCC centres) and the constant index offsets of
 /// the neighbours of its interior samples.
+#[derive(Clone, Debug)]
 pub(super) struct Part {
     /// 0 for corners, 1 for centres (added to doubled coordinates).
     pub(super) odd: i32,
@@ -175,6 +222,7 @@ impl Part {
     }
 }
 
+#[derive(Clone, Debug)]
 pub(super) struct Layout {
     pub(super) parts: Vec<Part>,
 }
@@ -231,6 +279,13 @@ pub(super) fn owns(a: usize, va: f32, b: usize, vb: f32, iso: f32) -> bool {
     da < db || (da == db && a < b)
 }
 
+/// [`owns`] without a branch, for the vertex pass's inner loop.
+#[inline]
+fn owns_branchless(a: usize, va: f32, b: usize, vb: f32, iso: f32) -> bool {
+    let (da, db) = ((va - iso).abs(), (vb - iso).abs());
+    (da < db) | ((da == db) & (a < b))
+}
+
 /// Tetrahedra in the lattice: six per cube (Kuhn); four per pair of neighbouring cell centres
 /// (BCC, about twelve per cell).
 pub fn tetrahedron_count(lattice: &Lattice) -> usize {
@@ -266,7 +321,10 @@ pub(super) struct VertexPass<'a> {
     pub(super) at: &'a Addresser,
     pub(super) layout: &'a Layout,
     pub(super) rows: &'a [Vec<Row>],
-    pub(super) row_offsets: [Vec<(bool, isize, isize)>; 2],
+    /// Kuhn: the grid's signs, which find the samples with a crossing 64 at a time (the rows
+    /// above are then not used).
+    pub(super) signs: Option<&'a GridSigns>,
+    pub(super) row_offsets: &'a [Vec<(bool, isize, isize)>; 2],
     pub(super) steps: [Vec3; DIRECTIONS],
     pub(super) no_merge: &'a [bool],
     pub(super) clustering: &'a dyn Clustering,
@@ -298,92 +356,127 @@ impl VertexPass<'_> {
         let part = &layout.parts[p];
         let [dx, dy, dz] = part.dims;
         let other = if layout.parts.len() > 1 { 1 - p } else { p };
+        let sample_offsets = topo.directions.map(|d| d.map(|c| c as isize / 2));
         for z in z0..z1 {
             for y in 0..dy {
-                near.clear();
-                for &(cross, oy, oz) in &self.row_offsets[part.odd as usize] {
-                    let (g, dims) = if cross { (other, part.cross_dims) } else { (p, part.dims) };
-                    let (ry, rz) = (y as isize + oy, z as isize + oz);
-                    if ry >= 0 && rz >= 0 && (ry as usize) < dims[1] && (rz as usize) < dims[2] {
-                        near.push(self.rows[g][ry as usize + dims[1] * rz as usize]);
+                // The samples of the row that may own a crossing, as words of bits: on a cubic
+                // grid exactly those with a sign change on one of their 14 edges; on the BCC
+                // lattice the x-range where the rows around may differ.
+                let span_xs = match self.signs {
+                    Some(_) => None,
+                    None => {
+                        near.clear();
+                        for &(cross, oy, oz) in &self.row_offsets[part.odd as usize] {
+                            let (g, dims) = if cross { (other, part.cross_dims) } else { (p, part.dims) };
+                            let (ry, rz) = (y as isize + oy, z as isize + oz);
+                            if ry >= 0 && rz >= 0 && (ry as usize) < dims[1] && (rz as usize) < dims[2] {
+                                near.push(self.rows[g][ry as usize + dims[1] * rz as usize]);
+                            }
+                        }
+                        let Some((lo, hi)) = span(near, dx.max(part.cross_dims[0])) else { continue };
+                        Some((lo.saturating_sub(1), (hi + 1).min(dx - 1)))
                     }
-                }
-                let Some((lo, hi)) = span(near, dx.max(part.cross_dims[0])) else { continue };
+                };
+                let candidates = |w: usize| match (self.signs, span_xs) {
+                    (Some(signs), _) => sample_offsets.iter().fold(0, |m, &o| m | signs.changes_toward(y, z, o, w)),
+                    (None, Some((lo, hi))) => range_mask(w, lo, hi),
+                    (None, None) => 0,
+                };
                 let row_interior = (1..dy.saturating_sub(1)).contains(&y) && (1..dz.saturating_sub(1)).contains(&z);
                 let row_same = part.start + dx * (y + dy * z);
                 let row_cross = part.cross_start + part.cross_dims[0] * (y + part.cross_dims[1] * z);
-                for x in lo.saturating_sub(1)..(hi + 2).min(dx) {
-                    let i = row_same + x;
-                    let vi = values[i];
-                    let inside = vi < iso;
-                    let interior = row_interior && x >= 1 && x + 1 < dx;
-                    let q = [2 * x as i32 + part.odd, 2 * y as i32 + part.odd, 2 * z as i32 + part.odd];
-                    let neighbour = |k: usize| -> Option<usize> {
+                for (w, mut m) in (0..dx.div_ceil(64)).map(|w| (w, candidates(w))) {
+                    while m != 0 {
+                        let x = 64 * w + m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let i = row_same + x;
+                        let vi = values[i];
+                        let inside = vi < iso;
+                        let interior = row_interior && x >= 1 && x + 1 < dx;
+                        let q = [2 * x as i32 + part.odd, 2 * y as i32 + part.odd, 2 * z as i32 + part.odd];
+                        let neighbour = |k: usize| -> Option<usize> {
+                            if interior {
+                                let (cross, off) = part.offsets[k];
+                                Some(((if cross { row_cross + x } else { i }) as isize + off) as usize)
+                            } else {
+                                let d = topo.directions[k];
+                                at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]])
+                            }
+                        };
+                        // First the flags only; positions for the rare samples that own a crossing.
+                        let (mut nearby, mut neighbours, mut changes) = (0u16, 0u16, 0u16);
                         if interior {
-                            let (cross, off) = part.offsets[k];
-                            Some(((if cross { row_cross + x } else { i }) as isize + off) as usize)
+                            // No branch on the signs: at surface samples they are unpredictable.
+                            neighbours = (1 << DIRECTIONS) - 1;
+                            let from = [i, row_cross + x];
+                            for (k, &(cross, off)) in part.offsets.iter().enumerate() {
+                                let j = (from[usize::from(cross)] as isize + off) as usize;
+                                let vj = values[j];
+                                let change = (vj < iso) != inside;
+                                changes |= u16::from(change) << k;
+                                nearby |= u16::from(change & owns_branchless(i, vi, j, vj, iso)) << k;
+                            }
                         } else {
-                            let d = topo.directions[k];
-                            at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]])
-                        }
-                    };
-                    // First the flags only; positions for the rare samples that own a crossing.
-                    let (mut nearby, mut neighbours, mut touched) = (0u16, 0u16, false);
-                    for k in 0..DIRECTIONS {
-                        let Some(j) = neighbour(k) else { continue };
-                        neighbours |= 1 << k;
-                        let vj = values[j];
-                        if (vj < iso) != inside {
-                            touched = true;
-                            if owns(i, vi, j, vj, iso) {
-                                nearby |= 1 << k;
+                            for k in 0..DIRECTIONS {
+                                let Some(j) = neighbour(k) else { continue };
+                                neighbours |= 1 << k;
+                                let vj = values[j];
+                                if (vj < iso) != inside {
+                                    changes |= 1 << k;
+                                    if owns(i, vi, j, vj, iso) {
+                                        nearby |= 1 << k;
+                                    }
+                                }
                             }
                         }
-                    }
-                    touch[i - first] = touched;
-                    if nearby == 0 {
-                        continue;
-                    }
-                    let mut star = Star { nearby, neighbours, crossings: [Vec3::ZERO; DIRECTIONS] };
-                    let origin = at.position(q);
-                    let mut bits = nearby;
-                    while bits != 0 {
-                        let k = bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        let vj = values[neighbour(k).expect("flagged neighbours exist")];
-                        star.crossings[k] = origin + self.steps[k] * edge_crossing_fraction(vi, vj, iso);
-                    }
-                    let islands =
-                        if self.no_merge[i] { NoClustering.islands(&star, topo) } else { self.clustering.islands(&star, topo) };
-                    let start = positions.len();
-                    if start + islands.count as usize > u32::MAX as usize {
-                        return Err(ExtractError::TooLarge {
-                            algorithm: "marching tetrahedra",
-                            vertices: start + islands.count as usize,
-                        });
-                    }
-                    base[i - first] = start as u32;
-                    let mut sums = [Vec3::ZERO; DIRECTIONS];
-                    let mut members = [0u32; DIRECTIONS];
-                    let mut packed = 0u64;
-                    let mut bits = star.nearby;
-                    while bits != 0 {
-                        let k = bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        let s = islands.slot[k];
-                        sums[s as usize] += star.crossings[k];
-                        members[s as usize] += 1;
-                        packed |= u64::from(s) << (4 * k);
-                    }
-                    slots[i - first] = packed;
-                    let mut lowest = [u8::MAX; DIRECTIONS];
-                    for k in (0..DIRECTIONS).rev().filter(|&k| star.nearby >> k & 1 == 1) {
-                        lowest[islands.slot[k] as usize] = k as u8;
-                    }
-                    for s in 0..islands.count as usize {
-                        let mean = sums[s] / members[s] as f32;
-                        positions.push(self.clustering.place(mean, members[s], self.field, iso, at.corners.spacing));
-                        owner.push((i as u32, members[s].min(255) as u8, lowest[s]));
+                        touch[i - first] = changes != 0;
+                        if nearby == 0 {
+                            continue;
+                        }
+                        let mut star = Star { nearby, neighbours, crossings: [Vec3::ZERO; DIRECTIONS] };
+                        let origin = at.position(q);
+                        let mut bits = nearby;
+                        while bits != 0 {
+                            let k = bits.trailing_zeros() as usize;
+                            bits &= bits - 1;
+                            let vj = values[neighbour(k).expect("flagged neighbours exist")];
+                            star.crossings[k] = origin + self.steps[k] * edge_crossing_fraction(vi, vj, iso);
+                        }
+                        let islands = if self.no_merge[i] {
+                            NoClustering.islands(&star, topo)
+                        } else {
+                            self.clustering.islands(&star, topo)
+                        };
+                        let start = positions.len();
+                        if start + islands.count as usize > u32::MAX as usize {
+                            return Err(ExtractError::TooLarge {
+                                algorithm: "marching tetrahedra",
+                                vertices: start + islands.count as usize,
+                            });
+                        }
+                        base[i - first] = start as u32;
+                        let mut sums = [Vec3::ZERO; DIRECTIONS];
+                        let mut members = [0u32; DIRECTIONS];
+                        let mut packed = 0u64;
+                        let mut bits = star.nearby;
+                        while bits != 0 {
+                            let k = bits.trailing_zeros() as usize;
+                            bits &= bits - 1;
+                            let s = islands.slot[k];
+                            sums[s as usize] += star.crossings[k];
+                            members[s as usize] += 1;
+                            packed |= u64::from(s) << (4 * k);
+                        }
+                        slots[i - first] = packed;
+                        let mut lowest = [u8::MAX; DIRECTIONS];
+                        for k in (0..DIRECTIONS).rev().filter(|&k| star.nearby >> k & 1 == 1) {
+                            lowest[islands.slot[k] as usize] = k as u8;
+                        }
+                        for s in 0..islands.count as usize {
+                            let mean = sums[s] / members[s] as f32;
+                            positions.push(self.clustering.place(mean, members[s], self.field, iso, at.corners.spacing));
+                            owner.push((i as u32, members[s].min(255) as u8, lowest[s]));
+                        }
                     }
                 }
             }
@@ -424,29 +517,41 @@ pub fn extract_tetrahedral(
     } else {
         scratch.touch[..n].fill(false);
     }
+    // Cleared: a reused scratch holds the previous call's repairs.
     if scratch.no_merge.len() < n {
         scratch.no_merge = vec![false; n];
+    } else {
+        scratch.no_merge[..n].fill(false);
     }
     scratch.owner.clear();
-    let layout = Layout::new(&at, topo);
+    if !scratch.plan.as_ref().is_some_and(|p| p.fits(&lattice)) {
+        scratch.plan = Some(Plan::new(&lattice));
+    }
+    let plan = scratch.plan.as_ref().expect("made above");
+    let layout = &plan.layout;
     let half = 0.5 * at.corners.spacing;
     // Row summaries of both grids: a row whose neighbouring rows (in both grids) all share its
     // state has no crossing and is skipped without loading its neighbours.
-    let mut rows: Vec<Vec<Row>> = Vec::with_capacity(layout.parts.len());
-    for part in &layout.parts {
-        let mut r = Vec::new();
-        let len = part.dims.iter().product::<usize>();
-        classify_rows(&values[part.start..part.start + len], part.dims[0], iso, &mut r);
-        rows.push(r);
+    // Kuhn: every sample's sign instead (the samples with a crossing are found from them).
+    let kuhn = topo.kind == TetKind::Kuhn;
+    if kuhn {
+        scratch.signs.classify(values, at.corners.dims, iso);
+    } else {
+        scratch.rows.resize_with(layout.parts.len(), Vec::new);
+        for (part, r) in layout.parts.iter().zip(&mut scratch.rows) {
+            let len = part.dims.iter().product::<usize>();
+            classify_rows(&values[part.start..part.start + len], part.dims[0], iso, r);
+        }
     }
     let pass = VertexPass {
         values,
         iso,
         topo,
         at: &at,
-        layout: &layout,
-        rows: &rows,
-        row_offsets: row_neighbours(topo),
+        layout,
+        rows: &scratch.rows,
+        signs: kuhn.then_some(&scratch.signs),
+        row_offsets: &plan.row_offsets,
         steps: topo.directions.map(|d| Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * half),
         no_merge: &scratch.no_merge,
         clustering,
@@ -456,7 +561,8 @@ pub fn extract_tetrahedral(
     // slots and makes its own vertices; joined in order, the result is the serial pass's.
     let layers: usize = layout.parts.iter().map(|p| p.dims[2]).sum();
     let tasks = crate::slabs::task_count(crate::slabs::Parallelism::Rayon, n, layers);
-    let mut slabs: Vec<(usize, usize, usize)> = Vec::new(); // (part, z0, z1)
+    let slabs = &mut scratch.slabs; // (part, z0, z1)
+    slabs.clear();
     for (p, part) in layout.parts.iter().enumerate() {
         let per = tasks.div_ceil(layout.parts.len()).min(part.dims[2]).max(1);
         for k in 0..per {
@@ -464,17 +570,17 @@ pub fn extract_tetrahedral(
         }
     }
     if slabs.len() == 1 || tasks == 1 {
-        let mut near = Vec::with_capacity(16);
+        let near = &mut scratch.near;
         let (touch, base, slots) = (&mut scratch.touch[..], &mut scratch.base[..], &mut scratch.slots[..]);
-        for &(p, z0, z1) in &slabs {
-            pass.slab(p, z0, z1, 0, touch, base, slots, &mut out.surface.positions, &mut scratch.owner, &mut near)?;
+        for &(p, z0, z1) in slabs.iter() {
+            pass.slab(p, z0, z1, 0, touch, base, slots, &mut out.surface.positions, &mut scratch.owner, near)?;
         }
     } else {
         // Disjoint sample ranges for the slabs.
         let mut work = Vec::with_capacity(slabs.len());
         let (mut touch, mut base, mut slots) = (&mut scratch.touch[..n], &mut scratch.base[..n], &mut scratch.slots[..n]);
         let mut at_index = 0usize;
-        for &(p, z0, z1) in &slabs {
+        for &(p, z0, z1) in slabs.iter() {
             let part = &layout.parts[p];
             let first = part.start + part.dims[0] * part.dims[1] * z0;
             let last = part.start + part.dims[0] * part.dims[1] * z1;
@@ -512,8 +618,6 @@ pub fn extract_tetrahedral(
             scratch.owner.extend_from_slice(&owner);
         }
     }
-    out.stats.times.vertex = t.elapsed();
-
     out.stats.times.vertex = t.elapsed();
     let counts = geometry_pass(samples, scratch, out);
     let t = Instant::now();

@@ -11,7 +11,15 @@ pub fn geometry_pass(samples: &Samples, scratch: &TetScratch, out: &mut Extracti
     let lattice = *samples.lattice();
     let topo = topology(TetKind::of(&lattice));
     let at = Addresser::new(&lattice);
-    let layout = Layout::new(&at, topo);
+    let made_here;
+    let plan = match &scratch.plan {
+        Some(plan) if plan.fits(&lattice) => plan,
+        _ => {
+            made_here = Plan::new(&lattice);
+            &made_here
+        }
+    };
+    let layout = &plan.layout;
     let values = samples.values();
     let iso = samples.iso();
     out.surface.triangles.clear();
@@ -41,9 +49,10 @@ pub fn geometry_pass(samples: &Samples, scratch: &TetScratch, out: &mut Extracti
         }
         TetKind::Kuhn => 6 * anchor_dims.iter().product::<usize>(),
     };
-    let template_offsets: Vec<[(bool, isize); 4]> = topo.templates.iter().map(|t| t.map(|d| anchor_part.offset_of(d))).collect();
+    let template_offsets = &plan.template_offsets;
     let positions = &out.surface.positions;
     let [ax, ay, az] = anchor_dims;
+    let kuhn_signs = (topo.kind == TetKind::Kuhn && scratch.signs.holds(at.corners.dims)).then_some(&scratch.signs);
     let [dx, dy, _] = anchor_part.dims;
     // The triangles of anchor layers `z0..z1`, in order, and their counts.
     let layers = |z0: usize, z1: usize, triangles: &mut Vec<[u32; 3]>, counts: &mut TetCounts| {
@@ -53,62 +62,75 @@ pub fn geometry_pass(samples: &Samples, scratch: &TetScratch, out: &mut Extracti
                 let row_cross = anchor_part.cross_start + anchor_part.cross_dims[0] * (y + anchor_part.cross_dims[1] * z);
                 // BCC: every template exists when the anchor's +x, +y, +z neighbours do.
                 let row_full = topo.kind == TetKind::Kuhn || (y + 1 < ay && z + 1 < az);
-                for x in 0..ax {
-                    let i = row_same + x;
-                    if !scratch.touch[i] {
-                        continue;
+                // Kuhn: only cubes whose corners disagree hold surface, found 64 at a time; BCC:
+                // anchors with a sign change on one of their edges.
+                let candidates = |w: usize| match kuhn_signs {
+                    Some(signs) => {
+                        let rows = [signs.bits(y, z), signs.bits(y + 1, z), signs.bits(y, z + 1), signs.bits(y + 1, z + 1)];
+                        surface_cell_word(rows, w, 0, ax - 1)
                     }
-                    let full = row_full && (topo.kind == TetKind::Kuhn || x + 1 < ax);
-                    let q = [2 * x as i32 + anchor_part.odd, 2 * y as i32 + anchor_part.odd, 2 * z as i32 + anchor_part.odd];
-                    for (t, offsets) in template_offsets.iter().enumerate() {
-                        let idx = if full {
-                            offsets.map(|(cross, off)| ((if cross { row_cross + x } else { i }) as isize + off) as usize)
-                        } else {
-                            let template = &topo.templates[t];
-                            let mut idx = [0usize; 4];
-                            let mut valid = true;
-                            for (v, d) in idx.iter_mut().zip(template) {
-                                match at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]]) {
-                                    Some(j) => *v = j,
-                                    None => valid = false,
-                                }
-                            }
-                            if !valid {
-                                continue;
-                            }
-                            idx
-                        };
-                        let v = idx.map(|i| values[i]);
-                        let case = usize::from(v[0] < iso)
-                            | usize::from(v[1] < iso) << 1
-                            | usize::from(v[2] < iso) << 2
-                            | usize::from(v[3] < iso) << 3;
-                        let entry = &MT_TABLE[case];
-                        if entry.count == 0 {
+                    None => range_mask(w, 0, ax - 1),
+                };
+                for (w, mut m) in (0..ax.div_ceil(64)).map(|w| (w, candidates(w))) {
+                    while m != 0 {
+                        let x = 64 * w + m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let i = row_same + x;
+                        if !scratch.touch[i] {
                             continue;
                         }
-                        counts.active += 1;
-                        let dirs = &topo.edge_directions[t];
-                        let mut ids = [0u32; 4];
-                        for (k, &(a, b)) in entry.edges[..entry.count as usize].iter().enumerate() {
-                            let (a, b) = (a as usize, b as usize);
-                            ids[k] = vertex_of(idx[a], v[a], idx[b], v[b], dirs[a][b]);
-                        }
-                        if entry.count == 3 {
-                            push_triangle([ids[0], ids[1], ids[2]], triangles, &mut counts.discarded);
-                        } else {
-                            let [a, b, c, d] = ids;
-                            let along_ac = if a == c {
-                                true
-                            } else if b == d {
-                                false
+                        let full = row_full && (topo.kind == TetKind::Kuhn || x + 1 < ax);
+                        let q = [2 * x as i32 + anchor_part.odd, 2 * y as i32 + anchor_part.odd, 2 * z as i32 + anchor_part.odd];
+                        for (t, offsets) in template_offsets.iter().enumerate() {
+                            let idx = if full {
+                                offsets.map(|(cross, off)| ((if cross { row_cross + x } else { i }) as isize + off) as usize)
                             } else {
-                                let p = |i: u32| positions[i as usize];
-                                p(a).distance_squared(p(c)) <= p(b).distance_squared(p(d))
+                                let template = &topo.templates[t];
+                                let mut idx = [0usize; 4];
+                                let mut valid = true;
+                                for (v, d) in idx.iter_mut().zip(template) {
+                                    match at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]]) {
+                                        Some(j) => *v = j,
+                                        None => valid = false,
+                                    }
+                                }
+                                if !valid {
+                                    continue;
+                                }
+                                idx
                             };
-                            let halves = if along_ac { [[a, b, c], [a, c, d]] } else { [[a, b, d], [b, c, d]] };
-                            for h in halves {
-                                push_triangle(h, triangles, &mut counts.discarded);
+                            let v = crate::geometry::gather(values, &idx);
+                            let case = usize::from(v[0] < iso)
+                                | usize::from(v[1] < iso) << 1
+                                | usize::from(v[2] < iso) << 2
+                                | usize::from(v[3] < iso) << 3;
+                            let entry = &MT_TABLE[case];
+                            if entry.count == 0 {
+                                continue;
+                            }
+                            counts.active += 1;
+                            let dirs = &topo.edge_directions[t];
+                            let mut ids = [0u32; 4];
+                            for (k, &(a, b)) in entry.edges[..entry.count as usize].iter().enumerate() {
+                                let (a, b) = (a as usize, b as usize);
+                                ids[k] = vertex_of(idx[a], v[a], idx[b], v[b], dirs[a][b]);
+                            }
+                            if entry.count == 3 {
+                                push_triangle([ids[0], ids[1], ids[2]], triangles, &mut counts.discarded);
+                            } else {
+                                let [a, b, c, d] = ids;
+                                let along_ac = if a == c {
+                                    true
+                                } else if b == d {
+                                    false
+                                } else {
+                                    let p = |i: u32| positions[i as usize];
+                                    p(a).distance_squared(p(c)) <= p(b).distance_squared(p(d))
+                                };
+                                let halves = if along_ac { [[a, b, c], [a, c, d]] } else { [[a, b, d], [b, c, d]] };
+                                for h in halves {
+                                    push_triangle(h, triangles, &mut counts.discarded);
+                                }
                             }
                         }
                     }

@@ -39,14 +39,19 @@
 //! Vertex normals are the area-weighted mean of the incident triangle normals (section 3.1.2).
 //! Groups of tetrahedra whose samples all share a sign are skipped from their signs alone (the
 //! paper skips a cube when its centre has no flags, which misses tetrahedra whose crossings are
-//! all owned by corners; this test cannot).
+//! all owned by corners; this test cannot). On a cubic grid both passes read the samples' signs
+//! packed 64 to a word ([`crate::sign_rows::GridSigns`]): the vertex pass visits only samples with
+//! a sign change on one of their 14 edges, the geometry pass only cubes whose corners disagree.
+//! The per-sample bookkeeping ([`TetScratch`]) is kept by the extractors between calls, so
+//! re-meshing a same-sized chunk allocates nothing (`tests/tests/allocations.rs`).
 //!
 //! **Guarantees.** Without clustering the surface is closed where it stays inside the lattice,
 //! manifold and outward-wound (the tests run all 16 sign patterns of a tetrahedron, every pattern
 //! of a sample's star, random fields and the closed built-in fields). With clustering see
 //! [`crate::extractors::regularised_marching_tetrahedra`].
 //!
-//! **Costs.** Each pass reads every sample and its 14 neighbours once: O(samples). Both passes
+//! **Costs.** O(samples): one sign pass over every sample (a word per 64 on a cubic grid, a row
+//! summary per row on BCC), then the 14 neighbours of the samples near the surface. Both passes
 //! run in slabs of layers on rayon ([`crate::slabs`]) joined in order, so the mesh is the same on
 //! any number of threads (the paper's section 3.1.4 parallelises sampling only).
 //!
@@ -59,7 +64,7 @@ use crate::field::Field;
 use crate::geometry::edge_crossing_fraction;
 use crate::lattice::{Grid, Lattice};
 use crate::samples::Samples;
-use crate::sign_rows::{classify_rows, span, Row};
+use crate::sign_rows::{classify_rows, range_mask, span, surface_cell_word, GridSigns, Row};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::LazyLock;

@@ -49,11 +49,12 @@ pub fn unmerge_and_regenerate(samples: &Samples, scratch: &mut TetScratch, out: 
 }
 
 /// After repairs: drops vertices no triangle uses (renumbering the rest in order) and
-/// recomputes the normals.
-pub fn finish_repair(out: &mut Extraction) {
+/// recomputes the normals. `used` is a buffer for the renumbering, kept by the caller.
+pub fn finish_repair(out: &mut Extraction, used: &mut Vec<u32>) {
     let t = Instant::now();
     let mesh = &mut out.surface;
-    let mut used = vec![u32::MAX; mesh.positions.len()];
+    used.clear();
+    used.resize(mesh.positions.len(), u32::MAX);
     for t in &mesh.triangles {
         for &v in t {
             used[v as usize] = 0;

@@ -182,7 +182,7 @@ impl Experiment for Decimation {
             let grid = Grid::with_dims(&field.domain(), dims)?;
             let samples = Samples::sample(field, Lattice::Bcc(grid), 0.0)?;
             let mut mt = Extraction::default();
-            MarchingTetrahedra.extract(&samples, &mut mt)?;
+            MarchingTetrahedra::default().extract(&samples, &mut mt)?;
             let input = mt.surface.clone();
             let input_path = tmp.join(format!("{name}.ply"));
             crate::io::write_mesh(&input_path, &input)?;

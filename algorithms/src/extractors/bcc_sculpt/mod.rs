@@ -382,7 +382,7 @@ fn surface_of_samples(samples: &Samples) -> Result<TriangleBvh, ExtractError> {
     let mut e = Extraction::default();
     match samples.lattice() {
         crate::lattice::Lattice::Cubic(_) => crate::extractors::MarchingCubes::default().extract(samples, &mut e)?,
-        crate::lattice::Lattice::Bcc(_) => crate::extractors::MarchingTetrahedra.extract(samples, &mut e)?,
+        crate::lattice::Lattice::Bcc(_) => crate::extractors::MarchingTetrahedra::default().extract(samples, &mut e)?,
     }
     let p = &e.surface.positions;
     Ok(TriangleBvh::new(e.surface.triangles.iter().map(|t| t.map(|i| p[i as usize])).collect()))

@@ -11,6 +11,9 @@ pub(super) struct Ctx<'a> {
     pub(super) placement: Placement,
     pub(super) field: Option<&'a dyn crate::field::Field>,
     pub(super) tables: Tables,
+    /// Whether the sweep computes vertex normals (not when smoothing moves the vertices: their
+    /// normals are computed once, after it).
+    pub(super) sweep_normals: bool,
 }
 
 impl Ctx<'_> {
@@ -73,7 +76,7 @@ impl Ctx<'_> {
             for_each_surface_cell(bits, lo.saturating_sub(1), hi.min(nx - 2), |x, case| {
                 let i = start + x;
                 let idx = [i, i + 1, i + 1 + sx, i + sx, i + sxy, i + 1 + sxy, i + 1 + sx + sxy, i + sx + sxy];
-                let v = idx.map(|k| self.values[k]);
+                let v = crate::geometry::gather(self.values, &idx);
                 let c = x + (nx - 1) * y;
                 let code = u16::from(case) << 6 | u16::from(self.joined_faces(case, x, y, z));
                 cases[c] = code;
@@ -124,7 +127,9 @@ impl Ctx<'_> {
                         Placement::MassPoint => sums[p] / counts[p],
                     };
                     mesh.positions.push(min + local * self.grid.spacing);
-                    mesh.normals.push(trilinear_gradient(&v, local.clamp(Vec3::ZERO, Vec3::ONE)).normalize_or_zero());
+                    if self.sweep_normals {
+                        mesh.normals.push(trilinear_gradient(&v, local.clamp(Vec3::ZERO, Vec3::ONE)).normalize_or_zero());
+                    }
                     cell_min.push(min);
                 }
             });

@@ -219,9 +219,16 @@ impl DualEngine {
         let mut held = self.scratch.take();
         let s = &mut held;
         let field = samples.field().map(|f| f.as_ref());
-        let ctx =
-            Ctx { values: samples.values(), grid, iso: samples.iso(), placement: self.placement, field, tables: Tables::get() };
         let smoothing = self.options.smoothing != Smoothing::None && self.options.iterations > 0;
+        let ctx = Ctx {
+            values: samples.values(),
+            grid,
+            iso: samples.iso(),
+            placement: self.placement,
+            field,
+            tables: Tables::get(),
+            sweep_normals: !smoothing,
+        };
         let cell_layers = nz - 1;
         let tasks = crate::slabs::task_count(self.options.parallelism, grid.cell_count(), cell_layers);
         while s.slabs.len() < tasks {
@@ -281,19 +288,25 @@ impl DualEngine {
         out.stats.times.smoothing = t_smooth.elapsed();
 
         // Normals: the gradient of the cell's trilinear interpolant at the vertex (computed in the
-        // vertex pass; recomputed where smoothing moved the vertex).
+        // vertex pass without smoothing; after it, where smoothing moved the vertices).
         let t_normals = Instant::now();
         if smoothing {
             let (values, cell_min) = (samples.values(), &s.cell_min);
             let positions = &out.surface.positions;
             out.surface.normals.clear();
-            out.surface.normals.par_extend(positions.par_iter().zip(cell_min.par_iter()).map(|(&p, &min)| {
-                let cell = ((min - grid.origin) / grid.spacing).round();
-                let i = grid.index(cell.x as usize, cell.y as usize, cell.z as usize);
-                let (sx, sxy) = (nx, nx * ny);
-                let idx = [i, i + 1, i + 1 + sx, i + sx, i + sxy, i + 1 + sxy, i + 1 + sx + sxy, i + sx + sxy];
-                trilinear_gradient(&idx.map(|k| values[k]), (p - min) / grid.spacing).normalize_or_zero()
-            }));
+            let inverse_spacing = 1.0 / grid.spacing;
+            out.surface.normals.par_extend(
+                positions.par_iter().zip(cell_min.par_iter()).with_min_len(crate::slabs::MIN_VERTICES_PER_TASK).map(
+                    |(&p, &min)| {
+                        // The cell's lower corner is a lattice point: nearest integer by truncation.
+                        let cell = ((min - grid.origin) * inverse_spacing + Vec3::splat(0.5)).as_uvec3();
+                        let i = grid.index(cell.x as usize, cell.y as usize, cell.z as usize);
+                        let (sx, sxy) = (nx, nx * ny);
+                        let idx = [i, i + 1, i + 1 + sx, i + sx, i + sxy, i + 1 + sxy, i + 1 + sx + sxy, i + sx + sxy];
+                        trilinear_gradient(&crate::geometry::gather(values, &idx), (p - min) / grid.spacing).normalize_or_zero()
+                    },
+                ),
+            );
         }
         out.stats.times.normals = t_normals.elapsed();
         if out.origins.wanted {

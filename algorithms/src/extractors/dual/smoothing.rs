@@ -5,6 +5,7 @@
 //! Jacobi-preconditioned conjugate gradients.
 
 use super::{DualEngine, Scratch, Smoothing};
+use crate::slabs::MIN_VERTICES_PER_TASK;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -75,7 +76,7 @@ impl DualEngine {
                 let mut strength = o.strength;
                 for _ in 0..o.iterations {
                     s.work.clear();
-                    s.work.par_extend((0..n).into_par_iter().map(|i| {
+                    s.work.par_extend((0..n).into_par_iter().with_min_len(MIN_VERTICES_PER_TASK).map(|i| {
                         let p = positions[i];
                         let target = neighbour_mean(i, positions, start, adjacency).unwrap_or(p);
                         clamp_to_cell(p + (target - p) * strength, cell_min[i], h)
@@ -91,16 +92,21 @@ impl DualEngine {
                     s.work.resize(n, Vec3::ZERO);
                     s.velocity_next.resize(n, Vec3::ZERO);
                     let velocity = &s.velocity;
-                    s.work.par_iter_mut().zip(s.velocity_next.par_iter_mut()).enumerate().for_each(|(i, (next_p, next_v))| {
-                        let p = positions[i];
-                        let target = neighbour_mean(i, positions, start, adjacency).unwrap_or(p);
-                        let v = velocity[i] * (1.0 - o.damping) + (target - p) * o.stiffness;
-                        let moved = p + v;
-                        let clamped = clamp_to_cell(moved, cell_min[i], h);
-                        // A wall stops motion into it (no bounce).
-                        *next_v = Vec3::select(moved.cmpne(clamped), Vec3::ZERO, v);
-                        *next_p = clamped;
-                    });
+                    s.work
+                        .par_iter_mut()
+                        .zip(s.velocity_next.par_iter_mut())
+                        .enumerate()
+                        .with_min_len(MIN_VERTICES_PER_TASK)
+                        .for_each(|(i, (next_p, next_v))| {
+                            let p = positions[i];
+                            let target = neighbour_mean(i, positions, start, adjacency).unwrap_or(p);
+                            let v = velocity[i] * (1.0 - o.damping) + (target - p) * o.stiffness;
+                            let moved = p + v;
+                            let clamped = clamp_to_cell(moved, cell_min[i], h);
+                            // A wall stops motion into it (no bounce).
+                            *next_v = Vec3::select(moved.cmpne(clamped), Vec3::ZERO, v);
+                            *next_p = clamped;
+                        });
                     positions.copy_from_slice(&s.work);
                     std::mem::swap(&mut s.velocity, &mut s.velocity_next);
                 }

@@ -26,7 +26,7 @@ pub(super) fn projection(repeats: usize) -> Result<Vec<ProjectionRow>, Experimen
         let grid = Grid::with_dims(&field.domain(), dims)?;
         let samples = Samples::sample(field.clone(), Lattice::Bcc(grid), 0.0)?;
         let measure = |projection| -> Result<(MeshMetrics, f64), ExperimentError> {
-            let e = RegularisedMarchingTetrahedra { options: RmtOptions { projection, ..Default::default() } };
+            let e = RegularisedMarchingTetrahedra::new(RmtOptions { projection, ..Default::default() });
             let mut out = Extraction::default();
             let mut t = Vec::new();
             for _ in 0..repeats {

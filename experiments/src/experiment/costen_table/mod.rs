@@ -151,9 +151,9 @@ struct Data {
 
 /// Extracts with method `m` (one of [`METHODS`]).
 fn run_method(m: &str, samples: &Samples, out: &mut Extraction) -> Result<usize, ExperimentError> {
-    let rmt = |options| RegularisedMarchingTetrahedra { options };
+    let rmt = RegularisedMarchingTetrahedra::new;
     match m {
-        "u" | "p" | "p+" => MarchingTetrahedra.extract(samples, out)?,
+        "u" | "p" | "p+" => MarchingTetrahedra::default().extract(samples, out)?,
         "i" => rmt(RmtOptions::paper()).extract(samples, out)?,
         _ => rmt(RmtOptions::default()).extract(samples, out)?,
     }

@@ -36,9 +36,11 @@
 //! - `guard=true` (default): the paper's graph test is local, but two neighbouring samples can
 //!   each merge safely and together collapse a narrow fold or tube (their islands touch along two
 //!   separate stretches), leaving an edge with four triangles or a pinched vertex. After the
-//!   geometry pass the guard lists the vertices where the mesh is not a consistently wound
-//!   manifold ([`crate::mesh::manifold_defects`]), forbids merging at the samples that made the
-//!   merged ones, and runs both passes again; plain marching tetrahedra is manifold, so this ends,
+//!   geometry pass the guard lists the merged vertices where the mesh is not a consistently wound
+//!   manifold ([`crate::mesh::ManifoldCheck`]), forbids merging at the samples that made them,
+//!   gives their crossings one vertex each and re-emits the triangles of the tetrahedra around
+//!   those samples (on cubic grids only those: [`crate::tetrahedral::regenerate_anchors`]; on the
+//!   BCC lattice the whole geometry pass); plain marching tetrahedra is manifold, so this ends,
 //!   usually after one or two rounds. Its cost is in the geometry time.
 //!
 //! **Guarantees.** Every crossing belongs to exactly one sample, so merging is order independent

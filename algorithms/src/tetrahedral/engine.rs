@@ -75,6 +75,15 @@ pub struct TetScratch {
     pub(super) slabs: Vec<(usize, usize, usize)>,
     /// The index layout of the last lattice meshed (rebuilt when the lattice's shape changes).
     pub(super) plan: Option<Plan>,
+    /// The last geometry pass's surface anchors, in order: flat index and first triangle (valid
+    /// once a geometry pass ran on the current samples), a spare triangle buffer for partial
+    /// re-passes, and the anchors one re-emits.
+    pub(super) anchors: Vec<(u32, u32)>,
+    pub(super) anchors_valid: bool,
+    pub(super) next_triangles: Vec<[u32; 3]>,
+    pub(super) affected: Vec<u32>,
+    /// The samples one repair unmerged.
+    pub(super) unmerged: Vec<usize>,
 }
 
 /// What both passes derive from a lattice's shape alone: the grids' index layout, the rows a
@@ -117,6 +126,9 @@ impl TetScratch {
             + self.owner.capacity() * 8
             + self.rows.iter().map(|r| r.capacity() * std::mem::size_of::<Row>()).sum::<usize>()
             + self.signs.capacity_bytes()
+            + self.anchors.capacity() * 8
+            + self.next_triangles.capacity() * 12
+            + (self.affected.capacity() + self.unmerged.capacity() * 2) * 4
     }
 
     /// Fills `origins` with each vertex's owning sample and the lowest direction of its crossings
@@ -524,6 +536,7 @@ pub fn extract_tetrahedral(
         scratch.no_merge[..n].fill(false);
     }
     scratch.owner.clear();
+    scratch.anchors_valid = false;
     if !scratch.plan.as_ref().is_some_and(|p| p.fits(&lattice)) {
         scratch.plan = Some(Plan::new(&lattice));
     }

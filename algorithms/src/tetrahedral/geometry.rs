@@ -6,8 +6,63 @@
 use super::*;
 
 /// The geometry pass (Algorithm 3) over the vertex indices in `scratch`, replacing
-/// `out.surface.triangles`; sets the geometry time and the counts in `out.stats`.
-pub fn geometry_pass(samples: &Samples, scratch: &TetScratch, out: &mut Extraction) -> TetCounts {
+/// `out.surface.triangles`; sets the geometry time and the counts in `out.stats`. Records each
+/// surface anchor's first triangle in `scratch`, so that a repair can re-emit only the anchors it
+/// touched ([`regenerate_anchors`]).
+pub fn geometry_pass(samples: &Samples, scratch: &mut TetScratch, out: &mut Extraction) -> TetCounts {
+    run_geometry(samples, scratch, out, None)
+}
+
+/// After the vertex indices of the samples `changed` were rewritten (a repair), re-emits the
+/// triangles of the anchors whose tetrahedra contain one of them and keeps every other anchor's
+/// triangles as the last pass made them: the same triangles, in the same order, as
+/// [`geometry_pass`] would make (every tetrahedron using a crossing owned by a sample contains
+/// that sample). Kuhn lattices after a geometry pass on the same samples; otherwise the whole
+/// pass runs again.
+pub fn regenerate_anchors(samples: &Samples, scratch: &mut TetScratch, out: &mut Extraction, changed: &[usize]) -> TetCounts {
+    let lattice = *samples.lattice();
+    let dims = lattice.grid().dims;
+    if TetKind::of(&lattice) != TetKind::Kuhn || !scratch.anchors_valid || !scratch.signs.holds(dims) {
+        return run_geometry(samples, scratch, out, None);
+    }
+    // The cubes around each changed corner sample, by their low corner's flat index.
+    let grid = lattice.grid();
+    let mut affected = std::mem::take(&mut scratch.affected);
+    affected.clear();
+    for &i in changed {
+        let (x, y, z) = (i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1]));
+        for (a, b, c) in (0..8).map(|k| (k & 1, k >> 1 & 1, k >> 2)) {
+            let (cx, cy, cz) = (x.wrapping_sub(a), y.wrapping_sub(b), z.wrapping_sub(c));
+            if cx + 1 < dims[0] && cy + 1 < dims[1] && cz + 1 < dims[2] {
+                affected.push(grid.index(cx, cy, cz) as u32);
+            }
+        }
+    }
+    affected.sort_unstable();
+    affected.dedup();
+    let counts = run_geometry(samples, scratch, out, Some(&affected));
+    scratch.affected = affected;
+    counts
+}
+
+/// The geometry pass over every anchor (`only: None`) or, re-using the last pass's triangles
+/// elsewhere, over the anchors `only` (sorted flat indices).
+fn run_geometry(samples: &Samples, scratch: &mut TetScratch, out: &mut Extraction, only: Option<&[u32]>) -> TetCounts {
+    let (mut anchors, mut next) = (std::mem::take(&mut scratch.anchors), std::mem::take(&mut scratch.next_triangles));
+    let counts = geometry_with(samples, scratch, out, only, &mut anchors, &mut next);
+    (scratch.anchors, scratch.next_triangles, scratch.anchors_valid) = (anchors, next, true);
+    counts
+}
+
+/// [`run_geometry`] with the anchors' record and the spare triangle buffer held apart.
+fn geometry_with(
+    samples: &Samples,
+    scratch: &TetScratch,
+    out: &mut Extraction,
+    only: Option<&[u32]>,
+    anchors: &mut Vec<(u32, u32)>,
+    next: &mut Vec<[u32; 3]>,
+) -> TetCounts {
     let lattice = *samples.lattice();
     let topo = topology(TetKind::of(&lattice));
     let at = Addresser::new(&lattice);
@@ -22,7 +77,6 @@ pub fn geometry_pass(samples: &Samples, scratch: &TetScratch, out: &mut Extracti
     let layout = &plan.layout;
     let values = samples.values();
     let iso = samples.iso();
-    out.surface.triangles.clear();
     let t = Instant::now();
     let mut counts = TetCounts::default();
     let vertex_of = |a: usize, va: f32, b: usize, vb: f32, dir_ab: u8| -> u32 {
@@ -54,14 +108,74 @@ pub fn geometry_pass(samples: &Samples, scratch: &TetScratch, out: &mut Extracti
     let [ax, ay, az] = anchor_dims;
     let kuhn_signs = (topo.kind == TetKind::Kuhn && scratch.signs.holds(at.corners.dims)).then_some(&scratch.signs);
     let [dx, dy, _] = anchor_part.dims;
-    // The triangles of anchor layers `z0..z1`, in order, and their counts.
-    let layers = |z0: usize, z1: usize, triangles: &mut Vec<[u32; 3]>, counts: &mut TetCounts| {
+    // The triangles of the anchor at (x, y, z) of the anchor grid, appended to `triangles`.
+    let anchor = |x: usize, y: usize, z: usize, triangles: &mut Vec<[u32; 3]>, counts: &mut TetCounts| {
+        let row_same = anchor_part.start + dx * (y + dy * z);
+        let row_cross = anchor_part.cross_start + anchor_part.cross_dims[0] * (y + anchor_part.cross_dims[1] * z);
+        // BCC: every template exists when the anchor's +x, +y, +z neighbours do.
+        let row_full = topo.kind == TetKind::Kuhn || (y + 1 < ay && z + 1 < az);
+        let i = row_same + x;
+        let full = row_full && (topo.kind == TetKind::Kuhn || x + 1 < ax);
+        let q = [2 * x as i32 + anchor_part.odd, 2 * y as i32 + anchor_part.odd, 2 * z as i32 + anchor_part.odd];
+        for (t, offsets) in template_offsets.iter().enumerate() {
+            let idx = if full {
+                offsets.map(|(cross, off)| ((if cross { row_cross + x } else { i }) as isize + off) as usize)
+            } else {
+                let template = &topo.templates[t];
+                let mut idx = [0usize; 4];
+                let mut valid = true;
+                for (v, d) in idx.iter_mut().zip(template) {
+                    match at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]]) {
+                        Some(j) => *v = j,
+                        None => valid = false,
+                    }
+                }
+                if !valid {
+                    continue;
+                }
+                idx
+            };
+            let v = crate::geometry::gather(values, &idx);
+            let case = usize::from(v[0] < iso)
+                | usize::from(v[1] < iso) << 1
+                | usize::from(v[2] < iso) << 2
+                | usize::from(v[3] < iso) << 3;
+            let entry = &MT_TABLE[case];
+            if entry.count == 0 {
+                continue;
+            }
+            counts.active += 1;
+            let dirs = &topo.edge_directions[t];
+            let mut ids = [0u32; 4];
+            for (k, &(a, b)) in entry.edges[..entry.count as usize].iter().enumerate() {
+                let (a, b) = (a as usize, b as usize);
+                ids[k] = vertex_of(idx[a], v[a], idx[b], v[b], dirs[a][b]);
+            }
+            if entry.count == 3 {
+                push_triangle([ids[0], ids[1], ids[2]], triangles, &mut counts.discarded);
+            } else {
+                let [a, b, c, d] = ids;
+                let along_ac = if a == c {
+                    true
+                } else if b == d {
+                    false
+                } else {
+                    let p = |i: u32| positions[i as usize];
+                    p(a).distance_squared(p(c)) <= p(b).distance_squared(p(d))
+                };
+                let halves = if along_ac { [[a, b, c], [a, c, d]] } else { [[a, b, d], [b, c, d]] };
+                for h in halves {
+                    push_triangle(h, triangles, &mut counts.discarded);
+                }
+            }
+        }
+    };
+    // The triangles of anchor layers `z0..z1`, in order, their counts, and each surface anchor's
+    // (flat index, first triangle).
+    let layers = |z0: usize, z1: usize, triangles: &mut Vec<[u32; 3]>, counts: &mut TetCounts, anchors: &mut Vec<(u32, u32)>| {
         for z in z0..z1 {
             for y in 0..ay {
                 let row_same = anchor_part.start + dx * (y + dy * z);
-                let row_cross = anchor_part.cross_start + anchor_part.cross_dims[0] * (y + anchor_part.cross_dims[1] * z);
-                // BCC: every template exists when the anchor's +x, +y, +z neighbours do.
-                let row_full = topo.kind == TetKind::Kuhn || (y + 1 < ay && z + 1 < az);
                 // Kuhn: only cubes whose corners disagree hold surface, found 64 at a time; BCC:
                 // anchors with a sign change on one of their edges.
                 let candidates = |w: usize| match kuhn_signs {
@@ -75,87 +189,67 @@ pub fn geometry_pass(samples: &Samples, scratch: &TetScratch, out: &mut Extracti
                     while m != 0 {
                         let x = 64 * w + m.trailing_zeros() as usize;
                         m &= m - 1;
-                        let i = row_same + x;
-                        if !scratch.touch[i] {
+                        if !scratch.touch[row_same + x] {
                             continue;
                         }
-                        let full = row_full && (topo.kind == TetKind::Kuhn || x + 1 < ax);
-                        let q = [2 * x as i32 + anchor_part.odd, 2 * y as i32 + anchor_part.odd, 2 * z as i32 + anchor_part.odd];
-                        for (t, offsets) in template_offsets.iter().enumerate() {
-                            let idx = if full {
-                                offsets.map(|(cross, off)| ((if cross { row_cross + x } else { i }) as isize + off) as usize)
-                            } else {
-                                let template = &topo.templates[t];
-                                let mut idx = [0usize; 4];
-                                let mut valid = true;
-                                for (v, d) in idx.iter_mut().zip(template) {
-                                    match at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]]) {
-                                        Some(j) => *v = j,
-                                        None => valid = false,
-                                    }
-                                }
-                                if !valid {
-                                    continue;
-                                }
-                                idx
-                            };
-                            let v = crate::geometry::gather(values, &idx);
-                            let case = usize::from(v[0] < iso)
-                                | usize::from(v[1] < iso) << 1
-                                | usize::from(v[2] < iso) << 2
-                                | usize::from(v[3] < iso) << 3;
-                            let entry = &MT_TABLE[case];
-                            if entry.count == 0 {
-                                continue;
-                            }
-                            counts.active += 1;
-                            let dirs = &topo.edge_directions[t];
-                            let mut ids = [0u32; 4];
-                            for (k, &(a, b)) in entry.edges[..entry.count as usize].iter().enumerate() {
-                                let (a, b) = (a as usize, b as usize);
-                                ids[k] = vertex_of(idx[a], v[a], idx[b], v[b], dirs[a][b]);
-                            }
-                            if entry.count == 3 {
-                                push_triangle([ids[0], ids[1], ids[2]], triangles, &mut counts.discarded);
-                            } else {
-                                let [a, b, c, d] = ids;
-                                let along_ac = if a == c {
-                                    true
-                                } else if b == d {
-                                    false
-                                } else {
-                                    let p = |i: u32| positions[i as usize];
-                                    p(a).distance_squared(p(c)) <= p(b).distance_squared(p(d))
-                                };
-                                let halves = if along_ac { [[a, b, c], [a, c, d]] } else { [[a, b, d], [b, c, d]] };
-                                for h in halves {
-                                    push_triangle(h, triangles, &mut counts.discarded);
-                                }
-                            }
-                        }
+                        anchors.push(((row_same + x) as u32, triangles.len() as u32));
+                        anchor(x, y, z, triangles, counts);
                     }
                 }
             }
         }
     };
     let mut triangles = std::mem::take(&mut out.surface.triangles);
-    let tasks = crate::slabs::task_count(crate::slabs::Parallelism::Rayon, ax * ay * az, az);
-    if tasks <= 1 {
-        layers(0, az, &mut triangles, &mut counts);
-    } else {
-        // Slabs of anchor layers, joined in order: the serial pass's triangles.
-        let slabs: Vec<(Vec<[u32; 3]>, TetCounts)> = (0..tasks)
-            .into_par_iter()
-            .map(|k| {
-                let (mut part, mut c) = (Vec::new(), TetCounts::default());
-                layers(k * az / tasks, (k + 1) * az / tasks, &mut part, &mut c);
-                (part, c)
-            })
-            .collect();
-        for (part, c) in slabs {
-            triangles.extend_from_slice(&part);
-            counts.active += c.active;
-            counts.discarded += c.discarded;
+    match only {
+        Some(only) => {
+            // Re-emit the anchors in `only`, copy every other anchor's triangles.
+            counts.active = out.stats.active_cells;
+            counts.discarded = out.stats.discarded_triangles;
+            next.clear();
+            let mut wanted = only.iter().peekable();
+            for k in 0..anchors.len() {
+                let (i, first) = anchors[k];
+                let end = anchors.get(k + 1).map_or(triangles.len(), |a| a.1 as usize);
+                anchors[k].1 = next.len() as u32;
+                while wanted.next_if(|&&a| a < i).is_some() {}
+                if wanted.next_if(|&&a| a == i).is_some() {
+                    let (ii, g) = (i as usize - anchor_part.start, [dx, dy]);
+                    let (x, y, z) = (ii % g[0], (ii / g[0]) % g[1], ii / (g[0] * g[1]));
+                    // Same tetrahedra and cases: every triangle not emitted now that was before
+                    // is one more discarded, and the other way round.
+                    anchor(x, y, z, next, &mut TetCounts::default());
+                    let (before, now) = (end - first as usize, next.len() - anchors[k].1 as usize);
+                    counts.discarded = (counts.discarded + before).saturating_sub(now);
+                } else {
+                    next.extend_from_slice(&triangles[first as usize..end]);
+                }
+            }
+            std::mem::swap(&mut triangles, next);
+        }
+        None => {
+            anchors.clear();
+            let tasks = crate::slabs::task_count(crate::slabs::Parallelism::Rayon, ax * ay * az, az);
+            triangles.clear();
+            if tasks <= 1 {
+                layers(0, az, &mut triangles, &mut counts, anchors);
+            } else {
+                // Slabs of anchor layers, joined in order: the serial pass's triangles.
+                let slabs: Vec<SlabTriangles> = (0..tasks)
+                    .into_par_iter()
+                    .map(|k| {
+                        let (mut part, mut c, mut a) = (Vec::new(), TetCounts::default(), Vec::new());
+                        layers(k * az / tasks, (k + 1) * az / tasks, &mut part, &mut c, &mut a);
+                        (part, c, a)
+                    })
+                    .collect();
+                for (part, c, a) in slabs {
+                    let offset = triangles.len() as u32;
+                    anchors.extend(a.iter().map(|&(i, first)| (i, first + offset)));
+                    triangles.extend_from_slice(&part);
+                    counts.active += c.active;
+                    counts.discarded += c.discarded;
+                }
+            }
         }
     }
     out.surface.triangles = triangles;
@@ -164,6 +258,9 @@ pub fn geometry_pass(samples: &Samples, scratch: &TetScratch, out: &mut Extracti
     out.stats.active_cells = counts.active;
     counts
 }
+
+/// One slab's triangles, counts and surface anchors (flat index, first triangle in the slab).
+type SlabTriangles = (Vec<[u32; 3]>, TetCounts, Vec<(u32, u32)>);
 
 #[inline]
 pub(super) fn push_triangle(t: [u32; 3], triangles: &mut Vec<[u32; 3]>, discarded: &mut usize) {

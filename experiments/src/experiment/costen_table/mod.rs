@@ -349,7 +349,7 @@ fn section(ctx: &Context, data: &Data) -> String {
          rows `p+` the topology-safe edge collapse; the paper has neither. The objects are ours: a sphere of radius {radius:.2} in the unit \
          cube, our asteroid (a noise-displaced sphere, not the paper's), the bunny as a signed-distance field of the shipped \
          model; so counts compare in kind, not digit for digit. Times are from a shared machine (the paper: {PAPER_CPU} \
-         with {PAPER_LOGICAL_PROCESSORS} logical processors, its sampling pass parallel on a thread count it does not state), B_edges is our per-sample scratch ({edge_lo:.1}-{edge_hi:.1} bytes a sample on the simple cubic lattice: vertex base, half-byte slots, two flags; the paper \
+         with {PAPER_LOGICAL_PROCESSORS} logical processors, its sampling pass parallel on a thread count it does not state), B_edges is our per-sample scratch ({edge_lo:.1}-{edge_hi:.1} bytes a sample on the simple cubic lattice: vertex base, half-byte slots, two flags, packed signs, and the guard's buffers; the paper \
          stores {:.0}). F_discard is the paper's definition, discarded / (discarded + kept); `removed` is one minus triangles / \
          triangles of `u`.\n\n",
         OBJECTS.len(),

@@ -66,20 +66,21 @@ pub struct TetScratch {
     /// directions (with the sample, a key for the vertex that does not depend on the lattice's
     /// extent).
     pub(super) owner: Vec<(u32, u8, u8)>,
-    /// Row summaries of the lattice's grids, the rows near one row, and the vertex pass's slabs:
-    /// kept so that re-meshing a chunk allocates nothing.
+    // Everything below is kept so that re-meshing a same-sized chunk allocates nothing.
+    /// BCC: row summaries of both grids, and the rows around one row.
     pub(super) rows: Vec<Vec<Row>>,
     pub(super) near: Vec<Row>,
     /// Kuhn (cubic grids): every sample's sign, 64 to a word.
     pub(super) signs: GridSigns,
+    /// The vertex pass's slabs: (grid, first layer, end layer).
     pub(super) slabs: Vec<(usize, usize, usize)>,
     /// The index layout of the last lattice meshed (rebuilt when the lattice's shape changes).
     pub(super) plan: Option<Plan>,
-    /// The last geometry pass's surface anchors, in order: flat index and first triangle (valid
-    /// once a geometry pass ran on the current samples), a spare triangle buffer for partial
-    /// re-passes, and the anchors one re-emits.
+    /// The last geometry pass's surface anchors, in order: flat index and first triangle; valid
+    /// once a geometry pass ran on the current samples.
     pub(super) anchors: Vec<(u32, u32)>,
     pub(super) anchors_valid: bool,
+    /// A partial re-pass's spare triangle buffer and the anchors it re-emits.
     pub(super) next_triangles: Vec<[u32; 3]>,
     pub(super) affected: Vec<u32>,
     /// The samples one repair unmerged.
@@ -124,11 +125,12 @@ impl TetScratch {
             + self.touch.capacity()
             + self.no_merge.capacity()
             + self.owner.capacity() * 8
-            + self.rows.iter().map(|r| r.capacity() * std::mem::size_of::<Row>()).sum::<usize>()
+            + (self.rows.iter().map(Vec::capacity).sum::<usize>() + self.near.capacity()) * std::mem::size_of::<Row>()
             + self.signs.capacity_bytes()
             + self.anchors.capacity() * 8
             + self.next_triangles.capacity() * 12
-            + (self.affected.capacity() + self.unmerged.capacity() * 2) * 4
+            + self.affected.capacity() * 4
+            + self.unmerged.capacity() * 8
     }
 
     /// Fills `origins` with each vertex's owning sample and the lowest direction of its crossings

@@ -80,7 +80,8 @@ pub(super) fn peer_section(rows: &[PeerRow]) -> String {
         "\n### Against `ferreus_rmt`\n\nThe `ferreus_rmt` crate (Maptek; its version is in `Cargo.lock`) is an independent regularised marching tetrahedra \
          that follows the surface from seed points (here every {SEED_EVERY}th vertex of our mesh) instead of sampling the whole volume, \
          on Treece's stacked-plane lattice at the same spacing. Both evaluate the field in parallel; its time includes its field \
-         evaluations, so compare it with our sampling + extraction. Same field, same spacing, runs alternating, medians.\n\n",
+         evaluations, so compare it with our sampling + extraction. Both one-shot: every run builds a new extractor and a fresh \
+         output (ours) or calls its builder anew (theirs). Same field, same spacing, runs alternating, medians.\n\n",
     );
     let body: Vec<Vec<String>> = rows
         .iter()

@@ -9,6 +9,16 @@ use rayon::prelude::*;
 /// (which depends on fields, not the other way round).
 pub const DEFAULT_MATERIAL: u8 = 0;
 
+/// Where every sample of a block lies, when a field can tell without sampling it
+/// ([`Field::block_side`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BlockSide {
+    /// Every sample's value is at least `iso` (nothing to mesh: an empty chunk).
+    Outside,
+    /// Every sample's value is below `iso` (a full chunk).
+    Inside,
+}
+
 /// A scalar field `f: R^3 -> R`. Inside is `f < iso`.
 ///
 /// Implementors give a value, a default domain and, where they know it, an analytic gradient;
@@ -71,6 +81,30 @@ pub trait Field: Send + Sync {
     fn sample_grid(&self, grid: &Grid, iso: f32, out: &mut [f32]) {
         let _ = iso;
         sample_pointwise(self, grid, out);
+    }
+
+    /// Fills `out` with the values at the samples `lo ..= lo + dims - 1` of `grid` (x fastest,
+    /// then y, then z), each bitwise equal to [`Field::value`] at `grid.position(..)`, so blocks
+    /// that share samples agree on them. The default evaluates [`Field::value`] per sample; a
+    /// field that shares work between samples overrides it (terrain computes its height field
+    /// once per column).
+    fn sample_block(&self, grid: &Grid, lo: [usize; 3], dims: [usize; 3], out: &mut [f32]) {
+        let [nx, ny, nz] = dims;
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    out[(z * ny + y) * nx + x] = self.value(grid.position(lo[0] + x, lo[1] + y, lo[2] + z));
+                }
+            }
+        }
+    }
+
+    /// The side of `iso` every sample of the block `lo ..= lo + dims - 1` of `grid` lies on, when
+    /// the field can prove it without sampling the block; `None` (the default) when it cannot.
+    /// Streaming skips such chunks unsampled ([`crate::chunks::stream_chunked`]), so a wrong
+    /// answer loses surface: only answer from a proven bound.
+    fn block_side(&self, _grid: &Grid, _lo: [usize; 3], _dims: [usize; 3], _iso: f32) -> Option<BlockSide> {
+        None
     }
 
     /// The analytic volume enclosed by the level set `iso` within the default domain, where known.

@@ -35,7 +35,7 @@
 //! `stream` ([`stream_chunked`], [`MeshSink`]); `edit` ([`ChunkedVolume`], [`Brush`]).
 
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
-use crate::field::Field;
+use crate::field::{BlockSide, Field};
 use crate::geometry::Aabb;
 use crate::lattice::{Grid, Lattice};
 use crate::samples::Samples;
@@ -271,28 +271,23 @@ impl ChunkSlot {
         field: &dyn Field,
     ) -> Result<(), ExtractError> {
         let b = self.block;
-        let [nx, ny, nz] = b.dims;
-        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
         let local = self.samples.values_mut();
-        for z in 0..nz {
-            for y in 0..ny {
-                for x in 0..nx {
-                    let p = grid.position(b.lo[0] + x, b.lo[1] + y, b.lo[2] + z);
-                    let v = field.value(p);
-                    if !v.is_finite() {
-                        return Err(crate::samples::SampleError::NonFinite {
-                            field: field.name().to_owned(),
-                            position: p.to_array(),
-                            index: grid.index(b.lo[0] + x, b.lo[1] + y, b.lo[2] + z),
-                            value: v,
-                        }
-                        .into());
-                    }
-                    lo = lo.min(v);
-                    hi = hi.max(v);
-                    local[(z * ny + y) * nx + x] = v;
+        field.sample_block(grid, b.lo, b.dims, local);
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for (i, &v) in local.iter().enumerate() {
+            if !v.is_finite() {
+                let [nx, ny, _] = b.dims;
+                let (x, y, z) = (i % nx, i / nx % ny, i / (nx * ny));
+                return Err(crate::samples::SampleError::NonFinite {
+                    field: field.name().to_owned(),
+                    position: grid.position(b.lo[0] + x, b.lo[1] + y, b.lo[2] + z).to_array(),
+                    index: grid.index(b.lo[0] + x, b.lo[1] + y, b.lo[2] + z),
+                    value: v,
                 }
+                .into());
             }
+            lo = lo.min(v);
+            hi = hi.max(v);
         }
         self.mesh_loaded(extractor, chunking, grid, lo, hi)
     }

@@ -23,6 +23,9 @@ pub struct StreamStats {
     pub empty: usize,
     /// Chunks skipped because every sample was inside.
     pub full: usize,
+    /// Of the empty and full chunks, those skipped unsampled because the field proved their side
+    /// ([`crate::field::Field::block_side`]).
+    pub proven: usize,
     /// Vertices and triangles written.
     pub vertices: u64,
     /// Triangles written.
@@ -58,7 +61,8 @@ pub(super) fn key_z(key: u128) -> f32 {
 
 /// Meshes a world of `grid` samples of `field` that need never exist as a dense grid: slabs of
 /// chunks along z are sampled straight from the field and meshed in parallel, welded against the
-/// previous slab's top face (the only vertices kept between slabs), and written to `sink`.
+/// previous slab's top face (the only vertices kept between slabs), and written to `sink`. Chunks
+/// the field proves empty or full ([`crate::field::Field::block_side`]) are not sampled.
 /// Memory is one slab of chunk meshes plus one face of seam keys. Cell-local extractors only
 /// (their chunks need no apron). `progress(done, total)` is called after each slab.
 pub fn stream_chunked(
@@ -82,12 +86,22 @@ pub fn stream_chunked(
     let mut stats = StreamStats { chunks: counts, ..Default::default() };
     let mut index: HashMap<u128, u32> = HashMap::new();
     let (mut batch_v, mut batch_t, mut remap) = (Vec::new(), Vec::new(), Vec::new());
+    let proven = std::sync::atomic::AtomicUsize::new(0);
     for z in 0..counts[2] {
         let ids: Vec<[usize; 3]> = (0..counts[0] * counts[1]).map(|k| [k % counts[0], k / counts[0], z]).collect();
         let meshed: Vec<(ChunkState, Extraction, Vec<Option<u128>>)> = ids
             .par_iter()
             .map(|&id| {
-                let mut slot = ChunkSlot::new(id, Block::new(id, chunk, 0, grid.dims), &grid, iso, None);
+                let block = Block::new(id, chunk, 0, grid.dims);
+                if let Some(side) = field.block_side(&grid, block.lo, block.dims, iso) {
+                    proven.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let state = match side {
+                        BlockSide::Outside => ChunkState::Empty,
+                        BlockSide::Inside => ChunkState::Full,
+                    };
+                    return Ok((state, Extraction::default(), Vec::new()));
+                }
+                let mut slot = ChunkSlot::new(id, block, &grid, iso, None);
                 slot.sample_and_mesh(extractor, chunking, &grid, field)?;
                 Ok((slot.state, slot.mesh, slot.keys))
             })
@@ -131,5 +145,6 @@ pub fn stream_chunked(
         index.retain(|&key, _| key_z(key) == top);
         progress(z + 1, counts[2]);
     }
+    stats.proven = proven.into_inner();
     Ok(stats)
 }

@@ -107,6 +107,45 @@ impl TriangleBvh {
         }
     }
 
+    /// A lower bound on the distance from every point of `region` to every triangle, when it is
+    /// at least `limit` (the distance between the box and the nearest triangle's bounding box,
+    /// shaved by a relative 1e-5 against rounding); `None` when some triangle's bounding box
+    /// comes nearer than `limit`. Stops at the first such triangle.
+    pub fn distance_from_box_at_least(&self, region: &Aabb, limit: f32) -> Option<f32> {
+        if self.nodes.is_empty() {
+            return Some(f32::INFINITY);
+        }
+        let limit = f64::from(limit);
+        let mut nearest = f64::INFINITY;
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = &self.nodes[stack[top] as usize];
+            let gap = box_distance(region, &node.bounds);
+            if gap >= nearest {
+                continue;
+            }
+            if node.count > 0 {
+                for t in &self.triangles[node.start as usize..(node.start + node.count) as usize] {
+                    let mut b = Aabb::empty();
+                    t.iter().for_each(|&v| b.grow(v));
+                    nearest = nearest.min(box_distance(region, &b));
+                }
+            } else if gap >= limit {
+                nearest = nearest.min(gap);
+            } else {
+                stack[top] = node.start;
+                stack[top + 1] = node.start + 1;
+                top += 2;
+            }
+            if nearest < limit {
+                return None;
+            }
+        }
+        Some((nearest * (1.0 - 1e-5)) as f32)
+    }
+
     /// The closest point on any triangle to `p`, its squared distance, and the triangle's id.
     pub fn closest_triangle(&self, p: Vec3) -> Option<(Vec3, f32, u32)> {
         self.closest(p)

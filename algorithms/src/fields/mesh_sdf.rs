@@ -26,12 +26,18 @@
 //!
 //! The sign does not need a winding number per sample. The grid is split recursively into boxes;
 //! [`TriangleBvh::winding_interval`] bounds the exact winding number over a whole box, and a box
-//! whose bound keeps clear of `|w| = 1/2` takes one answer for all its samples. Only boxes near
-//! the surface (or near the `|w| = 1/2` sheet spanning a hole) split down to small boxes whose samples
-//! get the per-point fast winding number. Distances come from closest-point queries that give up
-//! beyond the band, only in boxes that may reach into it. Last, every bound that ends (or
-//! neighbours the end of) a grid edge whose sign changes is made exact: across a hole the level
-//! set is that sheet, which may lie farther than the band from every triangle.
+//! whose bound keeps clear of `|w| = 1/2` takes one answer for all its samples. Only boxes near the
+//! surface (or near the `|w| = 1/2` sheet spanning a hole) split down to small boxes whose samples
+//! get the per-point fast winding number. A closed mesh (every edge has two triangles, wound
+//! opposite ways; [`MeshField::is_closed`]) needs almost no winding numbers: its winding number is
+//! an integer that changes by one at each crossing, so each grid row's signs come from counting the
+//! triangles it crosses (the classic scanline test of solid voxelizers), decided with exact
+//! orientation tests in the row's plane; only samples whose row touches a projected edge or vertex,
+//! or that lie almost on a crossing, fall back to their own winding number. Distances come from
+//! closest-point queries that give up beyond the band, only in boxes that may reach into it. Last,
+//! every bound that ends (or neighbours the end of) a grid edge whose sign changes is made exact:
+//! across a hole the level set is that sheet, which may lie farther than the band from every
+//! triangle.
 
 use crate::bvh::TriangleBvh;
 use crate::field::{sample_pointwise, Field, FieldError};
@@ -66,6 +72,9 @@ pub struct MeshField {
     bvh: TriangleBvh,
     domain: Aabb,
     reoriented: bool,
+    /// The cones that close the mesh's boundary loops (none for a closed mesh), for signs from
+    /// row crossings ([`crossing_signs`]).
+    caps: Caps,
     band_cells: f32,
 }
 
@@ -92,10 +101,11 @@ impl MeshField {
                 t.swap(1, 2);
             }
         }
+        let caps = Caps::closing(&soup, triangles, reoriented);
         let bvh = TriangleBvh::new(soup);
         let bounds = bvh.bounds();
         let domain = bounds.expanded(DOMAIN_MARGIN * bounds.longest_side());
-        Ok(Self { name, bvh, domain, reoriented, band_cells: DEFAULT_BAND_CELLS })
+        Ok(Self { name, bvh, domain, reoriented, caps, band_cells: DEFAULT_BAND_CELLS })
     }
 
     /// Sets the half-width of the exact band used when sampling grids, in grid spacings;
@@ -152,6 +162,13 @@ impl MeshField {
         self.band_cells
     }
 
+    /// Whether the mesh is closed: every edge has exactly two triangles, wound opposite ways. Its
+    /// winding number is then an integer off the surface, and grids take their signs from
+    /// crossings along rows instead of per-sample winding numbers.
+    pub fn is_closed(&self) -> bool {
+        self.caps.triangles.is_empty()
+    }
+
     /// Whether the input was wound inward as a whole (negative signed volume) and was flipped.
     pub fn reoriented(&self) -> bool {
         self.reoriented
@@ -184,7 +201,8 @@ impl Field for MeshField {
         }
         out.par_chunks_mut(nx * ny * SLAB_LAYERS).enumerate().for_each(|(k, slab)| {
             let z = k * SLAB_LAYERS..(k * SLAB_LAYERS + SLAB_LAYERS).min(nz);
-            let fill = BandFill { bvh: &self.bvh, grid, band, first_layer: z.start };
+            let signs = crossing_signs(&self.bvh, &self.caps, grid, z.clone());
+            let fill = BandFill { bvh: &self.bvh, grid, band, first_layer: z.start, signs: &signs };
             fill.boxed([0..nx, 0..ny, z], slab);
         });
         self.exact_at_sign_changes(grid, band, out);
@@ -214,6 +232,8 @@ struct BandFill<'a> {
     band: f32,
     /// The slab's first z index (its slice starts there).
     first_layer: usize,
+    /// Each slab sample's side from row crossings ([`crossing_signs`]).
+    signs: &'a [Side],
 }
 
 impl BandFill<'_> {
@@ -223,28 +243,53 @@ impl BandFill<'_> {
         let region =
             Aabb::new(self.grid.position(x.start, y.start, z.start), self.grid.position(x.end - 1, y.end - 1, z.end - 1));
         let count: usize = ranges.iter().map(|r| r.len()).product();
+        if self.all_sided(&ranges) {
+            // Every sample's side is known: only distances need the box hierarchy.
+            let side = |i: usize| if self.signs[i] == Side::Inside { -1.0 } else { 1.0 };
+            if count <= SMALLEST_TRIED {
+                return self.fill(&ranges, slab, |i, p| side(i) * self.band_distance(p));
+            }
+            if let Some(far) = self.bvh.distance_from_box_at_least(&region, self.band).filter(|&far| far >= self.band) {
+                return self.fill(&ranges, slab, |i, _| side(i) * far);
+            }
+            return self.split(ranges, slab);
+        }
         let certified = if count <= SMALLEST_TRIED {
             None
         } else {
             self.bvh.winding_interval(&region, WINDING_BUDGET).and_then(|w| Some((inside(&w)?, w.distance)))
         };
         match certified {
-            Some((inside, far)) if far >= self.band => self.fill(&ranges, slab, |_| sign(inside) * far),
-            Some((inside, _)) => self.fill(&ranges, slab, |p| sign(inside) * self.band_distance(p)),
+            Some((inside, far)) if far >= self.band => self.fill(&ranges, slab, |_, _| sign(inside) * far),
+            Some((inside, _)) => self.fill(&ranges, slab, |_, p| sign(inside) * self.band_distance(p)),
             None if count <= SMALLEST_TRIED => {
-                self.fill(&ranges, slab, |p| sign(winds_inside(self.bvh, p)) * self.band_distance(p));
+                self.fill(&ranges, slab, |_, p| sign(winds_inside(self.bvh, p)) * self.band_distance(p));
             }
-            None => {
-                let axis = (0..3).max_by_key(|&a| ranges[a].len()).unwrap_or(0);
-                let r = &ranges[axis];
-                let mid = r.start + r.len() / 2;
-                let (mut low, mut high) = (ranges.clone(), ranges);
-                low[axis].end = mid;
-                high[axis].start = mid;
-                self.boxed(low, slab);
-                self.boxed(high, slab);
-            }
+            None => self.split(ranges, slab),
         }
+    }
+
+    /// Whether row crossings gave every sample of the box its side.
+    fn all_sided(&self, [x, y, z]: &[Range<usize>; 3]) -> bool {
+        let [nx, ny, _] = self.grid.dims;
+        z.clone().all(|k| {
+            y.clone().all(|j| {
+                let row = nx * (j + ny * (k - self.first_layer));
+                self.signs[row + x.start..row + x.end].iter().all(|&s| s != Side::Unknown)
+            })
+        })
+    }
+
+    /// Splits the box across its longest axis and fills both halves.
+    fn split(&self, ranges: [Range<usize>; 3], slab: &mut [f32]) {
+        let axis = (0..3).max_by_key(|&a| ranges[a].len()).unwrap_or(0);
+        let r = &ranges[axis];
+        let mid = r.start + r.len() / 2;
+        let (mut low, mut high) = (ranges.clone(), ranges);
+        low[axis].end = mid;
+        high[axis].start = mid;
+        self.boxed(low, slab);
+        self.boxed(high, slab);
     }
 
     /// The exact distance from `p` to the mesh if it is within the band, the band otherwise.
@@ -252,13 +297,14 @@ impl BandFill<'_> {
         self.bvh.closest_point_within(p, self.band).map_or(self.band, |(_, d2)| d2.sqrt())
     }
 
-    fn fill(&self, [x, y, z]: &[Range<usize>; 3], slab: &mut [f32], value: impl Fn(Vec3) -> f32) {
+    /// Sets every sample of the box to `value(index in the slab, position)`.
+    fn fill(&self, [x, y, z]: &[Range<usize>; 3], slab: &mut [f32], value: impl Fn(usize, Vec3) -> f32) {
         let [nx, ny, _] = self.grid.dims;
         for k in z.clone() {
             for j in y.clone() {
                 let row = nx * (j + ny * (k - self.first_layer));
                 for i in x.clone() {
-                    slab[row + i] = value(self.grid.position(i, j, k));
+                    slab[row + i] = value(row + i, self.grid.position(i, j, k));
                 }
             }
         }
@@ -276,6 +322,206 @@ fn inside(w: &crate::bvh::WindingInterval) -> Option<bool> {
     } else {
         None
     }
+}
+
+/// A sample's side, as row crossings tell it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Side {
+    Inside,
+    Outside,
+    /// The row touches an edge or a vertex of a triangle's projection, a crossing lies within
+    /// [`CROSSING_TOLERANCE`] of the sample, or a cap is near: the sample's side comes from the
+    /// winding number.
+    Unknown,
+}
+
+/// How near a crossing (in grid spacings) makes a sample ask its own winding number instead.
+pub const CROSSING_TOLERANCE: f64 = 1e-4;
+
+/// Largest bound on the caps' winding number at a sample whose side row crossings still give:
+/// the mesh's winding number is then within this of the crossings' integer, far from 1/2.
+pub const CAP_WINDING_BOUND: f64 = 0.25;
+
+/// Cones closing an open mesh: one per connected piece of its boundary (the edges its triangles
+/// leave uncancelled, with multiplicity), from the piece's centroid. The mesh and its caps have
+/// no boundary, so their winding number `n` is an integer that row crossings count; the mesh's
+/// own is `n - w_caps`.
+#[derive(Clone, Debug, Default)]
+struct Caps {
+    /// The cones' triangles, wound so that they cancel the mesh's boundary.
+    triangles: Vec<[Vec3; 3]>,
+    /// Per cone: its apex, the largest distance from the apex to its rim, and its area.
+    cones: Vec<(Vec3, f32, f64)>,
+}
+
+impl Caps {
+    /// The caps of `soup` (the triangles as the field keeps them), from its indexed `triangles`,
+    /// flipped like the soup when `reoriented`.
+    fn closing(soup: &[[Vec3; 3]], triangles: &[[u32; 3]], reoriented: bool) -> Self {
+        let mut net: std::collections::HashMap<(u32, u32), i32> = std::collections::HashMap::new();
+        let mut at: std::collections::HashMap<u32, Vec3> = std::collections::HashMap::new();
+        for (t, tri) in triangles.iter().enumerate() {
+            let [a, b, c] = if reoriented { [tri[0], tri[2], tri[1]] } else { *tri };
+            let corners = soup[t];
+            for (k, &v) in [a, b, c].iter().enumerate() {
+                at.insert(v, corners[k]);
+            }
+            for (u, v) in [(a, b), (b, c), (c, a)] {
+                if u != v {
+                    *net.entry((u.min(v), u.max(v))).or_default() += if u < v { 1 } else { -1 };
+                }
+            }
+        }
+        let mut edges: Vec<(u32, u32, u32)> = net
+            .into_iter()
+            .filter(|&(_, n)| n != 0)
+            .map(|((u, v), n)| if n > 0 { (u, v, n as u32) } else { (v, u, n.unsigned_abs()) })
+            .collect();
+        if edges.is_empty() {
+            return Self::default();
+        }
+        edges.sort_unstable();
+        let mut ids: Vec<u32> = edges.iter().flat_map(|&(u, v, _)| [u, v]).collect();
+        ids.sort_unstable();
+        ids.dedup();
+        let local = |v: u32| ids.binary_search(&v).unwrap_or(0);
+        let mut pieces = petgraph::unionfind::UnionFind::<usize>::new(ids.len());
+        for &(u, v, _) in &edges {
+            pieces.union(local(u), local(v));
+        }
+        let mut caps = Self::default();
+        let mut roots: Vec<usize> = (0..ids.len()).map(|i| pieces.find(i)).collect();
+        roots.sort_unstable();
+        roots.dedup();
+        for root in roots {
+            let rim: Vec<Vec3> = ids.iter().filter(|&&v| pieces.find(local(v)) == root).map(|v| at[v]).collect();
+            let apex = (rim.iter().map(|p| p.as_dvec3()).sum::<glam::DVec3>() / rim.len() as f64).as_vec3();
+            let radius = rim.iter().map(|p| p.distance(apex)).fold(0.0, f32::max);
+            let mut area = 0.0;
+            for &(u, v, n) in edges.iter().filter(|e| pieces.find(local(e.0)) == root) {
+                let t = [apex, at[&v], at[&u]];
+                area += f64::from(n) * 0.5 * (t[1] - t[0]).as_dvec3().cross((t[2] - t[0]).as_dvec3()).length();
+                caps.triangles.extend(std::iter::repeat_n(t, n as usize));
+            }
+            caps.cones.push((apex, radius, area));
+        }
+        caps
+    }
+
+    /// A bound on the caps' winding number at `p` (a triangle's solid angle is at most its area
+    /// over the squared distance), infinite within a cone's ball.
+    fn winding_bound(&self, p: Vec3) -> f64 {
+        self.cones
+            .iter()
+            .map(|&(apex, radius, area)| {
+                let gap = f64::from(p.distance(apex)) - f64::from(radius);
+                if gap > 0.0 {
+                    area / (4.0 * std::f64::consts::PI * gap * gap)
+                } else {
+                    f64::INFINITY
+                }
+            })
+            .sum()
+    }
+}
+
+/// The side of every sample of the z-layers `layers` of `grid` (slab order), by counting
+/// crossings along each x-row. The mesh closed by its `caps` has an integer winding number `n`,
+/// 0 far out along the row and changing by one at each crossing (up where the triangle faces
+/// away from +x, down where it faces +x); the mesh's own winding number is `n` less the caps',
+/// so where the caps' is bounded by [`CAP_WINDING_BOUND`] (everywhere, for a closed mesh) a
+/// sample is inside exactly where `n` is nonzero. Whether a row meets a triangle is decided with
+/// exact orientation tests in the row's (y, z) plane; a row through a projected edge or vertex,
+/// or along a triangle seen edge-on, leaves its samples [`Side::Unknown`], as does a crossing
+/// within [`CROSSING_TOLERANCE`] of a sample, or a cap nearby. The sides agree with the fast
+/// winding number's `|w| >= 1/2` (tested on every sample of the shipped models).
+fn crossing_signs(bvh: &TriangleBvh, caps: &Caps, grid: &Grid, layers: Range<usize>) -> Vec<Side> {
+    use crate::predicates::o2;
+    let [nx, ny, _] = grid.dims;
+    let rows = ny * layers.len();
+    let mut sides = vec![Side::Outside; nx * rows];
+    if rows == 0 || nx == 0 {
+        return sides;
+    }
+    let (first, last) = (grid.position(0, 0, layers.start), grid.position(0, ny - 1, layers.end - 1));
+    let query = Aabb::new(Vec3::new(f32::MIN, first.y, first.z), Vec3::new(f32::MAX, last.y, last.z));
+    let mut unsure = vec![false; rows];
+    let mut crossings: Vec<(u32, f64, i8)> = Vec::new();
+    let index_range = |lo: f32, hi: f32, origin: f32, count: usize| {
+        let from = ((lo - origin) / grid.spacing).floor() - 1.0;
+        let to = ((hi - origin) / grid.spacing).ceil() + 1.0;
+        (from.max(0.0) as usize)..((to.max(-1.0) + 1.0) as usize).min(count)
+    };
+    let mut cross = |t: &[Vec3; 3]| {
+        let [a, b, c] = *t;
+        let facing = o2(a, b, c, 0);
+        let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+        let js = index_range(lo.y, hi.y, grid.origin.y, ny);
+        let ks = index_range(lo.z, hi.z, grid.origin.z, grid.dims[2]);
+        for k in ks.start.max(layers.start)..ks.end.min(layers.end) {
+            for j in js.clone() {
+                let row = (k - layers.start) * ny + j;
+                let r = grid.position(0, j, k);
+                let e = [o2(a, b, r, 0), o2(b, c, r, 0), o2(c, a, r, 0)];
+                if facing == 0 {
+                    // Seen edge-on: only a row on its projected segment is in doubt.
+                    if e == [0, 0, 0] && (lo.y..=hi.y).contains(&r.y) && (lo.z..=hi.z).contains(&r.z) {
+                        unsure[row] = true;
+                    }
+                    continue;
+                }
+                if e.iter().all(|&s| s == facing) {
+                    crossings.push((row as u32, crossing_x(t, r), -facing));
+                } else if e.iter().all(|&s| s == facing || s == 0) {
+                    unsure[row] = true;
+                }
+            }
+        }
+    };
+    bvh.for_each_overlapping(&query, |_, t| cross(t));
+    caps.triangles.iter().for_each(&mut cross);
+    crossings.sort_unstable_by(|p, q| p.0.cmp(&q.0).then(p.1.total_cmp(&q.1)));
+    let tolerance = CROSSING_TOLERANCE * f64::from(grid.spacing);
+    let mut next = 0;
+    for (row, unsure) in unsure.iter().enumerate() {
+        let end = next + crossings[next..].iter().take_while(|c| c.0 as usize == row).count();
+        let here = &crossings[next..end];
+        next = end;
+        let out = &mut sides[row * nx..(row + 1) * nx];
+        if *unsure {
+            out.fill(Side::Unknown);
+            continue;
+        }
+        let (j, k) = (row % ny, layers.start + row / ny);
+        let (mut winding, mut c) = (0i32, 0);
+        for (i, side) in out.iter_mut().enumerate() {
+            let p = grid.position(i, j, k);
+            let x = f64::from(p.x);
+            while c < here.len() && here[c].1 < x - tolerance {
+                winding += i32::from(here[c].2);
+                c += 1;
+            }
+            let on_a_crossing = c < here.len() && here[c].1 <= x + tolerance;
+            *side = if on_a_crossing || (!caps.cones.is_empty() && caps.winding_bound(p) >= CAP_WINDING_BOUND) {
+                Side::Unknown
+            } else if winding != 0 {
+                Side::Inside
+            } else {
+                Side::Outside
+            };
+        }
+    }
+    sides
+}
+
+/// Where the x-parallel line through `r` (its y and z) meets the plane of triangle `t`, whose
+/// projection onto (y, z) it crosses.
+fn crossing_x(t: &[Vec3; 3], r: Vec3) -> f64 {
+    let [a, b, c] = t.map(|v| v.as_dvec3());
+    let (py, pz) = (f64::from(r.y), f64::from(r.z));
+    let area = |u: glam::DVec3, v: glam::DVec3| (u.y - py) * (v.z - pz) - (u.z - pz) * (v.y - py);
+    let (wa, wb, wc) = (area(b, c), area(c, a), area(a, b));
+    (wa * a.x + wb * b.x + wc * c.x) / (wa + wb + wc)
 }
 
 /// The field's inside: `|w| >= 1/2` (see the module doc).
@@ -408,6 +654,12 @@ mod tests {
         let mut open = t.clone();
         open.pop();
         check_band(MeshField::new("open", &v, &open).unwrap(), 41, 0.0);
+        // A bent hole (two faces gone): the cone capping it is not the |w| = 1/2 sheet, so
+        // samples between them must take their own winding numbers.
+        open.pop();
+        for n in [41, 64, 77] {
+            check_band(MeshField::new("bent", &v, &open).unwrap(), n, 0.0);
+        }
         // A hollow shell, and two shells wound opposite ways.
         let mut positions = v.clone();
         positions.extend(v.iter().map(|p| *p * 0.5));
@@ -419,6 +671,90 @@ mod tests {
         let mut mixed = t.clone();
         mixed.extend(t.iter().map(|&[a, b, c]| [a + 6, c + 6, b + 6]));
         check_band(MeshField::new("mixed", &apart, &mixed).unwrap(), 37, 0.0);
+    }
+
+    #[test]
+    fn closed_meshes_are_told_apart_from_open_and_inconsistent_ones() {
+        let (v, t) = octahedron();
+        assert!(MeshField::new("octa", &v, &t).unwrap().is_closed());
+        let mut open = t.clone();
+        open.pop();
+        assert!(!MeshField::new("open", &v, &open).unwrap().is_closed());
+        let mut twice = t.clone();
+        twice.push(t[0]);
+        assert!(!MeshField::new("twice", &v, &twice).unwrap().is_closed());
+        let mut one_flipped = t.clone();
+        one_flipped[3].swap(1, 2);
+        assert!(!MeshField::new("flipped", &v, &one_flipped).unwrap().is_closed());
+    }
+
+    /// Row crossings give every sample the winding number's side; rows through the octahedron's
+    /// vertices and edges (the grid below has them) are left to the winding number.
+    #[test]
+    fn row_crossings_agree_with_the_winding_number() {
+        let (v, t) = octahedron();
+        let f = MeshField::new("octa", &v, &t).unwrap();
+        for (grid, expect_unsure) in [
+            (Grid { origin: Vec3::splat(-1.5), spacing: 0.125, dims: [25, 25, 25] }, true),
+            (Grid { origin: Vec3::new(-1.3, -1.21, -1.17), spacing: 0.0931, dims: [29, 27, 26] }, false),
+        ] {
+            let sides = crossing_signs(f.bvh(), &f.caps, &grid, 0..grid.dims[2]);
+            let (mut known, mut unsure) = (0, 0);
+            for (i, side) in sides.iter().enumerate() {
+                let [nx, ny, _] = grid.dims;
+                let p = grid.position(i % nx, i / nx % ny, i / (nx * ny));
+                match side {
+                    Side::Unknown => unsure += 1,
+                    s => {
+                        assert_eq!(*s == Side::Inside, winds_inside(f.bvh(), p), "at {p}");
+                        known += 1;
+                    }
+                }
+            }
+            assert!(known > 10_000, "{known}");
+            assert_eq!(unsure > 0, expect_unsure, "{unsure} samples unsure");
+        }
+    }
+
+    /// The caps close the mesh (with them its winding number is an integer everywhere), and
+    /// their own winding number stays within the bound the signs rely on.
+    #[test]
+    fn caps_close_the_boundary_and_bound_their_winding_number() {
+        let (v, mut t) = octahedron();
+        t.truncate(6); // a bent hole of four edges
+        let f = MeshField::new("bent", &v, &t).unwrap();
+        assert!(!f.is_closed() && f.caps.cones.len() == 1 && f.caps.triangles.len() == 4, "{:?}", f.caps);
+        let winding = |p: Vec3, soup: &[[Vec3; 3]]| {
+            soup.iter().map(|t| crate::geometry::solid_angle(p, t[0], t[1], t[2])).sum::<f64>() / (4.0 * std::f64::consts::PI)
+        };
+        let mesh: Vec<[Vec3; 3]> = f.bvh().triangles().to_vec();
+        let mut bounded = 0;
+        for i in 0..2000 {
+            let k = i as f32;
+            let p = Vec3::new((k * 0.731).sin(), (k * 1.37).cos(), (k * 0.413).sin() * 1.2) * 1.6;
+            let closed: Vec<[Vec3; 3]> = mesh.iter().chain(&f.caps.triangles).copied().collect();
+            let n = winding(p, &closed);
+            assert!((n - n.round()).abs() < 1e-9, "at {p}: mesh and caps wind {n}");
+            let bound = f.caps.winding_bound(p);
+            if bound.is_finite() {
+                assert!(winding(p, &f.caps.triangles).abs() <= bound, "at {p}");
+                bounded += 1;
+            }
+        }
+        assert!(bounded > 500, "{bounded}");
+        assert!(MeshField::new("octa", &v, &octahedron().1).unwrap().caps.triangles.is_empty());
+    }
+
+    #[test]
+    fn a_box_is_as_far_from_the_mesh_as_its_nearest_triangle_box() {
+        let (v, t) = octahedron();
+        let f = MeshField::new("octa", &v, &t).unwrap();
+        let corner = Aabb::new(Vec3::splat(2.0), Vec3::splat(2.5));
+        let d = f.bvh().distance_from_box_at_least(&corner, 0.5).unwrap();
+        assert!(d <= f.unsigned_distance(Vec3::splat(2.0)) && d > 1.5, "{d}");
+        assert!(f.bvh().distance_from_box_at_least(&corner, 2.0).is_none());
+        // Inside, the triangles' boxes reach the centre: no bound.
+        assert!(f.bvh().distance_from_box_at_least(&Aabb::new(Vec3::splat(-0.01), Vec3::splat(0.01)), 0.1).is_none());
     }
 
     #[test]

@@ -14,7 +14,7 @@ pub mod volume;
 
 pub use analytic::{Csg, Gyroid, Sphere, Thin, Torus};
 pub use complement::Complement;
-pub use mesh_sdf::{MeshField, DEFAULT_BAND_CELLS};
+pub use mesh_sdf::{MeshField, CAP_WINDING_BOUND, CROSSING_TOLERANCE, DEFAULT_BAND_CELLS};
 pub use noise::{Asteroid, Terrain};
 pub use volume::{Volume, VolumeField};
 

@@ -19,7 +19,7 @@ use super::{Context, Experiment, ExperimentError};
 use crate::io::read_mesh;
 use crate::peers::python::PythonServer;
 use crate::report::markdown_table;
-use isolab_algorithms::fields::{MeshField, DEFAULT_BAND_CELLS};
+use isolab_algorithms::fields::{MeshField, CAP_WINDING_BOUND, CROSSING_TOLERANCE, DEFAULT_BAND_CELLS};
 use isolab_algorithms::{extractors, Extraction, Field, Grid, Options, Samples};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -88,6 +88,13 @@ pub struct Row {
     pub fwn_magnitude_h: Option<f64>,
     /// Whether marching cubes makes the same mesh from the narrow band as from exact samples.
     pub mesh_unchanged: bool,
+    /// Whether the mesh is closed, so the narrow band takes its signs from row crossings (absent
+    /// in older runs).
+    #[serde(default)]
+    pub closed: Option<bool>,
+    /// Samples whose narrow-band sign differs from the exact field's (absent in older runs).
+    #[serde(default)]
+    pub sign_differs_from_exact: Option<usize>,
 }
 
 /// The experiment's data.
@@ -182,6 +189,8 @@ impl Experiment for MeshFields {
                 band_difference_h,
                 fwn_magnitude_h,
                 mesh_unchanged: same_marching_cubes(&field, &exact_field, &grid)?,
+                closed: Some(field.is_closed()),
+                sign_differs_from_exact: Some(narrow.iter().zip(&exact).filter(|(a, b)| (**a < 0.0) != (**b < 0.0)).count()),
             });
             bar.inc(1);
         }
@@ -246,10 +255,19 @@ fn section(data: &Data) -> String {
          plus its margin), by three implementations, one-shot (a fresh output each call), {RUNS} alternating runs each, on \
          {} threads each (rayon's pool; libigl's `parallel_for` takes the hardware threads). **ours, narrow band** is what \
          the extractors get: the exact signed distance within {} grid spacings of the mesh, beyond it the right sign and a \
-         lower bound on the distance (see `algorithms/src/fields/mesh_sdf.rs`). **ours, exact** computes every sample as \
+         lower bound on the distance (see `algorithms/src/fields/mesh_sdf.rs`). Its signs are the generalized winding number's (inside where `|w|` is at least a half), found without \
+         computing it at most samples: the mesh closed by cones over its holes has an integer winding number, counted by \
+         the crossings along each grid row (exact orientation tests); the mesh's own differs from it by the cones' winding \
+         number, so samples where that is not bounded below {} (near a cone), on rows through a triangle's edge or \
+         vertex, or within {:e} spacings of a crossing take their own winding number. A closed mesh needs no cones. **ours, exact** computes every sample as \
          libigl does. **libigl** is `signed_distance` with `SIGNED_DISTANCE_TYPE_FAST_WINDING_NUMBER` ({}), on the same \
          points, built outside its timing. Times in ms: median (fastest–slowest); ratios are libigl's median over ours.\n\n",
-        data.resolution, data.threads, data.band_cells, data.libigl
+        data.resolution,
+        data.threads,
+        data.band_cells,
+        CAP_WINDING_BOUND,
+        CROSSING_TOLERANCE,
+        data.libigl
     ));
     let body: Vec<Vec<String>> = data
         .rows
@@ -258,6 +276,7 @@ fn section(data: &Data) -> String {
             vec![
                 r.model.clone(),
                 r.triangles.to_string(),
+                r.closed.map_or("–".into(), |c| if c { "closed".into() } else { "open: capped".into() }),
                 format!("{}", r.dims.iter().product::<usize>()),
                 format!("{}", r.in_band),
                 ms(&r.narrow_band),
@@ -269,6 +288,7 @@ fn section(data: &Data) -> String {
                 r.band_difference_h.map_or("–".into(), |d| format!("{d:.1e}")),
                 r.fwn_magnitude_h.map_or("–".into(), |d| format!("{d:.2}")),
                 if r.mesh_unchanged { "yes".into() } else { "**no**".into() },
+                r.sign_differs_from_exact.map_or("–".into(), |n| n.to_string()),
             ]
         })
         .collect();
@@ -276,6 +296,7 @@ fn section(data: &Data) -> String {
         &[
             "model",
             "triangles",
+            "mesh",
             "samples",
             "in the band",
             "ours, narrow band",
@@ -287,6 +308,7 @@ fn section(data: &Data) -> String {
             "in the band: ours against libigl's exact distance (h)",
             "in the band: libigl's signed_distance magnitude against exact (h)",
             "marching cubes unchanged",
+            "signs differing from our exact field",
         ],
         &body,
     ));

@@ -93,8 +93,7 @@ impl TriangleBvh {
             if node.count > 0 {
                 for k in node.start as usize..(node.start + node.count) as usize {
                     let t = &self.triangles[k];
-                    let mut b = Aabb::empty();
-                    t.iter().for_each(|&v| b.grow(v));
+                    let b = triangle_bounds(t);
                     if overlaps(&b) {
                         visit(self.ids[k], t);
                     }
@@ -128,8 +127,7 @@ impl TriangleBvh {
             }
             if node.count > 0 {
                 for t in &self.triangles[node.start as usize..(node.start + node.count) as usize] {
-                    let mut b = Aabb::empty();
-                    t.iter().for_each(|&v| b.grow(v));
+                    let b = triangle_bounds(t);
                     nearest = nearest.min(box_distance(region, &b));
                 }
             } else if gap >= limit {
@@ -295,8 +293,7 @@ impl TriangleBvh {
                 distance = distance.min(gap);
             } else if node.count > 0 {
                 for t in &self.triangles[node.start as usize..(node.start + node.count) as usize] {
-                    let mut b = Aabb::empty();
-                    t.iter().for_each(|&v| b.grow(v));
+                    let b = triangle_bounds(t);
                     let to_triangle = closest_point_on_triangle(centre, t[0], t[1], t[2]).distance(centre) as f64;
                     let gap = box_distance(region, &b).max(to_triangle - half_diagonal);
                     if gap <= 0.0 {
@@ -318,6 +315,13 @@ impl TriangleBvh {
         // Shaved by a relative 1e-5 so that rounding never lifts the bound above a distance.
         Some((error, (distance * (1.0 - 1e-5)) as f32))
     }
+}
+
+/// The bounding box of one triangle.
+fn triangle_bounds(t: &[Vec3; 3]) -> Aabb {
+    let mut b = Aabb::empty();
+    t.iter().for_each(|&v| b.grow(v));
+    b
 }
 
 /// Distance between two boxes (0 when they touch or overlap).

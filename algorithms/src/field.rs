@@ -75,8 +75,9 @@ pub trait Field: Send + Sync {
     }
 
     /// Fills `out` with the field's values at every sample of `grid` (x fastest, then y, then z)
-    /// for a surface at `iso`. The default evaluates [`Field::value`] at every sample
-    /// ([`sample_pointwise`]); a field that can do better for a whole grid overrides it, as mesh
+    /// for a surface at `iso`. The default samples each z-slice as a block
+    /// ([`sample_pointwise`], through [`Field::sample_block`]); a field that can do better for a
+    /// whole grid overrides it, as mesh
     /// fields do (exact values only in a narrow band around the level set, a bound beyond).
     fn sample_grid(&self, grid: &Grid, iso: f32, out: &mut [f32]) {
         let _ = iso;
@@ -118,19 +119,14 @@ pub trait Field: Send + Sync {
     }
 }
 
-/// [`Field::value`] at every sample of `grid`, in parallel (one z-slice per rayon task).
+/// [`Field::value`] at every sample of `grid`, in parallel: each z-slice is one rayon task and
+/// one [`Field::sample_block`] (bitwise the pointwise values).
 pub fn sample_pointwise<F: Field + ?Sized>(field: &F, grid: &Grid, out: &mut [f32]) {
     let [nx, ny, _] = grid.dims;
     if nx == 0 || ny == 0 {
         return;
     }
-    out.par_chunks_mut(nx * ny).enumerate().for_each(|(z, slice)| {
-        for y in 0..ny {
-            for x in 0..nx {
-                slice[x + nx * y] = field.value(grid.position(x, y, z));
-            }
-        }
-    });
+    out.par_chunks_mut(nx * ny).enumerate().for_each(|(z, slice)| field.sample_block(grid, [0, 0, z], [nx, ny, 1], slice));
 }
 
 /// Central-difference gradient of any field.

@@ -471,7 +471,10 @@ fn crossing_signs(bvh: &TriangleBvh, caps: &Caps, grid: &Grid, layers: Range<usi
                     continue;
                 }
                 if e.iter().all(|&s| s == facing) {
-                    crossings.push((row as u32, crossing_x(t, r), -facing));
+                    match crossing_x(t, r) {
+                        Some(x) => crossings.push((row as u32, x, -facing)),
+                        None => unsure[row] = true,
+                    }
                 } else if e.iter().all(|&s| s == facing || s == 0) {
                     unsure[row] = true;
                 }
@@ -515,13 +518,20 @@ fn crossing_signs(bvh: &TriangleBvh, caps: &Caps, grid: &Grid, layers: Range<usi
 }
 
 /// Where the x-parallel line through `r` (its y and z) meets the plane of triangle `t`, whose
-/// projection onto (y, z) it crosses.
-fn crossing_x(t: &[Vec3; 3], r: Vec3) -> f64 {
+/// projection onto (y, z) it crosses; `None` when that projection is so thin against its
+/// coordinates that `f64` rounding of the barycentric weights (products of coordinate
+/// differences) could move the answer by more than about 1e-9 of the triangle: the row then
+/// takes its samples' winding numbers.
+fn crossing_x(t: &[Vec3; 3], r: Vec3) -> Option<f64> {
     let [a, b, c] = t.map(|v| v.as_dvec3());
     let (py, pz) = (f64::from(r.y), f64::from(r.z));
-    let area = |u: glam::DVec3, v: glam::DVec3| (u.y - py) * (v.z - pz) - (u.z - pz) * (v.y - py);
-    let (wa, wb, wc) = (area(b, c), area(c, a), area(a, b));
-    (wa * a.x + wb * b.x + wc * c.x) / (wa + wb + wc)
+    let products = |u: glam::DVec3, v: glam::DVec3| ((u.y - py) * (v.z - pz), (u.z - pz) * (v.y - py));
+    let pairs = [products(b, c), products(c, a), products(a, b)];
+    let [wa, wb, wc] = pairs.map(|(p, q)| p - q);
+    let magnitude: f64 = pairs.iter().map(|(p, q)| p.abs() + q.abs()).sum();
+    let sum = wa + wb + wc;
+    let x = (wa * a.x + wb * b.x + wc * c.x) / sum;
+    (sum.abs() > 1e-6 * magnitude && x.is_finite()).then_some(x)
 }
 
 /// The field's inside: `|w| >= 1/2` (see the module doc).
@@ -714,6 +724,17 @@ mod tests {
             assert!(known > 10_000, "{known}");
             assert_eq!(unsure > 0, expect_unsure, "{unsure} samples unsure");
         }
+    }
+
+    #[test]
+    fn a_crossing_is_placed_on_the_plane_and_refused_on_a_sliver() {
+        let t = [Vec3::new(1.0, 0.0, 0.0), Vec3::new(3.0, 1.0, 0.0), Vec3::new(2.0, 0.0, 1.0)];
+        let x = crossing_x(&t, Vec3::new(0.0, 0.25, 0.25)).unwrap();
+        // The plane through t: x = 1 + 2y + z.
+        assert!((x - 1.75).abs() < 1e-12, "{x}");
+        // Seen almost edge-on from x, the weights cancel: no crossing is trusted.
+        let sliver = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0e4, 1.0, 1.0), Vec3::new(2.0e4, 2.0, 2.0 + 1.0e-6)];
+        assert_eq!(crossing_x(&sliver, Vec3::new(0.0, 1.0, 1.0 + 2.5e-7)), None);
     }
 
     /// The caps close the mesh (with them its winding number is an integer everywhere), and

@@ -8,6 +8,7 @@
 //! times the reports show.
 
 use crate::extract::ExtractError;
+use rayon::prelude::*;
 use std::time::Duration;
 
 /// Whether slabs run in parallel.
@@ -78,6 +79,47 @@ pub fn grow_zeroed<T: Copy + Default>(buffer: &mut Vec<T>, len: usize) {
         buffer.resize(len, T::default());
     }
 }
+
+/// Makes `dst` `len` zeroes long, ready to be cut into pieces that rayon tasks fill. A fresh
+/// `dst` (too little capacity) is allocated zeroed, which the allocator serves with untouched zero
+/// pages, so the tasks' writes are the output's first and only touch, made on every thread; a
+/// reused one is zero-filled in parallel.
+pub fn resize_zeroed<T: bytemuck::Zeroable + Copy + Send + Sync>(dst: &mut Vec<T>, len: usize) {
+    dst.clear();
+    if dst.capacity() < len {
+        *dst = bytemuck::allocation::zeroed_vec(len);
+    } else {
+        dst.par_extend(rayon::iter::repeat_n(T::zeroed(), len).with_min_len(JOIN_MIN_LEN));
+    }
+}
+
+/// Cuts `slice` into consecutive pieces of `lens` elements (the rest, if any, is left out).
+pub fn split_pieces<T>(slice: &mut [T], lens: impl IntoIterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut rest = slice;
+    lens.into_iter()
+        .map(|n| {
+            let (piece, tail) = std::mem::take(&mut rest).split_at_mut(n);
+            rest = tail;
+            piece
+        })
+        .collect()
+}
+
+/// Joins slab parts into `dst` (cleared first) in parallel: `dst` is sized to the parts' total
+/// ([`resize_zeroed`]), cut into one piece per part, and `fill(t, part, piece)` writes part `t`
+/// into its piece on a rayon task (a copy, or a copy that resolves indices).
+pub fn join_parts<T, F>(dst: &mut Vec<T>, parts: &[&[T]], fill: F)
+where
+    T: bytemuck::Zeroable + Copy + Send + Sync,
+    F: Fn(usize, &[T], &mut [T]) + Sync,
+{
+    resize_zeroed(dst, parts.iter().map(|p| p.len()).sum());
+    let pieces = split_pieces(dst, parts.iter().map(|p| p.len()));
+    pieces.into_par_iter().zip(parts.par_iter()).enumerate().for_each(|(t, (piece, part))| fill(t, part, piece));
+}
+
+/// Elements a parallel fill task writes at least (keeps rayon's splitting coarse).
+const JOIN_MIN_LEN: usize = 1 << 14;
 
 /// Scratch buffers for concurrent calls of one extractor (chunks meshed in parallel): each call
 /// takes a set (a new one when all are in use) and gives it back, so calls never wait on each

@@ -14,7 +14,14 @@
 //! cells are found by word operations over 64 samples at a time, and only they are visited one by
 //! one, while the layer's samples are still in cache. The volume is split into slabs
 //! of cells along z meshed in parallel (rayon); vertices on a slab's bottom layer belong to the
-//! slab below and are patched in when the slabs are joined, so there are no duplicates.
+//! slab below, so there are no duplicates. Into a fresh output (one-shot), the slabs work in
+//! flying edges' order: each first counts the vertices and triangles it will make, from the sign
+//! bits alone; the output is allocated once at its exact size; then each slab writes its own piece
+//! of it, numbering its bottom layer's vertices from where the slab below's top layer starts. No
+//! slab buffers, no copy, and every output page is touched once. Into a reused output (steady
+//! state), each slab meshes into its own kept buffers, with tagged references to the slab below,
+//! and the buffers are copied into the output in parallel: the samples are read once, which
+//! costs less than a counting pass once the buffers are warm.
 //!
 //! **Guarantees.** The table resolves every ambiguous face the same way in both cells sharing it
 //! (the inside corners are separated), so for any finite samples the surface is closed wherever
@@ -35,12 +42,12 @@
 //! exactly at the iso-value would give coincident vertices; by default vertices keep 1e-4 of the
 //! spacing from the edge ends instead ([`OnIsoSamples`]), so no triangle has zero area.
 //!
-//! **Why one file of about 650 lines.** The sweep's vertex pass, geometry pass, slab join and
-//! normals share one set of per-layer index arrays; split apart they would pass those arrays
+//! **Why one file of about 900 lines.** The sweep's vertex pass, geometry pass, counting pass, slab
+//! join and normals share one set of per-layer index arrays; split apart they would pass those arrays
 //! through half a dozen signatures. It is one algorithm that reads best whole.
 //!
-//! **Costs.** One read of every sample to pack its sign, then work proportional to the crossing
-//! edges and surface cells. Memory: five `nx * ny` index layers and two layers of sign bits per
+//! **Costs.** One read of every sample to pack its sign (two on the one-shot parallel path: the
+//! count and the sweep), then work proportional to the crossing edges and surface cells. Memory: five `nx * ny` index layers and two layers of sign bits per
 //! slab task, plus the output.
 //!
 //! ```
@@ -59,9 +66,11 @@ use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
 use crate::samples::Samples;
 use crate::sign_rows::{
-    count_crossing_edges, for_each_bit, for_each_surface_cell, layer_edge_words, span, z_edge_words, LayerSigns,
+    count_bits, count_crossing_edges, for_each_bit, for_each_surface_cell, layer_edge_words, span, z_edge_words, LayerSigns,
 };
-use crate::slabs::{grow_zeroed, slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN};
+use crate::slabs::{
+    grow_zeroed, join_parts, resize_zeroed, slab_offsets, split_pieces, split_slab_time, Parallelism, ScratchPool, EXTERN,
+};
 use crate::tables::marching_cubes::{
     decider_joins_inside, Case, AMBIGUOUS_FACES, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, TABLE,
 };
@@ -225,6 +234,7 @@ struct Scratch {
     z_mid: Vec<u32>,
     /// The sign bits of the two sample layers the sweep is between.
     signs: LayerSigns,
+    /// The slab's own output, when slabs are joined afterwards (a reused output).
     mesh: TriMesh,
     vertex_time: Duration,
     geometry_time: Duration,
@@ -236,7 +246,6 @@ impl Scratch {
         for b in [&mut self.x_lo, &mut self.y_lo, &mut self.x_hi, &mut self.y_hi, &mut self.z_mid] {
             grow_zeroed(b, layer);
         }
-        self.mesh.clear();
         self.vertex_time = Duration::ZERO;
         self.geometry_time = Duration::ZERO;
         self.active_cells = 0;
@@ -247,6 +256,86 @@ impl Scratch {
             + self.signs.capacity_bytes()
             + self.mesh.capacity_bytes()
     }
+}
+
+/// Who makes the x/y-edge vertices of a slab's bottom layer.
+#[derive(Clone, Copy, Debug)]
+enum Bottom {
+    /// This slab (the first).
+    Make,
+    /// The slab below, whose top layer's vertices are numbered from this global index onward
+    /// (slabs writing into pieces of one output).
+    Numbered(u32),
+    /// The slab below, referred to by tagged indices `EXTERN | (2 * (x + nx * y) + axis)` that
+    /// the join resolves (slabs writing into their own meshes).
+    Tagged,
+}
+
+/// Where a slab task writes its vertices and triangles: the output mesh itself (one slab), or
+/// its own pieces of the output, counted beforehand (parallel slabs).
+trait Sink {
+    /// Adds a vertex (and its normal, when normals are made) and returns its global index.
+    fn vertex(&mut self, p: Vec3, normal: Option<Vec3>) -> u32;
+    /// Adds a triangle of global indices.
+    fn triangle(&mut self, t: [u32; 3]);
+}
+
+impl Sink for TriMesh {
+    #[inline(always)]
+    fn vertex(&mut self, p: Vec3, normal: Option<Vec3>) -> u32 {
+        let index = self.positions.len() as u32;
+        self.positions.push(p);
+        if let Some(n) = normal {
+            self.normals.push(n);
+        }
+        index
+    }
+
+    #[inline(always)]
+    fn triangle(&mut self, t: [u32; 3]) {
+        self.triangles.push(t);
+    }
+}
+
+/// One slab's pieces of the output, sized by [`Ctx::count`]; its vertices are numbered from
+/// `base`.
+struct Pieces<'a> {
+    positions: &'a mut [Vec3],
+    /// Empty when no normals are made.
+    normals: &'a mut [Vec3],
+    triangles: &'a mut [[u32; 3]],
+    base: u32,
+    vertices: usize,
+    triangles_written: usize,
+}
+
+impl Sink for Pieces<'_> {
+    #[inline(always)]
+    fn vertex(&mut self, p: Vec3, normal: Option<Vec3>) -> u32 {
+        let i = self.vertices;
+        self.positions[i] = p;
+        if let Some(n) = normal {
+            self.normals[i] = n;
+        }
+        self.vertices += 1;
+        self.base + i as u32
+    }
+
+    #[inline(always)]
+    fn triangle(&mut self, t: [u32; 3]) {
+        self.triangles[self.triangles_written] = t;
+        self.triangles_written += 1;
+    }
+}
+
+/// What one slab will write (from [`Ctx::count`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct SlabCount {
+    vertices: usize,
+    triangles: usize,
+    /// Vertices the slab writes before its top layer's x- and y-edge vertices (the slab above
+    /// numbers its bottom layer from there).
+    before_top: usize,
 }
 
 /// Read-only inputs of a slab task.
@@ -284,7 +373,7 @@ impl Ctx<'_> {
 
     /// Creates the vertex on the edge from sample `a` to the next sample along `axis`.
     #[inline(always)]
-    fn push_vertex(&self, mesh: &mut TriMesh, a: [usize; 3], axis: usize) -> u32 {
+    fn push_vertex(&self, sink: &mut impl Sink, a: [usize; 3], axis: usize) -> u32 {
         let g = &self.grid;
         let i = g.index(a[0], a[1], a[2]);
         let stride = [1, g.dims[0], g.dims[0] * g.dims[1]][axis];
@@ -292,105 +381,135 @@ impl Ctx<'_> {
         let t = ((self.iso - va) / (vb - va)).clamp(self.t_min, 1.0 - self.t_min);
         let mut p = g.position(a[0], a[1], a[2]);
         p[axis] += t * g.spacing;
-        let index = mesh.positions.len() as u32;
-        mesh.positions.push(p);
-        if self.sample_normals {
+        let normal = self.sample_normals.then(|| {
             let mut b = a;
             b[axis] += 1;
             let ga = self.sample_gradient(a[0], a[1], a[2]);
             let gb = self.sample_gradient(b[0], b[1], b[2]);
-            mesh.normals.push(ga.lerp(gb, t).normalize_or_zero());
-        }
-        index
+            ga.lerp(gb, t).normalize_or_zero()
+        });
+        sink.vertex(p, normal)
     }
 
     /// Vertices on the x- and y-edges of sample layer `z`.
-    fn layer_vertices(&self, signs: &LayerSigns, z: usize, xs: &mut [u32], ys: &mut [u32], mesh: &mut TriMesh) {
+    fn layer_vertices(&self, signs: &LayerSigns, z: usize, xs: &mut [u32], ys: &mut [u32], sink: &mut impl Sink) {
         let nx = self.grid.dims[0];
         layer_edge_words(signs, self.grid.dims, z, |y, axis, lo, hi, word| {
             let ids = if axis == 0 { &mut *xs } else { &mut *ys };
-            for_each_bit(lo, hi, word, |x| ids[x + nx * y] = self.push_vertex(mesh, [x, y, z], axis));
+            for_each_bit(lo, hi, word, |x| ids[x + nx * y] = self.push_vertex(sink, [x, y, z], axis));
+        });
+    }
+
+    /// The indices of the x- and y-edge vertices of sample layer `z` that the slab below made
+    /// (its top layer): numbered from `first` in the order [`Ctx::layer_vertices`] creates them,
+    /// or tagged for the join when `first` is `None`.
+    fn number_layer(&self, signs: &LayerSigns, z: usize, first: Option<u32>, xs: &mut [u32], ys: &mut [u32]) {
+        let nx = self.grid.dims[0];
+        let mut next = first.unwrap_or(0);
+        layer_edge_words(signs, self.grid.dims, z, |y, axis, lo, hi, word| {
+            let ids = if axis == 0 { &mut *xs } else { &mut *ys };
+            for_each_bit(lo, hi, word, |x| {
+                let i = x + nx * y;
+                ids[i] = match first {
+                    Some(_) => {
+                        next += 1;
+                        next - 1
+                    }
+                    None => EXTERN | (2 * i as u32 + axis as u32),
+                };
+            });
         });
     }
 
     /// Vertices on the z-edges between sample layers `z` and `z + 1`.
-    fn z_vertices(&self, signs: &LayerSigns, z: usize, zs: &mut [u32], mesh: &mut TriMesh) {
+    fn z_vertices(&self, signs: &LayerSigns, z: usize, zs: &mut [u32], sink: &mut impl Sink) {
         let nx = self.grid.dims[0];
         z_edge_words(signs, self.grid.dims, z, |y, axis, lo, hi, word| {
-            for_each_bit(lo, hi, word, |x| zs[x + nx * y] = self.push_vertex(mesh, [x, y, z], axis));
+            for_each_bit(lo, hi, word, |x| zs[x + nx * y] = self.push_vertex(sink, [x, y, z], axis));
         });
     }
 
-    /// Triangles of the cells between sample layers `z` and `z + 1`. When `extern_bottom`, the
-    /// bottom layer's x/y-edge vertices belong to the slab below and are written as tagged
-    /// references `EXTERN | (2 * (x + nx * y) + axis)`.
-    fn cells(&self, signs: &LayerSigns, z: usize, extern_bottom: bool, s: &mut Scratch) -> usize {
+    /// Calls `visit(x, y, case, corners)` for every cell between sample layers `z` and `z + 1`
+    /// that the surface crosses, with its table case and its corners' sample indices.
+    #[inline(always)]
+    fn for_each_surface_cell(&self, signs: &LayerSigns, z: usize, mut visit: impl FnMut(usize, usize, usize, [usize; 8])) {
         let [nx, ny, _] = self.grid.dims;
         let layer = nx * ny;
-        let mut active = 0;
-        let tag = |i: usize, axis: u32| EXTERN | (2 * i as u32 + axis);
         for y in 0..ny - 1 {
             let rows = [signs.row(y, z), signs.row(y + 1, z), signs.row(y, z + 1), signs.row(y + 1, z + 1)];
             let Some((lo, hi)) = span(&rows, nx) else { continue };
             let base = self.grid.index(0, y, z);
             let bits = [signs.bits(y, z), signs.bits(y + 1, z), signs.bits(y, z + 1), signs.bits(y + 1, z + 1)];
             for_each_surface_cell(bits, lo.saturating_sub(1), hi.min(nx - 2), |x, case| {
-                let case = case as usize;
                 let i = base + x;
                 let corners = [i, i + 1, i + 1 + nx, i + nx, i + layer, i + 1 + layer, i + 1 + nx + layer, i + nx + layer];
-                active += 1;
-                let ambiguous = if self.decider { AMBIGUOUS_FACES[case] } else { 0 };
-                let entry = if ambiguous == 0 {
-                    &TABLE[case]
-                } else {
-                    let mut joins = 0usize;
-                    for (f, (cycle, _)) in FACES.iter().enumerate() {
-                        if ambiguous >> f & 1 == 1 {
-                            let v = cycle.map(|k| f64::from(self.values[corners[k as usize]]) - f64::from(self.iso));
-                            joins |= usize::from(decider_joins_inside(v)) << f;
-                        }
-                    }
-                    &FACE_CHOICE_TABLE[case * 64 + joins]
-                };
-                let e = x + nx * y;
-                let mut ids = [0u32; 16];
-                let mut mask = entry.edge_mask;
-                while mask != 0 {
-                    let edge = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    ids[edge] = match edge {
-                        0 if extern_bottom => tag(e, 0),
-                        1 if extern_bottom => tag(e + 1, 1),
-                        2 if extern_bottom => tag(e + nx, 0),
-                        3 if extern_bottom => tag(e, 1),
-                        0 => s.x_lo[e],
-                        1 => s.y_lo[e + 1],
-                        2 => s.x_lo[e + nx],
-                        3 => s.y_lo[e],
-                        4 => s.x_hi[e],
-                        5 => s.y_hi[e + 1],
-                        6 => s.x_hi[e + nx],
-                        7 => s.y_hi[e],
-                        8 => s.z_mid[e],
-                        9 => s.z_mid[e + 1],
-                        10 => s.z_mid[e + 1 + nx],
-                        _ => s.z_mid[e + nx],
-                    };
-                }
-                if entry.interior != 0 {
-                    self.interior_vertices(entry, &corners, [x, y, z], &mut ids, &mut s.mesh);
-                }
-                for t in entry.triangles() {
-                    s.mesh.triangles.push(t.map(|edge| ids[edge as usize]));
-                }
+                visit(x, y, case as usize, corners);
             });
         }
+    }
+
+    /// The table entry of a surface cell: the default table's, or with the decider, the one for
+    /// the ambiguous faces whose inside corners the trilinear interpolant joins.
+    #[inline(always)]
+    fn entry(&self, case: usize, corners: &[usize; 8]) -> &'static Case {
+        let ambiguous = if self.decider { AMBIGUOUS_FACES[case] } else { 0 };
+        if ambiguous == 0 {
+            return &TABLE[case];
+        }
+        let mut joins = 0usize;
+        for (f, (cycle, _)) in FACES.iter().enumerate() {
+            if ambiguous >> f & 1 == 1 {
+                let v = cycle.map(|k| f64::from(self.values[corners[k as usize]]) - f64::from(self.iso));
+                joins |= usize::from(decider_joins_inside(v)) << f;
+            }
+        }
+        &FACE_CHOICE_TABLE[case * 64 + joins]
+    }
+
+    /// Triangles of the cells between sample layers `z` and `z + 1`, connecting the vertices in
+    /// the scratch's index layers. Returns the number of surface cells.
+    fn cells(&self, signs: &LayerSigns, z: usize, s: &Scratch, sink: &mut impl Sink) -> usize {
+        let nx = self.grid.dims[0];
+        let mut active = 0;
+        self.for_each_surface_cell(signs, z, |x, y, case, corners| {
+            active += 1;
+            let entry = self.entry(case, &corners);
+            let e = x + nx * y;
+            let mut ids = [0u32; 16];
+            let mut mask = entry.edge_mask;
+            while mask != 0 {
+                let edge = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                ids[edge] = match edge {
+                    0 => s.x_lo[e],
+                    1 => s.y_lo[e + 1],
+                    2 => s.x_lo[e + nx],
+                    3 => s.y_lo[e],
+                    4 => s.x_hi[e],
+                    5 => s.y_hi[e + 1],
+                    6 => s.x_hi[e + nx],
+                    7 => s.y_hi[e],
+                    8 => s.z_mid[e],
+                    9 => s.z_mid[e + 1],
+                    10 => s.z_mid[e + 1 + nx],
+                    _ => s.z_mid[e + nx],
+                };
+            }
+            if entry.interior != 0 {
+                self.interior_vertices(entry, &corners, [x, y, z], &mut ids, sink);
+            }
+            for t in entry.triangles() {
+                // Element by element: `t.map(..)` builds the triple on the stack and reads it back
+                // wider than it was written (a store-forwarding stall per triangle).
+                sink.triangle([ids[t[0] as usize], ids[t[1] as usize], ids[t[2] as usize]]);
+            }
+        });
         active
     }
 
     /// Vertices inside the cell for the polygons the table fans around one (joined ambiguous
     /// faces only): the mean of the polygon's edge crossings, stored in `ids[12 + polygon]`.
-    fn interior_vertices(&self, entry: &Case, corners: &[usize; 8], cell: [usize; 3], ids: &mut [u32; 16], mesh: &mut TriMesh) {
+    fn interior_vertices(&self, entry: &Case, corners: &[usize; 8], cell: [usize; 3], ids: &mut [u32; 16], sink: &mut impl Sink) {
         let values = corners.map(|i| self.values[i]);
         for piece in 0..entry.polygons {
             if entry.interior >> piece & 1 == 0 {
@@ -408,40 +527,72 @@ impl Ctx<'_> {
                 }
             }
             let local = sum / n;
-            ids[12 + piece as usize] = mesh.positions.len() as u32;
-            mesh.positions.push(self.grid.position(cell[0], cell[1], cell[2]) + local * self.grid.spacing);
-            if self.sample_normals {
-                mesh.normals.push(trilinear_gradient(&values, local).normalize_or_zero());
-            }
+            let normal = self.sample_normals.then(|| trilinear_gradient(&values, local).normalize_or_zero());
+            ids[12 + piece as usize] =
+                sink.vertex(self.grid.position(cell[0], cell[1], cell[2]) + local * self.grid.spacing, normal);
         }
     }
 
-    /// Meshes cell slabs `z0..z1` into `s.mesh`; afterwards `s.x_lo`/`s.y_lo` hold the vertex
-    /// indices of the top layer `z1`.
-    fn slab(&self, z0: usize, z1: usize, extern_bottom: bool, s: &mut Scratch) {
+    /// Interior vertices a cell's entry makes ([`Ctx::interior_vertices`]).
+    fn interior_count(entry: &Case) -> usize {
+        (0..entry.polygons).filter(|&piece| entry.interior >> piece & 1 == 1).count()
+    }
+
+    /// What [`Ctx::slab`] will write for cell layers `z0..z1`, from the sign bits alone (and the
+    /// decider's face values): the first pass of the parallel path, so every slab can then write
+    /// straight into its own piece of an output allocated once, as flying edges does. `bottom`:
+    /// the slab makes its bottom layer's x/y-edge vertices (the first slab).
+    fn count(&self, z0: usize, z1: usize, bottom: bool, signs: &mut LayerSigns) -> SlabCount {
+        let dims = self.grid.dims;
+        signs.reset(dims[0], dims[1]);
+        signs.classify(self.values, dims, self.iso, z0);
+        let layer_edges = |signs: &LayerSigns, z: usize| {
+            let mut n = 0;
+            layer_edge_words(signs, dims, z, |_, _, lo, hi, word| n += count_bits(lo, hi, word));
+            n
+        };
+        let mut vertices = if bottom { layer_edges(signs, z0) } else { 0 };
+        let (mut before_top, mut triangles) = (0, 0);
+        for z in z0..z1 {
+            signs.classify(self.values, dims, self.iso, z + 1);
+            z_edge_words(signs, dims, z, |_, _, lo, hi, word| vertices += count_bits(lo, hi, word));
+            if z + 1 == z1 {
+                before_top = vertices;
+            }
+            vertices += layer_edges(signs, z + 1);
+            self.for_each_surface_cell(signs, z, |_, _, case, corners| {
+                let entry = self.entry(case, &corners);
+                triangles += entry.triangles().len();
+                if entry.interior != 0 {
+                    vertices += Self::interior_count(entry);
+                }
+            });
+        }
+        SlabCount { vertices, triangles, before_top }
+    }
+
+    /// Meshes cell layers `z0..z1` into `sink`; `bottom` says who makes the bottom layer's
+    /// x/y-edge vertices. Afterwards `s.x_lo`/`s.y_lo` hold the vertex indices of the top layer.
+    fn slab(&self, z0: usize, z1: usize, bottom: Bottom, s: &mut Scratch, sink: &mut impl Sink) {
         let [nx, ny, _] = self.grid.dims;
         s.prepare(nx * ny);
         let mut signs = std::mem::take(&mut s.signs);
         let start = Instant::now();
-        if s.mesh.positions.capacity() == 0 {
-            // A fresh output (one-shot): count the vertices and allocate once, instead of
-            // growing the vectors by doubling, which copies them and touches twice the pages.
-            let vertices = count_crossing_edges(&mut signs, self.values, self.grid.dims, self.iso, z0, z1, !extern_bottom);
-            reserve_for(&mut s.mesh, vertices, self.sample_normals);
-        }
         signs.reset(nx, ny);
         signs.classify(self.values, self.grid.dims, self.iso, z0);
-        if !extern_bottom {
-            self.layer_vertices(&signs, z0, &mut s.x_lo, &mut s.y_lo, &mut s.mesh);
+        match bottom {
+            Bottom::Make => self.layer_vertices(&signs, z0, &mut s.x_lo, &mut s.y_lo, sink),
+            Bottom::Numbered(first) => self.number_layer(&signs, z0, Some(first), &mut s.x_lo, &mut s.y_lo),
+            Bottom::Tagged => self.number_layer(&signs, z0, None, &mut s.x_lo, &mut s.y_lo),
         }
         s.vertex_time += start.elapsed();
         for z in z0..z1 {
             let t0 = Instant::now();
             signs.classify(self.values, self.grid.dims, self.iso, z + 1);
-            self.z_vertices(&signs, z, &mut s.z_mid, &mut s.mesh);
-            self.layer_vertices(&signs, z + 1, &mut s.x_hi, &mut s.y_hi, &mut s.mesh);
+            self.z_vertices(&signs, z, &mut s.z_mid, sink);
+            self.layer_vertices(&signs, z + 1, &mut s.x_hi, &mut s.y_hi, sink);
             let t1 = Instant::now();
-            s.active_cells += self.cells(&signs, z, extern_bottom && z == z0, s);
+            s.active_cells += self.cells(&signs, z, s, sink);
             s.geometry_time += t1.elapsed();
             s.vertex_time += t1 - t0;
             std::mem::swap(&mut s.x_lo, &mut s.x_hi);
@@ -464,35 +615,41 @@ fn reserve_for(mesh: &mut TriMesh, vertices: usize, normals: bool) {
     mesh.triangles.reserve_exact(2 * vertices + vertices / 8 + 64);
 }
 
-/// Elements a join task copies at least (keeps rayon's splitting coarse).
-const JOIN_CHUNK: usize = 1 << 14;
-
-/// Which slab an output element comes from, remembered between consecutive elements of one join
-/// task (they are consecutive indices, so the slab changes rarely).
-#[derive(Default)]
-struct SlabCursor(usize);
-
-impl SlabCursor {
-    /// The slab `t` with `offsets[t] <= i < offsets[t + 1]`.
-    #[inline]
-    fn slab_of(&mut self, offsets: &[usize], i: usize) -> usize {
-        if i < offsets[self.0] || i >= offsets[self.0 + 1] {
-            self.0 = offsets.partition_point(|&o| o <= i) - 1;
+/// Copies the slabs' meshes into `surface` in parallel, resolving each slab's tagged references
+/// to the slab below's top layer.
+fn join_slab_meshes(
+    scratches: &[Scratch],
+    normals: bool,
+    surface: &mut TriMesh,
+    algorithm: &'static str,
+) -> Result<(), ExtractError> {
+    let offsets = slab_offsets(scratches.iter().map(|s| s.mesh.positions.len()), algorithm)?;
+    let copy = |_: usize, part: &[Vec3], piece: &mut [Vec3]| piece.copy_from_slice(part);
+    join_parts(&mut surface.positions, &scratches.iter().map(|s| &s.mesh.positions[..]).collect::<Vec<_>>(), copy);
+    if normals {
+        join_parts(&mut surface.normals, &scratches.iter().map(|s| &s.mesh.normals[..]).collect::<Vec<_>>(), copy);
+    }
+    let triangles: Vec<&[[u32; 3]]> = scratches.iter().map(|s| &s.mesh.triangles[..]).collect();
+    join_parts(&mut surface.triangles, &triangles, |t, part, piece| {
+        let offset = offsets[t] as u32;
+        // A tagged index names an x- (even) or y-edge (odd) of the slab below's top layer.
+        let resolve = |i: u32| {
+            if i & EXTERN == 0 {
+                return i + offset;
+            }
+            let key = (i & !EXTERN) as usize;
+            let below = &scratches[t - 1];
+            let local = if key % 2 == 0 { below.x_lo[key / 2] } else { below.y_lo[key / 2] };
+            local + offsets[t - 1] as u32
+        };
+        for (d, s) in piece.iter_mut().zip(part) {
+            // Element by element, not `s.map(..)`: see `Ctx::cells`.
+            d[0] = resolve(s[0]);
+            d[1] = resolve(s[1]);
+            d[2] = resolve(s[2]);
         }
-        self.0
-    }
-}
-
-/// Resolves a slab-local index to a global one.
-#[inline]
-fn resolve(i: u32, offset: u32, below: Option<(&Scratch, u32)>) -> u32 {
-    if i & EXTERN == 0 {
-        return i + offset;
-    }
-    let key = (i & !EXTERN) as usize;
-    let (prev, prev_offset) = below.expect("only slabs above the first have external references");
-    let local = if key % 2 == 0 { prev.x_lo[key / 2] } else { prev.y_lo[key / 2] };
-    local + prev_offset
+    });
+    Ok(())
 }
 
 impl Extractor for MarchingCubes {
@@ -551,63 +708,89 @@ impl Extractor for MarchingCubes {
         let scratches = &mut pool[..tasks];
 
         let t_slabs = Instant::now();
+        let mut allocation_time = Duration::ZERO;
         if tasks == 1 {
-            std::mem::swap(&mut scratches[0].mesh, &mut out.surface);
-            ctx.slab(0, slab_cells, false, &mut scratches[0]);
-            std::mem::swap(&mut scratches[0].mesh, &mut out.surface);
+            let s = &mut scratches[0];
+            if out.surface.positions.capacity() == 0 {
+                // A fresh output (one-shot): count the vertices and allocate once, instead of
+                // growing the vectors by doubling, which copies them and touches twice the pages.
+                let vertices = count_crossing_edges(&mut s.signs, ctx.values, grid.dims, ctx.iso, 0, slab_cells, true);
+                reserve_for(&mut out.surface, vertices, sample_normals);
+            }
+            ctx.slab(0, slab_cells, Bottom::Make, s, &mut out.surface);
+            if out.surface.positions.len() >= EXTERN as usize {
+                return Err(ExtractError::TooLarge { algorithm: self.name(), vertices: out.surface.positions.len() });
+            }
+        } else if out.surface.positions.capacity() > 0 {
+            // A reused output (steady state): each slab meshes into its own kept buffers, which
+            // are then copied into the output in parallel. This reads the samples once; counting
+            // first would read them twice, which costs more than the copy once the buffers are warm.
+            scratches.par_iter_mut().enumerate().for_each(|(t, s)| {
+                s.mesh.clear();
+                let mut mesh = std::mem::take(&mut s.mesh);
+                let bottom = if t == 0 { Bottom::Make } else { Bottom::Tagged };
+                ctx.slab(t * slab_cells / tasks, (t + 1) * slab_cells / tasks, bottom, s, &mut mesh);
+                s.mesh = mesh;
+            });
+            let t_join = Instant::now();
+            join_slab_meshes(scratches, sample_normals, &mut out.surface, self.name())?;
+            allocation_time = t_join.elapsed();
         } else {
-            scratches
+            // A fresh output (one-shot), in flying edges' order: count every slab's output,
+            // allocate the output once, then let each slab write its own piece of it. Every page
+            // of the output is touched once, and no slab buffers are allocated and copied.
+            let bounds = |t: usize| (t * slab_cells / tasks, (t + 1) * slab_cells / tasks);
+            let counts: Vec<(SlabCount, Duration)> = scratches
                 .par_iter_mut()
                 .enumerate()
-                .for_each(|(t, s)| ctx.slab(t * slab_cells / tasks, (t + 1) * slab_cells / tasks, t > 0, s));
-        }
-        let slab_wall = t_slabs.elapsed();
-
-        let t_join = Instant::now();
-        if tasks > 1 {
-            let offsets = slab_offsets(scratches.iter().map(|s| s.mesh.positions.len()), self.name())?;
-            // Written in parallel straight into the output's capacity (a fresh output's pages are
-            // first touched here, by both threads, instead of by a serial fill).
-            let surface = &mut out.surface;
-            let total = offsets[tasks];
-            let scratches: &[Scratch] = scratches;
-            let tri_offsets: Vec<usize> = std::iter::once(0)
-                .chain(scratches.iter().scan(0, |sum, s| {
-                    *sum += s.mesh.triangles.len();
-                    Some(*sum)
-                }))
+                .map(|(t, s)| {
+                    let start = Instant::now();
+                    let (z0, z1) = bounds(t);
+                    (ctx.count(z0, z1, t == 0, &mut s.signs), start.elapsed())
+                })
                 .collect();
-            surface.positions.par_extend((0..total).into_par_iter().with_min_len(JOIN_CHUNK).map_init(
-                SlabCursor::default,
-                |c, i| {
-                    let t = c.slab_of(&offsets, i);
-                    scratches[t].mesh.positions[i - offsets[t]]
-                },
-            ));
-            if ctx.sample_normals {
-                surface.normals.par_extend((0..total).into_par_iter().with_min_len(JOIN_CHUNK).map_init(
-                    SlabCursor::default,
-                    |c, i| {
-                        let t = c.slab_of(&offsets, i);
-                        scratches[t].mesh.normals[i - offsets[t]]
-                    },
-                ));
-            }
-            surface.triangles.par_extend((0..tri_offsets[tasks]).into_par_iter().with_min_len(JOIN_CHUNK).map_init(
-                SlabCursor::default,
-                |c, i| {
-                    let t = c.slab_of(&tri_offsets, i);
-                    let below = (t > 0).then(|| (&scratches[t - 1], offsets[t - 1] as u32));
-                    scratches[t].mesh.triangles[i - tri_offsets[t]].map(|v| resolve(v, offsets[t] as u32, below))
-                },
-            ));
-        } else if out.surface.positions.len() >= EXTERN as usize {
-            return Err(ExtractError::TooLarge { algorithm: self.name(), vertices: out.surface.positions.len() });
+            let offsets = slab_offsets(counts.iter().map(|(c, _)| c.vertices), self.name())?;
+            let t_allocate = Instant::now();
+            let surface = &mut out.surface;
+            resize_zeroed(&mut surface.positions, offsets[tasks]);
+            resize_zeroed(&mut surface.normals, if sample_normals { offsets[tasks] } else { 0 });
+            resize_zeroed(&mut surface.triangles, counts.iter().map(|(c, _)| c.triangles).sum());
+            allocation_time = t_allocate.elapsed();
+            let normal_counts = counts.iter().map(|(c, _)| if sample_normals { c.vertices } else { 0 });
+            let pieces = split_pieces(&mut surface.positions, counts.iter().map(|(c, _)| c.vertices))
+                .into_iter()
+                .zip(split_pieces(&mut surface.normals, normal_counts))
+                .zip(split_pieces(&mut surface.triangles, counts.iter().map(|(c, _)| c.triangles)));
+            let sinks: Vec<Pieces> = pieces
+                .enumerate()
+                .map(|(t, ((positions, normals), triangles))| Pieces {
+                    positions,
+                    normals,
+                    triangles,
+                    base: offsets[t] as u32,
+                    vertices: 0,
+                    triangles_written: 0,
+                })
+                .collect();
+            scratches.par_iter_mut().zip(sinks).enumerate().for_each(|(t, (s, mut sink))| {
+                let (z0, z1) = bounds(t);
+                let bottom =
+                    if t == 0 { Bottom::Make } else { Bottom::Numbered((offsets[t - 1] + counts[t - 1].0.before_top) as u32) };
+                ctx.slab(z0, z1, bottom, s, &mut sink);
+                s.vertex_time += counts[t].1;
+                // The count and the sweep read the same sign bits, so they agree; a piece left
+                // partly unwritten would be a silently wrong mesh, so this is checked always.
+                assert_eq!(
+                    (sink.vertices, sink.triangles_written),
+                    (counts[t].0.vertices, counts[t].0.triangles),
+                    "marching cubes: slab {t} wrote other counts than it counted"
+                );
+            });
         }
-        let join_time = t_join.elapsed();
-
+        let slab_wall = t_slabs.elapsed() - allocation_time;
         let (cpu_v, cpu_g) =
             scratches.iter().fold((0.0, 0.0), |(v, g), s| (v + s.vertex_time.as_secs_f64(), g + s.geometry_time.as_secs_f64()));
+        let join_time = allocation_time;
         let (vertex_time, geometry_time) = split_slab_time(slab_wall, join_time, cpu_v, cpu_g);
         out.stats.times.vertex = setup_time + vertex_time;
         out.stats.times.geometry = geometry_time;

@@ -29,7 +29,7 @@ use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
 use crate::samples::Samples;
 use crate::sign_rows::{count_crossing_edges, for_each_bit, for_each_surface_cell, next_bits, span, LayerSigns};
-use crate::slabs::{slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN};
+use crate::slabs::{join_parts, slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN};
 use crate::tables::marching_cubes::{opposite_face, Case, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, RING_FACES, TABLE};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -253,22 +253,30 @@ impl DualEngine {
         let t_join = Instant::now();
         if tasks > 1 {
             let offsets = slab_offsets(slabs.iter().map(|slab| slab.mesh.positions.len()), self.name)?;
-            s.cell_min.clear();
-            s.links.clear();
-            let total = offsets[tasks];
-            out.surface.positions.reserve_exact(total);
-            out.surface.normals.reserve_exact(total);
-            s.cell_min.reserve_exact(total);
-            out.surface.triangles.reserve_exact(slabs.iter().map(|slab| slab.mesh.triangles.len()).sum());
-            for (t, slab) in slabs.iter().enumerate() {
-                let offset = offsets[t] as u32;
-                let below = if t > 0 { offsets[t - 1] as u32 + slabs[t - 1].last_layer_start } else { 0 };
-                out.surface.positions.extend_from_slice(&slab.mesh.positions);
-                out.surface.normals.extend_from_slice(&slab.mesh.normals);
-                out.surface.triangles.extend(slab.mesh.triangles.iter().map(|tri| tri.map(|i| resolve(i, offset, below))));
-                s.cell_min.extend_from_slice(&slab.cell_min);
-                s.links.extend(slab.links.iter().map(|&(a, b)| (resolve(a, offset, below), resolve(b, offset, below))));
-            }
+            let slabs: &[Slab] = slabs;
+            // Where slab `t`'s tagged indices point: the first vertex of the slab below's last layer.
+            let below = |t: usize| if t > 0 { offsets[t - 1] as u32 + slabs[t - 1].last_layer_start } else { 0 };
+            let copy = |_: usize, part: &[Vec3], piece: &mut [Vec3]| piece.copy_from_slice(part);
+            join_parts(&mut out.surface.positions, &slabs.iter().map(|sl| &sl.mesh.positions[..]).collect::<Vec<_>>(), copy);
+            join_parts(&mut out.surface.normals, &slabs.iter().map(|sl| &sl.mesh.normals[..]).collect::<Vec<_>>(), copy);
+            join_parts(&mut s.cell_min, &slabs.iter().map(|sl| &sl.cell_min[..]).collect::<Vec<_>>(), copy);
+            let triangles: Vec<&[[u32; 3]]> = slabs.iter().map(|sl| &sl.mesh.triangles[..]).collect();
+            join_parts(&mut out.surface.triangles, &triangles, |t, part, piece| {
+                let (offset, below) = (offsets[t] as u32, below(t));
+                for (d, s) in piece.iter_mut().zip(part) {
+                    // Element by element, not `s.map(..)`: see `slabs::join_parts`' callers.
+                    d[0] = resolve(s[0], offset, below);
+                    d[1] = resolve(s[1], offset, below);
+                    d[2] = resolve(s[2], offset, below);
+                }
+            });
+            let links: Vec<&[(u32, u32)]> = slabs.iter().map(|sl| &sl.links[..]).collect();
+            join_parts(&mut s.links, &links, |t, part, piece| {
+                let (offset, below) = (offsets[t] as u32, below(t));
+                for (d, &(a, b)) in piece.iter_mut().zip(part) {
+                    *d = (resolve(a, offset, below), resolve(b, offset, below));
+                }
+            });
         } else if out.surface.positions.len() >= EXTERN as usize {
             return Err(ExtractError::TooLarge { algorithm: self.name, vertices: out.surface.positions.len() });
         }

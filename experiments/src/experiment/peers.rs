@@ -428,7 +428,10 @@ fn section(data: &Data) -> String {
          peers keep nothing between calls and run one-shot only. Ratios are peer median / our median under the same protocol \
          (above one means we are faster); the times tables give each median with its fastest and slowest run. \
          Our marching cubes makes no normals here, as VTK runs with ComputeNormalsOff and the other marching cubes peers make \
-         none; surface nets makes its usual normals, as `fast-surface-nets` does. Peer versions: {}. Times are wall clock on a shared machine; compare ratios within this run.\n\n",
+         none; surface nets makes its usual normals, as `fast-surface-nets` does. Threads: our one-thread runs are serial on the \
+         experiment's own thread; our two-thread runs share one rayon pool whose threads are the experiment's thread and one \
+         more, as VTK's threads back end works on the calling thread (with a pool per implementation, a pool's idle threads \
+         still spun while the next implementation ran, which slowed whichever came next). Peer versions: {}. Times are wall clock on a shared machine; compare ratios within this run.\n\n",
         data.repeats,
         if data.versions.is_empty() {
             "none available".to_owned()

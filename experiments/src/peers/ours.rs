@@ -2,26 +2,50 @@
 //!
 //! One-shot: the extractor is built from the registry and the output is `Extraction::default()`
 //! on every call (what `isolab extract` does once). Steady state: both are kept between calls, so
-//! output vectors and scratch are reused. On one thread the extractor runs with
-//! `parallelism=serial`; on more, on a rayon pool of that many threads.
+//! output vectors and scratch are reused.
+//!
+//! Threads: on one, the extractor runs with `parallelism=serial` on the calling thread. On more,
+//! it runs on a rayon pool of that many threads, one pool per thread count shared by every `Ours`
+//! and built with the thread that first asks as one of its threads (the experiment's), so a call
+//! works on the calling thread and wakes one thread fewer, as VTK's threads back end does. With a
+//! pool per implementation, our two-thread runs were often no faster than one thread; most likely
+//! the threads of the pool that ran last were still spinning, idle, on one of the two cores. Measured alternating
+//! four of our implementations (marching cubes and surface nets, one and two threads) on a 128³
+//! gyroid, medians of 7: two-thread marching cubes took 11.9 ms with a pool each, 7.6 ms with
+//! this pool, 6.7 ms alone; but one-thread surface nets varied between 18.9 and 28 ms from one
+//! arrangement to another, so some cross-talk between runs remains on this machine.
 
 use super::{Job, Peer, PeerError, PeerRun, Protocol};
 use isolab_algorithms::extractors;
 use isolab_algorithms::{Extraction, Extractor, Options};
 use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// The rayon pool with `threads` threads that every [`Ours`] uses.
+fn shared_pool(threads: usize) -> Result<Arc<rayon::ThreadPool>, rayon::ThreadPoolBuildError> {
+    static POOLS: OnceLock<Mutex<HashMap<usize, Arc<rayon::ThreadPool>>>> = OnceLock::new();
+    let mut pools = POOLS.get_or_init(Default::default).lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(pool) = pools.get(&threads) {
+        return Ok(pool.clone());
+    }
+    // The thread that first asks (the experiment's) is one of the pool's threads, so a call made
+    // from it works on it and wakes one thread fewer, as VTK's threads back end does.
+    let pool = Arc::new(rayon::ThreadPoolBuilder::new().num_threads(threads).use_current_thread().build()?);
+    pools.insert(threads, pool.clone());
+    Ok(pool)
+}
 
 /// Our extractor `name` with `options` (jobs: [`Job::Grid`]).
 pub struct Ours {
     name: &'static str,
     options: Vec<(&'static str, &'static str)>,
-    pools: HashMap<usize, rayon::ThreadPool>,
     kept: HashMap<usize, (Box<dyn Extractor>, Extraction)>,
 }
 
 impl Ours {
     /// Our registered extractor `name`, built with `options` (`name=value` pairs) on every run.
     pub fn new(name: &'static str, options: &[(&'static str, &'static str)]) -> Ours {
-        Ours { name, options: options.to_vec(), pools: HashMap::new(), kept: HashMap::new() }
+        Ours { name, options: options.to_vec(), kept: HashMap::new() }
     }
 
     fn build(&self, threads: usize) -> Result<Box<dyn Extractor>, PeerError> {
@@ -47,20 +71,18 @@ impl Peer for Ours {
     fn run(&mut self, job: &Job<'_>, protocol: Protocol) -> Result<PeerRun, PeerError> {
         let Job::Grid { samples, threads, .. } = job else { return Err(self.unsupported()) };
         let threads = (*threads).max(1);
-        if !self.pools.contains_key(&threads) {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .map_err(|e| PeerError::Failed { peer: self.name(), message: format!("thread pool: {e}") })?;
-            self.pools.insert(threads, pool);
-        }
         let (extractor, mut out) = match (protocol, self.kept.remove(&threads)) {
             (Protocol::SteadyState, Some(kept)) => kept,
             _ => (self.build(threads)?, Extraction::default()),
         };
-        let pool = &self.pools[&threads];
-        pool.install(|| extractor.extract(samples, &mut out))
-            .map_err(|e| PeerError::Failed { peer: self.name(), message: e.to_string() })?;
+        // One thread runs serial on the calling thread: no pool thread to wake.
+        let result = match threads {
+            1 => extractor.extract(samples, &mut out),
+            _ => shared_pool(threads)
+                .map_err(|e| PeerError::Failed { peer: self.name(), message: format!("thread pool: {e}") })?
+                .install(|| extractor.extract(samples, &mut out)),
+        };
+        result.map_err(|e| PeerError::Failed { peer: self.name(), message: e.to_string() })?;
         let run = PeerRun {
             time: out.stats.times.extraction(),
             vertices: out.surface.positions.len(),

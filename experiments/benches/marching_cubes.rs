@@ -1,9 +1,12 @@
-//! Criterion benchmarks: marching cubes alone (sampling excluded) on `sphere` and `gyroid` at
-//! 64^3, 128^3 and 256^3, steady state (extractor and output reused) and one-shot (both new every
-//! call, dropped outside the timing), and sampling the bunny field at the RMT paper's 75x40x56.
+//! Criterion benchmarks: marching cubes alone (sampling excluded, no normals, as in `peers`) on
+//! `sphere` and `gyroid` at 64^3, 128^3 and 256^3, serial and on rayon's global pool, steady state
+//! (extractor and output reused) and one-shot (both new every call, dropped outside the timing),
+//! and sampling the bunny field at the RMT paper's 75x40x56.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use isolab_algorithms::{extractors::MarchingCubes, fields, Extraction, Extractor, Grid, Lattice, Samples};
+use isolab_algorithms::extractors::marching_cubes::{MarchingCubes, McOptions, NormalSource};
+use isolab_algorithms::slabs::Parallelism;
+use isolab_algorithms::{fields, Extraction, Extractor, Grid, Lattice, Samples};
 use isolab_experiments::run::load_field;
 use std::hint::black_box;
 use std::time::Duration;
@@ -16,19 +19,24 @@ fn marching_cubes(c: &mut Criterion) {
         for n in [64, 128, 256] {
             let grid = Grid::covering(&field.domain(), n).unwrap();
             let samples = Samples::sample_cubic(field.clone(), grid, 0.0).unwrap();
-            let mc = MarchingCubes::default();
-            let mut out = Extraction::default();
-            group.bench_with_input(BenchmarkId::new(name, n), &samples, |b, s| {
-                b.iter(|| mc.extract(black_box(s), &mut out).unwrap())
-            });
-            // One-shot: a new extractor and a new output every call (dropped outside the timing).
-            group.bench_with_input(BenchmarkId::new(format!("{name}/one-shot"), n), &samples, |b, s| {
-                b.iter_with_large_drop(|| {
-                    let mut fresh = Extraction::default();
-                    MarchingCubes::default().extract(black_box(s), &mut fresh).unwrap();
-                    fresh
-                })
-            });
+            // As the `peers` experiment runs it: no normals (VTK runs with ComputeNormalsOff),
+            // serial, or on rayon's global pool (as many threads as cores).
+            for (label, parallelism) in [("serial", Parallelism::Serial), ("rayon", Parallelism::Rayon)] {
+                let options = McOptions { normals: NormalSource::None, parallelism, ..Default::default() };
+                let mc = MarchingCubes::new(options);
+                let mut out = Extraction::default();
+                group.bench_with_input(BenchmarkId::new(format!("{name}/{label}"), n), &samples, |b, s| {
+                    b.iter(|| mc.extract(black_box(s), &mut out).unwrap())
+                });
+                // One-shot: a new extractor and a new output every call (dropped outside the timing).
+                group.bench_with_input(BenchmarkId::new(format!("{name}/{label}/one-shot"), n), &samples, |b, s| {
+                    b.iter_with_large_drop(|| {
+                        let mut fresh = Extraction::default();
+                        MarchingCubes::new(options).extract(black_box(s), &mut fresh).unwrap();
+                        fresh
+                    })
+                });
+            }
         }
     }
     group.finish();

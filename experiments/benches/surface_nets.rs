@@ -32,6 +32,15 @@ fn side_by_side(c: &mut Criterion) {
             group.bench_with_input(BenchmarkId::new(format!("isolab/{name}"), n), &samples, |b, s| {
                 b.iter(|| plain.extract(black_box(s), &mut out).unwrap())
             });
+            group.bench_with_input(BenchmarkId::new(format!("isolab-one-shot/{name}"), n), &samples, |b, s| {
+                b.iter_with_large_drop(|| {
+                    let mut fresh = Extraction::default();
+                    SurfaceNets::new(SnOptions { smoothing: Smoothing::None, ..Default::default() })
+                        .extract(black_box(s), &mut fresh)
+                        .unwrap();
+                    fresh
+                })
+            });
             group.bench_with_input(BenchmarkId::new(format!("isolab-serial/{name}"), n), &samples, |b, s| {
                 b.iter(|| serial.extract(black_box(s), &mut out).unwrap())
             });

@@ -2,7 +2,9 @@
 //! new extractor can use them. A volume is cut along z into slabs of cell layers, each meshed by
 //! one rayon task into its own buffers; a slab's vertices on its bottom layer belong to the slab
 //! below, and indices to them are tagged ([`EXTERN`]) until the slabs are joined in order
-//! ([`slab_offsets`]). The result is the same mesh on any number of threads. [`ScratchPool`]
+//! ([`slab_offsets`], [`join_parts`]), or, when every slab's output was counted first, each writes
+//! its own piece of one output sized once ([`resize_zeroed`], [`split_pieces`]). The result is
+//! the same mesh on any number of threads. [`ScratchPool`]
 //! gives concurrent callers (chunks meshed in parallel) their own reusable buffers;
 //! [`split_slab_time`] turns a parallel phase's wall time into the vertex and geometry stage
 //! times the reports show.
@@ -151,6 +153,27 @@ mod tests {
         assert!(matches!(e, ExtractError::TooLarge { vertices, .. } if vertices == EXTERN as usize));
         assert_eq!(task_count(Parallelism::Serial, 1 << 30, 100), 1);
         assert_eq!(task_count(Parallelism::Rayon, 10, 100), 1);
+    }
+
+    #[test]
+    fn parts_join_in_order_into_fresh_and_reused_outputs() {
+        let parts: [&[u32]; 4] = [&[1, 2, 3], &[], &[4], &[5, 6]];
+        // Fresh (no capacity: zeroed allocation), then reused (capacity kept: parallel fill).
+        let mut dst = Vec::new();
+        for round in 0..2 {
+            join_parts(&mut dst, &parts, |t, part, piece| {
+                for (d, s) in piece.iter_mut().zip(part) {
+                    *d = s + 10 * t as u32;
+                }
+            });
+            assert_eq!(dst, vec![1, 2, 3, 24, 35, 36], "round {round}");
+        }
+        let mut longer = vec![7u32; 9];
+        resize_zeroed(&mut longer, 5);
+        assert_eq!(longer, vec![0; 5]);
+        let mut data = [0u8, 1, 2, 3, 4, 5];
+        let pieces = split_pieces(&mut data, [2, 0, 3]);
+        assert_eq!(pieces.iter().map(|p| p.to_vec()).collect::<Vec<_>>(), vec![vec![0, 1], vec![], vec![2, 3, 4]]);
     }
 
     #[test]

@@ -14,6 +14,10 @@ pub(super) struct Ctx<'a> {
     /// Whether the sweep computes vertex normals (not when smoothing moves the vertices: their
     /// normals are computed once, after it).
     pub(super) sweep_normals: bool,
+    /// Whether each vertex's cell corner is kept (`cell_min`): smoothing clamps to the cell and
+    /// chunked meshing names the owner cell; otherwise it is not written at all, a fifth less
+    /// output to write (and, on parallel slabs, to copy).
+    pub(super) keep_cell_min: bool,
 }
 
 impl Ctx<'_> {
@@ -130,7 +134,9 @@ impl Ctx<'_> {
                     if self.sweep_normals {
                         mesh.normals.push(trilinear_gradient(&v, local.clamp(Vec3::ZERO, Vec3::ONE)).normalize_or_zero());
                     }
-                    cell_min.push(min);
+                    if self.keep_cell_min {
+                        cell_min.push(min);
+                    }
                 }
             });
         }
@@ -267,7 +273,9 @@ impl Ctx<'_> {
             let vertices = edges + edges / 8 + 64;
             s.mesh.positions.reserve_exact(vertices);
             s.mesh.normals.reserve_exact(vertices);
-            s.cell_min.reserve_exact(vertices);
+            if self.keep_cell_min {
+                s.cell_min.reserve_exact(vertices);
+            }
             s.mesh.triangles.reserve_exact(2 * edges + 64);
         }
         signs.reset(nx, ny);

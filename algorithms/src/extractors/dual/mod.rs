@@ -228,6 +228,7 @@ impl DualEngine {
             field,
             tables: Tables::get(),
             sweep_normals: !smoothing,
+            keep_cell_min: smoothing || out.origins.wanted,
         };
         let cell_layers = nz - 1;
         let tasks = crate::slabs::task_count(self.options.parallelism, grid.cell_count(), cell_layers);
@@ -374,8 +375,11 @@ mod tests {
                 "surface-nets",
             );
             let mut out = Extraction::default();
+            // Origins wanted: the cell corners are kept without smoothing too.
+            out.origins.wanted = true;
             sn.extract(&s, &mut out).unwrap();
             let scratch = sn.scratch.take();
+            assert_eq!(scratch.cell_min.len(), out.surface.positions.len(), "{smoothing:?}");
             for (p, min) in out.surface.positions.iter().zip(&scratch.cell_min) {
                 let d = (*p - *min) / h;
                 assert!(d.min_element() >= -1e-4 && d.max_element() <= 1.0 + 1e-4, "{smoothing:?}: {p} outside cell at {min}");

@@ -58,7 +58,8 @@ impl Ctx<'_> {
 
     /// Vertices of the surface cells in cell layer `z`: one per separate piece of surface in the
     /// cell (the polygons of its marching cubes case), at the mean of that piece's edge crossings.
-    /// `base` gets each cell's first vertex index and `cases` its [`Tables::entry`] code.
+    /// `base` gets each cell's first vertex index and `cases` its [`Tables::entry`] code; `cell_min`,
+    /// when given, each vertex's cell corner (the ghost layer below a slab needs none).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn cell_vertices(
         &self,
@@ -68,7 +69,7 @@ impl Ctx<'_> {
         base: &mut [u32],
         cases: &mut [u16],
         mesh: &mut TriMesh,
-        cell_min: &mut Vec<Vec3>,
+        mut cell_min: Option<&mut Vec<Vec3>>,
     ) {
         let [nx, ny, _] = self.grid.dims;
         let (sx, sxy) = (nx, nx * ny);
@@ -134,7 +135,7 @@ impl Ctx<'_> {
                     if self.sweep_normals {
                         mesh.normals.push(trilinear_gradient(&v, local.clamp(Vec3::ZERO, Vec3::ONE)).normalize_or_zero());
                     }
-                    if self.keep_cell_min {
+                    if let Some(cell_min) = cell_min.as_deref_mut() {
                         cell_min.push(min);
                     }
                 }
@@ -259,7 +260,6 @@ impl Ctx<'_> {
         s.mesh.clear();
         s.ghost.clear();
         s.cell_min.clear();
-        s.ghost_min.clear();
         s.links.clear();
         s.vertex_time = std::time::Duration::ZERO;
         s.geometry_time = std::time::Duration::ZERO;
@@ -283,7 +283,7 @@ impl Ctx<'_> {
             let t = Instant::now();
             signs.classify(values, dims, iso, z0 - 1);
             signs.classify(values, dims, iso, z0);
-            self.cell_vertices(&signs, z0 - 1, EXTERN, &mut s.prev, &mut s.prev_case, &mut s.ghost, &mut s.ghost_min);
+            self.cell_vertices(&signs, z0 - 1, EXTERN, &mut s.prev, &mut s.prev_case, &mut s.ghost, None);
             s.vertex_time += t.elapsed();
         }
         for z in z0..z1 {
@@ -291,7 +291,15 @@ impl Ctx<'_> {
             signs.classify(values, dims, iso, z);
             signs.classify(values, dims, iso, z + 1);
             s.last_layer_start = s.mesh.positions.len() as u32;
-            self.cell_vertices(&signs, z, 0, &mut s.cur, &mut s.cur_case, &mut s.mesh, &mut s.cell_min);
+            self.cell_vertices(
+                &signs,
+                z,
+                0,
+                &mut s.cur,
+                &mut s.cur_case,
+                &mut s.mesh,
+                self.keep_cell_min.then_some(&mut s.cell_min),
+            );
             let b = Instant::now();
             let link_buffer = links.then_some(&mut s.links);
             self.quads(&signs, z, (&s.prev, &s.prev_case), (&s.cur, &s.cur_case), &s.ghost.positions, &mut s.mesh, link_buffer);

@@ -141,7 +141,6 @@ struct Slab {
     links: Vec<(u32, u32)>,
     /// The slab below's last cell layer, recomputed here so quads can refer to it.
     ghost: TriMesh,
-    ghost_min: Vec<Vec3>,
     /// The sign bits of the two sample layers the sweep is between.
     signs: LayerSigns,
     /// Index of the first vertex of this slab's last cell layer.
@@ -157,7 +156,7 @@ impl Slab {
             + self.cur_case.capacity()
             + self.mesh.capacity_bytes()
             + self.ghost.capacity_bytes()
-            + 12 * (self.cell_min.capacity() + self.ghost_min.capacity())
+            + 12 * self.cell_min.capacity()
             + 8 * self.links.capacity()
             + self.signs.capacity_bytes()
     }

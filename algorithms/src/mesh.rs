@@ -103,8 +103,10 @@ pub fn manifold_defects(mesh: &TriMesh) -> Vec<u32> {
 /// re-meshed chunk) allocates nothing once the buffers have grown.
 #[derive(Clone, Debug, Default)]
 pub struct ManifoldCheck {
-    around: Incidence,
-    link: Vec<(u32, u32)>,
+    /// The wanted vertices' links in compressed rows: vertex `v`'s directed link edges are
+    /// `links[start[v]..start[v + 1]]`.
+    start: Vec<u32>,
+    links: Vec<(u32, u32)>,
     bad: Vec<u32>,
 }
 
@@ -116,18 +118,42 @@ impl ManifoldCheck {
     /// with a subset it is that list restricted to the subset.
     pub fn defects_among(&mut self, mesh: &TriMesh, wanted: impl Fn(u32) -> bool) -> &[u32] {
         let n = mesh.positions.len();
-        self.around.rebuild(n, &mesh.triangles);
+        // The links in one counting sort over the triangles: triangle (a, b, c) adds b -> c to
+        // a's link, c -> a to b's and a -> b to c's.
+        let (start, links) = (&mut self.start, &mut self.links);
+        start.clear();
+        start.resize(n + 1, 0);
+        for t in &mesh.triangles {
+            for &v in t {
+                if wanted(v) {
+                    start[v as usize + 1] += 1;
+                }
+            }
+        }
+        for v in 0..n {
+            start[v + 1] += start[v];
+        }
+        links.clear();
+        links.resize(start[n] as usize, (0, 0));
+        // Fill with start[v] as vertex v's cursor (it ends at start[v + 1]), then shift back.
+        for &[a, b, c] in &mesh.triangles {
+            for (v, edge) in [(a, (b, c)), (b, (c, a)), (c, (a, b))] {
+                if wanted(v) {
+                    links[start[v as usize] as usize] = edge;
+                    start[v as usize] += 1;
+                }
+            }
+        }
+        for v in (1..=n).rev() {
+            start[v] = start[v - 1];
+        }
+        start[0] = 0;
         self.bad.clear();
-        for v in (0..n as u32).filter(|&v| wanted(v)) {
-            self.link.clear();
-            self.link.extend(self.around.of_vertex(v).iter().map(|&t| {
-                let tri = mesh.triangles[t as usize];
-                let k = tri.iter().position(|&x| x == v).unwrap_or(0);
-                (tri[(k + 1) % 3], tri[(k + 2) % 3])
-            }));
-            if !link_is_consistent_fan(&self.link) {
-                self.bad.push(v);
-                self.bad.extend(repeated_link_ends(&self.link).filter(|&a| wanted(a)));
+        for v in 0..n {
+            let link = &links[start[v] as usize..start[v + 1] as usize];
+            if !link.is_empty() && !link_is_consistent_fan(link) {
+                self.bad.push(v as u32);
+                self.bad.extend(repeated_link_ends(link).filter(|&a| wanted(a)));
             }
         }
         self.bad.sort_unstable();
@@ -234,12 +260,87 @@ fn repeated_link_ends(link: &[(u32, u32)]) -> impl Iterator<Item = u32> + '_ {
         link[i + 1..].iter().flat_map(move |&(c, d)| [(a == c).then_some(a), (b == d).then_some(b)].into_iter().flatten())
     })
 }
-
 /// Whether one vertex's link, given as directed edges `a -> b` (one per incident triangle
 /// `(v, a, b)`), is one directed simple path or cycle: no link vertex is the tail or the head of
 /// two edges, and following heads to tails from the path's start (or any edge of a cycle)
-/// visits every edge. Without allocating (links are short: a scan per step).
+/// visits every edge. Without allocating; links of up to [`SHORT_LINK`] edges (nearly all) are
+/// hashed by tail, longer ones by scans.
 fn link_is_consistent_fan(link: &[(u32, u32)]) -> bool {
+    if link.len() <= SHORT_LINK {
+        short_link_is_consistent_fan(link)
+    } else {
+        long_link_is_consistent_fan(link)
+    }
+}
+
+/// Links up to this many edges take the hashed test.
+const SHORT_LINK: usize = 16;
+
+/// [`link_is_consistent_fan`] for at most [`SHORT_LINK`] edges, in O(edges): the edges are
+/// hashed by tail (a repeated tail fails), each edge's successor (the edge whose tail is its
+/// head) is looked up, an edge with two predecessors fails (a repeated head), and the walk
+/// along successors from the path's start (or any edge of a cycle) must visit every edge. A
+/// repeated head left (two path ends alike) leaves more than one path start, so the walk cannot
+/// cover every edge.
+fn short_link_is_consistent_fan(link: &[(u32, u32)]) -> bool {
+    const NONE: u8 = u8::MAX;
+    const SLOTS: usize = 2 * SHORT_LINK;
+    let k = link.len();
+    if k == 0 {
+        return true;
+    }
+    // Open addressing by tail: slot -> edge index + 1 (0: empty).
+    let mut by_tail = [0u8; SLOTS];
+    let home = |v: u32| (v.wrapping_mul(0x9E37_79B1) >> 27) as usize % SLOTS;
+    for (i, &(a, _)) in link.iter().enumerate() {
+        let mut h = home(a);
+        while by_tail[h] != 0 {
+            if link[by_tail[h] as usize - 1].0 == a {
+                return false;
+            }
+            h = (h + 1) % SLOTS;
+        }
+        by_tail[h] = i as u8 + 1;
+    }
+    let edge_from = |v: u32| {
+        let mut h = home(v);
+        while by_tail[h] != 0 {
+            let e = by_tail[h] as usize - 1;
+            if link[e].0 == v {
+                return Some(e);
+            }
+            h = (h + 1) % SLOTS;
+        }
+        None
+    };
+    let mut next = [NONE; SHORT_LINK];
+    let mut followed = 0u32;
+    for (i, &(_, b)) in link.iter().enumerate() {
+        if let Some(j) = edge_from(b) {
+            if followed >> j & 1 == 1 {
+                return false;
+            }
+            followed |= 1 << j;
+            next[i] = j as u8;
+        }
+    }
+    // Tails no edge leads to start paths; with one (or none: a cycle) the walk from it must
+    // visit every edge.
+    let starts = !followed & ((1u32 << k) - 1);
+    let first = if starts == 0 { 0 } else { starts.trailing_zeros() as usize };
+    let (mut at, mut visited) = (first, 1);
+    while next[at] != NONE && visited <= k {
+        at = next[at] as usize;
+        if at == first {
+            break;
+        }
+        visited += 1;
+    }
+    visited == k
+}
+
+/// [`link_is_consistent_fan`] by scans, for long links.
+fn long_link_is_consistent_fan(link: &[(u32, u32)]) -> bool {
     if repeated_link_ends(link).next().is_some() {
         return false;
     }
@@ -357,5 +458,43 @@ mod tests {
         fin.positions.push(Vec3::new(0.5, -1.0, 0.0));
         fin.triangles.push([0, 4, 1]);
         assert!(manifold_defects(&fin).starts_with(&[0, 1]));
+    }
+
+    #[test]
+    fn short_and_long_link_tests_agree() {
+        // Every link of up to five edges over four link vertices (self-loops included), and
+        // random longer ones: the bit-mask test decides as the scans do.
+        let mut checked = [0usize; 2];
+        let mut check = |link: &[(u32, u32)]| {
+            let expected = long_link_is_consistent_fan(link);
+            assert_eq!(short_link_is_consistent_fan(link), expected, "{link:?}");
+            checked[usize::from(expected)] += 1;
+        };
+        for len in 0..=5u32 {
+            for code in 0..16u32.pow(len) {
+                let link: Vec<(u32, u32)> = (0..len).map(|i| code / 16u32.pow(i) % 16).map(|e| (e / 4, e % 4)).collect();
+                check(&link);
+            }
+        }
+        let mut rng = crate::random::Random::new(7);
+        for _ in 0..20_000 {
+            let len = 1 + rng.next_u64() as usize % SHORT_LINK;
+            let alphabet = len as u64 + 1 + rng.next_u64() % 3;
+            let mut link: Vec<(u32, u32)> = (0..len as u32).map(|i| (i, (i + 1) % len as u32)).collect();
+            // A ring or path, then a few random changes.
+            if rng.next_u64() % 2 == 0 {
+                link.pop();
+            }
+            for _ in 0..rng.next_u64() % 3 {
+                let k = rng.next_u64() as usize % link.len().max(1);
+                if let Some(e) = link.get_mut(k) {
+                    *e = ((rng.next_u64() % alphabet) as u32, (rng.next_u64() % alphabet) as u32);
+                }
+            }
+            let shift = rng.next_u64() as usize % link.len().max(1);
+            link.rotate_left(shift);
+            check(&link);
+        }
+        assert!(checked[0] > 1000 && checked[1] > 1000, "both answers are exercised: {checked:?}");
     }
 }

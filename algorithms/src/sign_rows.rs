@@ -175,6 +175,29 @@ impl GridSigns {
         (own[w] ^ shifted) & valid
     }
 
+    /// [`GridSigns::changes_toward`] for each of `offsets`, reading the row's own word and the
+    /// valid ranges once.
+    #[inline]
+    pub fn changes_toward_each<const N: usize>(&self, y: usize, z: usize, offsets: &[[isize; 3]; N], w: usize) -> [u64; N] {
+        let [nx, ny, nz] = self.dims;
+        let own = self.bits(y, z)[w];
+        // Samples whose neighbour at x offset -1, 0, +1 lies inside the row.
+        let valid = [range_mask(w, 1, nx - 1), range_mask(w, 0, nx - 1), if nx < 2 { 0 } else { range_mask(w, 0, nx - 2) }];
+        offsets.map(|o| {
+            let (ry, rz) = (y as isize + o[1], z as isize + o[2]);
+            if ry < 0 || rz < 0 || ry as usize >= ny || rz as usize >= nz {
+                return 0;
+            }
+            let other = self.bits(ry as usize, rz as usize);
+            let shifted = match o[0] {
+                1 => next_bits(other, w),
+                -1 => other[w] << 1 | if w > 0 { other[w - 1] >> 63 } else { 0 },
+                _ => other[w],
+            };
+            (own ^ shifted) & valid[(o[0] + 1).clamp(0, 2) as usize]
+        })
+    }
+
     /// Whether these are the signs of a grid of `dims` samples (classified, not empty).
     pub fn holds(&self, dims: [usize; 3]) -> bool {
         self.dims == dims && !self.bits.is_empty()
@@ -429,6 +452,40 @@ mod tests {
             for_each_bit(0, nx - 2, |w| first[w] ^ next_bits(first, w), |x| crossings.push(x));
             let expected: Vec<usize> = (0..nx - 1).filter(|&x| inside(x, 0, 0) != inside(x + 1, 0, 0)).collect();
             assert_eq!(crossings, expected, "nx {nx}");
+        }
+    }
+
+    #[test]
+    fn grid_sign_changes_toward_each_neighbour_match_the_values() {
+        // Every sample of small grids (rows straddling word boundaries) against its 26
+        // neighbours: a change where the neighbour exists and has the other sign.
+        let offsets: [[isize; 3]; 26] = std::array::from_fn(|k| {
+            let k = if k >= 13 { k + 1 } else { k } as isize;
+            [k % 3 - 1, k / 3 % 3 - 1, k / 9 - 1]
+        });
+        for dims in [[1usize, 2, 2], [2, 3, 2], [63, 2, 3], [64, 3, 2], [65, 2, 2], [130, 2, 2]] {
+            let [nx, ny, nz] = dims;
+            let values: Vec<f32> = (0..nx * ny * nz)
+                .map(|i| ((i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40) as f32 / 16_777_216.0 - 0.5)
+                .collect();
+            let mut signs = GridSigns::default();
+            signs.classify(&values, dims, 0.0);
+            let inside = |x: isize, y: isize, z: isize| values[x as usize + nx * (y as usize + ny * z as usize)] < 0.0;
+            for (y, z) in (0..ny).flat_map(|y| (0..nz).map(move |z| (y, z))) {
+                for w in 0..nx.div_ceil(64) {
+                    let each = signs.changes_toward_each(y, z, &offsets, w);
+                    for (o, &got) in offsets.iter().zip(&each) {
+                        assert_eq!(got, signs.changes_toward(y, z, *o, w), "{dims:?} {o:?}");
+                        for x in 64 * w..(64 * w + 64).min(nx) {
+                            let (p, q) =
+                                ([x as isize, y as isize, z as isize], [x as isize + o[0], y as isize + o[1], z as isize + o[2]]);
+                            let exists = (0..3).all(|a| (0..dims[a] as isize).contains(&q[a]));
+                            let change = exists && inside(p[0], p[1], p[2]) != inside(q[0], q[1], q[2]);
+                            assert_eq!(got >> (x - 64 * w) & 1 == 1, change, "{dims:?} {o:?} x {x}");
+                        }
+                    }
+                }
+            }
         }
     }
 

@@ -48,7 +48,7 @@ use crate::lattice::Lattice;
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
 use crate::slabs::ScratchPool;
-use crate::tetrahedral::{extract_tetrahedral, NoClustering, TetScratch};
+use crate::tetrahedral::{compute_normals, extract_tetrahedral, NoClustering, TetScratch};
 
 /// One line for listings.
 pub const DESCRIPTION: &str =
@@ -99,6 +99,7 @@ impl Extractor for MarchingTetrahedra {
     fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
         let mut scratch = self.scratch.take();
         let result = extract_tetrahedral(samples, &NoClustering, &mut scratch, out);
+        compute_normals(out);
         if result.is_ok() && out.origins.wanted && matches!(samples.lattice(), Lattice::Cubic(_)) {
             scratch.fill_origins(samples.grid(), usize::MAX, &mut out.origins);
         }

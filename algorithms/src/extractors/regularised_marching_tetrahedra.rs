@@ -78,8 +78,8 @@ use crate::options::{OptionError, Options};
 use crate::samples::Samples;
 use crate::slabs::ScratchPool;
 use crate::tetrahedral::{
-    extract_tetrahedral, finish_repair, unmerge_and_regenerate, Clustering, Islands, NoClustering, Star, TetScratch, TetTopology,
-    DIRECTIONS,
+    compute_normals, extract_tetrahedral, finish_repair, unmerge_and_regenerate, Clustering, Islands, NoClustering, Star,
+    TetScratch, TetTopology, DIRECTIONS,
 };
 use glam::Vec3;
 use std::time::Instant;
@@ -179,24 +179,37 @@ struct RmtScratch {
     check: ManifoldCheck,
     /// The guard's vertex renumbering.
     renumber: Vec<u32>,
+    /// The guard's vertices to check again after a repair.
+    recheck: Vec<bool>,
+}
+
+/// Flags in `recheck` (one per vertex of a `vertices`-vertex mesh) the vertices a repair
+/// `rewritten`; returns whether every vertex must be checked instead (the repair re-ran the
+/// whole geometry pass).
+fn mark_rewritten(rewritten: Option<&[u32]>, vertices: usize, recheck: &mut Vec<bool>) -> bool {
+    let Some(rewritten) = rewritten else { return true };
+    recheck.clear();
+    recheck.resize(vertices, false);
+    for &v in rewritten {
+        recheck[v as usize] = true;
+    }
+    false
 }
 
 /// The bits of `mask` reachable from `seed` through `adjacency` without leaving `mask`.
 fn island(seed: u16, mask: u16, adjacency: &[u16; DIRECTIONS]) -> u16 {
-    let mut island = seed;
-    loop {
-        let mut grown = island;
-        let mut bits = island;
-        while bits != 0 {
-            let k = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            grown |= adjacency[k] & mask;
+    // Grown from its newest bits only: each bit's neighbours are read once.
+    let (mut island, mut frontier) = (seed, seed);
+    while frontier != 0 {
+        let mut grown = 0;
+        while frontier != 0 {
+            grown |= adjacency[frontier.trailing_zeros() as usize];
+            frontier &= frontier - 1;
         }
-        if grown == island {
-            return island;
-        }
-        island = grown;
+        frontier = grown & mask & !island;
+        island |= frontier;
     }
+    island
 }
 
 /// The islands of `mask` under `adjacency`, each as a bit mask, in order of their lowest bit.
@@ -226,11 +239,10 @@ impl Clustering for RmtOptions {
         }
         let mut slot = [u8::MAX; DIRECTIONS];
         let mut n = 0u8;
-        for found in islands_of(nearby, &topology.adjacency) {
-            for (k, s) in slot.iter_mut().enumerate() {
-                if found >> k & 1 == 1 {
-                    *s = n;
-                }
+        for mut found in islands_of(nearby, &topology.adjacency) {
+            while found != 0 {
+                slot[found.trailing_zeros() as usize] = n;
+                found &= found - 1;
             }
             n += 1;
         }
@@ -303,14 +315,24 @@ impl RegularisedMarchingTetrahedra {
             // The checks and the re-run geometry passes count as geometry time. Only merged
             // vertices can be repaired (unmerging is all the guard does), so only they are
             // checked: the same defects the whole mesh's check lists among them.
+            // After a repair that re-emitted only the tetrahedra around the unmerged samples, only
+            // the vertices of the triangles it removed or made have new links: only they are
+            // checked again (every other vertex passed the last check, or was at fault and is no
+            // longer used).
             let (first_pass, t) = (out.stats.times.geometry, Instant::now());
+            let mut everywhere = true;
             loop {
-                let tet = &s.tet;
-                let defects = s.check.defects_among(&out.surface, |v| tet.is_merged(v));
+                let (tet, recheck) = (&s.tet, &s.recheck);
+                let defects = if everywhere {
+                    s.check.defects_among(&out.surface, |v| tet.is_merged(v))
+                } else {
+                    s.check.defects_among(&out.surface, |v| recheck[v as usize] && tet.is_merged(v))
+                };
                 if defects.is_empty() || !unmerge_and_regenerate(samples, &mut s.tet, out, defects) {
                     break;
                 }
                 repaired = true;
+                everywhere = mark_rewritten(s.tet.rewritten_vertices(), out.surface.positions.len(), &mut s.recheck);
             }
             out.stats.times.geometry = first_pass + t.elapsed();
         }
@@ -320,7 +342,8 @@ impl RegularisedMarchingTetrahedra {
         if repaired {
             finish_repair(out, &mut s.renumber);
         }
-        out.finish_counts(s.tet.bytes() + s.renumber.capacity() * 4);
+        compute_normals(out);
+        out.finish_counts(s.tet.bytes() + s.renumber.capacity() * 4 + s.recheck.capacity());
         Ok(())
     }
 }
@@ -356,5 +379,53 @@ mod tests {
         }
         let polar = Star { nearby: 1 << 4, neighbours: ALL, crossings: [Vec3::ZERO; DIRECTIONS] };
         assert_eq!(RmtOptions::default().islands(&polar, t).count, 1);
+    }
+
+    /// The guard checks again only the vertices a repair rewrote; checking every merged vertex
+    /// each round gives the same mesh, on cubic grids (partial re-passes) and BCC lattices (whole
+    /// ones), on smooth fields and on white noise (where repairs take more than one round).
+    #[test]
+    fn rechecking_only_rewritten_vertices_finds_every_defect() {
+        use crate::tetrahedral::{compute_normals, extract_tetrahedral, finish_repair, unmerge_and_regenerate};
+        let mut cases: Vec<(String, Samples)> = Vec::new();
+        for name in ["thin", "gyroid", "terrain", "asteroid"] {
+            let field = crate::fields::builtin(name, Default::default()).unwrap();
+            let grid = crate::lattice::Grid::covering(&field.domain(), 51).unwrap();
+            for lattice in [Lattice::Cubic(grid), Lattice::Bcc(grid)] {
+                cases.push((format!("{name} {lattice:?}"), Samples::sample(field.clone(), lattice, 0.0).unwrap()));
+            }
+        }
+        let mut rng = crate::random::Random::new(20261129);
+        for seed in 0..6 {
+            let grid = crate::lattice::Grid { origin: Vec3::ZERO, spacing: 1.0, dims: [18, 18, 18] };
+            for lattice in [Lattice::Cubic(grid), Lattice::Bcc(grid)] {
+                let values = (0..lattice.sample_count()).map(|_| rng.unit_f32() - 0.5).collect();
+                cases.push((format!("noise {seed} {lattice:?}"), Samples::from_values(lattice, values, 0.0).unwrap()));
+            }
+        }
+        let mut rounds_seen = [0usize; 3];
+        for (name, samples) in &cases {
+            let mut guarded = Extraction::default();
+            RegularisedMarchingTetrahedra::default().extract(samples, &mut guarded).unwrap();
+            // The guard as it was: every merged vertex checked every round.
+            let (mut scratch, mut out) = (TetScratch::default(), Extraction::default());
+            extract_tetrahedral(samples, &RmtOptions::default(), &mut scratch, &mut out).unwrap();
+            let (mut check, mut rounds) = (ManifoldCheck::default(), 0);
+            loop {
+                let defects = check.defects_among(&out.surface, |v| scratch.is_merged(v)).to_vec();
+                if defects.is_empty() || !unmerge_and_regenerate(samples, &mut scratch, &mut out, &defects) {
+                    break;
+                }
+                rounds += 1;
+            }
+            if rounds > 0 {
+                finish_repair(&mut out, &mut Vec::new());
+            }
+            compute_normals(&mut out);
+            rounds_seen[rounds.min(2)] += 1;
+            assert_eq!(guarded.surface, out.surface, "{name}");
+            assert!(crate::mesh::manifold_defects(&guarded.surface).is_empty(), "{name}");
+        }
+        assert!(rounds_seen[1] > 0 && rounds_seen[2] > 0, "repairs in one and in several rounds: {rounds_seen:?}");
     }
 }

@@ -85,6 +85,10 @@ pub struct TetScratch {
     pub(super) affected: Vec<u32>,
     /// The samples one repair unmerged.
     pub(super) unmerged: Vec<usize>,
+    /// The vertices of the triangles the last partial re-pass removed or made (with repeats);
+    /// valid when `rewritten_valid` (a whole pass leaves it invalid).
+    pub(super) rewritten: Vec<u32>,
+    pub(super) rewritten_valid: bool,
 }
 
 /// What both passes derive from a lattice's shape alone: the grids' index layout, the rows a
@@ -131,6 +135,7 @@ impl TetScratch {
             + self.next_triangles.capacity() * 12
             + self.affected.capacity() * 4
             + self.unmerged.capacity() * 8
+            + self.rewritten.capacity() * 4
     }
 
     /// Fills `origins` with each vertex's owning sample and the lowest direction of its crossings
@@ -147,6 +152,13 @@ impl TetScratch {
     /// Whether vertex `v` merged two or more crossings (only those can be unmerged).
     pub fn is_merged(&self, v: u32) -> bool {
         self.owner.get(v as usize).is_some_and(|&(_, members, _)| members >= 2)
+    }
+
+    /// The vertices whose triangles the last repair's re-pass changed (removed or made, with
+    /// repeats), or `None` when it ran the whole geometry pass (BCC lattices): elsewhere every
+    /// vertex's triangles are as before the repair.
+    pub fn rewritten_vertices(&self) -> Option<&[u32]> {
+        self.rewritten_valid.then_some(&self.rewritten[..])
     }
 
     /// Samples currently forbidden to merge.
@@ -391,17 +403,21 @@ impl VertexPass<'_> {
                         Some((lo.saturating_sub(1), (hi + 1).min(dx - 1)))
                     }
                 };
-                let candidates = |w: usize| match (self.signs, span_xs) {
-                    (Some(signs), _) => sample_offsets.iter().fold(0, |m, &o| m | signs.changes_toward(y, z, o, w)),
-                    (None, Some((lo, hi))) => range_mask(w, lo, hi),
-                    (None, None) => 0,
-                };
                 let row_interior = (1..dy.saturating_sub(1)).contains(&y) && (1..dz.saturating_sub(1)).contains(&z);
                 let row_same = part.start + dx * (y + dy * z);
                 let row_cross = part.cross_start + part.cross_dims[0] * (y + part.cross_dims[1] * z);
-                for (w, mut m) in (0..dx.div_ceil(64)).map(|w| (w, candidates(w))) {
+                for w in 0..dx.div_ceil(64) {
+                    // Cubic grid: per direction, the samples of the word whose neighbour that way
+                    // has the other sign (none where it lies outside the grid).
+                    let toward = self.signs.map(|signs| signs.changes_toward_each(y, z, &sample_offsets, w));
+                    let mut m = match (toward, span_xs) {
+                        (Some(toward), _) => toward.iter().fold(0, |m, &c| m | c),
+                        (None, Some((lo, hi))) => range_mask(w, lo, hi),
+                        (None, None) => 0,
+                    };
                     while m != 0 {
-                        let x = 64 * w + m.trailing_zeros() as usize;
+                        let bit = m.trailing_zeros();
+                        let x = 64 * w + bit as usize;
                         m &= m - 1;
                         let i = row_same + x;
                         let vi = values[i];
@@ -419,7 +435,24 @@ impl VertexPass<'_> {
                         };
                         // First the flags only; positions for the rare samples that own a crossing.
                         let (mut nearby, mut neighbours, mut changes) = (0u16, 0u16, 0u16);
-                        if interior {
+                        if let Some(toward) = &toward {
+                            // The sign changes come from the sign bits; only the edges that change
+                            // are read (a neighbour that exists is at the same index offset on
+                            // the grid's boundary as inside it).
+                            changes = toward.iter().enumerate().fold(0, |c, (k, &t)| c | ((t >> bit) as u16 & 1) << k);
+                            let mut bits = changes;
+                            while bits != 0 {
+                                let k = bits.trailing_zeros() as usize;
+                                bits &= bits - 1;
+                                let j = (i as isize + part.offsets[k].1) as usize;
+                                nearby |= u16::from(owns_branchless(i, vi, j, values[j], iso)) << k;
+                            }
+                            neighbours = if interior || nearby == 0 {
+                                (1 << DIRECTIONS) - 1
+                            } else {
+                                (0..DIRECTIONS).fold(0, |n, k| n | u16::from(neighbour(k).is_some()) << k)
+                            };
+                        } else if interior {
                             // No branch on the signs: at surface samples they are unpredictable.
                             neighbours = (1 << DIRECTIONS) - 1;
                             let from = [i, row_cross + x];
@@ -500,7 +533,8 @@ impl VertexPass<'_> {
 }
 
 /// Marching tetrahedra on `samples` (BCC lattice: [`TetKind::Bcc`]; cubic grid: [`TetKind::Kuhn`])
-/// with the given clustering, into `out`. Returns the geometry pass counts.
+/// with the given clustering, into `out`, without normals ([`compute_normals`]). Returns the
+/// geometry pass counts.
 pub fn extract_tetrahedral(
     samples: &Samples,
     clustering: &dyn Clustering,
@@ -634,9 +668,13 @@ pub fn extract_tetrahedral(
         }
     }
     out.stats.times.vertex = t.elapsed();
-    let counts = geometry_pass(samples, scratch, out);
+    Ok(geometry_pass(samples, scratch, out))
+}
+
+/// The area-weighted vertex normals of `out`'s surface (section 3.1.2), timed as its normals
+/// stage. Run by the extractors once their triangles are final.
+pub fn compute_normals(out: &mut Extraction) {
     let t = Instant::now();
     out.surface.compute_face_weighted_normals();
     out.stats.times.normals = t.elapsed();
-    Ok(counts)
 }

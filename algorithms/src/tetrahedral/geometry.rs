@@ -49,12 +49,16 @@ pub fn regenerate_anchors(samples: &Samples, scratch: &mut TetScratch, out: &mut
 /// elsewhere, over the anchors `only` (sorted flat indices).
 fn run_geometry(samples: &Samples, scratch: &mut TetScratch, out: &mut Extraction, only: Option<&[u32]>) -> TetCounts {
     let (mut anchors, mut next) = (std::mem::take(&mut scratch.anchors), std::mem::take(&mut scratch.next_triangles));
-    let counts = geometry_with(samples, scratch, out, only, &mut anchors, &mut next);
+    let mut rewritten = std::mem::take(&mut scratch.rewritten);
+    rewritten.clear();
+    let counts = geometry_with(samples, scratch, out, only, &mut anchors, &mut next, &mut rewritten);
     (scratch.anchors, scratch.next_triangles, scratch.anchors_valid) = (anchors, next, true);
+    (scratch.rewritten, scratch.rewritten_valid) = (rewritten, only.is_some());
     counts
 }
 
-/// [`run_geometry`] with the anchors' record and the spare triangle buffer held apart.
+/// [`run_geometry`] with the anchors' record, the spare triangle buffer and the list of
+/// rewritten vertices (filled by a partial pass) held apart.
 fn geometry_with(
     samples: &Samples,
     scratch: &TetScratch,
@@ -62,6 +66,7 @@ fn geometry_with(
     only: Option<&[u32]>,
     anchors: &mut Vec<(u32, u32)>,
     next: &mut Vec<[u32; 3]>,
+    rewritten: &mut Vec<u32>,
 ) -> TetCounts {
     let lattice = *samples.lattice();
     let topo = topology(TetKind::of(&lattice));
@@ -218,6 +223,8 @@ fn geometry_with(
                     // Same tetrahedra and cases: every triangle not emitted now that was before
                     // is one more discarded, and the other way round.
                     anchor(x, y, z, next, &mut TetCounts::default());
+                    let made = &next[anchors[k].1 as usize..];
+                    rewritten.extend(triangles[first as usize..end].iter().chain(made).flatten());
                     let (before, now) = (end - first as usize, next.len() - anchors[k].1 as usize);
                     counts.discarded = (counts.discarded + before).saturating_sub(now);
                 } else {

@@ -52,10 +52,9 @@ pub fn unmerge_and_regenerate(samples: &Samples, scratch: &mut TetScratch, out: 
     changed
 }
 
-/// After repairs: drops vertices no triangle uses (renumbering the rest in order) and
-/// recomputes the normals. `used` is a buffer for the renumbering, kept by the caller.
+/// After repairs: drops vertices no triangle uses (renumbering the rest in order). `used` is a
+/// buffer for the renumbering, kept by the caller. Normals come after ([`compute_normals`]).
 pub fn finish_repair(out: &mut Extraction, used: &mut Vec<u32>) {
-    let t = Instant::now();
     let mesh = &mut out.surface;
     used.clear();
     used.resize(mesh.positions.len(), u32::MAX);
@@ -85,8 +84,6 @@ pub fn finish_repair(out: &mut Extraction, used: &mut Vec<u32>) {
     for t in &mut mesh.triangles {
         *t = t.map(|v| used[v as usize]);
     }
-    mesh.compute_face_weighted_normals();
-    out.stats.times.normals = t.elapsed();
 }
 
 #[cfg(test)]

@@ -183,10 +183,11 @@ impl GridSigns {
         let own = self.bits(y, z)[w];
         // Samples whose neighbour at x offset -1, 0, +1 lies inside the row.
         let valid = [range_mask(w, 1, nx - 1), range_mask(w, 0, nx - 1), if nx < 2 { 0 } else { range_mask(w, 0, nx - 2) }];
-        offsets.map(|o| {
+        let mut changes = [0u64; N];
+        for (c, o) in changes.iter_mut().zip(offsets) {
             let (ry, rz) = (y as isize + o[1], z as isize + o[2]);
             if ry < 0 || rz < 0 || ry as usize >= ny || rz as usize >= nz {
-                return 0;
+                continue;
             }
             let other = self.bits(ry as usize, rz as usize);
             let shifted = match o[0] {
@@ -194,8 +195,9 @@ impl GridSigns {
                 -1 => other[w] << 1 | if w > 0 { other[w - 1] >> 63 } else { 0 },
                 _ => other[w],
             };
-            (own ^ shifted) & valid[(o[0] + 1).clamp(0, 2) as usize]
-        })
+            *c = (own ^ shifted) & valid[(o[0] + 1).clamp(0, 2) as usize];
+        }
+        changes
     }
 
     /// Whether these are the signs of a grid of `dims` samples (classified, not empty).

@@ -207,30 +207,32 @@ fn geometry_with(
     let mut triangles = std::mem::take(&mut out.surface.triangles);
     match only {
         Some(only) => {
-            // Re-emit the anchors in `only`, copy every other anchor's triangles.
+            // Re-emit the anchors in `only`; copy the runs of triangles between them whole,
+            // shifting the other anchors' first triangles by what the re-emitted ones changed.
             counts.active = out.stats.active_cells;
             counts.discarded = out.stats.discarded_triangles;
             next.clear();
-            let mut wanted = only.iter().peekable();
-            for k in 0..anchors.len() {
-                let (i, first) = anchors[k];
-                let end = anchors.get(k + 1).map_or(triangles.len(), |a| a.1 as usize);
+            let (mut copied, mut from) = (0usize, 0usize);
+            let shift = |run: &mut [(u32, u32)], by: isize| run.iter_mut().for_each(|a| a.1 = (a.1 as isize + by) as u32);
+            for &i in only {
+                // Cubes in `only` without surface have no triangles, before or now.
+                let Ok(k) = anchors[from..].binary_search_by_key(&i, |a| a.0).map(|k| from + k) else { continue };
+                let (first, end) = (anchors[k].1 as usize, anchors.get(k + 1).map_or(triangles.len(), |a| a.1 as usize));
+                shift(&mut anchors[from..k], next.len() as isize - copied as isize);
+                next.extend_from_slice(&triangles[copied..first]);
                 anchors[k].1 = next.len() as u32;
-                while wanted.next_if(|&&a| a < i).is_some() {}
-                if wanted.next_if(|&&a| a == i).is_some() {
-                    let (ii, g) = (i as usize - anchor_part.start, [dx, dy]);
-                    let (x, y, z) = (ii % g[0], (ii / g[0]) % g[1], ii / (g[0] * g[1]));
-                    // Same tetrahedra and cases: every triangle not emitted now that was before
-                    // is one more discarded, and the other way round.
-                    anchor(x, y, z, next, &mut TetCounts::default());
-                    let made = &next[anchors[k].1 as usize..];
-                    rewritten.extend(triangles[first as usize..end].iter().chain(made).flatten());
-                    let (before, now) = (end - first as usize, next.len() - anchors[k].1 as usize);
-                    counts.discarded = (counts.discarded + before).saturating_sub(now);
-                } else {
-                    next.extend_from_slice(&triangles[first as usize..end]);
-                }
+                let (ii, g) = (i as usize - anchor_part.start, [dx, dy]);
+                let (x, y, z) = (ii % g[0], (ii / g[0]) % g[1], ii / (g[0] * g[1]));
+                // Same tetrahedra and cases: every triangle not emitted now that was before is
+                // one more discarded, and the other way round.
+                anchor(x, y, z, next, &mut TetCounts::default());
+                let made = &next[anchors[k].1 as usize..];
+                rewritten.extend(triangles[first..end].iter().chain(made).flatten());
+                counts.discarded = (counts.discarded + (end - first)).saturating_sub(made.len());
+                (copied, from) = (end, k + 1);
             }
+            shift(&mut anchors[from..], next.len() as isize - copied as isize);
+            next.extend_from_slice(&triangles[copied..]);
             std::mem::swap(&mut triangles, next);
         }
         None => {

@@ -297,6 +297,15 @@ impl Sink for TriMesh {
     }
 }
 
+/// Normalises sample-gradient normals after a sweep made them: apart from the branchy cell
+/// loop, the square roots and divisions of successive vertices overlap (the same values as
+/// normalising each as it is made).
+fn normalize_all(normals: &mut [Vec3]) {
+    for n in normals {
+        *n = n.normalize_or_zero();
+    }
+}
+
 /// One slab's pieces of the output, sized by [`Ctx::count`]; its vertices are numbered from
 /// `base`.
 struct Pieces<'a> {
@@ -386,7 +395,8 @@ impl Ctx<'_> {
             b[axis] += 1;
             let ga = self.sample_gradient(a[0], a[1], a[2]);
             let gb = self.sample_gradient(b[0], b[1], b[2]);
-            ga.lerp(gb, t).normalize_or_zero()
+            // Normalised after the sweep ([`normalize_all`]).
+            ga.lerp(gb, t)
         });
         sink.vertex(p, normal)
     }
@@ -527,7 +537,7 @@ impl Ctx<'_> {
                 }
             }
             let local = sum / n;
-            let normal = self.sample_normals.then(|| trilinear_gradient(&values, local).normalize_or_zero());
+            let normal = self.sample_normals.then(|| trilinear_gradient(&values, local));
             ids[12 + piece as usize] =
                 sink.vertex(self.grid.position(cell[0], cell[1], cell[2]) + local * self.grid.spacing, normal);
         }
@@ -718,6 +728,7 @@ impl Extractor for MarchingCubes {
                 reserve_for(&mut out.surface, vertices, sample_normals);
             }
             ctx.slab(0, slab_cells, Bottom::Make, s, &mut out.surface);
+            normalize_all(&mut out.surface.normals);
             if out.surface.positions.len() >= EXTERN as usize {
                 return Err(ExtractError::TooLarge { algorithm: self.name(), vertices: out.surface.positions.len() });
             }
@@ -730,6 +741,7 @@ impl Extractor for MarchingCubes {
                 let mut mesh = std::mem::take(&mut s.mesh);
                 let bottom = if t == 0 { Bottom::Make } else { Bottom::Tagged };
                 ctx.slab(t * slab_cells / tasks, (t + 1) * slab_cells / tasks, bottom, s, &mut mesh);
+                normalize_all(&mut mesh.normals);
                 s.mesh = mesh;
             });
             let t_join = Instant::now();
@@ -777,6 +789,7 @@ impl Extractor for MarchingCubes {
                 let bottom =
                     if t == 0 { Bottom::Make } else { Bottom::Numbered((offsets[t - 1] + counts[t - 1].0.before_top) as u32) };
                 ctx.slab(z0, z1, bottom, s, &mut sink);
+                normalize_all(sink.normals);
                 s.vertex_time += counts[t].1;
                 // The count and the sweep read the same sign bits, so they agree; a piece left
                 // partly unwritten would be a silently wrong mesh, so this is checked always.

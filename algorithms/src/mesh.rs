@@ -90,9 +90,10 @@ fn accumulate_face_normals(positions: &[Vec3], triangles: &[[u32; 3]], acc: &mut
 
 /// The vertices where `mesh` is not a consistently oriented 2-manifold (with boundary): ends of
 /// edges with more than two triangles or two triangles wound the same way, and vertices whose
-/// triangles form more than one fan. Sorted, without repeats. O(triangles) with no hashing or
-/// sorting of edges: each vertex's link (the opposite edges of its triangles, directed by the
-/// winding) must be one simple path or cycle. Used by extractors that repair their own output
+/// triangles form more than one fan. Sorted, without repeats. O(triangles) with no global
+/// hashing or sorting of edges: each vertex's link (the opposite edges of its triangles, directed
+/// by the winding, gathered by one counting sort) must be one simple path or cycle, checked in
+/// O(link) with a small table keyed by tail. Used by extractors that repair their own output
 /// (regularised marching tetrahedra's guard); the metrics crate lists offenders for reports.
 pub fn manifold_defects(mesh: &TriMesh) -> Vec<u32> {
     ManifoldCheck::default().defects_among(mesh, |_| true).to_vec()

@@ -41,7 +41,9 @@
 //!   gives their crossings one vertex each and re-emits the triangles of the tetrahedra around
 //!   those samples (on cubic grids only those: [`crate::tetrahedral::regenerate_anchors`]; on the
 //!   BCC lattice the whole geometry pass); plain marching tetrahedra is manifold, so this ends,
-//!   usually after one or two rounds. Its cost is in the geometry time.
+//!   usually after one or two rounds. After a repair only the vertices of the triangles it
+//!   removed or made are checked again (elsewhere every link is as the last check saw it). Its
+//!   cost is in the geometry time.
 //!
 //! **Guarantees.** Every crossing belongs to exactly one sample, so merging is order independent
 //! and O(samples). With the guard, the output is as manifold as plain marching tetrahedra (closed

@@ -41,7 +41,8 @@
 //! paper skips a cube when its centre has no flags, which misses tetrahedra whose crossings are
 //! all owned by corners; this test cannot). On a cubic grid both passes read the samples' signs
 //! packed 64 to a word ([`crate::sign_rows::GridSigns`]): the vertex pass visits only samples with
-//! a sign change on one of their 14 edges, the geometry pass only cubes whose corners disagree.
+//! a sign change on one of their 14 edges and reads the values across those edges only (which
+//! edges change comes from the bits), the geometry pass only cubes whose corners disagree.
 //! The per-sample bookkeeping ([`TetScratch`]) is kept by the extractors between calls, so
 //! re-meshing a same-sized chunk allocates nothing (`tests/tests/allocations.rs`).
 //!

@@ -259,7 +259,7 @@ impl TriangleBvh {
     /// the kernel `k(y) = y / |y|^3` of the solid angle, whose Jacobian has norm `2 / |y|^3`: the
     /// solid angle of triangles of total area `A`, all at least `D > 0` from the box, moves by at
     /// most `2 A R / D^3` across a box of half-diagonal `R`. A node is taken whole when its term
-    /// is at most [`NODE_ERROR_SHARE`] of the budget, and opened otherwise; `D` is the distance
+    /// is at most `NODE_ERROR_SHARE` of the budget, and opened otherwise; `D` is the distance
     /// between bounding boxes, or for a single triangle the larger of that and its distance from
     /// the box's centre less `R`.
     ///

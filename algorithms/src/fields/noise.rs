@@ -59,7 +59,7 @@ pub const NOISE_BOUND: f32 = 1.05;
 /// The field is `max(ground, min(cave, floor))` with `ground = y - 0.12 h(x, z) + 0.05 w(x, y, z)`,
 /// `cave = 0.1 (c(x, y, z) - 0.35)` and `floor = y + 0.2`, for fractal noises `h`, `w`, `c`.
 /// Blocks and grids sample the height `h` once per column ([`Field::sample_block`]), and streaming
-/// skips blocks whose column heights and [`NOISE_BOUND`] prove them above the ground or below it
+/// skips blocks whose column heights and `NOISE_BOUND` prove them above the ground or below it
 /// and the floor ([`Field::block_side`]).
 pub struct Terrain {
     height: FastNoiseLite,

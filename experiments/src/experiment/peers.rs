@@ -83,6 +83,49 @@ struct Data {
     /// Peer package versions, or why a peer was skipped.
     versions: BTreeMap<String, String>,
     skipped: Vec<String>,
+    /// How long our two-thread pool's second thread takes to start work after idling.
+    #[serde(default)]
+    wake: Vec<Wake>,
+}
+
+/// Our two-thread pool's second thread asked for work after the experiment's thread ran alone
+/// (and the second slept) for `idle_ms`: when it started, microseconds after the request.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Wake {
+    idle_ms: u64,
+    start_us: Spread,
+}
+
+/// Idle times before the request, ms, and requests per idle time.
+const WAKE_IDLE_MS: [u64; 4] = [0, 1, 5, 20];
+const WAKE_REQUESTS: usize = 9;
+
+/// When our shared two-thread pool's second thread starts a job the experiment's thread hands it
+/// after idling `idle`, microseconds, per request: the experiment's thread spins until the job
+/// has started (at most 50 ms).
+fn second_thread_start(idle: Duration) -> Result<Vec<f64>, ExperimentError> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let pool = crate::peers::ours::shared_pool(TWO).map_err(|e| ExperimentError::Figure(format!("thread pool: {e}")))?;
+    let mut starts = Vec::with_capacity(WAKE_REQUESTS);
+    for _ in 0..WAKE_REQUESTS {
+        std::thread::sleep(idle);
+        let started = AtomicBool::new(false);
+        let asked = Instant::now();
+        let mut waited = Duration::ZERO;
+        pool.install(|| {
+            rayon::join(
+                || {
+                    while !started.load(Ordering::Acquire) && asked.elapsed() < Duration::from_millis(50) {
+                        std::hint::spin_loop();
+                    }
+                    waited = asked.elapsed();
+                },
+                || started.store(true, Ordering::Release),
+            )
+        });
+        starts.push(waited.as_secs_f64() * 1e6);
+    }
+    Ok(starts)
 }
 
 /// One implementation as the run alternates them: its label, the peer, its threads, and whether
@@ -182,6 +225,11 @@ impl Experiment for Peers {
                 None
             }
         };
+        // Before the grids, on the pool our two-thread runs use.
+        let wake = WAKE_IDLE_MS
+            .iter()
+            .map(|&ms| Ok(Wake { idle_ms: ms, start_us: Spread::of(second_thread_start(Duration::from_millis(ms))?) }))
+            .collect::<Result<Vec<_>, ExperimentError>>()?;
         let mut entries = entries(server.as_ref());
         let tmp = std::env::temp_dir().join(format!("isolab-peers-{}", std::process::id()));
         std::fs::create_dir_all(&tmp).map_err(|source| crate::io::IoError::Write { path: tmp.clone(), source })?;
@@ -270,7 +318,7 @@ impl Experiment for Peers {
         drop(server);
         let _ = std::fs::remove_dir_all(&tmp);
         bar.finish();
-        let data = Data { repeats, timings, floors, versions, skipped };
+        let data = Data { repeats, timings, floors, versions, skipped, wake };
         charts(&ctx.figure_dir(NAME)?, &data)?;
         ctx.write_data(NAME, &data)
     }
@@ -455,6 +503,24 @@ fn section(data: &Data) -> String {
     md.push_str(&ratio_table(data, &grids, Protocol::SteadyState, &one_shot_ratios()[..4]));
     md.push_str("\n### The second thread (one-shot: one-thread time / two-thread time)\n\n");
     md.push_str(&ratio_table(data, &grids, Protocol::OneShot, &scaling_columns()));
+    if !data.wake.is_empty() {
+        md.push_str(
+            "\nOn this machine a thread that has slept for a few milliseconds can take milliseconds to start again (an idle \
+             virtual CPU wakes late), and in this run other implementations run between our calls, so our pool's second \
+             thread has usually slept. Measured before the grids: the experiment's thread idles, then hands the second thread a \
+             job and spins until it starts (µs: median (fastest-slowest) of the requests). A one-shot extraction shorter than \
+             that delay is over before the second thread helps.\n\n",
+        );
+        let rows: Vec<Vec<String>> = data
+            .wake
+            .iter()
+            .map(|w| {
+                let s = &w.start_us;
+                vec![format!("{}", w.idle_ms), format!("{:.0} ({:.0}-{:.0})", s.median, s.min, s.max)]
+            })
+            .collect();
+        md.push_str(&markdown_table(&["idle before the request (ms)", "second thread starts after (µs)"], &rows));
+    }
     md.push_str("\n### Times, one-shot (ms: median (fastest-slowest)) and the memory floor\n\nThe floor is one streaming read of the grid plus one write of marching cubes' output bytes; `× floor` is our two-thread one-shot marching cubes over it. Triangle counts are in `data/peers.json`.\n\n");
     md.push_str(&times_table(data, &grids, Protocol::OneShot, true));
     md.push_str("\n### Times, steady state (ms: median (fastest-slowest))\n\n");

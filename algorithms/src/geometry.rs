@@ -153,6 +153,15 @@ pub fn gather<const N: usize>(values: &[f32], idx: &[usize; N]) -> [f32; N] {
     out
 }
 
+/// Normalises `normals` in place (zero stays zero). Extractors store raw gradients in their
+/// branchy cell loops and normalise them here, in a tight loop where the square roots and
+/// divisions of successive vertices overlap: the same values as normalising each as it is made.
+pub fn normalize_all(normals: &mut [Vec3]) {
+    for n in normals {
+        *n = n.normalize_or_zero();
+    }
+}
+
 /// Gradient of the trilinear interpolant of a cell's corner values `c` (table corner order) at
 /// local coordinates `q` in `[0, 1]^3`.
 pub fn trilinear_gradient(c: &[f32; 8], q: Vec3) -> Vec3 {

@@ -261,6 +261,7 @@ fn repeated_link_ends(link: &[(u32, u32)]) -> impl Iterator<Item = u32> + '_ {
         link[i + 1..].iter().flat_map(move |&(c, d)| [(a == c).then_some(a), (b == d).then_some(b)].into_iter().flatten())
     })
 }
+
 /// Whether one vertex's link, given as directed edges `a -> b` (one per incident triangle
 /// `(v, a, b)`), is one directed simple path or cycle: no link vertex is the tail or the head of
 /// two edges, and following heads to tails from the path's start (or any edge of a cycle)
@@ -464,7 +465,7 @@ mod tests {
     #[test]
     fn short_and_long_link_tests_agree() {
         // Every link of up to five edges over four link vertices (self-loops included), and
-        // random longer ones: the bit-mask test decides as the scans do.
+        // random longer ones: the hashed test decides as the scans do.
         let mut checked = [0usize; 2];
         let mut check = |link: &[(u32, u32)]| {
             let expected = long_link_is_consistent_fan(link);

@@ -161,22 +161,11 @@ impl GridSigns {
     /// sample offset `offset` (x offset -1, 0 or 1); zero where that neighbour is outside the grid.
     #[inline]
     pub fn changes_toward(&self, y: usize, z: usize, offset: [isize; 3], w: usize) -> u64 {
-        let [nx, ny, nz] = self.dims;
-        let (ry, rz) = (y as isize + offset[1], z as isize + offset[2]);
-        if ry < 0 || rz < 0 || ry as usize >= ny || rz as usize >= nz || (offset[0] != 0 && nx < 2) {
-            return 0;
-        }
-        let (own, other) = (self.bits(y, z), self.bits(ry as usize, rz as usize));
-        let (shifted, valid) = match offset[0] {
-            1 => (next_bits(other, w), range_mask(w, 0, nx - 2)),
-            -1 => (other[w] << 1 | if w > 0 { other[w - 1] >> 63 } else { 0 }, range_mask(w, 1, nx - 1)),
-            _ => (other[w], range_mask(w, 0, nx - 1)),
-        };
-        (own[w] ^ shifted) & valid
+        self.changes_toward_each(y, z, &[offset], w)[0]
     }
 
-    /// [`GridSigns::changes_toward`] for each of `offsets`, reading the row's own word and the
-    /// valid ranges once.
+    /// [`GridSigns::changes_toward`] for each of `offsets` (x offsets -1, 0 or 1), reading the
+    /// row's own word and the valid ranges once.
     #[inline]
     pub fn changes_toward_each<const N: usize>(&self, y: usize, z: usize, offsets: &[[isize; 3]; N], w: usize) -> [u64; N] {
         let [nx, ny, nz] = self.dims;

@@ -61,7 +61,7 @@
 //! ```
 
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees};
-use crate::geometry::trilinear_gradient;
+use crate::geometry::{normalize_all, trilinear_gradient};
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
 use crate::samples::Samples;
@@ -294,15 +294,6 @@ impl Sink for TriMesh {
     #[inline(always)]
     fn triangle(&mut self, t: [u32; 3]) {
         self.triangles.push(t);
-    }
-}
-
-/// Normalises sample-gradient normals after a sweep made them: apart from the branchy cell
-/// loop, the square roots and divisions of successive vertices overlap (the same values as
-/// normalising each as it is made).
-fn normalize_all(normals: &mut [Vec3]) {
-    for n in normals {
-        *n = n.normalize_or_zero();
     }
 }
 

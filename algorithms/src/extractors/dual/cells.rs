@@ -150,11 +150,7 @@ impl Ctx<'_> {
                 }
             });
         }
-        // Normalised apart from the branchy cell loop, so that the square roots and divisions
-        // of successive vertices overlap.
-        for n in &mut mesh.normals[first_normal..] {
-            *n = n.normalize_or_zero();
-        }
+        crate::geometry::normalize_all(&mut mesh.normals[first_normal..]);
     }
 
     /// Quads for the crossing edges whose four cells lie in cell layers `z - 1` (`prev`) and `z`

@@ -33,13 +33,18 @@
 //! an integer that changes by one at each crossing, so each grid row's signs come from counting the
 //! triangles it crosses (the classic scanline test of solid voxelizers), decided with exact
 //! orientation tests in the row's plane; only samples whose row touches a projected edge or vertex,
-//! or that lie almost on a crossing, fall back to their own winding number. Distances come from
+//! or that lie almost on a crossing, fall back to their own winding number. An open mesh is closed
+//! by cones over its holes (its boundary found by position, so unwelded seams are not holes); the
+//! rows count the cones' crossings too, and the mesh's winding number is that count less the
+//! cones'. Far from the cones theirs is small by a bound; nearer, a box takes the cones' winding
+//! interval (a few triangles, cheap), and a small box each sample's own cone winding number, so
+//! only samples near the `|w| = 1/2` sheet across a hole need the mesh's. Distances come from
 //! closest-point queries that give up beyond the band, only in boxes that may reach into it. Last,
 //! every bound that ends (or neighbours the end of) a grid edge whose sign changes is made exact:
 //! across a hole the level set is that sheet, which may lie farther than the band from every
 //! triangle.
 
-use crate::bvh::TriangleBvh;
+use crate::bvh::{TriangleBvh, WindingInterval};
 use crate::field::{sample_pointwise, Field, FieldError};
 use crate::geometry::Aabb;
 use crate::lattice::Grid;
@@ -101,7 +106,7 @@ impl MeshField {
                 t.swap(1, 2);
             }
         }
-        let caps = Caps::closing(&soup, triangles, reoriented);
+        let caps = Caps::closing(&soup);
         let bvh = TriangleBvh::new(soup);
         let bounds = bvh.bounds();
         let domain = bounds.expanded(DOMAIN_MARGIN * bounds.longest_side());
@@ -162,8 +167,9 @@ impl MeshField {
         self.band_cells
     }
 
-    /// Whether the mesh is closed: every edge has exactly two triangles, wound opposite ways. Its
-    /// winding number is then an integer off the surface, and grids take their signs from
+    /// Whether the mesh is closed: along every edge (its ends told apart by position, so an
+    /// unwelded seam counts as shared), as many triangles run one way as the other. Its winding
+    /// number is then an integer off the surface, and grids take their signs from
     /// crossings along rows instead of per-sample winding numbers.
     pub fn is_closed(&self) -> bool {
         self.caps.triangles.is_empty()
@@ -202,7 +208,7 @@ impl Field for MeshField {
         out.par_chunks_mut(nx * ny * SLAB_LAYERS).enumerate().for_each(|(k, slab)| {
             let z = k * SLAB_LAYERS..(k * SLAB_LAYERS + SLAB_LAYERS).min(nz);
             let signs = crossing_signs(&self.bvh, &self.caps, grid, z.clone());
-            let fill = BandFill { bvh: &self.bvh, grid, band, first_layer: z.start, signs: &signs };
+            let fill = BandFill { bvh: &self.bvh, caps: &self.caps, grid, band, first_layer: z.start, signs: &signs };
             fill.boxed([0..nx, 0..ny, z], slab);
         });
         self.exact_at_sign_changes(grid, band, out);
@@ -227,6 +233,8 @@ impl Field for MeshField {
 /// Narrow-band sampling of one slab of a grid (see the module doc).
 struct BandFill<'a> {
     bvh: &'a TriangleBvh,
+    /// The caps over the mesh's holes, for the sides of samples near them.
+    caps: &'a Caps,
     grid: &'a Grid,
     /// Distance within which samples are exact.
     band: f32,
@@ -243,9 +251,9 @@ impl BandFill<'_> {
         let region =
             Aabb::new(self.grid.position(x.start, y.start, z.start), self.grid.position(x.end - 1, y.end - 1, z.end - 1));
         let count: usize = ranges.iter().map(|r| r.len()).product();
-        if self.all_sided(&ranges) {
+        if let Some(caps) = self.sided(&ranges, &region) {
             // Every sample's side is known: only distances need the box hierarchy.
-            let side = |i: usize| if self.signs[i] == Side::Inside { -1.0 } else { 1.0 };
+            let side = |i: usize| if is_inside(self.signs[i], caps) { -1.0 } else { 1.0 };
             if count <= SMALLEST_TRIED {
                 return self.fill(&ranges, slab, |i, p| side(i) * self.band_distance(p));
             }
@@ -263,21 +271,61 @@ impl BandFill<'_> {
             Some((inside, far)) if far >= self.band => self.fill(&ranges, slab, |_, _| sign(inside) * far),
             Some((inside, _)) => self.fill(&ranges, slab, |_, p| sign(inside) * self.band_distance(p)),
             None if count <= SMALLEST_TRIED => {
-                self.fill(&ranges, slab, |_, p| sign(winds_inside(self.bvh, p)) * self.band_distance(p));
+                self.fill(&ranges, slab, |i, p| sign(self.side_at(i, p)) * self.band_distance(p));
             }
             None => self.split(ranges, slab),
         }
     }
 
-    /// Whether row crossings gave every sample of the box its side.
-    fn all_sided(&self, [x, y, z]: &[Range<usize>; 3]) -> bool {
+    /// Whether row crossings give every sample of the box (`region`) its side: `Some` with the
+    /// caps' winding interval over the box when some sample is [`Side::NearCaps`] (and the
+    /// interval decides every such sample), `Some(None)` when no sample needs it.
+    fn sided(&self, [x, y, z]: &[Range<usize>; 3], region: &Aabb) -> Option<Option<WindingInterval>> {
         let [nx, ny, _] = self.grid.dims;
-        z.clone().all(|k| {
+        let mut near_caps = false;
+        for k in z.clone() {
+            for j in y.clone() {
+                let row = nx * (j + ny * (k - self.first_layer));
+                for &s in &self.signs[row + x.start..row + x.end] {
+                    match s {
+                        Side::Unknown => return None,
+                        Side::NearCaps(_) => near_caps = true,
+                        Side::Inside | Side::Outside => {}
+                    }
+                }
+            }
+        }
+        if !near_caps {
+            return Some(None);
+        }
+        let caps = self.caps.bvh.as_ref()?.winding_interval(region, CAP_WINDING_BOUND)?;
+        let decided = z.clone().all(|k| {
             y.clone().all(|j| {
                 let row = nx * (j + ny * (k - self.first_layer));
-                self.signs[row + x.start..row + x.end].iter().all(|&s| s != Side::Unknown)
+                self.signs[row + x.start..row + x.end].iter().all(|&s| match s {
+                    Side::NearCaps(n) => side_from_caps(n, caps.centre, caps.error).is_some(),
+                    _ => true,
+                })
             })
-        })
+        });
+        decided.then_some(Some(caps))
+    }
+
+    /// Whether the sample `i` of the slab, at `p`, is inside: as row crossings tell it, from the
+    /// caps' winding number at `p` next to a cap, and from the mesh's own winding number where
+    /// neither decides.
+    fn side_at(&self, i: usize, p: Vec3) -> bool {
+        match self.signs[i] {
+            Side::Inside => true,
+            Side::Outside => false,
+            Side::NearCaps(n) => self
+                .caps
+                .bvh
+                .as_ref()
+                .and_then(|caps| side_from_caps(n, caps.winding_number(p), 0.0))
+                .unwrap_or_else(|| winds_inside(self.bvh, p)),
+            Side::Unknown => winds_inside(self.bvh, p),
+        }
     }
 
     /// Splits the box across its longest axis and fills both halves.
@@ -324,22 +372,53 @@ fn inside(w: &crate::bvh::WindingInterval) -> Option<bool> {
     }
 }
 
+/// Whether a sample whose side [`BandFill::sided`] decided is inside (`caps`: the caps' winding
+/// interval over its box, when the box has [`Side::NearCaps`] samples).
+fn is_inside(side: Side, caps: Option<WindingInterval>) -> bool {
+    match side {
+        Side::Inside => true,
+        Side::NearCaps(n) => caps.and_then(|c| side_from_caps(n, c.centre, c.error)).unwrap_or(false),
+        Side::Outside | Side::Unknown => false,
+    }
+}
+
+/// Whether a sample whose mesh and caps wind `n` times around it (row crossings' count), where
+/// the caps' own winding number is within `error` of `caps`, is inside: the mesh's own winding
+/// number is `n` less the caps', inside where its magnitude is at least 1/2. Decided only when
+/// every value in the interval keeps [`CAP_WINDING_BOUND`] clear of 1/2 (room for the error of
+/// the mesh's fast winding number, which the field's sign follows); `None` otherwise.
+fn side_from_caps(n: i32, caps: f64, error: f64) -> Option<bool> {
+    let (low, high) = (f64::from(n) - caps - error, f64::from(n) - caps + error);
+    let margin = CAP_WINDING_BOUND;
+    if low >= 0.5 + margin || high <= -0.5 - margin {
+        Some(true)
+    } else if low >= -0.5 + margin && high <= 0.5 - margin {
+        Some(false)
+    } else {
+        None
+    }
+}
+
 /// A sample's side, as row crossings tell it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Side {
     Inside,
     Outside,
-    /// The row touches an edge or a vertex of a triangle's projection, a crossing lies within
-    /// [`CROSSING_TOLERANCE`] of the sample, or a cap is near: the sample's side comes from the
-    /// winding number.
+    /// A cap is near (its winding number may exceed [`CAP_WINDING_BOUND`]): mesh and caps wind
+    /// this many times around the sample, and the side comes from the caps' winding number over
+    /// the sample's box ([`side_from_caps`]).
+    NearCaps(i32),
+    /// The row touches an edge or a vertex of a triangle's projection, or a crossing lies within
+    /// [`CROSSING_TOLERANCE`] of the sample: the sample's side comes from the winding number.
     Unknown,
 }
 
 /// How near a crossing (in grid spacings) makes a sample ask its own winding number instead.
 pub const CROSSING_TOLERANCE: f64 = 1e-4;
 
-/// Largest bound on the caps' winding number at a sample whose side row crossings still give:
+/// Largest bound on the caps' winding number at a sample whose side row crossings give alone:
 /// the mesh's winding number is then within this of the crossings' integer, far from 1/2.
+/// Nearer the caps, the caps' winding interval over a box must keep the mesh's this far from 1/2.
 pub const CAP_WINDING_BOUND: f64 = 0.25;
 
 /// Cones closing an open mesh: one per connected piece of its boundary (the edges its triangles
@@ -350,22 +429,31 @@ pub const CAP_WINDING_BOUND: f64 = 0.25;
 struct Caps {
     /// The cones' triangles, wound so that they cancel the mesh's boundary.
     triangles: Vec<[Vec3; 3]>,
+    /// The same triangles in a hierarchy, for their winding interval over a box (none for a
+    /// closed mesh).
+    bvh: Option<TriangleBvh>,
     /// Per cone: its apex, the largest distance from the apex to its rim, and its area.
     cones: Vec<(Vec3, f32, f64)>,
 }
 
 impl Caps {
-    /// The caps of `soup` (the triangles as the field keeps them), from its indexed `triangles`,
-    /// flipped like the soup when `reoriented`.
-    fn closing(soup: &[[Vec3; 3]], triangles: &[[u32; 3]], reoriented: bool) -> Self {
+    /// The caps of `soup` (the triangles as the field keeps them). Corners are told apart by
+    /// position, not by index: a seam whose two sides repeat the same positions under different
+    /// indices (the Utah teapot's patches) cancels like a shared edge, since the winding number
+    /// depends on the geometry alone. Capping such a seam would put a cone through the solid,
+    /// near which every sample needs its own winding number.
+    fn closing(soup: &[[Vec3; 3]]) -> Self {
         let mut net: std::collections::HashMap<(u32, u32), i32> = std::collections::HashMap::new();
-        let mut at: std::collections::HashMap<u32, Vec3> = std::collections::HashMap::new();
-        for (t, tri) in triangles.iter().enumerate() {
-            let [a, b, c] = if reoriented { [tri[0], tri[2], tri[1]] } else { *tri };
-            let corners = soup[t];
-            for (k, &v) in [a, b, c].iter().enumerate() {
-                at.insert(v, corners[k]);
-            }
+        let mut position_ids: std::collections::HashMap<[u32; 3], u32> = std::collections::HashMap::new();
+        let mut at: Vec<Vec3> = Vec::new();
+        for corners in soup {
+            // `+ 0.0` makes -0.0 and 0.0 one position.
+            let [a, b, c] = corners.map(|p| {
+                *position_ids.entry((p + Vec3::ZERO).to_array().map(f32::to_bits)).or_insert_with(|| {
+                    at.push(p);
+                    (at.len() - 1) as u32
+                })
+            });
             for (u, v) in [(a, b), (b, c), (c, a)] {
                 if u != v {
                     *net.entry((u.min(v), u.max(v))).or_default() += if u < v { 1 } else { -1 };
@@ -394,17 +482,18 @@ impl Caps {
         roots.sort_unstable();
         roots.dedup();
         for root in roots {
-            let rim: Vec<Vec3> = ids.iter().filter(|&&v| pieces.find(local(v)) == root).map(|v| at[v]).collect();
+            let rim: Vec<Vec3> = ids.iter().filter(|&&v| pieces.find(local(v)) == root).map(|&v| at[v as usize]).collect();
             let apex = (rim.iter().map(|p| p.as_dvec3()).sum::<glam::DVec3>() / rim.len() as f64).as_vec3();
             let radius = rim.iter().map(|p| p.distance(apex)).fold(0.0, f32::max);
             let mut area = 0.0;
             for &(u, v, n) in edges.iter().filter(|e| pieces.find(local(e.0)) == root) {
-                let t = [apex, at[&v], at[&u]];
+                let t = [apex, at[v as usize], at[u as usize]];
                 area += f64::from(n) * 0.5 * (t[1] - t[0]).as_dvec3().cross((t[2] - t[0]).as_dvec3()).length();
                 caps.triangles.extend(std::iter::repeat_n(t, n as usize));
             }
             caps.cones.push((apex, radius, area));
         }
+        caps.bvh = Some(TriangleBvh::new(caps.triangles.clone()));
         caps
     }
 
@@ -505,8 +594,10 @@ fn crossing_signs(bvh: &TriangleBvh, caps: &Caps, grid: &Grid, layers: Range<usi
                 c += 1;
             }
             let on_a_crossing = c < here.len() && here[c].1 <= x + tolerance;
-            *side = if on_a_crossing || (!caps.cones.is_empty() && caps.winding_bound(p) >= CAP_WINDING_BOUND) {
+            *side = if on_a_crossing {
                 Side::Unknown
+            } else if !caps.cones.is_empty() && caps.winding_bound(p) >= CAP_WINDING_BOUND {
+                Side::NearCaps(winding)
             } else if winding != 0 {
                 Side::Inside
             } else {
@@ -714,7 +805,7 @@ mod tests {
                 let [nx, ny, _] = grid.dims;
                 let p = grid.position(i % nx, i / nx % ny, i / (nx * ny));
                 match side {
-                    Side::Unknown => unsure += 1,
+                    Side::Unknown | Side::NearCaps(_) => unsure += 1,
                     s => {
                         assert_eq!(*s == Side::Inside, winds_inside(f.bvh(), p), "at {p}");
                         known += 1;
@@ -764,6 +855,36 @@ mod tests {
         }
         assert!(bounded > 500, "{bounded}");
         assert!(MeshField::new("octa", &v, &octahedron().1).unwrap().caps.triangles.is_empty());
+    }
+
+    /// Next to a cap, the mesh winds around a sample as often as row crossings count (mesh and
+    /// caps together) less the caps' winding number: the rule [`side_from_caps`] decides by.
+    #[test]
+    fn near_a_cap_the_mesh_winds_as_the_crossings_less_the_caps() {
+        let (v, mut t) = octahedron();
+        t.truncate(6);
+        let f = MeshField::new("bent", &v, &t).unwrap();
+        let caps = f.caps.bvh.as_ref().unwrap();
+        let exact = |p: Vec3, soup: &[[Vec3; 3]]| {
+            soup.iter().map(|t| crate::geometry::solid_angle(p, t[0], t[1], t[2])).sum::<f64>() / (4.0 * std::f64::consts::PI)
+        };
+        let grid = Grid { origin: Vec3::new(-1.3, -1.21, -1.17), spacing: 0.0931, dims: [29, 27, 26] };
+        let sides = crossing_signs(f.bvh(), &f.caps, &grid, 0..grid.dims[2]);
+        let [nx, ny, _] = grid.dims;
+        let (mut near, mut wound, mut decided) = (0, 0, 0);
+        for (i, side) in sides.iter().enumerate() {
+            let Side::NearCaps(n) = *side else { continue };
+            let p = grid.position(i % nx, i / nx % ny, i / (nx * ny));
+            let w = exact(p, f.bvh().triangles());
+            assert!((w - (f64::from(n) - exact(p, &f.caps.triangles))).abs() < 1e-9, "at {p}: {w} with {n} crossings");
+            if let Some(inside) = side_from_caps(n, caps.winding_number(p), 0.0) {
+                assert_eq!(inside, winds_inside(f.bvh(), p), "at {p}");
+                decided += 1;
+            }
+            near += 1;
+            wound += usize::from(n != 0);
+        }
+        assert!(near > 1000 && wound > 100 && decided > near / 2, "{near} near a cap, {wound} wound, {decided} decided");
     }
 
     #[test]

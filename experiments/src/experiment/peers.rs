@@ -88,44 +88,78 @@ struct Data {
     wake: Vec<Wake>,
 }
 
-/// Our two-thread pool's second thread asked for work after the experiment's thread ran alone
-/// (and the second slept) for `idle_ms`: when it started, microseconds after the request.
+/// A two-thread pool asked for work after the experiment's thread ran alone (and the pool slept)
+/// for `idle_ms`: when both threads were working, microseconds after the request.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct Wake {
     idle_ms: u64,
+    /// The pool our two-thread runs use, which includes the caller ([`WakeCaller::Inside`]).
     start_us: Spread,
+    /// A pool that leaves the caller out, which waits ([`WakeCaller::Outside`]; absent from runs
+    /// before it was measured).
+    #[serde(default)]
+    caller_outside_us: Option<Spread>,
+}
+
+/// Where the thread asking a two-thread pool for work is.
+#[derive(Clone, Copy, Debug)]
+enum WakeCaller {
+    /// One of the pool's threads (`use_current_thread`): it runs its half of a `join` while the
+    /// other thread is woken (our two-thread runs).
+    Inside,
+    /// Not one of them: it hands the pool the job and waits (VTK's caller, and a program calling
+    /// isolab from its own thread with rayon's global pool).
+    Outside,
 }
 
 /// Idle times before the request, ms, and requests per idle time.
 const WAKE_IDLE_MS: [u64; 4] = [0, 1, 5, 20];
 const WAKE_REQUESTS: usize = 9;
 
-/// When our shared two-thread pool's second thread starts a job the experiment's thread hands it
-/// after idling `idle`, microseconds, per request: the experiment's thread spins until the job
-/// has started (at most 50 ms).
-fn second_thread_start(idle: Duration) -> Result<Vec<f64>, ExperimentError> {
+/// When both threads of a two-thread pool work on a job a caller hands it after idling `idle`,
+/// microseconds after the request, per request: the job is a `join` whose first half spins until
+/// the second half has started (at most 50 ms). `Inside` asks our shared pool from the
+/// experiment's thread, one of its threads; `Outside` asks a pool of its own from a thread of its
+/// own, in no pool (a pool thread asking another pool keeps working in its own while it waits).
+fn second_thread_start(idle: Duration, caller: WakeCaller) -> Result<Vec<f64>, ExperimentError> {
     use std::sync::atomic::{AtomicBool, Ordering};
-    let pool = crate::peers::ours::shared_pool(TWO).map_err(|e| ExperimentError::Figure(format!("thread pool: {e}")))?;
-    let mut starts = Vec::with_capacity(WAKE_REQUESTS);
-    for _ in 0..WAKE_REQUESTS {
-        std::thread::sleep(idle);
-        let started = AtomicBool::new(false);
-        let asked = Instant::now();
-        let mut waited = Duration::ZERO;
-        pool.install(|| {
-            rayon::join(
-                || {
-                    while !started.load(Ordering::Acquire) && asked.elapsed() < Duration::from_millis(50) {
-                        std::hint::spin_loop();
-                    }
-                    waited = asked.elapsed();
-                },
-                || started.store(true, Ordering::Release),
-            )
-        });
-        starts.push(waited.as_secs_f64() * 1e6);
+    let failed = |e: String| ExperimentError::Figure(format!("thread pool: {e}"));
+    let measure = |pool: &rayon::ThreadPool| {
+        let mut starts = Vec::with_capacity(WAKE_REQUESTS);
+        for _ in 0..WAKE_REQUESTS {
+            std::thread::sleep(idle);
+            let started = AtomicBool::new(false);
+            let asked = Instant::now();
+            let mut waited = Duration::ZERO;
+            pool.install(|| {
+                rayon::join(
+                    || {
+                        while !started.load(Ordering::Acquire) && asked.elapsed() < Duration::from_millis(50) {
+                            std::hint::spin_loop();
+                        }
+                        waited = asked.elapsed();
+                    },
+                    || started.store(true, Ordering::Release),
+                )
+            });
+            starts.push(waited.as_secs_f64() * 1e6);
+        }
+        starts
+    };
+    match caller {
+        WakeCaller::Inside => {
+            let pool = crate::peers::ours::shared_pool(TWO).map_err(|e| failed(e.to_string()))?;
+            Ok(measure(&pool))
+        }
+        WakeCaller::Outside => std::thread::scope(|s| {
+            s.spawn(|| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(TWO).build().map_err(|e| failed(e.to_string()))?;
+                Ok(measure(&pool))
+            })
+            .join()
+            .map_err(|_| failed("the measuring thread panicked".into()))?
+        }),
     }
-    Ok(starts)
 }
 
 /// One implementation as the run alternates them: its label, the peer, its threads, and whether
@@ -228,7 +262,14 @@ impl Experiment for Peers {
         // Before the grids, on the pool our two-thread runs use.
         let wake = WAKE_IDLE_MS
             .iter()
-            .map(|&ms| Ok(Wake { idle_ms: ms, start_us: Spread::of(second_thread_start(Duration::from_millis(ms))?) }))
+            .map(|&ms| {
+                let idle = Duration::from_millis(ms);
+                Ok(Wake {
+                    idle_ms: ms,
+                    start_us: Spread::of(second_thread_start(idle, WakeCaller::Inside)?),
+                    caller_outside_us: Some(Spread::of(second_thread_start(idle, WakeCaller::Outside)?)),
+                })
+            })
             .collect::<Result<Vec<_>, ExperimentError>>()?;
         let mut entries = entries(server.as_ref());
         let tmp = std::env::temp_dir().join(format!("isolab-peers-{}", std::process::id()));
@@ -505,21 +546,29 @@ fn section(data: &Data) -> String {
     md.push_str(&ratio_table(data, &grids, Protocol::OneShot, &scaling_columns()));
     if !data.wake.is_empty() {
         md.push_str(
-            "\nOn this machine a thread that has slept for a few milliseconds can take milliseconds to start again (an idle \
-             virtual CPU wakes late), and in this run other implementations run between our calls, so our pool's second \
-             thread has usually slept. Measured before the grids: the experiment's thread idles, then hands the second thread a \
-             job and spins until it starts (µs: median (fastest-slowest) of the requests). A one-shot extraction shorter than \
-             that delay is over before the second thread helps.\n\n",
+            "\nIn this run other implementations run between our calls, so our pool has usually slept when a call comes. \
+             How soon both of a two-thread pool's threads work on a job handed to it after the caller idled, measured before \
+             the grids (µs: median (fastest-slowest) of the requests), two ways: the caller inside the pool works its half \
+             while it wakes the other thread (the pool our two-thread runs use); the caller outside the pool hands it the job \
+             and waits, as VTK's caller and a program calling isolab from its own thread do. On this machine a thread can \
+             start milliseconds late; a one-shot extraction shorter than that is over before the second thread helps.\n\n",
         );
         let rows: Vec<Vec<String>> = data
             .wake
             .iter()
             .map(|w| {
-                let s = &w.start_us;
-                vec![format!("{}", w.idle_ms), format!("{:.0} ({:.0}-{:.0})", s.median, s.min, s.max)]
+                let cell = |s: &Spread| format!("{:.0} ({:.0}-{:.0})", s.median, s.min, s.max);
+                vec![format!("{}", w.idle_ms), cell(&w.start_us), w.caller_outside_us.as_ref().map_or_else(|| "-".into(), cell)]
             })
             .collect();
-        md.push_str(&markdown_table(&["idle before the request (ms)", "second thread starts after (µs)"], &rows));
+        md.push_str(&markdown_table(
+            &[
+                "idle before the request (ms)",
+                "both threads working after (µs): caller inside, working",
+                "caller outside, waiting",
+            ],
+            &rows,
+        ));
     }
     md.push_str("\n### Times, one-shot (ms: median (fastest-slowest)) and the memory floor\n\nThe floor is one streaming read of the grid plus one write of marching cubes' output bytes; `× floor` is our two-thread one-shot marching cubes over it. Triangle counts are in `data/peers.json`.\n\n");
     md.push_str(&times_table(data, &grids, Protocol::OneShot, true));

@@ -7,13 +7,22 @@
 //! Threads: on one, the extractor runs with `parallelism=serial` on the calling thread. On more,
 //! it runs on a rayon pool of that many threads, one pool per thread count shared by every `Ours`
 //! and built with the thread that first asks as one of its threads (the experiment's), so a call
-//! works on the calling thread and wakes one thread fewer, as VTK's threads back end does. With a
-//! pool per implementation, our two-thread runs were often no faster than one thread; most likely
-//! the threads of the pool that ran last were still spinning, idle, on one of the two cores. Measured alternating
-//! four of our implementations (marching cubes and surface nets, one and two threads) on a 128³
-//! gyroid, medians of 7: two-thread marching cubes took 11.9 ms with a pool each, 7.6 ms with
-//! this pool, 6.7 ms alone; but one-thread surface nets varied between 18.9 and 28 ms from one
-//! arrangement to another, so some cross-talk between runs remains on this machine.
+//! works on the calling thread and wakes one thread fewer. With a pool per implementation, our
+//! two-thread runs were often no faster than one thread; most likely the threads of the pool that
+//! ran last were still spinning, idle, on one of the two cores. Measured alternating four of our
+//! implementations (marching cubes and surface nets, one and two threads) on a 128³ gyroid,
+//! medians of 7: two-thread marching cubes took 11.9 ms with a pool each, 7.6 ms with this pool,
+//! 6.7 ms alone; but one-thread surface nets varied between 18.9 and 28 ms from one arrangement to
+//! another, so some cross-talk between runs remains on this machine.
+//!
+//! Tried and dropped: a pool that leaves the calling thread out, which then hands it the job and
+//! waits, as VTK's caller waits for its `STDThread` pool. In a side harness (one-shot marching
+//! cubes after 5 or 20 ms idle, medians of 31) it was faster than this pool (gyroid 64³ 1.9-2.0
+//! against 2.8-3.1 ms; sphere 128³ 2.0-2.3 against 3.9-4.5 ms), but in one full `peers` run it was
+//! slower: two-thread marching cubes at 128³ took 3.71 ms (sphere), 10.9 (gyroid), 4.00 (asteroid)
+//! against 2.26, 7.06 and 2.21 ms in the run before with this pool, and the wake-up measurement
+//! of that run saw its threads start milliseconds late after 1 ms idle, where this pool's start
+//! in microseconds. `peers` measures both before the grids (see `second_thread_start`).
 
 use super::{Job, Peer, PeerError, PeerRun, Protocol};
 use isolab_algorithms::extractors;
@@ -21,15 +30,14 @@ use isolab_algorithms::{Extraction, Extractor, Options};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
-/// The rayon pool with `threads` threads that every [`Ours`] uses.
+/// The rayon pool with `threads` threads that every [`Ours`] uses; the thread that first asks is
+/// one of them.
 pub(crate) fn shared_pool(threads: usize) -> Result<Arc<rayon::ThreadPool>, rayon::ThreadPoolBuildError> {
     static POOLS: OnceLock<Mutex<HashMap<usize, Arc<rayon::ThreadPool>>>> = OnceLock::new();
     let mut pools = POOLS.get_or_init(Default::default).lock().unwrap_or_else(|e| e.into_inner());
     if let Some(pool) = pools.get(&threads) {
         return Ok(pool.clone());
     }
-    // The thread that first asks (the experiment's) is one of the pool's threads, so a call made
-    // from it works on it and wakes one thread fewer, as VTK's threads back end does.
     let pool = Arc::new(rayon::ThreadPoolBuilder::new().num_threads(threads).use_current_thread().build()?);
     pools.insert(threads, pool.clone());
     Ok(pool)

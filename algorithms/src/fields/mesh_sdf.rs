@@ -702,6 +702,33 @@ mod tests {
         assert!(mixed.value(Vec3::new(2.5, 0.0, 0.0)) > 0.0);
     }
 
+    /// A triangle soup (every triangle with corners of its own, as many files store patches) is
+    /// the same field: its seams are not holes, so it gets the caps, signs and band values of the
+    /// indexed mesh, closed or open.
+    #[test]
+    fn unwelded_seams_are_not_holes() {
+        let (v, t) = octahedron();
+        let soup_of = |tris: &[[u32; 3]]| -> (Vec<Vec3>, Vec<[u32; 3]>) {
+            let positions: Vec<Vec3> = tris.iter().flat_map(|tri| tri.map(|i| v[i as usize])).collect();
+            let triangles = (0..tris.len() as u32).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
+            (positions, triangles)
+        };
+        let mut bent = t.clone();
+        bent.truncate(6);
+        for (name, tris, closed) in [("closed", &t, true), ("bent", &bent, false)] {
+            let welded = MeshField::new(name, &v, tris).unwrap();
+            let (sv, st) = soup_of(tris);
+            let soup = MeshField::new(name, &sv, &st).unwrap();
+            assert_eq!((welded.is_closed(), soup.is_closed()), (closed, closed), "{name}");
+            assert_eq!(welded.caps.triangles, soup.caps.triangles, "{name}");
+            let grid = Grid { origin: Vec3::new(-1.3, -1.21, -1.17), spacing: 0.0931, dims: [29, 27, 26] };
+            let (mut a, mut b) = (vec![0.0; grid.len()], vec![0.0; grid.len()]);
+            welded.sample_grid(&grid, 0.0, &mut a);
+            soup.sample_grid(&grid, 0.0, &mut b);
+            assert_eq!(a, b, "{name}");
+        }
+    }
+
     #[test]
     fn a_hollow_shell_keeps_its_cavity_either_way_round() {
         let (v, t) = octahedron();

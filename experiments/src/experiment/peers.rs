@@ -511,7 +511,8 @@ fn section(data: &Data) -> String {
         "Every implementation on the same sampled grid (built-in fields on their default domains, n samples a side), extraction \
          only, alternating, {} runs each per protocol; Python peers read the very grid isolab sampled (`tests/reference/peers.py`). \
          **One-shot**: fresh output and fresh state every call, as a CLI user or a first library call meets it (ours: a new \
-         extractor and a new `Extraction`; VTK: a new filter; `fast-surface-nets`: a new buffer). **Steady state**: the same \
+         extractor and a new `Extraction`; VTK: a new filter; `fast-surface-nets`: a new buffer), each freed when its call \
+         returns (freeing it just before the next call instead would hand that call pages already touched). **Steady state**: the same \
          call repeated with what the implementation lets a caller keep (ours: extractor and output buffers; VTK: the same \
          filter, `Modified()` then `Update()`; `fast-surface-nets`: its buffer), after one unrecorded warm-up call. The slower \
          peers keep nothing between calls and run one-shot only. Ratios are peer median / our median under the same protocol \

@@ -1,6 +1,6 @@
 //! The `fast-surface-nets` crate (bonsairobo, MIT/Apache): naive surface nets on a dense grid, one
-//! thread. One-shot: a new `SurfaceNetsBuffer` per call; steady state: the buffer reused, as a
-//! game engine meshing chunk after chunk does.
+//! thread. One-shot: a new `SurfaceNetsBuffer` per call, freed after it; steady state: the buffer
+//! reused, as a game engine meshing chunk after chunk does.
 
 use super::{Job, Peer, PeerError, PeerRun, Protocol};
 use fast_surface_nets::ndshape::RuntimeShape;
@@ -25,17 +25,17 @@ impl Peer for FastSurfaceNets {
         }
         let [nx, ny, nz] = samples.lattice().grid().dims.map(|d| d as u32);
         let shape = RuntimeShape::<u32, 3>::new([nx, ny, nz]);
-        if protocol == Protocol::OneShot {
-            self.buffer = SurfaceNetsBuffer::default();
-        }
+        // One-shot: a fresh buffer, freed at the end of this call (after the timing), as our
+        // one-shot output is; freeing the last call's just before the timing would hand this call
+        // pages already touched.
+        let mut fresh = SurfaceNetsBuffer::default();
+        let buffer = match protocol {
+            Protocol::OneShot => &mut fresh,
+            Protocol::SteadyState => &mut self.buffer,
+        };
         let t = Instant::now();
-        surface_nets(samples.values(), &shape, [0; 3], [nx - 1, ny - 1, nz - 1], &mut self.buffer);
+        surface_nets(samples.values(), &shape, [0; 3], [nx - 1, ny - 1, nz - 1], buffer);
         let time = t.elapsed();
-        Ok(PeerRun {
-            time,
-            vertices: self.buffer.positions.len(),
-            triangles: self.buffer.indices.len() / 3,
-            ..PeerRun::default()
-        })
+        Ok(PeerRun { time, vertices: buffer.positions.len(), triangles: buffer.indices.len() / 3, ..PeerRun::default() })
     }
 }

@@ -43,15 +43,20 @@ impl Peer for IsosurfaceCrate {
         if nx != ny || ny != nz || samples.iso() != 0.0 {
             return Err(PeerError::Failed { peer: self.name(), message: "meshes n³ grids at the zero level only".into() });
         }
-        if protocol == Protocol::OneShot {
-            (self.vertices, self.indices) = (Vec::new(), Vec::new());
-        }
-        self.vertices.clear();
-        self.indices.clear();
+        // One-shot: fresh vectors, freed at the end of this call (after the timing), as our
+        // one-shot output is; freeing the last call's just before the timing would hand this call
+        // pages already touched.
+        let (mut fresh_vertices, mut fresh_indices) = (Vec::new(), Vec::new());
+        let (vertices, indices) = match protocol {
+            Protocol::OneShot => (&mut fresh_vertices, &mut fresh_indices),
+            Protocol::SteadyState => (&mut self.vertices, &mut self.indices),
+        };
+        vertices.clear();
+        indices.clear();
         let source = GridSource { values: samples.values(), n: nx };
         let t = Instant::now();
-        isosurface::marching_cubes::MarchingCubes::new(nx).extract(&source, &mut self.vertices, &mut self.indices);
+        isosurface::marching_cubes::MarchingCubes::new(nx).extract(&source, vertices, indices);
         let time = t.elapsed();
-        Ok(PeerRun { time, vertices: self.vertices.len() / 3, triangles: self.indices.len() / 3, ..PeerRun::default() })
+        Ok(PeerRun { time, vertices: vertices.len() / 3, triangles: indices.len() / 3, ..PeerRun::default() })
     }
 }

@@ -23,6 +23,16 @@
 //! against 2.26, 7.06 and 2.21 ms in the run before with this pool, and the wake-up measurement
 //! of that run saw its threads start milliseconds late after 1 ms idle, where this pool's start
 //! in microseconds. `peers` measures both before the grids (see `second_thread_start`).
+//!
+//! Why the second thread starts late here: a thread woken while its waker keeps running lands on
+//! the waker's CPU (in a side harness, 15 of 15 wakes after a 1 ms idle) and waits there until the
+//! scheduler moves it, on this machine one to four milliseconds later. Pinning the pool's two
+//! threads to two CPUs removed the delay: in a side harness, after 20 ms idle, the second thread
+//! started after 77 µs against 1555 µs unpinned, and two 1 ms halves joined in 1.1 ms against
+//! 2.0 ms. In one full `peers` run with this pool pinned (not committed), marching cubes on two
+//! threads against flying edges was 1.27-2.43x at 64³ and 1.37-1.65x at 128³. Not adopted: the
+//! pools of programs calling isolab are not pinned, this experiment measures what they meet, and
+//! pinned threads cannot be moved off a CPU something else is using.
 
 use super::{Job, Peer, PeerError, PeerRun, Protocol};
 use isolab_algorithms::extractors;

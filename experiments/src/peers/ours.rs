@@ -20,9 +20,10 @@
 //! cubes after 5 or 20 ms idle, medians of 31) it was faster than this pool (gyroid 64³ 1.9-2.0
 //! against 2.8-3.1 ms; sphere 128³ 2.0-2.3 against 3.9-4.5 ms), but in one full `peers` run it was
 //! slower: two-thread marching cubes at 128³ took 3.71 ms (sphere), 10.9 (gyroid), 4.00 (asteroid)
-//! against 2.26, 7.06 and 2.21 ms in the run before with this pool, and the wake-up measurement
-//! of that run saw its threads start milliseconds late after 1 ms idle, where this pool's start
-//! in microseconds. `peers` measures both before the grids (see `second_thread_start`).
+//! against 2.26, 7.06 and 2.21 ms in the run before with this pool; the wake-up measurement of
+//! that run saw its threads working 2.9 ms after a request that followed 1 ms idle, where this
+//! pool's were after 26 µs (later runs of this pool vary as much: the report's table). `peers`
+//! measures both before the grids (see `second_thread_start`).
 //!
 //! Why the second thread starts late here: a thread woken while its waker keeps running lands on
 //! the waker's CPU (in a side harness, 15 of 15 wakes after a 1 ms idle) and waits there until the

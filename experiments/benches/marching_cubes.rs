@@ -1,13 +1,16 @@
 //! Criterion benchmarks: marching cubes alone (sampling excluded, no normals, as in `peers`) on
 //! `sphere` and `gyroid` at 64^3, 128^3 and 256^3, serial and on rayon's global pool, steady state
-//! (extractor and output reused) and one-shot (both new every call, dropped outside the timing),
-//! and sampling the bunny field at the RMT paper's 75x40x56.
+//! (extractor and output reused) and one-shot (both new every call, each output dropped after its
+//! call outside the timing, as `peers` frees its one-shot outputs: see [`one_shot`]), and sampling
+//! the bunny field at the RMT paper's 75x40x56.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+mod protocol;
 use isolab_algorithms::extractors::marching_cubes::{MarchingCubes, McOptions, NormalSource};
 use isolab_algorithms::slabs::Parallelism;
 use isolab_algorithms::{fields, Extraction, Extractor, Grid, Lattice, Samples};
 use isolab_experiments::run::load_field;
+use protocol::one_shot;
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -28,9 +31,9 @@ fn marching_cubes(c: &mut Criterion) {
                 group.bench_with_input(BenchmarkId::new(format!("{name}/{label}"), n), &samples, |b, s| {
                     b.iter(|| mc.extract(black_box(s), &mut out).unwrap())
                 });
-                // One-shot: a new extractor and a new output every call (dropped outside the timing).
+                // One-shot: a new extractor and a new output every call.
                 group.bench_with_input(BenchmarkId::new(format!("{name}/{label}/one-shot"), n), &samples, |b, s| {
-                    b.iter_with_large_drop(|| {
+                    one_shot(b, || {
                         let mut fresh = Extraction::default();
                         MarchingCubes::new(options).extract(black_box(s), &mut fresh).unwrap();
                         fresh

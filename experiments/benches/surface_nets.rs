@@ -1,15 +1,18 @@
 //! Criterion benchmarks: our surface nets (no smoothing, and the default elastic smoothing) side by
 //! side with the `fast-surface-nets` crate in one run, on the same sampled grids (sphere and
 //! gyroid, 64^3 to 256^3), sampling excluded, steady state (buffers reused) and one-shot (a new
-//! extractor and output, or a new `SurfaceNetsBuffer`, every call; dropped outside the timing);
+//! extractor and output, or a new `SurfaceNetsBuffer`, every call; each dropped after its call
+//! outside the timing, as `peers` frees its one-shot outputs: see [`one_shot`]);
 //! and the smoothing methods on a 32^3 terrain chunk.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+mod protocol;
 use fast_surface_nets::ndshape::{RuntimeShape, Shape};
 use fast_surface_nets::{surface_nets, SurfaceNetsBuffer};
 use isolab_algorithms::extractors::surface_nets::{Smoothing, SnOptions, SurfaceNets};
 use isolab_algorithms::slabs::Parallelism;
 use isolab_algorithms::{fields, Extraction, Extractor, Grid, Samples};
+use protocol::one_shot;
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -33,7 +36,7 @@ fn side_by_side(c: &mut Criterion) {
                 b.iter(|| plain.extract(black_box(s), &mut out).unwrap())
             });
             group.bench_with_input(BenchmarkId::new(format!("isolab-one-shot/{name}"), n), &samples, |b, s| {
-                b.iter_with_large_drop(|| {
+                one_shot(b, || {
                     let mut fresh = Extraction::default();
                     SurfaceNets::new(SnOptions { smoothing: Smoothing::None, ..Default::default() })
                         .extract(black_box(s), &mut fresh)
@@ -44,9 +47,9 @@ fn side_by_side(c: &mut Criterion) {
             group.bench_with_input(BenchmarkId::new(format!("isolab-serial/{name}"), n), &samples, |b, s| {
                 b.iter(|| serial.extract(black_box(s), &mut out).unwrap())
             });
-            // One-shot: a new extractor and a new output every call (dropped outside the timing).
+            // One-shot: a new extractor and a new output every call.
             group.bench_with_input(BenchmarkId::new(format!("isolab-serial-one-shot/{name}"), n), &samples, |b, s| {
-                b.iter_with_large_drop(|| {
+                one_shot(b, || {
                     let mut fresh = Extraction::default();
                     SurfaceNets::new(SnOptions {
                         smoothing: Smoothing::None,
@@ -69,7 +72,7 @@ fn side_by_side(c: &mut Criterion) {
                 b.iter(|| surface_nets(black_box(s.values()), &shape, [0; 3], [nx - 1, ny - 1, nz - 1], &mut buffer))
             });
             group.bench_with_input(BenchmarkId::new(format!("fast-surface-nets-one-shot/{name}"), n), &samples, |b, s| {
-                b.iter_with_large_drop(|| {
+                one_shot(b, || {
                     let mut fresh = SurfaceNetsBuffer::default();
                     surface_nets(black_box(s.values()), &shape, [0; 3], [nx - 1, ny - 1, nz - 1], &mut fresh);
                     fresh

@@ -34,6 +34,23 @@
 //! threads against flying edges was 1.27-2.43x at 64³ and 1.37-1.65x at 128³. Not adopted: the
 //! pools of programs calling isolab are not pinned, this experiment measures what they meet, and
 //! pinned threads cannot be moved off a CPU something else is using.
+//!
+//! Four pool set-ups compared later, five runs each of this experiment cut to the 64³ and 128³
+//! grids (not committed; the median over the five runs of marching cubes' two-thread ratio
+//! against flying edges on two threads, gyroid 64³, then sphere, gyroid, asteroid and terrain at
+//! 128³):
+//! - this pool: 0.87x; 2.07, 1.37, 1.54, 1.23x;
+//! - a pool leaving the caller out, not pinned: 0.71x; 0.99, 1.08, 0.92, 0.97x (worse everywhere);
+//! - a new two-thread pool for every one-shot call, its start-up inside the timing (new threads
+//!   are placed on an idle CPU, not woken onto a busy one): 1.12x; 1.58, 0.78, 1.45, 1.33x; at
+//!   gyroid 128³ it was slower than one thread, which I did not explain;
+//! - a pool leaving the caller out with its two threads pinned: 1.18x; 1.71, 1.44, 1.47, 1.71x,
+//!   every 64³ ratio of every run at least 1.04x; but two-thread surface nets on the 128³ gyroid
+//!   took 20.0 ms (median of the runs' medians), against 10.7 with this pool, and gained next to
+//!   nothing over one thread (22.2 ms in the same runs).
+//!
+//! So this pool stays: no set-up that a library caller would meet meets every target, and the
+//! one nearest (pinned) makes another implementation slower than one thread.
 
 use super::{Job, Peer, PeerError, PeerRun, Protocol};
 use isolab_algorithms::extractors;

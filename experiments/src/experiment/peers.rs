@@ -520,11 +520,13 @@ fn section(data: &Data) -> String {
          Our marching cubes makes no normals here, as VTK runs with ComputeNormalsOff and the other marching cubes peers make \
          none; surface nets makes its usual normals, as `fast-surface-nets` does. Threads: our one-thread runs are serial on the \
          experiment's own thread; our two-thread runs share one rayon pool whose threads are the experiment's thread and one \
-         more, as VTK's threads back end works on the calling thread (with a pool per implementation, our two-thread runs were \
-         often no faster than one). Each one-shot output is freed before the next call, so the allocator hands back pages \
-         already touched, on both sides; a process's first call gets fresh pages from the kernel, which the criterion \
-         benches' one-shot measures (`cargo bench --bench marching_cubes`: outputs kept until a batch ends) and which costs \
-         more. Peer versions: {}. Times are wall clock on a shared machine; compare ratios within this run.\n\n",
+         more, so the calling thread works while the other starts (VTK's caller instead hands a job to each of its pool's \
+         threads and waits). With a pool per implementation our two-thread runs were often no faster than one; other pool \
+         set-ups tried (the caller left out, a new pool per call, pinned threads) are described, with what they measured, in \
+         `experiments/src/peers/ours.rs`. Each one-shot output is freed when its call returns, so the allocator may hand the \
+         next call pages already touched, on both sides; a process's very first call gets fresh pages from the kernel and costs \
+         more. The criterion benches' one-shot follows this protocol (each output dropped right after its call: \
+         `experiments/benches/protocol`). Peer versions: {}. Times are wall clock on a shared machine; compare ratios within this run.\n\n",
         data.repeats,
         if data.versions.is_empty() {
             "none available".to_owned()

@@ -401,3 +401,39 @@ fn materials_are_counted_and_written_as_vertex_colours() {
     assert_eq!(back["vertices"], report["vertices"]);
     assert_eq!(back["triangles"], report["triangles"]);
 }
+
+/// The CLI re-executes itself with huge pages for malloc (Linux with glibc); the re-executed
+/// process must see the same arguments and name, and make the same mesh.
+#[cfg(unix)]
+#[test]
+fn re_executing_with_huge_pages_keeps_the_arguments_the_name_and_the_mesh() {
+    use std::os::unix::process::CommandExt;
+    use std::process::Command;
+    let dir = tempfile::tempdir().unwrap();
+    let run = |no_huge: bool, out: &Path| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_isolab"));
+        c.args(["extract", "-a", "surface-nets", "-f", "gyroid", "-r", "24", "-o"]).arg(out).env_remove("GLIBC_TUNABLES");
+        if no_huge {
+            c.env("ISOLAB_NO_HUGE_PAGES", "1");
+        } else {
+            c.env_remove("ISOLAB_NO_HUGE_PAGES");
+        }
+        let o = c.output().unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read(out).unwrap()
+    };
+    let (huge, plain) = (dir.path().join("huge.obj"), dir.path().join("plain.obj"));
+    assert_eq!(run(false, &huge), run(true, &plain), "the same mesh either way");
+    for no_huge in [false, true] {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_isolab"));
+        c.arg0("isolab-under-test").env_remove("GLIBC_TUNABLES");
+        if no_huge {
+            c.env("ISOLAB_NO_HUGE_PAGES", "1");
+        } else {
+            c.env_remove("ISOLAB_NO_HUGE_PAGES");
+        }
+        let o = c.output().unwrap();
+        assert_eq!(o.status.code(), Some(2));
+        assert!(stderr(&o).contains("Usage: isolab-under-test"), "the name it was called by: {}", stderr(&o));
+    }
+}

@@ -20,6 +20,7 @@
 
 use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
+use crate::peers::cli::Cli;
 use crate::peers::fast_surface_nets::FastSurfaceNets;
 use crate::peers::isosurface_crate::IsosurfaceCrate;
 use crate::peers::ours::Ours;
@@ -199,7 +200,7 @@ pub(crate) fn floor(values: &[f32], bytes: usize) -> (Duration, Duration) {
 }
 
 /// Every implementation the run alternates, Python peers when the server started.
-fn entries(python: Option<&std::rc::Rc<std::cell::RefCell<PythonServer>>>) -> Vec<Entry> {
+fn entries(python: Option<&std::rc::Rc<std::cell::RefCell<PythonServer>>>, root: &Path) -> Vec<Entry> {
     let entry = |name: &str, peer: Box<dyn Peer>, threads: usize, steady: bool, slow: bool| Entry {
         label: label(name, threads),
         peer,
@@ -219,6 +220,12 @@ fn entries(python: Option<&std::rc::Rc<std::cell::RefCell<PythonServer>>>) -> Ve
         entry(FSN, Box::<FastSurfaceNets>::default(), ONE, true, false),
         entry(ISOSURFACE, Box::<IsosurfaceCrate>::default(), ONE, true, false),
     ];
+    // Our command line as a user runs it, one process a call: one-shot only, and not at 512³,
+    // where the metrics every `isolab extract` computes take longer than the rest of a grid's runs.
+    let cli = |huge_pages: bool| Box::new(Cli::new(root, "marching-cubes", &[("normals", "none")], huge_pages));
+    list.push(entry(OUR_MC_CLI, cli(true), ONE, false, true));
+    list.push(entry(OUR_MC_CLI, cli(true), TWO, false, true));
+    list.push(entry(OUR_MC_CLI_SMALL_PAGES, cli(false), ONE, false, true));
     if let Some(server) = python {
         for threads in [ONE, TWO] {
             list.push(entry(VTK_FE, Box::new(PythonPeer::new(server, "vtk-flying-edges")), threads, true, false));
@@ -271,7 +278,7 @@ impl Experiment for Peers {
                 })
             })
             .collect::<Result<Vec<_>, ExperimentError>>()?;
-        let mut entries = entries(server.as_ref());
+        let mut entries = entries(server.as_ref(), &root);
         let tmp = std::env::temp_dir().join(format!("isolab-peers-{}", std::process::id()));
         std::fs::create_dir_all(&tmp).map_err(|source| crate::io::IoError::Write { path: tmp.clone(), source })?;
         let mut grids: Vec<(&str, usize)> = FIELDS.iter().flat_map(|&f| SIZES.iter().map(move |&n| (f, n))).collect();
@@ -412,6 +419,8 @@ const ONE: usize = 1;
 const TWO: usize = 2;
 const OUR_MC: &str = "isolab marching-cubes";
 const OUR_SN: &str = "isolab surface-nets";
+const OUR_MC_CLI: &str = "isolab marching-cubes CLI";
+const OUR_MC_CLI_SMALL_PAGES: &str = "isolab marching-cubes CLI, no huge pages";
 const VTK_FE: &str = "VTK vtkFlyingEdges3D";
 const FSN: &str = "fast-surface-nets";
 const ISOSURFACE: &str = "isosurface crate";
@@ -445,6 +454,16 @@ fn scaling_columns() -> Vec<Column> {
         .into_iter()
         .map(|(h, name)| (h.to_owned(), (name, TWO), (name, ONE)))
         .collect()
+}
+
+/// Our command line against the library (one-shot): header, then the library and the CLI.
+fn cli_columns() -> Vec<Column> {
+    let t = |n: usize| format!("{n} thread{}", if n == 1 { "" } else { "s" });
+    vec![
+        (format!("CLI, {}", t(ONE)), (OUR_MC, ONE), (OUR_MC_CLI, ONE)),
+        (format!("CLI, {}", t(TWO)), (OUR_MC, TWO), (OUR_MC_CLI, TWO)),
+        (format!("CLI without huge pages, {}", t(ONE)), (OUR_MC, ONE), (OUR_MC_CLI_SMALL_PAGES, ONE)),
+    ]
 }
 
 /// Peer median over ours, or a dash.
@@ -573,6 +592,18 @@ fn section(data: &Data) -> String {
             &rows,
         ));
     }
+    md.push_str(&format!(
+        "\n### Our command line against the library (one-shot: CLI time / library time)\n\n`isolab extract` run as a user runs it, \
+         a new process a call on the very grid file the Python peers read, marching cubes without normals, its time the \
+         `times_ms.extraction` it reports (`experiments/src/peers/cli.rs`); not at {}³, where the metrics every call computes \
+         take longer than the rest of a grid's runs. A process's one extraction gets pages the kernel has never handed out; \
+         the CLI therefore re-executes itself with huge pages for malloc (Linux with glibc; `ISOLAB_NO_HUGE_PAGES` turns that \
+         off), and the last column shows it without them. Above one, the CLI is slower than the library's one-shot call in \
+         this long-running process.\n\n",
+        LARGE.0
+    ));
+    let cli_grids: Vec<(String, usize)> = grids.iter().filter(|(_, n)| *n != LARGE.0).cloned().collect();
+    md.push_str(&ratio_table(data, &cli_grids, Protocol::OneShot, &cli_columns()));
     md.push_str("\n### Times, one-shot (ms: median (fastest-slowest)) and the memory floor\n\nThe floor is one streaming read of the grid plus one write of marching cubes' output bytes; `× floor` is our two-thread one-shot marching cubes over it. Triangle counts are in `data/peers.json`.\n\n");
     md.push_str(&times_table(data, &grids, Protocol::OneShot, true));
     md.push_str("\n### Times, steady state (ms: median (fastest-slowest))\n\n");

@@ -7,6 +7,8 @@
 //!
 //! - [`ours::Ours`]: one of our registered extractors, run like the peers (one-shot: a new
 //!   extractor and a fresh `Extraction` per call; steady state: both kept between calls).
+//! - [`cli::Cli`]: our command line, a process per call on the grid file, timed by the
+//!   extraction time it reports (one-shot only).
 //! - [`fast_surface_nets::FastSurfaceNets`]: the `fast-surface-nets` crate (one-shot: a new
 //!   `SurfaceNetsBuffer`; steady state: the buffer reused, as a game engine does).
 //! - [`isosurface_crate::IsosurfaceCrate`]: the `isosurface` crate's marching cubes.
@@ -29,6 +31,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::time::Duration;
 
+pub mod cli;
 pub mod fast_surface_nets;
 pub mod ferreus_rmt;
 pub mod isosurface_crate;

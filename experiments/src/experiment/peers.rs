@@ -383,7 +383,12 @@ fn time_of<'a>(data: &'a Data, implementation: &str, protocol: Protocol, field: 
 
 fn charts(dir: &Path, data: &Data) -> Result<(), ExperimentError> {
     for field in FIELDS {
-        let one_shot = || data.timings.iter().filter(|t| t.field == field && t.protocol == Protocol::OneShot);
+        // The CLI rows have a table of their own; drawn here they only crowd the legend.
+        let one_shot = || {
+            data.timings
+                .iter()
+                .filter(|t| t.field == field && t.protocol == Protocol::OneShot && !t.implementation.contains(CLI_MARK))
+        };
         let mut labels: Vec<&str> = one_shot().map(|t| t.implementation.as_str()).collect();
         labels.sort_unstable();
         labels.dedup();
@@ -419,6 +424,8 @@ const ONE: usize = 1;
 const TWO: usize = 2;
 const OUR_MC: &str = "isolab marching-cubes";
 const OUR_SN: &str = "isolab surface-nets";
+/// What every CLI row's label contains.
+const CLI_MARK: &str = " CLI";
 const OUR_MC_CLI: &str = "isolab marching-cubes CLI";
 const OUR_MC_CLI_SMALL_PAGES: &str = "isolab marching-cubes CLI, no huge pages";
 const VTK_FE: &str = "VTK vtkFlyingEdges3D";

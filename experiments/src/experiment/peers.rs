@@ -222,7 +222,8 @@ fn entries(python: Option<&std::rc::Rc<std::cell::RefCell<PythonServer>>>, root:
     ];
     // Our command line as a user runs it, one process a call: one-shot only, and not at 512³,
     // where the metrics every `isolab extract` computes take longer than the rest of a grid's runs.
-    let cli = |huge_pages: bool| Box::new(Cli::new(root, "marching-cubes", &[("normals", "none")], huge_pages));
+    let binary = crate::peers::cli::build(root);
+    let cli = |huge_pages: bool| Box::new(Cli::new(binary.clone(), "marching-cubes", &[("normals", "none")], huge_pages));
     list.push(entry(OUR_MC_CLI, cli(true), ONE, false, true));
     list.push(entry(OUR_MC_CLI, cli(true), TWO, false, true));
     list.push(entry(OUR_MC_CLI_SMALL_PAGES, cli(false), ONE, false, true));
@@ -432,9 +433,14 @@ const VTK_FE: &str = "VTK vtkFlyingEdges3D";
 const FSN: &str = "fast-surface-nets";
 const ISOSURFACE: &str = "isosurface crate";
 
+/// "1 thread", "2 threads".
+fn threads_text(threads: usize) -> String {
+    format!("{threads} thread{}", if threads == 1 { "" } else { "s" })
+}
+
 /// An implementation's label in the data: its name and threads.
 fn label(name: &str, threads: usize) -> String {
-    format!("{name} ({threads} thread{})", if threads == 1 { "" } else { "s" })
+    format!("{name} ({})", threads_text(threads))
 }
 
 /// A ratio column: header, then (name, threads) of ours and of the peer.
@@ -442,7 +448,7 @@ type Column = (String, (&'static str, usize), (&'static str, usize));
 
 /// Ratio columns, one-shot; the first four also steady state.
 fn one_shot_ratios() -> Vec<Column> {
-    let t = |n: usize| format!("{n} thread{}", if n == 1 { "" } else { "s" });
+    let t = threads_text;
     vec![
         (format!("MC vs FlyingEdges, {}", t(ONE)), (OUR_MC, ONE), (VTK_FE, ONE)),
         (format!("MC vs FlyingEdges, {}", t(TWO)), (OUR_MC, TWO), (VTK_FE, TWO)),
@@ -465,7 +471,7 @@ fn scaling_columns() -> Vec<Column> {
 
 /// Our command line against the library (one-shot): header, then the library and the CLI.
 fn cli_columns() -> Vec<Column> {
-    let t = |n: usize| format!("{n} thread{}", if n == 1 { "" } else { "s" });
+    let t = threads_text;
     vec![
         (format!("CLI, {}", t(ONE)), (OUR_MC, ONE), (OUR_MC_CLI, ONE)),
         (format!("CLI, {}", t(TWO)), (OUR_MC, TWO), (OUR_MC_CLI, TWO)),

@@ -24,15 +24,21 @@ pub struct Cli {
 }
 
 impl Cli {
-    /// The CLI in the workspace at `root`, built now if needed, running `algorithm` with `options`
-    /// (`name=value` pairs), with or without its huge pages.
-    pub fn new(root: &Path, algorithm: &'static str, options: &[(&'static str, &'static str)], huge_pages: bool) -> Cli {
-        Cli { algorithm, options: options.to_vec(), huge_pages, binary: build(root) }
+    /// The CLI `binary` ([`build`]'s answer) running `algorithm` with `options` (`name=value`
+    /// pairs), with or without its huge pages.
+    pub fn new(
+        binary: Result<PathBuf, String>,
+        algorithm: &'static str,
+        options: &[(&'static str, &'static str)],
+        huge_pages: bool,
+    ) -> Cli {
+        Cli { algorithm, options: options.to_vec(), huge_pages, binary }
     }
 }
 
-/// Builds the `isolab` binary of the workspace at `root` and returns its path.
-fn build(root: &Path) -> Result<PathBuf, String> {
+/// Builds the `isolab` binary of the workspace at `root` (once per experiment run, for every
+/// [`Cli`] row) and returns its path, or why there is none.
+pub fn build(root: &Path) -> Result<PathBuf, String> {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let status = Command::new(cargo)
         .current_dir(root)
@@ -44,7 +50,11 @@ fn build(root: &Path) -> Result<PathBuf, String> {
     }
     let target = std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
     let binary = target.join("release").join("isolab");
-    binary.exists().then_some(binary.clone()).ok_or_else(|| format!("no binary at {} after building it", binary.display()))
+    if binary.exists() {
+        Ok(binary)
+    } else {
+        Err(format!("no binary at {} after building it", binary.display()))
+    }
 }
 
 impl Peer for Cli {
@@ -69,7 +79,7 @@ impl Peer for Cli {
         if *threads <= 1 {
             command.args(["--set", "parallelism=serial"]);
         }
-        command.env("RAYON_NUM_THREADS", threads.max(&1).to_string()).env_remove("GLIBC_TUNABLES");
+        command.env("RAYON_NUM_THREADS", (*threads).max(1).to_string()).env_remove("GLIBC_TUNABLES");
         if self.huge_pages {
             command.env_remove("ISOLAB_NO_HUGE_PAGES");
         } else {

@@ -69,7 +69,8 @@ use crate::sign_rows::{
     count_bits, count_crossing_edges, for_each_bit, for_each_surface_cell, layer_edge_words, span, z_edge_words, LayerSigns,
 };
 use crate::slabs::{
-    grow_zeroed, join_parts, resize_zeroed, slab_offsets, split_pieces, split_slab_time, Parallelism, ScratchPool, EXTERN,
+    for_each_slab, grow_zeroed, join_parts, resize_zeroed, slab_offsets, split_pieces, split_slab_time, Parallelism, ScratchPool,
+    EXTERN,
 };
 use crate::tables::marching_cubes::{
     decider_joins_inside, Case, AMBIGUOUS_FACES, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, TABLE,
@@ -727,7 +728,7 @@ impl Extractor for MarchingCubes {
             // A reused output (steady state): each slab meshes into its own kept buffers, which
             // are then copied into the output in parallel. This reads the samples once; counting
             // first would read them twice, which costs more than the copy once the buffers are warm.
-            scratches.par_iter_mut().enumerate().for_each(|(t, s)| {
+            for_each_slab(scratches, |t, s| {
                 s.mesh.clear();
                 let mut mesh = std::mem::take(&mut s.mesh);
                 let bottom = if t == 0 { Bottom::Make } else { Bottom::Tagged };
@@ -743,15 +744,11 @@ impl Extractor for MarchingCubes {
             // allocate the output once, then let each slab write its own piece of it. Every page
             // of the output is touched once, and no slab buffers are allocated and copied.
             let bounds = |t: usize| (t * slab_cells / tasks, (t + 1) * slab_cells / tasks);
-            let counts: Vec<(SlabCount, Duration)> = scratches
-                .par_iter_mut()
-                .enumerate()
-                .map(|(t, s)| {
-                    let start = Instant::now();
-                    let (z0, z1) = bounds(t);
-                    (ctx.count(z0, z1, t == 0, &mut s.signs), start.elapsed())
-                })
-                .collect();
+            let counts: Vec<(SlabCount, Duration)> = for_each_slab(scratches, |t, s| {
+                let start = Instant::now();
+                let (z0, z1) = bounds(t);
+                (ctx.count(z0, z1, t == 0, &mut s.signs), start.elapsed())
+            });
             let offsets = slab_offsets(counts.iter().map(|(c, _)| c.vertices), self.name())?;
             let t_allocate = Instant::now();
             let surface = &mut out.surface;
@@ -775,11 +772,12 @@ impl Extractor for MarchingCubes {
                     triangles_written: 0,
                 })
                 .collect();
-            scratches.par_iter_mut().zip(sinks).enumerate().for_each(|(t, (s, mut sink))| {
+            let mut work: Vec<(&mut Scratch, Pieces)> = scratches.iter_mut().zip(sinks).collect();
+            for_each_slab(&mut work, |t, (s, sink)| {
                 let (z0, z1) = bounds(t);
                 let bottom =
                     if t == 0 { Bottom::Make } else { Bottom::Numbered((offsets[t - 1] + counts[t - 1].0.before_top) as u32) };
-                ctx.slab(z0, z1, bottom, s, &mut sink);
+                ctx.slab(z0, z1, bottom, s, sink);
                 normalize_all(sink.normals);
                 s.vertex_time += counts[t].1;
                 // The count and the sweep read the same sign bits, so they agree; a piece left

@@ -87,6 +87,13 @@ struct Data {
     /// How long our two-thread pool's second thread takes to start work after idling.
     #[serde(default)]
     wake: Vec<Wake>,
+    /// Whether our two-thread runs called from the experiment's thread on rayon's global pool of
+    /// two threads (absent from runs before they did; they used a pool counting the caller).
+    #[serde(default)]
+    two_threads_global: Option<bool>,
+    /// Idle before each recorded call, ms (absent from runs before there was one).
+    #[serde(default)]
+    idle_before_call_ms: Option<u64>,
 }
 
 /// A two-thread pool asked for work after the experiment's thread ran alone (and the pool slept)
@@ -94,23 +101,31 @@ struct Data {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct Wake {
     idle_ms: u64,
-    /// The pool our two-thread runs use, which includes the caller ([`WakeCaller::Inside`]).
+    /// A pool that counts the caller as one of its threads ([`WakeCaller::Inside`]; the pool our
+    /// two-thread runs used before they called from outside).
     start_us: Spread,
     /// A pool that leaves the caller out, which waits ([`WakeCaller::Outside`]; absent from runs
     /// before it was measured).
     #[serde(default)]
     caller_outside_us: Option<Spread>,
+    /// The caller outside wakes every thread and waits ([`WakeCaller::Broadcast`]; absent from
+    /// runs before it was measured).
+    #[serde(default)]
+    broadcast_us: Option<Spread>,
 }
 
-/// Where the thread asking a two-thread pool for work is.
+/// Where the thread asking a two-thread pool for work is, and how it asks.
 #[derive(Clone, Copy, Debug)]
 enum WakeCaller {
     /// One of the pool's threads (`use_current_thread`): it runs its half of a `join` while the
-    /// other thread is woken (our two-thread runs).
+    /// other thread is woken.
     Inside,
-    /// Not one of them: it hands the pool the job and waits (VTK's caller, and a program calling
-    /// isolab from its own thread with rayon's global pool).
+    /// Not one of them: it hands the pool a `join` and waits; the thread that takes it wakes the
+    /// other (rayon's parallel iterators called from outside a pool).
     Outside,
+    /// Not one of them: it wakes every thread with a broadcast and waits (our slab phases called
+    /// from outside a pool, as our two-thread runs and the command line call them; VTK's caller).
+    Broadcast,
 }
 
 /// Idle times before the request, ms, and requests per idle time.
@@ -118,49 +133,56 @@ const WAKE_IDLE_MS: [u64; 4] = [0, 1, 5, 20];
 const WAKE_REQUESTS: usize = 9;
 
 /// When both threads of a two-thread pool work on a job a caller hands it after idling `idle`,
-/// microseconds after the request, per request: the job is a `join` whose first half spins until
-/// the second half has started (at most 50 ms). `Inside` asks our shared pool from the
-/// experiment's thread, one of its threads; `Outside` asks a pool of its own from a thread of its
-/// own, in no pool (a pool thread asking another pool keeps working in its own while it waits).
+/// microseconds after the request, per request. For `Inside` and `Outside` the job is a `join`
+/// whose first half spins until the second half has started (at most 50 ms); for `Broadcast`, the
+/// later of the two threads' start times. Each way runs on a thread and a pool of its own, so the
+/// experiment's thread stays in no pool.
 fn second_thread_start(idle: Duration, caller: WakeCaller) -> Result<Vec<f64>, ExperimentError> {
     use std::sync::atomic::{AtomicBool, Ordering};
     let failed = |e: String| ExperimentError::Figure(format!("thread pool: {e}"));
-    let measure = |pool: &rayon::ThreadPool| {
-        let mut starts = Vec::with_capacity(WAKE_REQUESTS);
-        for _ in 0..WAKE_REQUESTS {
-            std::thread::sleep(idle);
-            let started = AtomicBool::new(false);
-            let asked = Instant::now();
-            let mut waited = Duration::ZERO;
-            pool.install(|| {
-                rayon::join(
-                    || {
-                        while !started.load(Ordering::Acquire) && asked.elapsed() < Duration::from_millis(50) {
-                            std::hint::spin_loop();
-                        }
-                        waited = asked.elapsed();
-                    },
-                    || started.store(true, Ordering::Release),
-                )
-            });
-            starts.push(waited.as_secs_f64() * 1e6);
-        }
-        starts
+    let join_start = |pool: &rayon::ThreadPool| {
+        let started = AtomicBool::new(false);
+        let asked = Instant::now();
+        let mut waited = Duration::ZERO;
+        pool.install(|| {
+            rayon::join(
+                || {
+                    while !started.load(Ordering::Acquire) && asked.elapsed() < Duration::from_millis(50) {
+                        std::hint::spin_loop();
+                    }
+                    waited = asked.elapsed();
+                },
+                || started.store(true, Ordering::Release),
+            )
+        });
+        waited
     };
-    match caller {
-        WakeCaller::Inside => {
-            let pool = crate::peers::ours::shared_pool(TWO).map_err(|e| failed(e.to_string()))?;
-            Ok(measure(&pool))
-        }
-        WakeCaller::Outside => std::thread::scope(|s| {
-            s.spawn(|| {
-                let pool = rayon::ThreadPoolBuilder::new().num_threads(TWO).build().map_err(|e| failed(e.to_string()))?;
-                Ok(measure(&pool))
+    let broadcast_start = |pool: &rayon::ThreadPool| {
+        let asked = Instant::now();
+        pool.broadcast(|_| asked.elapsed()).into_iter().max().unwrap_or_default()
+    };
+    let measure = |pool: &rayon::ThreadPool| {
+        (0..WAKE_REQUESTS)
+            .map(|_| {
+                std::thread::sleep(idle);
+                let waited = match caller {
+                    WakeCaller::Broadcast => broadcast_start(pool),
+                    WakeCaller::Inside | WakeCaller::Outside => join_start(pool),
+                };
+                waited.as_secs_f64() * 1e6
             })
-            .join()
-            .map_err(|_| failed("the measuring thread panicked".into()))?
-        }),
-    }
+            .collect::<Vec<f64>>()
+    };
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            let builder = rayon::ThreadPoolBuilder::new().num_threads(TWO);
+            let builder = if matches!(caller, WakeCaller::Inside) { builder.use_current_thread() } else { builder };
+            let pool = builder.build().map_err(|e| failed(e.to_string()))?;
+            Ok(measure(&pool))
+        })
+        .join()
+        .map_err(|_| failed("the measuring thread panicked".into()))?
+    })
 }
 
 /// One implementation as the run alternates them: its label, the peer, its threads, and whether
@@ -276,6 +298,7 @@ impl Experiment for Peers {
                     idle_ms: ms,
                     start_us: Spread::of(second_thread_start(idle, WakeCaller::Inside)?),
                     caller_outside_us: Some(Spread::of(second_thread_start(idle, WakeCaller::Outside)?)),
+                    broadcast_us: Some(Spread::of(second_thread_start(idle, WakeCaller::Broadcast)?)),
                 })
             })
             .collect::<Result<Vec<_>, ExperimentError>>()?;
@@ -325,6 +348,7 @@ impl Experiment for Peers {
                             continue;
                         }
                         let job = Job::Grid { samples: &samples, file: &raw, threads: e.threads };
+                        std::thread::sleep(IDLE_BEFORE_CALL);
                         match e.peer.run(&job, protocol) {
                             Ok(run) => {
                                 let slot = runs.entry((k, protocol)).or_insert_with(|| (Vec::new(), run.vertices, run.triangles));
@@ -367,7 +391,9 @@ impl Experiment for Peers {
         drop(server);
         let _ = std::fs::remove_dir_all(&tmp);
         bar.finish();
-        let data = Data { repeats, timings, floors, versions, skipped, wake };
+        let two_threads_global = Some(crate::peers::ours::caller_outside(TWO));
+        let idle_before_call_ms = Some(IDLE_BEFORE_CALL.as_millis() as u64);
+        let data = Data { repeats, timings, floors, versions, skipped, wake, two_threads_global, idle_before_call_ms };
         charts(&ctx.figure_dir(NAME)?, &data)?;
         ctx.write_data(NAME, &data)
     }
@@ -423,6 +449,14 @@ fn charts(dir: &Path, data: &Data) -> Result<(), ExperimentError> {
 const ONE: usize = 1;
 /// See [`ONE`].
 const TWO: usize = 2;
+
+/// Idle before every recorded call, so that no call overlaps what the previous implementation
+/// (often in another process) still does after it answered. Without it, in a run cut to 64³ and
+/// 128³, our two-thread marching cubes on the 128³ sphere took 2.37-2.48 ms in two runs and
+/// 4.36-4.74 ms in three, right after the Python peers' calls; with it, four runs of five took
+/// 1.88-1.97 ms. Every implementation waits the same, so each call finds the machine idle and
+/// any thread pool asleep, as a one-shot call in a program mostly does.
+const IDLE_BEFORE_CALL: Duration = Duration::from_millis(20);
 const OUR_MC: &str = "isolab marching-cubes";
 const OUR_SN: &str = "isolab surface-nets";
 /// What every CLI row's label contains.
@@ -541,7 +575,7 @@ fn section(data: &Data) -> String {
     let mut md = String::from("## Against the peers, in one run (`peers`)\n\n");
     md.push_str(&format!(
         "Every implementation on the same sampled grid (built-in fields on their default domains, n samples a side), extraction \
-         only, alternating, {} runs each per protocol; Python peers read the very grid isolab sampled (`tests/reference/peers.py`). \
+         only, alternating, {} runs each per protocol{}; Python peers read the very grid isolab sampled (`tests/reference/peers.py`). \
          **One-shot**: fresh output and fresh state every call, as a CLI user or a first library call meets it (ours: a new \
          extractor and a new `Extraction`; VTK: a new filter; `fast-surface-nets`: a new buffer), each freed when its call \
          returns (freeing it just before the next call instead would hand that call pages already touched). **Steady state**: the same \
@@ -551,15 +585,25 @@ fn section(data: &Data) -> String {
          (above one means we are faster); the times tables give each median with its fastest and slowest run. \
          Our marching cubes makes no normals here, as VTK runs with ComputeNormalsOff and the other marching cubes peers make \
          none; surface nets makes its usual normals, as `fast-surface-nets` does. Threads: our one-thread runs are serial on the \
-         experiment's own thread; our two-thread runs share one rayon pool whose threads are the experiment's thread and one \
-         more, so the calling thread works while the other starts (VTK's caller instead hands a job to each of its pool's \
-         threads and waits). With a pool per implementation our two-thread runs were often no faster than one; other pool \
-         set-ups tried (the caller left out, a new pool per call, pinned threads) are described, with what they measured, in \
-         `experiments/src/peers/ours.rs`. Each one-shot output is freed when its call returns, so the allocator may hand the \
+         experiment's own thread; {} Pool set-ups tried before (the caller as a pool thread, the caller left out, a new pool \
+         per call, pinned threads) are described, with what they measured, in `experiments/src/peers/ours.rs`. Each one-shot output is freed when its call returns, so the allocator may hand the \
          next call pages already touched, on both sides; a process's very first call gets fresh pages from the kernel and costs \
          more. The criterion benches' one-shot follows this protocol (each output dropped right after its call: \
          `experiments/benches/protocol`). Peer versions: {}. Times are wall clock on a shared machine; compare ratios within this run.\n\n",
         data.repeats,
+        data.idle_before_call_ms.map_or_else(String::new, |ms| format!(
+            ", each call after {ms} ms idle (so that no call overlaps what the previous one, often in another process, still \
+             does after it answered; every thread pool has then slept)"
+        )),
+        match data.two_threads_global {
+            Some(true) => "our two-thread runs call from that thread on rayon's global pool of two threads, so the caller \
+                           wakes both pool threads at once and sleeps until they are done, as VTK's caller does with its pool \
+                           and as our command line does (`slabs::for_each_slab`).",
+            Some(false) => "rayon's global pool did not have two threads, so our two-thread runs ran inside a two-thread pool \
+                            of their own, where a working thread wakes the other.",
+            None => "our two-thread runs shared one rayon pool whose threads were the experiment's thread and one more, so the \
+                     calling thread worked while it woke the other.",
+        },
         if data.versions.is_empty() {
             "none available".to_owned()
         } else {
@@ -581,19 +625,23 @@ fn section(data: &Data) -> String {
     md.push_str(&ratio_table(data, &grids, Protocol::OneShot, &scaling_columns()));
     if !data.wake.is_empty() {
         md.push_str(
-            "\nIn this run other implementations run between our calls, so our pool has usually slept when a call comes. \
+            "\nIn this run every call follows an idle, so every pool has slept when a call comes. \
              How soon both of a two-thread pool's threads work on a job handed to it after the caller idled, measured before \
-             the grids (µs: median (fastest-slowest) of the requests), two ways: the caller inside the pool works its half \
-             while it wakes the other thread (the pool our two-thread runs use); the caller outside the pool hands it the job \
-             and waits, as VTK's caller and a program calling isolab from its own thread do. On this machine a thread can \
-             start milliseconds late; a one-shot extraction shorter than that is over before the second thread helps.\n\n",
+             the grids (µs: median (fastest-slowest) of the requests), three ways: the caller inside the pool works its half \
+             while it wakes the other thread; the caller outside the pool hands it a job and waits, and the thread that takes \
+             the job wakes the other (rayon's parallel iterators called from outside a pool); the caller outside wakes both \
+             threads at once and waits (a broadcast: our slab phases called from outside a pool, and VTK's caller; here the \
+             time is when the later thread started, which does not show whether the two share a CPU at first). On this \
+             machine a thread woken by a working thread can start milliseconds late; a one-shot extraction shorter than that \
+             is over before the second thread helps.\n\n",
         );
         let rows: Vec<Vec<String>> = data
             .wake
             .iter()
             .map(|w| {
                 let cell = |s: &Spread| format!("{:.0} ({:.0}-{:.0})", s.median, s.min, s.max);
-                vec![format!("{}", w.idle_ms), cell(&w.start_us), w.caller_outside_us.as_ref().map_or_else(|| "-".into(), cell)]
+                let optional = |s: &Option<Spread>| s.as_ref().map_or_else(|| "-".into(), cell);
+                vec![format!("{}", w.idle_ms), cell(&w.start_us), optional(&w.caller_outside_us), optional(&w.broadcast_us)]
             })
             .collect();
         md.push_str(&markdown_table(
@@ -601,6 +649,7 @@ fn section(data: &Data) -> String {
                 "idle before the request (ms)",
                 "both threads working after (µs): caller inside, working",
                 "caller outside, waiting",
+                "caller outside, waking both",
             ],
             &rows,
         ));

@@ -5,52 +5,32 @@
 //! output vectors and scratch are reused.
 //!
 //! Threads: on one, the extractor runs with `parallelism=serial` on the calling thread. On more,
-//! it runs on a rayon pool of that many threads, one pool per thread count shared by every `Ours`
-//! and built with the thread that first asks as one of its threads (the experiment's), so a call
-//! works on the calling thread and wakes one thread fewer. With a pool per implementation, our
-//! two-thread runs were often no faster than one thread; most likely the threads of the pool that
-//! ran last were still spinning, idle, on one of the two cores. Measured alternating four of our
-//! implementations (marching cubes and surface nets, one and two threads) on a 128³ gyroid,
-//! medians of 7: two-thread marching cubes took 11.9 ms with a pool each, 7.6 ms with this pool,
-//! 6.7 ms alone; but one-thread surface nets varied between 18.9 and 28 ms from one arrangement to
-//! another, so some cross-talk between runs remains on this machine.
+//! the experiment's thread calls it directly on rayon's global pool when that pool has that many
+//! threads ([`caller_outside`]), as the command line and a program calling isolab from its own
+//! thread do: the slab phases then wake every pool thread at once and the caller sleeps until
+//! they are done (`slabs::for_each_slab`), as VTK's caller does with its SMP pool. Otherwise it
+//! runs inside a pool of its own of that many threads, where rayon's work stealing wakes the
+//! second thread from a working one.
 //!
-//! Tried and dropped: a pool that leaves the calling thread out, which then hands it the job and
-//! waits, as VTK's caller waits for its `STDThread` pool. In a side harness (one-shot marching
-//! cubes after 5 or 20 ms idle, medians of 31) it was faster than this pool (gyroid 64³ 1.9-2.0
-//! against 2.8-3.1 ms; sphere 128³ 2.0-2.3 against 3.9-4.5 ms), but in one full `peers` run it was
-//! slower: two-thread marching cubes at 128³ took 3.71 ms (sphere), 10.9 (gyroid), 4.00 (asteroid)
-//! against 2.26, 7.06 and 2.21 ms in the run before with this pool; the wake-up measurement of
-//! that run saw its threads working 2.9 ms after a request that followed 1 ms idle, where this
-//! pool's were after 26 µs (later runs of this pool vary as much: the report's table). `peers`
-//! measures both before the grids (see `second_thread_start`).
-//!
-//! Why the second thread starts late here: a thread woken while its waker keeps running lands on
-//! the waker's CPU (in a side harness, 15 of 15 wakes after a 1 ms idle) and waits there until the
-//! scheduler moves it, on this machine one to four milliseconds later. Pinning the pool's two
-//! threads to two CPUs removed the delay: in a side harness, after 20 ms idle, the second thread
-//! started after 77 µs against 1555 µs unpinned, and two 1 ms halves joined in 1.1 ms against
-//! 2.0 ms. In one full `peers` run with this pool pinned (not committed), marching cubes on two
-//! threads against flying edges was 1.27-2.43x at 64³ and 1.37-1.65x at 128³. Not adopted: the
-//! pools of programs calling isolab are not pinned, this experiment measures what they meet, and
-//! pinned threads cannot be moved off a CPU something else is using.
-//!
-//! Four pool set-ups compared later, five runs each of this experiment cut to the 64³ and 128³
-//! grids (not committed; the median over the five runs of marching cubes' two-thread ratio
-//! against flying edges on two threads, gyroid 64³, then sphere, gyroid, asteroid and terrain at
-//! 128³):
-//! - this pool: 0.87x; 2.07, 1.37, 1.54, 1.23x;
-//! - a pool leaving the caller out, not pinned: 0.71x; 0.99, 1.08, 0.92, 0.97x (worse everywhere);
-//! - a new two-thread pool for every one-shot call, its start-up inside the timing (new threads
-//!   are placed on an idle CPU, not woken onto a busy one): 1.12x; 1.58, 0.78, 1.45, 1.33x; at
-//!   gyroid 128³ it was slower than one thread, which I did not explain;
+//! Why: on the machine the report runs on, a thread woken by a thread that keeps working lands on
+//! the waker's CPU and waits there until the scheduler moves it (in a side harness, 15 of 15
+//! wakes after 1 ms idle; the kernel is booted with `sched_vcpu_pack=15`, which is not an
+//! upstream option). Threads woken by a caller that then sleeps start on both CPUs within tens of
+//! microseconds. Earlier runs of this experiment used one pool that counted the experiment's
+//! thread as one of its two threads, so the caller worked while it woke the other; after the
+//! pool slept, its second thread often started milliseconds late, and two-thread marching cubes
+//! was slower than one thread on three of the four 64³ grids of the run committed before this
+//! change. Set-ups tried on the way, each in five runs of this experiment cut to 64³ and 128³ (the
+//! median over the runs of marching cubes' two-thread ratio against flying edges on two threads,
+//! gyroid 64³; sphere, gyroid, asteroid and terrain 128³), all with the wake-one-at-a-time
+//! parallel iterator:
+//! - one pool with the caller as a thread: 0.87x; 2.07, 1.37, 1.54, 1.23x;
+//! - a pool leaving the caller out, not pinned: 0.71x; 0.99, 1.08, 0.92, 0.97x (the first woken
+//!   thread wakes the second while it works);
+//! - a new two-thread pool for every one-shot call, its start-up inside the timing: 1.12x; 1.58,
+//!   0.78, 1.45, 1.33x;
 //! - a pool leaving the caller out with its two threads pinned: 1.18x; 1.71, 1.44, 1.47, 1.71x,
-//!   every 64³ ratio of every run at least 1.04x; but two-thread surface nets on the 128³ gyroid
-//!   took 20.0 ms (median of the runs' medians), against 10.7 with this pool, and gained next to
-//!   nothing over one thread (22.2 ms in the same runs).
-//!
-//! So this pool stays: no set-up that a library caller would meet meets every target, and the
-//! one nearest (pinned) makes another implementation slower than one thread.
+//!   but two-thread surface nets on the 128³ gyroid no faster than one thread.
 
 use super::{Job, Peer, PeerError, PeerRun, Protocol};
 use isolab_algorithms::extractors;
@@ -58,15 +38,21 @@ use isolab_algorithms::{Extraction, Extractor, Options};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
-/// The rayon pool with `threads` threads that every [`Ours`] uses; the thread that first asks is
-/// one of them.
-pub(crate) fn shared_pool(threads: usize) -> Result<Arc<rayon::ThreadPool>, rayon::ThreadPoolBuildError> {
+/// Whether a call from this thread with `threads` threads runs on rayon's global pool with the
+/// caller outside it: the thread is in no pool and the global pool has exactly `threads` threads.
+pub fn caller_outside(threads: usize) -> bool {
+    rayon::current_thread_index().is_none() && rayon::current_num_threads() == threads
+}
+
+/// The pool of `threads` threads for calls that cannot use the global pool, shared by every
+/// [`Ours`].
+fn own_pool(threads: usize) -> Result<Arc<rayon::ThreadPool>, rayon::ThreadPoolBuildError> {
     static POOLS: OnceLock<Mutex<HashMap<usize, Arc<rayon::ThreadPool>>>> = OnceLock::new();
     let mut pools = POOLS.get_or_init(Default::default).lock().unwrap_or_else(|e| e.into_inner());
     if let Some(pool) = pools.get(&threads) {
         return Ok(pool.clone());
     }
-    let pool = Arc::new(rayon::ThreadPoolBuilder::new().num_threads(threads).use_current_thread().build()?);
+    let pool = Arc::new(rayon::ThreadPoolBuilder::new().num_threads(threads).build()?);
     pools.insert(threads, pool.clone());
     Ok(pool)
 }
@@ -114,7 +100,8 @@ impl Peer for Ours {
         // One thread runs serial on the calling thread: no pool thread to wake.
         let result = match threads {
             1 => extractor.extract(samples, &mut out),
-            _ => shared_pool(threads)
+            n if caller_outside(n) => extractor.extract(samples, &mut out),
+            _ => own_pool(threads)
                 .map_err(|e| PeerError::Failed { peer: self.name(), message: format!("thread pool: {e}") })?
                 .install(|| extractor.extract(samples, &mut out)),
         };

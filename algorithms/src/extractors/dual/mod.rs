@@ -245,7 +245,7 @@ impl DualEngine {
             std::mem::swap(&mut slabs[0].cell_min, &mut s.cell_min);
             std::mem::swap(&mut slabs[0].links, &mut s.links);
         } else {
-            slabs.par_iter_mut().enumerate().for_each(|(t, slab)| {
+            crate::slabs::for_each_slab(slabs, |t, slab| {
                 ctx.slab(t * cell_layers / tasks, (t + 1) * cell_layers / tasks, smoothing, slab);
             });
         }

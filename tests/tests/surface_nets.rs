@@ -156,7 +156,9 @@ fn normals_follow_the_field_gradient() {
 
 #[test]
 fn parallel_slabs_join_exactly_like_one_slab_on_a_rough_field() {
+    use isolab_algorithms::extractors::dual_contouring::{DcOptions, DualContouring};
     use isolab_algorithms::slabs::Parallelism;
+    use isolab_algorithms::{Extraction, Extractor};
     // Many slabs on a rough field: every slab boundary is crowded with quads.
     let f = fields::builtin("asteroid", Default::default()).unwrap();
     let grid = Grid::covering(&f.domain(), 97).unwrap();
@@ -170,12 +172,46 @@ fn parallel_slabs_join_exactly_like_one_slab_on_a_rough_field() {
             }
         }
     }
-    for smoothing in [Smoothing::None, Smoothing::Elastic] {
-        let parallel = extract(&nets(smoothing), &s);
-        let serial =
-            extract(&SurfaceNets::new(SnOptions { smoothing, parallelism: Parallelism::Serial, ..Default::default() }), &s);
-        assert_eq!(parallel.surface, serial.surface, "{smoothing:?}: slabs must join to the very same mesh");
-        let t = isolab_metrics::topology(&parallel.surface);
-        assert!(t.closed && t.misoriented_edges == 0, "{t:?}");
+    let other = Samples::sample_cubic(fields::builtin("gyroid", Default::default()).unwrap(), grid, 0.0).unwrap();
+    let with = |parallelism: Parallelism| -> Vec<(String, Box<dyn Extractor>)> {
+        let mut all: Vec<(String, Box<dyn Extractor>)> = [Smoothing::None, Smoothing::Elastic]
+            .map(|smoothing| {
+                let e: Box<dyn Extractor> =
+                    Box::new(SurfaceNets::new(SnOptions { smoothing, parallelism, ..Default::default() }));
+                (format!("surface nets, {smoothing:?}"), e)
+            })
+            .into_iter()
+            .collect();
+        all.push(("dual contouring".into(), Box::new(DualContouring::new(DcOptions { parallelism, ..Default::default() }))));
+        all
+    };
+    for ((what, serial), (_, parallel)) in with(Parallelism::Serial).into_iter().zip(with(Parallelism::Rayon)) {
+        let expected = extract(serial.as_ref(), &s).surface;
+        let t = isolab_metrics::topology(&expected);
+        assert!(t.closed && t.misoriented_edges == 0, "{what}: {t:?}");
+        // One-shot (a fresh output: counted, then written in place without smoothing) and steady
+        // state (an output kept from another grid: slab buffers joined), from a thread outside
+        // any pool and inside pools of two and three threads.
+        let one_shot = || {
+            let mut out = Extraction::default();
+            parallel.extract(&s, &mut out).unwrap();
+            out.surface
+        };
+        let steady = || {
+            let mut out = Extraction::default();
+            parallel.extract(&other, &mut out).unwrap();
+            parallel.extract(&s, &mut out).unwrap();
+            out.surface
+        };
+        for threads in [0, 2, 3] {
+            let (a, b) = if threads == 0 {
+                (one_shot(), steady())
+            } else {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                pool.install(|| (one_shot(), steady()))
+            };
+            assert!(a == expected, "{what}, {threads} threads (0: global pool), one-shot: slabs must join to the very same mesh");
+            assert!(b == expected, "{what}, {threads} threads (0: global pool), steady: slabs must join to the very same mesh");
+        }
     }
 }

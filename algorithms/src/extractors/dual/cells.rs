@@ -68,89 +68,105 @@ impl Ctx<'_> {
         tag: u32,
         base: &mut [u32],
         cases: &mut [u16],
-        mesh: &mut TriMesh,
+        mesh: &mut impl SweepOut,
         mut cell_min: Option<&mut Vec<Vec3>>,
     ) {
         let [nx, ny, _] = self.grid.dims;
         let (sx, sxy) = (nx, nx * ny);
-        let first_normal = mesh.normals.len();
+        let first_normal = mesh.vertex_count();
+        self.for_each_surface_cell_of_layer(signs, z, |x, y, i, case| {
+            let idx = [i, i + 1, i + 1 + sx, i + sx, i + sxy, i + 1 + sxy, i + 1 + sx + sxy, i + sx + sxy];
+            let v = crate::geometry::gather(self.values, &idx);
+            let c = x + (nx - 1) * y;
+            let code = u16::from(case) << 6 | u16::from(self.joined_faces(case, x, y, z));
+            cases[c] = code;
+            let entry = self.tables.entry(code);
+            // Crossing of edge `e`, in the cell's unit cube.
+            let crossing = |e: usize| {
+                let (a, b) = EDGES[e];
+                let (va, vb) = (v[a as usize], v[b as usize]);
+                self.tables.edge_start[e] + self.tables.edge_step[e] * ((self.iso - va) / (vb - va))
+            };
+            let mut sums = [Vec3::ZERO; 4];
+            let mut counts = [0.0f32; 4];
+            let mut mask = entry.edge_mask;
+            if entry.polygons == 1 {
+                // Most cells: one piece, summed in registers (the same sum, in the same order).
+                counts[0] = mask.count_ones() as f32;
+                while mask != 0 {
+                    sums[0] += crossing(mask.trailing_zeros() as usize);
+                    mask &= mask - 1;
+                }
+            }
+            while mask != 0 {
+                let e = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let piece = entry.edge_polygon[e] as usize;
+                sums[piece] += crossing(e);
+                counts[piece] += 1.0;
+            }
+            let min = self.grid.position(x, y, z);
+            base[c] = tag | mesh.vertex_count() as u32;
+            for p in 0..entry.polygons as usize {
+                let local = match self.placement {
+                    Placement::Qef { tolerance, clamp } => {
+                        let mut pts = [Vec3::ZERO; 12];
+                        let mut nrm = [Vec3::ZERO; 12];
+                        let mut k = 0;
+                        for e in (0..12).filter(|&e| entry.edge_polygon[e] as usize == p) {
+                            let q = crossing(e);
+                            pts[k] = q;
+                            // The field's gradient where the samples carry it, else the
+                            // cell's trilinear interpolant's (Hermite data from samples).
+                            let g = match self.field {
+                                Some(field) => field.gradient(min + q * self.grid.spacing),
+                                None => trilinear_gradient(&v, q),
+                            };
+                            nrm[k] = g.normalize_or_zero();
+                            k += 1;
+                        }
+                        let x = qef::solve_qef(&pts[..k], &nrm[..k], tolerance);
+                        if clamp {
+                            x.clamp(Vec3::ZERO, Vec3::ONE)
+                        } else {
+                            x
+                        }
+                    }
+                    Placement::MassPoint => sums[p] / counts[p],
+                };
+                let normal = self.sweep_normals.then(|| trilinear_gradient(&v, local.clamp(Vec3::ZERO, Vec3::ONE)));
+                mesh.push_vertex(min + local * self.grid.spacing, normal);
+                if let Some(cell_min) = cell_min.as_deref_mut() {
+                    cell_min.push(min);
+                }
+            }
+        });
+        crate::geometry::normalize_all(mesh.normals_from(first_normal));
+    }
+
+    /// Calls `visit(x, y, i, case)` for every cell of cell layer `z` whose corners disagree (`i`:
+    /// the sample index of its lower corner), in the order the sweep numbers their vertices.
+    #[inline(always)]
+    fn for_each_surface_cell_of_layer(&self, signs: &LayerSigns, z: usize, mut visit: impl FnMut(usize, usize, usize, u8)) {
+        let [nx, ny, _] = self.grid.dims;
         for y in 0..ny - 1 {
             let rows = [signs.row(y, z), signs.row(y + 1, z), signs.row(y, z + 1), signs.row(y + 1, z + 1)];
             let Some((lo, hi)) = span(&rows, nx) else { continue };
             let start = self.grid.index(0, y, z);
             let bits = [signs.bits(y, z), signs.bits(y + 1, z), signs.bits(y, z + 1), signs.bits(y + 1, z + 1)];
-            for_each_surface_cell(bits, lo.saturating_sub(1), hi.min(nx - 2), |x, case| {
-                let i = start + x;
-                let idx = [i, i + 1, i + 1 + sx, i + sx, i + sxy, i + 1 + sxy, i + 1 + sx + sxy, i + sx + sxy];
-                let v = crate::geometry::gather(self.values, &idx);
-                let c = x + (nx - 1) * y;
-                let code = u16::from(case) << 6 | u16::from(self.joined_faces(case, x, y, z));
-                cases[c] = code;
-                let entry = self.tables.entry(code);
-                // Crossing of edge `e`, in the cell's unit cube.
-                let crossing = |e: usize| {
-                    let (a, b) = EDGES[e];
-                    let (va, vb) = (v[a as usize], v[b as usize]);
-                    self.tables.edge_start[e] + self.tables.edge_step[e] * ((self.iso - va) / (vb - va))
-                };
-                let mut sums = [Vec3::ZERO; 4];
-                let mut counts = [0.0f32; 4];
-                let mut mask = entry.edge_mask;
-                if entry.polygons == 1 {
-                    // Most cells: one piece, summed in registers (the same sum, in the same order).
-                    counts[0] = mask.count_ones() as f32;
-                    while mask != 0 {
-                        sums[0] += crossing(mask.trailing_zeros() as usize);
-                        mask &= mask - 1;
-                    }
-                }
-                while mask != 0 {
-                    let e = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    let piece = entry.edge_polygon[e] as usize;
-                    sums[piece] += crossing(e);
-                    counts[piece] += 1.0;
-                }
-                let min = self.grid.position(x, y, z);
-                base[c] = tag | mesh.positions.len() as u32;
-                for p in 0..entry.polygons as usize {
-                    let local = match self.placement {
-                        Placement::Qef { tolerance, clamp } => {
-                            let mut pts = [Vec3::ZERO; 12];
-                            let mut nrm = [Vec3::ZERO; 12];
-                            let mut k = 0;
-                            for e in (0..12).filter(|&e| entry.edge_polygon[e] as usize == p) {
-                                let q = crossing(e);
-                                pts[k] = q;
-                                // The field's gradient where the samples carry it, else the
-                                // cell's trilinear interpolant's (Hermite data from samples).
-                                let g = match self.field {
-                                    Some(field) => field.gradient(min + q * self.grid.spacing),
-                                    None => trilinear_gradient(&v, q),
-                                };
-                                nrm[k] = g.normalize_or_zero();
-                                k += 1;
-                            }
-                            let x = qef::solve_qef(&pts[..k], &nrm[..k], tolerance);
-                            if clamp {
-                                x.clamp(Vec3::ZERO, Vec3::ONE)
-                            } else {
-                                x
-                            }
-                        }
-                        Placement::MassPoint => sums[p] / counts[p],
-                    };
-                    mesh.positions.push(min + local * self.grid.spacing);
-                    if self.sweep_normals {
-                        mesh.normals.push(trilinear_gradient(&v, local.clamp(Vec3::ZERO, Vec3::ONE)));
-                    }
-                    if let Some(cell_min) = cell_min.as_deref_mut() {
-                        cell_min.push(min);
-                    }
-                }
-            });
+            for_each_surface_cell(bits, lo.saturating_sub(1), hi.min(nx - 2), |x, case| visit(x, y, start + x, case));
         }
-        crate::geometry::normalize_all(&mut mesh.normals[first_normal..]);
+    }
+
+    /// The vertices [`Ctx::cell_vertices`] makes in cell layer `z`: one per piece of surface of
+    /// every surface cell, from the sign bits alone.
+    fn count_cell_vertices(&self, signs: &LayerSigns, z: usize) -> usize {
+        let mut n = 0;
+        self.for_each_surface_cell_of_layer(signs, z, |x, y, _, case| {
+            let code = u16::from(case) << 6 | u16::from(self.joined_faces(case, x, y, z));
+            n += self.tables.entry(code).polygons as usize;
+        });
+        n
     }
 
     /// Quads for the crossing edges whose four cells lie in cell layers `z - 1` (`prev`) and `z`
@@ -163,23 +179,25 @@ impl Ctx<'_> {
         prev: (&[u32], &[u16]),
         cur: (&[u32], &[u16]),
         ghost: &[Vec3],
-        mesh: &mut TriMesh,
+        mesh: &mut impl SweepOut,
         links: Option<&mut Vec<(u32, u32)>>,
     ) {
-        let [nx, ny, _] = self.grid.dims;
-        let cx = nx - 1;
+        let cx = self.grid.dims[0] - 1;
         let tables = self.tables;
         // The vertex of the piece of surface that crosses local edge `e` of a cell.
-        let cell = |layer: (&[u32], &[u16]), x: usize, y: usize, e: usize| {
-            let c = x + cx * y;
-            layer.0[c] + u32::from(tables.entry(layer.1[c]).edge_polygon[e])
-        };
-        let positions = &mesh.positions;
+        let cell = |layer: (&[u32], &[u16]), x: usize, y: usize, e: usize| piece_vertex(tables, layer, x + cx * y, e);
+        // Taken out for the layer's quads and put back after, as a local.
+        let mut triangles = mesh.take_triangles();
+        let positions = mesh.positions();
         let at = |i: u32| if i & EXTERN == 0 { positions[i as usize] } else { ghost[(i & !EXTERN) as usize] };
         let mut links = links;
         let least_folded = matches!(self.placement, Placement::Qef { .. });
-        let mut emit = |c: [u32; 4], flip: bool, triangles: &mut Vec<[u32; 3]>| {
-            let [c00, c10, c11, c01] = c;
+        self.for_each_quad(signs, z, |edge, x, y, flip| {
+            let [c00, c10, c11, c01] = match edge {
+                QuadEdge::Z => [cell(cur, x - 1, y - 1, 10), cell(cur, x, y - 1, 11), cell(cur, x, y, 8), cell(cur, x - 1, y, 9)],
+                QuadEdge::X => [cell(prev, x, y - 1, 6), cell(prev, x, y, 4), cell(cur, x, y, 0), cell(cur, x, y - 1, 2)],
+                QuadEdge::Y => [cell(prev, x - 1, y, 5), cell(cur, x - 1, y, 1), cell(cur, x, y, 3), cell(prev, x, y, 7)],
+            };
             let along_00_11 = if least_folded {
                 let p = [c00, c10, c11, c01].map(at);
                 split_least_folded(p, (p[2] - p[0]).cross(p[3] - p[1]))
@@ -188,77 +206,125 @@ impl Ctx<'_> {
             };
             let (t0, t1) = if along_00_11 { ([c00, c10, c11], [c00, c11, c01]) } else { ([c10, c11, c01], [c10, c01, c00]) };
             for t in [t0, t1] {
-                triangles.push(if flip { [t[0], t[2], t[1]] } else { t });
+                triangles.push_triangle(if flip { [t[0], t[2], t[1]] } else { t });
             }
             if let Some(links) = links.as_deref_mut() {
                 links.extend([(c00, c10), (c10, c11), (c11, c01), (c01, c00)]);
             }
-        };
-        let mut triangles = std::mem::take(&mut mesh.triangles);
+        });
+        mesh.put_triangles(triangles);
+    }
+
+    /// The triangles [`Ctx::quads`] makes for cell layer `z`: two per quad.
+    fn count_quad_triangles(&self, signs: &LayerSigns, z: usize) -> usize {
+        let mut n = 0;
+        self.for_each_quad(signs, z, |_, _, _, _| n += 2);
+        n
+    }
+
+    /// Calls `visit(edge, x, y, flip)` for every crossing edge whose quad [`Ctx::quads`] makes
+    /// for cell layer `z`, in its order: the edge from sample `(x, y, z)` along `edge`, wound the
+    /// other way when `flip` (its first sample is outside).
+    #[inline(always)]
+    fn for_each_quad(&self, signs: &LayerSigns, z: usize, mut visit: impl FnMut(QuadEdge, usize, usize, bool)) {
+        let [nx, ny, nz] = self.grid.dims;
         let bit = |row: &[u64], x: usize| row[x / 64] >> (x % 64) & 1 == 1;
         for y in 0..ny {
             let here = signs.bits(y, z);
             // z-edges (x, y, z)-(x, y, z+1): cells (x-1..x, y-1..y) of layer z.
-            if z + 1 < self.grid.dims[2] && y >= 1 && y + 1 < ny {
+            if z + 1 < nz && y >= 1 && y + 1 < ny {
                 if let Some((lo, hi)) = span(&[signs.row(y, z), signs.row(y, z + 1)], nx) {
                     let above = signs.bits(y, z + 1);
-                    for_each_bit(
-                        lo.max(1),
-                        hi.min(nx - 2),
-                        |w| here[w] ^ above[w],
-                        |x| {
-                            let c = [
-                                cell(cur, x - 1, y - 1, 10),
-                                cell(cur, x, y - 1, 11),
-                                cell(cur, x, y, 8),
-                                cell(cur, x - 1, y, 9),
-                            ];
-                            emit(c, !bit(here, x), &mut triangles);
-                        },
-                    );
+                    for_each_bit(lo.max(1), hi.min(nx - 2), |w| here[w] ^ above[w], |x| visit(QuadEdge::Z, x, y, !bit(here, x)));
                 }
             }
-            if z == 0 || z + 1 >= self.grid.dims[2] {
+            if z == 0 || z + 1 >= nz {
                 continue;
             }
             // x-edges (x, y, z)-(x+1, y, z): cells (x, y-1..y) of layers z-1 and z.
             let row = signs.row(y, z);
             if y >= 1 && y + 1 < ny && !row.is_uniform() {
                 let (lo, hi) = ((row.first as usize).saturating_sub(1), (row.last as usize).min(nx - 2));
-                for_each_bit(
-                    lo,
-                    hi,
-                    |w| here[w] ^ next_bits(here, w),
-                    |x| {
-                        let c = [cell(prev, x, y - 1, 6), cell(prev, x, y, 4), cell(cur, x, y, 0), cell(cur, x, y - 1, 2)];
-                        emit(c, !bit(here, x), &mut triangles);
-                    },
-                );
+                for_each_bit(lo, hi, |w| here[w] ^ next_bits(here, w), |x| visit(QuadEdge::X, x, y, !bit(here, x)));
             }
             // y-edges (x, y, z)-(x, y+1, z): cells (x-1..x, y) of layers z-1 and z.
             if y + 1 < ny {
                 if let Some((lo, hi)) = span(&[row, signs.row(y + 1, z)], nx) {
                     let next = signs.bits(y + 1, z);
-                    for_each_bit(
-                        lo.max(1),
-                        hi.min(nx - 2),
-                        |w| here[w] ^ next[w],
-                        |x| {
-                            let c = [cell(prev, x - 1, y, 5), cell(cur, x - 1, y, 1), cell(cur, x, y, 3), cell(prev, x, y, 7)];
-                            emit(c, !bit(here, x), &mut triangles);
-                        },
-                    );
+                    for_each_bit(lo.max(1), hi.min(nx - 2), |w| here[w] ^ next[w], |x| visit(QuadEdge::Y, x, y, !bit(here, x)));
                 }
             }
         }
-        mesh.triangles = triangles;
     }
+}
+
+/// The vertex of the piece of surface that crosses local edge `e` of cell `c` in `layer` (first
+/// vertex indices, cell codes). Inlined by force: called from one closure in four places, it was
+/// not, and the whole sweep took a sixth longer.
+#[inline(always)]
+fn piece_vertex(tables: Tables, layer: (&[u32], &[u16]), c: usize, e: usize) -> u32 {
+    layer.0[c] + u32::from(tables.entry(layer.1[c]).edge_polygon[e])
+}
+
+/// The lattice axis of a crossing edge whose quad the sweep makes.
+#[derive(Clone, Copy)]
+pub(super) enum QuadEdge {
+    X,
+    Y,
+    Z,
 }
 
 impl Ctx<'_> {
     /// Meshes cell layers `z0..z1` into `s.mesh`, referring to the layer below `z0` (owned by the
     /// slab below) through `EXTERN`-tagged indices into a recomputed ghost layer.
     pub(super) fn slab(&self, z0: usize, z1: usize, links: bool, s: &mut Slab) {
+        let mut mesh = std::mem::take(&mut s.mesh);
+        mesh.clear();
+        if mesh.positions.capacity() == 0 {
+            // A fresh output (one-shot): size it once from the crossing edges instead of growing
+            // by doubling. A closed quad mesh has about as many vertices as quads, one quad per
+            // interior crossing edge; capacity never written is never touched.
+            let dims = self.grid.dims;
+            let edges = count_crossing_edges(&mut s.signs, self.values, dims, self.iso, z0, z1, true);
+            let vertices = edges + edges / 8 + 64;
+            mesh.positions.reserve_exact(vertices);
+            mesh.normals.reserve_exact(vertices);
+            if self.keep_cell_min {
+                s.cell_min.reserve_exact(vertices);
+            }
+            mesh.triangles.reserve_exact(2 * edges + 64);
+        }
+        self.sweep(z0, z1, links, s, &mut mesh);
+        s.mesh = mesh;
+    }
+
+    /// Meshes cell layers `z0..z1` straight into `piece`, its part of the output, sized by
+    /// [`Ctx::count`]: indices come out global, those to the layer below `z0` resolved to the
+    /// slab below's piece. No cell corners or links (the path without smoothing).
+    pub(super) fn slab_into(&self, z0: usize, z1: usize, s: &mut Slab, piece: &mut Piece) {
+        debug_assert!(!self.keep_cell_min);
+        self.sweep(z0, z1, false, s, piece);
+    }
+
+    /// What [`Ctx::slab_into`] writes for cell layers `z0..z1`, from the sign bits alone (and
+    /// the neighbour cases of the rare cells with joined faces).
+    pub(super) fn count(&self, z0: usize, z1: usize, s: &mut Slab) -> SlabCount {
+        let (values, dims, iso) = (self.values, self.grid.dims, self.iso);
+        let signs = &mut s.signs;
+        signs.reset(dims[0], dims[1]);
+        let mut count = SlabCount::default();
+        for z in z0..z1 {
+            signs.classify(values, dims, iso, z);
+            signs.classify(values, dims, iso, z + 1);
+            count.last_layer_start = count.vertices;
+            count.vertices += self.count_cell_vertices(signs, z);
+            count.triangles += self.count_quad_triangles(signs, z);
+        }
+        count
+    }
+
+    /// The sweep of [`Ctx::slab`] and [`Ctx::slab_into`] into `out`.
+    fn sweep(&self, z0: usize, z1: usize, links: bool, s: &mut Slab, out: &mut impl SweepOut) {
         let [nx, ny, _] = self.grid.dims;
         let layer = (nx - 1) * (ny - 1);
         for b in [&mut s.prev, &mut s.cur] {
@@ -267,7 +333,6 @@ impl Ctx<'_> {
         for b in [&mut s.prev_case, &mut s.cur_case] {
             crate::slabs::grow_zeroed(b, layer);
         }
-        s.mesh.clear();
         s.ghost.clear();
         s.cell_min.clear();
         s.links.clear();
@@ -275,19 +340,6 @@ impl Ctx<'_> {
         s.geometry_time = std::time::Duration::ZERO;
         let mut signs = std::mem::take(&mut s.signs);
         let (values, dims, iso) = (self.values, self.grid.dims, self.iso);
-        if s.mesh.positions.capacity() == 0 {
-            // A fresh output (one-shot): size it once from the crossing edges instead of growing
-            // by doubling. A closed quad mesh has about as many vertices as quads, one quad per
-            // interior crossing edge; capacity never written is never touched.
-            let edges = count_crossing_edges(&mut signs, values, dims, iso, z0, z1, true);
-            let vertices = edges + edges / 8 + 64;
-            s.mesh.positions.reserve_exact(vertices);
-            s.mesh.normals.reserve_exact(vertices);
-            if self.keep_cell_min {
-                s.cell_min.reserve_exact(vertices);
-            }
-            s.mesh.triangles.reserve_exact(2 * edges + 64);
-        }
         signs.reset(nx, ny);
         if z0 > 0 {
             let t = Instant::now();
@@ -300,25 +352,146 @@ impl Ctx<'_> {
             let a = Instant::now();
             signs.classify(values, dims, iso, z);
             signs.classify(values, dims, iso, z + 1);
-            s.last_layer_start = s.mesh.positions.len() as u32;
-            self.cell_vertices(
-                &signs,
-                z,
-                0,
-                &mut s.cur,
-                &mut s.cur_case,
-                &mut s.mesh,
-                self.keep_cell_min.then_some(&mut s.cell_min),
-            );
+            s.last_layer_start = out.vertex_count() as u32;
+            let cell_min = self.keep_cell_min.then_some(&mut s.cell_min);
+            self.cell_vertices(&signs, z, 0, &mut s.cur, &mut s.cur_case, out, cell_min);
             let b = Instant::now();
             let link_buffer = links.then_some(&mut s.links);
-            self.quads(&signs, z, (&s.prev, &s.prev_case), (&s.cur, &s.cur_case), &s.ghost.positions, &mut s.mesh, link_buffer);
+            self.quads(&signs, z, (&s.prev, &s.prev_case), (&s.cur, &s.cur_case), &s.ghost.positions, out, link_buffer);
             s.geometry_time += b.elapsed();
             s.vertex_time += b - a;
             std::mem::swap(&mut s.prev, &mut s.cur);
             std::mem::swap(&mut s.prev_case, &mut s.cur_case);
         }
         s.signs = signs;
+    }
+}
+
+/// What a slab writes: its vertices and triangles, and how many vertices come before its last
+/// cell layer's (the layer the slab above refers to).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) struct SlabCount {
+    pub(super) vertices: usize,
+    pub(super) triangles: usize,
+    pub(super) last_layer_start: usize,
+}
+
+/// Where the sweep writes: a slab's own mesh (indices slab-local, tagged below the slab) or its
+/// piece of the output ([`Piece`]).
+pub(super) trait SweepOut {
+    /// Where triangles go.
+    type Triangles: TriangleOut;
+    /// Vertices written so far.
+    fn vertex_count(&self) -> usize;
+    /// Appends a vertex and, when given, its normal.
+    fn push_vertex(&mut self, p: Vec3, normal: Option<Vec3>);
+    /// The normals from vertex `first` on (none when the sweep makes none).
+    fn normals_from(&mut self, first: usize) -> &mut [Vec3];
+    /// The vertices written so far, by slab-local index.
+    fn positions(&self) -> &[Vec3];
+    /// Takes where triangles go out, to be put back by [`SweepOut::put_triangles`].
+    fn take_triangles(&mut self) -> Self::Triangles;
+    /// Puts back what [`SweepOut::take_triangles`] took.
+    fn put_triangles(&mut self, triangles: Self::Triangles);
+}
+
+/// Takes triangles of slab-local indices (tagged: the layer below the slab).
+pub(super) trait TriangleOut {
+    fn push_triangle(&mut self, t: [u32; 3]);
+}
+
+impl TriangleOut for Vec<[u32; 3]> {
+    #[inline]
+    fn push_triangle(&mut self, t: [u32; 3]) {
+        self.push(t);
+    }
+}
+
+impl SweepOut for TriMesh {
+    type Triangles = Vec<[u32; 3]>;
+    #[inline]
+    fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+    #[inline]
+    fn push_vertex(&mut self, p: Vec3, normal: Option<Vec3>) {
+        self.positions.push(p);
+        if let Some(n) = normal {
+            self.normals.push(n);
+        }
+    }
+    fn normals_from(&mut self, first: usize) -> &mut [Vec3] {
+        // No normals at all when the sweep makes none (smoothing moves the vertices first).
+        let first = first.min(self.normals.len());
+        &mut self.normals[first..]
+    }
+    fn positions(&self) -> &[Vec3] {
+        &self.positions
+    }
+    fn take_triangles(&mut self) -> Vec<[u32; 3]> {
+        std::mem::take(&mut self.triangles)
+    }
+    fn put_triangles(&mut self, triangles: Vec<[u32; 3]>) {
+        self.triangles = triangles;
+    }
+}
+
+/// A slab's piece of an output sized beforehand: vertices and normals written in place, triangle
+/// indices made global as they are written.
+pub(super) struct Piece<'a> {
+    pub(super) positions: &'a mut [Vec3],
+    pub(super) normals: &'a mut [Vec3],
+    pub(super) vertices: usize,
+    pub(super) triangles: PieceTriangles<'a>,
+}
+
+/// A piece's triangles: slab-local index `i` becomes `base + i`, a tagged one the slab below's
+/// last-layer vertex `below + i`.
+pub(super) struct PieceTriangles<'a> {
+    pub(super) out: &'a mut [[u32; 3]],
+    pub(super) written: usize,
+    pub(super) base: u32,
+    pub(super) below: u32,
+}
+
+impl TriangleOut for PieceTriangles<'_> {
+    #[inline]
+    fn push_triangle(&mut self, t: [u32; 3]) {
+        let d = &mut self.out[self.written];
+        // Element by element, not `t.map(..)`: see `slabs::join_parts`' callers.
+        d[0] = resolve(t[0], self.base, self.below);
+        d[1] = resolve(t[1], self.base, self.below);
+        d[2] = resolve(t[2], self.base, self.below);
+        self.written += 1;
+    }
+}
+
+impl<'a> SweepOut for Piece<'a> {
+    type Triangles = PieceTriangles<'a>;
+    #[inline]
+    fn vertex_count(&self) -> usize {
+        self.vertices
+    }
+    #[inline]
+    fn push_vertex(&mut self, p: Vec3, normal: Option<Vec3>) {
+        self.positions[self.vertices] = p;
+        if let Some(n) = normal {
+            self.normals[self.vertices] = n;
+        }
+        self.vertices += 1;
+    }
+    fn normals_from(&mut self, first: usize) -> &mut [Vec3] {
+        let written = if self.normals.is_empty() { 0 } else { self.vertices };
+        &mut self.normals[first.min(written)..written]
+    }
+    fn positions(&self) -> &[Vec3] {
+        &self.positions[..self.vertices]
+    }
+    fn take_triangles(&mut self) -> PieceTriangles<'a> {
+        PieceTriangles { out: std::mem::take(&mut self.triangles.out), ..self.triangles }
+    }
+    fn put_triangles(&mut self, triangles: PieceTriangles<'a>) {
+        self.triangles = triangles;
     }
 }
 

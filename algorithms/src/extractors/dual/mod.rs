@@ -10,7 +10,10 @@
 //! its quadric error ([`qef`], dual contouring). Cells are swept in layers along z, slabs of
 //! layers in parallel ([`crate::slabs`]); each slab recomputes the cell layer below it, whose
 //! vertices belong to the slab below, and refers to them by tagged indices resolved at the join,
-//! so the mesh is the same on any number of threads. Optional constrained smoothing
+//! so the mesh is the same on any number of threads. A fresh output without smoothing (one-shot)
+//! skips the join, as flying edges does: every slab's output is counted from the sign bits first,
+//! the output allocated once, and each slab writes its own piece of it (`Ctx::count`,
+//! `Ctx::slab_into`). Optional constrained smoothing
 //! ([`smoothing`]) moves vertices toward their net neighbours without leaving their cells.
 //!
 //! The front ends' module docs give the papers, guarantees and costs.
@@ -29,7 +32,9 @@ use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
 use crate::samples::Samples;
 use crate::sign_rows::{count_crossing_edges, for_each_bit, for_each_surface_cell, next_bits, span, LayerSigns};
-use crate::slabs::{join_parts, slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN};
+use crate::slabs::{
+    for_each_slab, join_parts, resize_zeroed, slab_offsets, split_pieces, split_slab_time, Parallelism, ScratchPool, EXTERN,
+};
 use crate::tables::marching_cubes::{opposite_face, Case, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, RING_FACES, TABLE};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -189,6 +194,62 @@ fn resolve(i: u32, offset: u32, below: u32) -> u32 {
 }
 
 impl DualEngine {
+    /// The one-shot parallel path without smoothing: counts each of the `slabs`' output
+    /// ([`Ctx::count`]), sizes `surface` once, and has each slab write its piece of it
+    /// ([`Ctx::slab_into`]).
+    fn extract_into_pieces(
+        &self,
+        ctx: &Ctx,
+        slabs: &mut [Slab],
+        cell_layers: usize,
+        surface: &mut TriMesh,
+    ) -> Result<(), ExtractError> {
+        let tasks = slabs.len();
+        let bounds = |t: usize| (t * cell_layers / tasks, (t + 1) * cell_layers / tasks);
+        let counts: Vec<(SlabCount, std::time::Duration)> = for_each_slab(slabs, |t, slab| {
+            let start = Instant::now();
+            let (z0, z1) = bounds(t);
+            (ctx.count(z0, z1, slab), start.elapsed())
+        });
+        let offsets = slab_offsets(counts.iter().map(|(c, _)| c.vertices), self.name)?;
+        resize_zeroed(&mut surface.positions, offsets[tasks]);
+        resize_zeroed(&mut surface.normals, if ctx.sweep_normals { offsets[tasks] } else { 0 });
+        resize_zeroed(&mut surface.triangles, counts.iter().map(|(c, _)| c.triangles).sum());
+        let normal_counts = counts.iter().map(|(c, _)| if ctx.sweep_normals { c.vertices } else { 0 });
+        let pieces = split_pieces(&mut surface.positions, counts.iter().map(|(c, _)| c.vertices))
+            .into_iter()
+            .zip(split_pieces(&mut surface.normals, normal_counts))
+            .zip(split_pieces(&mut surface.triangles, counts.iter().map(|(c, _)| c.triangles)))
+            .enumerate()
+            .map(|(t, ((positions, normals), triangles))| Piece {
+                positions,
+                normals,
+                vertices: 0,
+                triangles: PieceTriangles {
+                    out: triangles,
+                    written: 0,
+                    base: offsets[t] as u32,
+                    // The slab below's last cell layer, which this slab's ghost layer recomputes.
+                    below: if t > 0 { (offsets[t - 1] + counts[t - 1].0.last_layer_start) as u32 } else { 0 },
+                },
+            });
+        let mut work: Vec<(&mut Slab, Piece)> = slabs.iter_mut().zip(pieces).collect();
+        for_each_slab(&mut work, |t, (slab, piece)| {
+            let (z0, z1) = bounds(t);
+            ctx.slab_into(z0, z1, slab, piece);
+            slab.vertex_time += counts[t].1;
+            // A piece left partly unwritten would be a silently wrong mesh, so this is checked
+            // always: the count and the sweep read the same sign bits and must agree.
+            assert_eq!(
+                (piece.vertices, piece.triangles.written),
+                (counts[t].0.vertices, counts[t].0.triangles),
+                "{}: slab {t} wrote other counts than it counted",
+                self.name
+            );
+        });
+        Ok(())
+    }
+
     /// The name it reports as.
     pub fn name(&self) -> &'static str {
         self.name
@@ -236,7 +297,15 @@ impl DualEngine {
         }
         let slabs = &mut s.slabs[..tasks];
         let t_slabs = Instant::now();
-        if tasks == 1 {
+        let mut joined = false;
+        if tasks > 1 && out.surface.positions.capacity() == 0 && !smoothing && !ctx.keep_cell_min {
+            // A fresh output (one-shot) without smoothing, in flying edges' order: count every
+            // slab's output, allocate the output once, then let each slab write its own piece of
+            // it. Every page of the output is touched once, by the thread that fills it, and no
+            // slab buffers are filled and copied.
+            self.extract_into_pieces(&ctx, slabs, cell_layers, &mut out.surface)?;
+            joined = true;
+        } else if tasks == 1 {
             std::mem::swap(&mut slabs[0].mesh, &mut out.surface);
             std::mem::swap(&mut slabs[0].cell_min, &mut s.cell_min);
             std::mem::swap(&mut slabs[0].links, &mut s.links);
@@ -245,13 +314,13 @@ impl DualEngine {
             std::mem::swap(&mut slabs[0].cell_min, &mut s.cell_min);
             std::mem::swap(&mut slabs[0].links, &mut s.links);
         } else {
-            crate::slabs::for_each_slab(slabs, |t, slab| {
+            for_each_slab(slabs, |t, slab| {
                 ctx.slab(t * cell_layers / tasks, (t + 1) * cell_layers / tasks, smoothing, slab);
             });
         }
         let slab_wall = t_slabs.elapsed();
         let t_join = Instant::now();
-        if tasks > 1 {
+        if tasks > 1 && !joined {
             let offsets = slab_offsets(slabs.iter().map(|slab| slab.mesh.positions.len()), self.name)?;
             let slabs: &[Slab] = slabs;
             // Where slab `t`'s tagged indices point: the first vertex of the slab below's last layer.

@@ -1,8 +1,8 @@
 //! `scaling`: how every extractor's time and memory grow with the grid, and how it uses threads
 //! (issue 7, "how far from the limit" and "scaling"). The built-in `sphere` sampled on cubic grids
-//! of 32³ to 512³ samples; each registered extractor run on the same samples with rayon limited
-//! to one thread and to two (a pool per count, so the code scales to whatever it is given),
-//! alternating, median of the runs (one run each at 512³). Reported per run:
+//! of 32³ to 512³ samples; each registered extractor run on the same samples on one thread (in a
+//! pool of one) and on two (on rayon's global pool, called from outside it as the command line
+//! calls), alternating, median of the runs (one run each at 512³). Reported per run:
 //! - time, the speed-up from the second thread, and the slope of log time against log cells
 //!   (about 1: bound by the cells; about 2/3: bound by the surface);
 //! - time as a multiple of the machine's memory floor for that grid and output (one streaming read
@@ -76,6 +76,10 @@ struct Data {
     threads: Vec<usize>,
     rows: Vec<Row>,
     skipped: Vec<String>,
+    /// The thread count that ran from the experiment's thread on rayon's global pool (the
+    /// others ran inside a pool of their size); None in runs before this was recorded.
+    #[serde(default)]
+    global_pool_threads: Option<usize>,
 }
 
 /// Bytes of the extraction's meshes as stored (positions, normals, indices).
@@ -93,15 +97,27 @@ fn fresh(index: usize) -> Result<Box<dyn Extractor>, ExperimentError> {
     (INFOS[index].make)(&Options::new()).map_err(|e| ExperimentError::Figure(format!("building {}: {e}", INFOS[index].name)))
 }
 
-/// Runs `extractor` on `samples` inside `pool`: the extraction time.
+/// Runs `extractor` on `samples` with `pool`'s thread count: the extraction time. When rayon's
+/// global pool has that many threads (more than one) and this thread is in no pool, the call
+/// runs from here on the global pool, as the command line and `peers` call, so the slab phases
+/// wake every pool thread at once ([`crate::peers::ours::caller_outside`]); otherwise inside `pool`.
 fn timed(
     pool: &rayon::ThreadPool,
     extractor: &dyn Extractor,
     samples: &Samples,
     out: &mut Extraction,
 ) -> Result<Duration, ExperimentError> {
-    pool.install(|| extractor.extract(samples, out))?;
+    if on_global_pool(pool.current_num_threads()) {
+        extractor.extract(samples, out)?;
+    } else {
+        pool.install(|| extractor.extract(samples, out))?;
+    }
     Ok(out.stats.times.extraction())
+}
+
+/// Whether [`timed`] runs `threads` threads from this thread on the global pool.
+fn on_global_pool(threads: usize) -> bool {
+    threads > 1 && crate::peers::ours::caller_outside(threads)
 }
 
 /// Least-squares slope of `ln y` against `ln x`.
@@ -215,7 +231,8 @@ impl Experiment for Scaling {
             }
         }
         bar.finish_with_message("done");
-        let data = Data { field: FIELD.into(), threads: THREADS.to_vec(), rows, skipped };
+        let global_pool_threads = THREADS.iter().copied().find(|&t| on_global_pool(t));
+        let data = Data { field: FIELD.into(), threads: THREADS.to_vec(), rows, skipped, global_pool_threads };
         figures(ctx, &data)?;
         ctx.write_data(NAME, &data)
     }
@@ -299,8 +316,8 @@ fn section(ctx: &Context, data: &Data) -> String {
     let threads = &data.threads;
     let mut md = String::from("## Scaling with the grid and the threads (`scaling`)\n\n");
     md.push_str(&format!(
-        "Every extractor on the built-in `{}` sampled on cubic grids of n³ samples (extraction only, the samples shared), with rayon \
-         limited to {} threads by a pool of that size, alternating; medians of up to {MAX_REPEATS} runs per protocol (one from {SINGLE_RUN_FROM}³ on); slopes and plots use \
+        "Every extractor on the built-in `{}` sampled on cubic grids of n³ samples (extraction only, the samples shared), on {} \
+         threads{}, alternating; medians of up to {MAX_REPEATS} runs per protocol (one from {SINGLE_RUN_FROM}³ on); slopes and plots use \
          the steady-state medians. *× floor* is the one-thread \
          time over this machine's memory floor for the grid and that extractor's output (one streaming read of the samples plus \
          one write of the output bytes, measured in the same run). *Peak* is the heap the extraction added at its highest, \
@@ -309,6 +326,14 @@ fn section(ctx: &Context, data: &Data) -> String {
          shared machine.\n\n",
         data.field,
         threads.iter().map(|t| t.to_string()).collect::<Vec<_>>().join(" and "),
+        match data.global_pool_threads {
+            Some(g) => format!(
+                " ({}{g} from the experiment's own thread on rayon's global pool of {g}, so the slab phases wake every pool thread \
+                 at once, as the command line and `peers` call)",
+                threads.iter().filter(|&&t| t != g).map(|t| format!("{t} inside a rayon pool of {t}; ")).collect::<String>()
+            ),
+            None => " (rayon limited to each count by a pool of that size)".to_owned(),
+        },
     ));
     // Slopes.
     md.push_str(&format!("### Slopes of log time against log cells ({SLOPE_FROM}³ and up)\n\n"));

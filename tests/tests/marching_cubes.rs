@@ -105,6 +105,43 @@ fn parallel_slabs_join_without_cracks_on_white_noise() {
     assert_eq!((tp.euler, tp.components), (ts.euler, ts.components));
 }
 
+/// One extractor kept across calls on different grids, each into a fresh output (one-shot) or a
+/// kept one (steady state), serial and on two and three threads: every mesh equals a fresh serial
+/// extractor's. Scratch state (sign bits, index arrays) wrongly carried from an earlier grid
+/// would show here.
+#[test]
+fn kept_extractors_mesh_each_new_grid_as_a_fresh_one_does() {
+    let grids: Vec<Samples> = ["sphere", "gyroid", "asteroid", "sphere"]
+        .iter()
+        .zip([40, 57, 66, 71])
+        .map(|(name, n)| {
+            let f = fields::builtin(name, Default::default()).unwrap();
+            Samples::sample_cubic(f.clone(), Grid::covering(&f.domain(), n).unwrap(), 0.0).unwrap()
+        })
+        .collect();
+    let expected: Vec<_> = grids.iter().map(|s| extract(&serial(), s).surface).collect();
+    for parallelism in [Parallelism::Serial, Parallelism::Rayon] {
+        for threads in [0, 2, 3] {
+            let run = || {
+                let kept = MarchingCubes::new(McOptions { parallelism, ..Default::default() });
+                let mut reused = isolab_algorithms::Extraction::default();
+                for (s, want) in grids.iter().zip(&expected) {
+                    let mut fresh = isolab_algorithms::Extraction::default();
+                    kept.extract(s, &mut fresh).unwrap();
+                    assert!(fresh.surface == *want, "{parallelism:?}, {threads} threads (0: global pool): one-shot differs");
+                    kept.extract(s, &mut reused).unwrap();
+                    assert!(reused.surface == *want, "{parallelism:?}, {threads} threads (0: global pool): steady state differs");
+                }
+            };
+            if threads == 0 {
+                run();
+            } else {
+                rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(run);
+            }
+        }
+    }
+}
+
 #[test]
 fn sphere_at_64_is_closed_genus_0_with_volume_within_half_a_percent() {
     let report = run(&RunConfig::new("marching-cubes", "sphere", 64)).unwrap().report;

@@ -424,7 +424,7 @@ fn charts(dir: &Path, data: &Data) -> Result<(), ExperimentError> {
             .enumerate()
             .map(|(k, label)| Series {
                 label: (*label).to_owned(),
-                color: crate::figures::PALETTE[k % crate::figures::PALETTE.len()],
+                color: crate::figures::series_color(k),
                 points: one_shot()
                     .filter(|t| t.implementation == *label)
                     .map(|t| (((t.n - 1) as f64).powi(3), t.ms.median))

@@ -16,6 +16,33 @@ pub const PALETTE: [(u8, u8, u8); 8] = [
     (0x17, 0xbe, 0xcf),
 ];
 
+/// Twelve more, after [`PALETTE`]: the rest of Tableau's twenty (its grey and olive, then the
+/// light shades of the eight), so that a figure of up to twenty series repeats no colour.
+const MORE: [(u8, u8, u8); 12] = [
+    (0x7f, 0x7f, 0x7f),
+    (0xbc, 0xbd, 0x22),
+    (0xae, 0xc7, 0xe8),
+    (0xff, 0x98, 0x96),
+    (0x98, 0xdf, 0x8a),
+    (0xff, 0xbb, 0x78),
+    (0xc5, 0xb0, 0xd5),
+    (0xc4, 0x9c, 0x94),
+    (0xf7, 0xb6, 0xd2),
+    (0x9e, 0xda, 0xe5),
+    (0xc7, 0xc7, 0xc7),
+    (0xdb, 0xdb, 0x8d),
+];
+
+/// The colour of series `k` of a figure that is not about the registered algorithms: distinct for
+/// the first twenty, then hues from the golden angle.
+pub fn series_color(k: usize) -> (u8, u8, u8) {
+    match k {
+        _ if k < PALETTE.len() => PALETTE[k],
+        _ if k < PALETTE.len() + MORE.len() => MORE[k - PALETTE.len()],
+        _ => hsv((k as f32 * 137.508) % 360.0, 0.65, 0.8),
+    }
+}
+
 /// The colours the report's figures have always given the registered algorithms.
 const NAMED: [(&str, (u8, u8, u8)); 7] = [
     ("marching-cubes", PALETTE[0]),
@@ -72,5 +99,14 @@ mod tests {
         assert_eq!(color_of("a-new-extractor"), color_of("a-new-extractor"));
         assert_eq!(hsv(0.0, 1.0, 1.0), (255, 0, 0));
         assert_eq!(hsv(120.0, 1.0, 1.0), (0, 255, 0));
+    }
+
+    #[test]
+    fn twenty_series_get_twenty_colours() {
+        let colours: Vec<_> = (0..20).map(series_color).collect();
+        for (i, a) in colours.iter().enumerate() {
+            assert!(colours[i + 1..].iter().all(|b| b != a), "series {i} repeats {a:?}");
+        }
+        assert_eq!(series_color(0), PALETTE[0]);
     }
 }

@@ -185,7 +185,7 @@ pub(super) fn plot(runs: &[StudyRun], dir: &Path) -> Result<Option<std::path::Pa
             } else {
                 format!("paper's update, step {}", r.time_step)
             },
-            color: crate::figures::PALETTE[k % crate::figures::PALETTE.len()],
+            color: crate::figures::series_color(k),
             points: r.trace.iter().map(|t| (f64::from(t.0), t.1.max(0.01))).collect(),
         })
         .collect();

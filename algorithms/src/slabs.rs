@@ -3,13 +3,15 @@
 //! one rayon task into its own buffers; a slab's vertices on its bottom layer belong to the slab
 //! below, and indices to them are tagged ([`EXTERN`]) until the slabs are joined in order
 //! ([`slab_offsets`], [`join_parts`]), or, when every slab's output was counted first, each writes
-//! its own piece of one output sized once ([`resize_zeroed`], [`split_pieces`]). The result is
+//! its own piece of one output sized once ([`mesh_pieces`]). The result is
 //! the same mesh on any number of threads. [`ScratchPool`]
 //! gives concurrent callers (chunks meshed in parallel) their own reusable buffers;
 //! [`split_slab_time`] turns a parallel phase's wall time into the vertex and geometry stage
 //! times the reports show.
 
 use crate::extract::ExtractError;
+use crate::mesh::TriMesh;
+use glam::Vec3;
 use rayon::prelude::*;
 use std::time::Duration;
 
@@ -104,6 +106,33 @@ pub fn split_pieces<T>(slice: &mut [T], lens: impl IntoIterator<Item = usize>) -
             rest = tail;
             piece
         })
+        .collect()
+}
+
+/// One slab's piece of a mesh output sized once ([`mesh_pieces`]).
+pub struct MeshPiece<'a> {
+    /// The slab's vertex positions.
+    pub positions: &'a mut [Vec3],
+    /// Its normals; empty when the output has none.
+    pub normals: &'a mut [Vec3],
+    /// Its triangles.
+    pub triangles: &'a mut [[u32; 3]],
+}
+
+/// Sizes `mesh` once for slabs that make `counts` (vertices, triangles) each, with a normal per
+/// vertex when `normals` ([`resize_zeroed`]), and cuts it into one piece per slab, in order: the
+/// output of the count-then-write path, where every slab fills its own piece.
+pub fn mesh_pieces<'a>(mesh: &'a mut TriMesh, counts: &[(usize, usize)], normals: bool) -> Vec<MeshPiece<'a>> {
+    let vertices: usize = counts.iter().map(|c| c.0).sum();
+    resize_zeroed(&mut mesh.positions, vertices);
+    resize_zeroed(&mut mesh.normals, if normals { vertices } else { 0 });
+    resize_zeroed(&mut mesh.triangles, counts.iter().map(|c| c.1).sum());
+    let normal_counts = counts.iter().map(|c| if normals { c.0 } else { 0 });
+    split_pieces(&mut mesh.positions, counts.iter().map(|c| c.0))
+        .into_iter()
+        .zip(split_pieces(&mut mesh.normals, normal_counts))
+        .zip(split_pieces(&mut mesh.triangles, counts.iter().map(|c| c.1)))
+        .map(|((positions, normals), triangles)| MeshPiece { positions, normals, triangles })
         .collect()
 }
 
@@ -250,6 +279,18 @@ mod tests {
         let mut data = [0u8, 1, 2, 3, 4, 5];
         let pieces = split_pieces(&mut data, [2, 0, 3]);
         assert_eq!(pieces.iter().map(|p| p.to_vec()).collect::<Vec<_>>(), vec![vec![0, 1], vec![], vec![2, 3, 4]]);
+    }
+
+    #[test]
+    fn mesh_pieces_cut_one_output_sized_once() {
+        let mut mesh = TriMesh::default();
+        for normals in [true, false] {
+            let pieces = mesh_pieces(&mut mesh, &[(2, 1), (0, 0), (3, 4)], normals);
+            let sizes: Vec<_> = pieces.iter().map(|p| (p.positions.len(), p.normals.len(), p.triangles.len())).collect();
+            let n = |k: usize| if normals { k } else { 0 };
+            assert_eq!(sizes, vec![(2, n(2), 1), (0, 0, 0), (3, n(3), 4)]);
+            assert_eq!((mesh.positions.len(), mesh.normals.len(), mesh.triangles.len()), (5, n(5), 5));
+        }
     }
 
     #[test]

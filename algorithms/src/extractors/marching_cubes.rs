@@ -69,8 +69,7 @@ use crate::sign_rows::{
     count_bits, count_crossing_edges, for_each_bit, for_each_surface_cell, layer_edge_words, span, z_edge_words, LayerSigns,
 };
 use crate::slabs::{
-    for_each_slab, grow_zeroed, join_parts, resize_zeroed, slab_offsets, split_pieces, split_slab_time, Parallelism, ScratchPool,
-    EXTERN,
+    for_each_slab, grow_zeroed, join_parts, mesh_pieces, slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN,
 };
 use crate::tables::marching_cubes::{
     decider_joins_inside, Case, AMBIGUOUS_FACES, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, TABLE,
@@ -751,27 +750,20 @@ impl Extractor for MarchingCubes {
             });
             let offsets = slab_offsets(counts.iter().map(|(c, _)| c.vertices), self.name())?;
             let t_allocate = Instant::now();
-            let surface = &mut out.surface;
-            resize_zeroed(&mut surface.positions, offsets[tasks]);
-            resize_zeroed(&mut surface.normals, if sample_normals { offsets[tasks] } else { 0 });
-            resize_zeroed(&mut surface.triangles, counts.iter().map(|(c, _)| c.triangles).sum());
-            allocation_time = t_allocate.elapsed();
-            let normal_counts = counts.iter().map(|(c, _)| if sample_normals { c.vertices } else { 0 });
-            let pieces = split_pieces(&mut surface.positions, counts.iter().map(|(c, _)| c.vertices))
+            let sizes: Vec<(usize, usize)> = counts.iter().map(|(c, _)| (c.vertices, c.triangles)).collect();
+            let sinks: Vec<Pieces> = mesh_pieces(&mut out.surface, &sizes, sample_normals)
                 .into_iter()
-                .zip(split_pieces(&mut surface.normals, normal_counts))
-                .zip(split_pieces(&mut surface.triangles, counts.iter().map(|(c, _)| c.triangles)));
-            let sinks: Vec<Pieces> = pieces
                 .enumerate()
-                .map(|(t, ((positions, normals), triangles))| Pieces {
-                    positions,
-                    normals,
-                    triangles,
+                .map(|(t, piece)| Pieces {
+                    positions: piece.positions,
+                    normals: piece.normals,
+                    triangles: piece.triangles,
                     base: offsets[t] as u32,
                     vertices: 0,
                     triangles_written: 0,
                 })
                 .collect();
+            allocation_time = t_allocate.elapsed();
             let mut work: Vec<(&mut Scratch, Pieces)> = scratches.iter_mut().zip(sinks).collect();
             for_each_slab(&mut work, |t, (s, sink)| {
                 let (z0, z1) = bounds(t);

@@ -186,9 +186,7 @@ impl Ctx<'_> {
         let tables = self.tables;
         // The vertex of the piece of surface that crosses local edge `e` of a cell.
         let cell = |layer: (&[u32], &[u16]), x: usize, y: usize, e: usize| piece_vertex(tables, layer, x + cx * y, e);
-        // Taken out for the layer's quads and put back after, as a local.
-        let mut triangles = mesh.take_triangles();
-        let positions = mesh.positions();
+        let (positions, triangles) = mesh.positions_and_triangles();
         let at = |i: u32| if i & EXTERN == 0 { positions[i as usize] } else { ghost[(i & !EXTERN) as usize] };
         let mut links = links;
         let least_folded = matches!(self.placement, Placement::Qef { .. });
@@ -212,7 +210,6 @@ impl Ctx<'_> {
                 links.extend([(c00, c10), (c10, c11), (c11, c01), (c01, c00)]);
             }
         });
-        mesh.put_triangles(triangles);
     }
 
     /// The triangles [`Ctx::quads`] makes for cell layer `z`: two per quad.
@@ -387,12 +384,8 @@ pub(super) trait SweepOut {
     fn push_vertex(&mut self, p: Vec3, normal: Option<Vec3>);
     /// The normals from vertex `first` on (none when the sweep makes none).
     fn normals_from(&mut self, first: usize) -> &mut [Vec3];
-    /// The vertices written so far, by slab-local index.
-    fn positions(&self) -> &[Vec3];
-    /// Takes where triangles go out, to be put back by [`SweepOut::put_triangles`].
-    fn take_triangles(&mut self) -> Self::Triangles;
-    /// Puts back what [`SweepOut::take_triangles`] took.
-    fn put_triangles(&mut self, triangles: Self::Triangles);
+    /// The vertices written so far (by slab-local index) and where triangles go.
+    fn positions_and_triangles(&mut self) -> (&[Vec3], &mut Self::Triangles);
 }
 
 /// Takes triangles of slab-local indices (tagged: the layer below the slab).
@@ -425,14 +418,8 @@ impl SweepOut for TriMesh {
         let first = first.min(self.normals.len());
         &mut self.normals[first..]
     }
-    fn positions(&self) -> &[Vec3] {
-        &self.positions
-    }
-    fn take_triangles(&mut self) -> Vec<[u32; 3]> {
-        std::mem::take(&mut self.triangles)
-    }
-    fn put_triangles(&mut self, triangles: Vec<[u32; 3]>) {
-        self.triangles = triangles;
+    fn positions_and_triangles(&mut self) -> (&[Vec3], &mut Vec<[u32; 3]>) {
+        (&self.positions, &mut self.triangles)
     }
 }
 
@@ -484,14 +471,8 @@ impl<'a> SweepOut for Piece<'a> {
         let written = if self.normals.is_empty() { 0 } else { self.vertices };
         &mut self.normals[first.min(written)..written]
     }
-    fn positions(&self) -> &[Vec3] {
-        &self.positions[..self.vertices]
-    }
-    fn take_triangles(&mut self) -> PieceTriangles<'a> {
-        PieceTriangles { out: std::mem::take(&mut self.triangles.out), ..self.triangles }
-    }
-    fn put_triangles(&mut self, triangles: PieceTriangles<'a>) {
-        self.triangles = triangles;
+    fn positions_and_triangles(&mut self) -> (&[Vec3], &mut PieceTriangles<'a>) {
+        (&self.positions[..self.vertices], &mut self.triangles)
     }
 }
 

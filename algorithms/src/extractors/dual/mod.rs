@@ -32,9 +32,7 @@ use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
 use crate::samples::Samples;
 use crate::sign_rows::{count_crossing_edges, for_each_bit, for_each_surface_cell, next_bits, span, LayerSigns};
-use crate::slabs::{
-    for_each_slab, join_parts, resize_zeroed, slab_offsets, split_pieces, split_slab_time, Parallelism, ScratchPool, EXTERN,
-};
+use crate::slabs::{for_each_slab, join_parts, mesh_pieces, slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN};
 use crate::tables::marching_cubes::{opposite_face, Case, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, RING_FACES, TABLE};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -212,27 +210,19 @@ impl DualEngine {
             (ctx.count(z0, z1, slab), start.elapsed())
         });
         let offsets = slab_offsets(counts.iter().map(|(c, _)| c.vertices), self.name)?;
-        resize_zeroed(&mut surface.positions, offsets[tasks]);
-        resize_zeroed(&mut surface.normals, if ctx.sweep_normals { offsets[tasks] } else { 0 });
-        resize_zeroed(&mut surface.triangles, counts.iter().map(|(c, _)| c.triangles).sum());
-        let normal_counts = counts.iter().map(|(c, _)| if ctx.sweep_normals { c.vertices } else { 0 });
-        let pieces = split_pieces(&mut surface.positions, counts.iter().map(|(c, _)| c.vertices))
-            .into_iter()
-            .zip(split_pieces(&mut surface.normals, normal_counts))
-            .zip(split_pieces(&mut surface.triangles, counts.iter().map(|(c, _)| c.triangles)))
-            .enumerate()
-            .map(|(t, ((positions, normals), triangles))| Piece {
-                positions,
-                normals,
-                vertices: 0,
-                triangles: PieceTriangles {
-                    out: triangles,
-                    written: 0,
-                    base: offsets[t] as u32,
-                    // The slab below's last cell layer, which this slab's ghost layer recomputes.
-                    below: if t > 0 { (offsets[t - 1] + counts[t - 1].0.last_layer_start) as u32 } else { 0 },
-                },
-            });
+        let sizes: Vec<(usize, usize)> = counts.iter().map(|(c, _)| (c.vertices, c.triangles)).collect();
+        let pieces = mesh_pieces(surface, &sizes, ctx.sweep_normals).into_iter().enumerate().map(|(t, piece)| Piece {
+            positions: piece.positions,
+            normals: piece.normals,
+            vertices: 0,
+            triangles: PieceTriangles {
+                out: piece.triangles,
+                written: 0,
+                base: offsets[t] as u32,
+                // The slab below's last cell layer, which this slab's ghost layer recomputes.
+                below: if t > 0 { (offsets[t - 1] + counts[t - 1].0.last_layer_start) as u32 } else { 0 },
+            },
+        });
         let mut work: Vec<(&mut Slab, Piece)> = slabs.iter_mut().zip(pieces).collect();
         for_each_slab(&mut work, |t, (slab, piece)| {
             let (z0, z1) = bounds(t);

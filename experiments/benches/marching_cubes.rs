@@ -9,7 +9,7 @@ mod protocol;
 use isolab_algorithms::extractors::marching_cubes::{MarchingCubes, McOptions, NormalSource};
 use isolab_algorithms::slabs::Parallelism;
 use isolab_algorithms::{fields, Extraction, Extractor, Grid, Lattice, Samples};
-use isolab_experiments::run::load_field;
+use isolab_pipeline::load_field;
 use protocol::one_shot;
 use std::hint::black_box;
 use std::time::Duration;

@@ -1,16 +1,13 @@
-//! # isolab experiments
+//! # isolab experiments: the report
 //!
-//! Everything that knows about files, command lines and the report: mesh file formats
-//! ([`io`]), the one-call pipeline the CLI and experiments share ([`run`]), and the binaries
-//! `isolab` (the CLI) and `report` (regenerates `report/`).
+//! The report's experiments ([`experiment`], one file or folder each, and the assembler of
+//! `report/`), their figures ([`figures`]), the peers they measure against ([`peers`]), and the
+//! binaries `report` (the main job) and one per experiment. Files come from `isolab-io`, runs
+//! from `isolab-pipeline`, pictures from `isolab-cli`'s renderer.
 
 pub mod alloc_meter;
-pub mod error;
 pub mod experiment;
 pub mod figures;
-pub mod input;
-pub mod io;
 pub mod memory;
 pub mod peers;
 pub mod report;
-pub mod run;

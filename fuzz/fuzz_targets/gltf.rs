@@ -1,7 +1,7 @@
 //! The glTF reader (`.glb` and `.gltf` with embedded buffers) on arbitrary bytes; external
 //! buffers are refused.
 #![no_main]
-use isolab_experiments::io::gltf::parse_gltf;
+use isolab_io::gltf::parse_gltf;
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 

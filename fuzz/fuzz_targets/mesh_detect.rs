@@ -1,6 +1,6 @@
 //! Format detection plus every mesh reader: the bytes go wherever their content sends them.
 #![no_main]
-use isolab_experiments::io::{parse_mesh, Coordinates};
+use isolab_io::{parse_mesh, Coordinates};
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 

@@ -2,8 +2,8 @@
 //! refused, so the header and attached data are what is fuzzed). A volume read must be finite
 //! and of the size its dimensions say.
 #![no_main]
-use isolab_experiments::io::volume::{nifti, VolumeOptions};
-use isolab_experiments::io::IoError;
+use isolab_io::volume::{nifti, VolumeOptions};
+use isolab_io::IoError;
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 

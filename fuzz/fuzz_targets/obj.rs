@@ -1,7 +1,7 @@
 //! The OBJ reader on arbitrary bytes (as text when they are UTF-8, as the CLI reads them): an
 //! error or a mesh with finite positions and indices in range, never a panic.
 #![no_main]
-use isolab_experiments::io::{parse_obj, Coordinates};
+use isolab_io::{parse_obj, Coordinates};
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 

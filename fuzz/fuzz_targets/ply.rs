@@ -1,6 +1,6 @@
 //! The PLY reader (ascii and binary, any property types) on arbitrary bytes.
 #![no_main]
-use isolab_experiments::io::{parse_ply, Coordinates};
+use isolab_io::{parse_ply, Coordinates};
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 

@@ -1,7 +1,7 @@
 //! The STL reader (ascii and binary) on arbitrary bytes.
 #![no_main]
-use isolab_experiments::io::stl::parse_stl;
-use isolab_experiments::io::Coordinates;
+use isolab_io::stl::parse_stl;
+use isolab_io::Coordinates;
 use libfuzzer_sys::fuzz_target;
 use std::path::Path;
 

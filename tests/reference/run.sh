@@ -49,5 +49,5 @@ fi
 if [ "${1:-}" = "setup" ]; then
   exit 0  # the environment only (the `peers` experiment's Python peers use it)
 fi
-cargo build --release --quiet -p isolab-experiments --bin isolab
+cargo build --release --quiet -p isolab-cli --bin isolab
 "$venv/bin/python" "$here/reference.py" live --isolab "$root/target/release/isolab"

@@ -12,7 +12,7 @@ pub fn model(name: &str) -> String {
 /// A built-in field by name, or a shipped model (`name.obj`) as a signed-distance field.
 pub fn object_field(name: &str) -> std::sync::Arc<dyn isolab_algorithms::Field> {
     if name.ends_with(".obj") {
-        isolab_experiments::run::load_field(&model(name), Default::default()).expect("shipped model")
+        isolab_pipeline::load_field(&model(name), Default::default()).expect("shipped model")
     } else {
         isolab_algorithms::fields::builtin(name, Default::default()).expect("built-in field")
     }

@@ -4,7 +4,7 @@
 use isolab_algorithms::extractors::marching_cubes::{FaceResolution, MarchingCubes, McOptions, NormalSource};
 use isolab_algorithms::slabs::Parallelism;
 use isolab_algorithms::{fields, Extractor, Grid, Samples};
-use isolab_experiments::run::{run, RunConfig};
+use isolab_pipeline::{run, RunConfig};
 use isolab_tests::{assert_closed_manifold, assert_closed_manifold_for, blob_field, extract, grid_samples};
 use proptest::prelude::*;
 
@@ -145,7 +145,7 @@ fn kept_extractors_mesh_each_new_grid_as_a_fresh_one_does() {
 #[test]
 fn sphere_at_64_is_closed_genus_0_with_volume_within_half_a_percent() {
     let report = run(&RunConfig::new("marching-cubes", "sphere", 64)).unwrap().report;
-    let m = &report.metrics;
+    let m = report.metrics.as_ref().unwrap();
     assert!(m.topology.is_watertight_manifold() && m.topology.outward);
     assert_eq!((m.topology.euler, m.topology.genus), (2, Some(0)));
     let exact = 4.0 / 3.0 * std::f64::consts::PI * 0.4f64.powi(3);
@@ -172,7 +172,7 @@ fn sphere_volume_and_area_converge() {
 
 #[test]
 fn torus_has_euler_characteristic_0() {
-    let m = run(&RunConfig::new("marching-cubes", "torus", 64)).unwrap().report.metrics;
+    let m = run(&RunConfig::new("marching-cubes", "torus", 64)).unwrap().report.metrics.unwrap();
     assert!(m.topology.is_watertight_manifold());
     assert_eq!((m.topology.euler, m.topology.genus, m.topology.components), (0, Some(1), 1));
     let exact = 2.0 * std::f64::consts::PI.powi(2) * 0.3 * 0.12f64.powi(2);
@@ -186,7 +186,7 @@ fn closed_fields_are_watertight_and_open_ones_only_open_at_the_domain() {
         assert_closed_manifold(&out.extraction.surface, name);
     }
     // Thin: a tube, a sheet and two close sheets stay four separate closed components at 64.
-    let thin = run(&RunConfig::new("marching-cubes", "thin", 64)).unwrap().report.metrics;
+    let thin = run(&RunConfig::new("marching-cubes", "thin", 64)).unwrap().report.metrics.unwrap();
     assert_eq!((thin.topology.components, thin.topology.euler), (4, 8));
     for name in ["gyroid", "terrain"] {
         let out = run(&RunConfig::new("marching-cubes", name, 40)).unwrap();

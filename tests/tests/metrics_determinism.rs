@@ -1,8 +1,8 @@
 //! The report promises the same numbers on every run (times aside): metrics must not depend on
 //! how rayon splits work.
 
-use isolab_experiments::run::{run, RunConfig};
 use isolab_metrics::MeshMetrics;
+use isolab_pipeline::{run, RunConfig};
 
 #[test]
 fn measuring_twice_gives_identical_json() {

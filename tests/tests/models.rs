@@ -3,8 +3,8 @@
 use isolab_algorithms::extractors::INFOS;
 use isolab_algorithms::fields::MeshField;
 use isolab_algorithms::{Extraction, Field, Grid, Lattice, Options, Samples};
-use isolab_experiments::io::read_mesh;
-use isolab_experiments::run::{run, RunConfig};
+use isolab_io::read_mesh;
+use isolab_pipeline::{run, RunConfig};
 use isolab_tests::{assert_closed_manifold, model};
 use std::sync::Arc;
 
@@ -21,7 +21,7 @@ fn stanford_bunny_with_holes_in_its_base_gives_one_closed_component() {
     let t = assert_closed_manifold(&out.extraction.surface, "bunny");
     assert_eq!((t.components, t.genus), (1, Some(0)));
     // Vertices lie near the scanned surface (exact distance), except where the base is closed.
-    let d = out.report.metrics.surface_distance.unwrap();
+    let d = out.report.metrics.as_ref().unwrap().surface_distance.unwrap();
     let spacing = out.report.dims.iter().map(|&n| n as f64).fold(0.0, f64::max).recip() * 0.2;
     // Measured: 6.1e-5 (about 2% of this spacing); the bound leaves half again for float error.
     assert!(d.mean < 0.03 * spacing, "mean distance {} against spacing {spacing}", d.mean);

@@ -4,8 +4,8 @@
 //! committed volume fixtures); proptest flips, overwrites, inserts and truncates bytes.
 
 use isolab_algorithms::fields::Volume;
-use isolab_experiments::io::volume::{metaimage, nifti, nrrd, VolumeOptions};
-use isolab_experiments::io::{self, Coordinates, IoError};
+use isolab_io::volume::{metaimage, nifti, nrrd, VolumeOptions};
+use isolab_io::{self as io, Coordinates, IoError};
 use proptest::prelude::*;
 use std::path::Path;
 use std::sync::OnceLock;
@@ -166,7 +166,7 @@ fn fuzz_regression_0002_a_short_gzip_stream_gets_no_more_memory_than_it_can_fill
     let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
     std::io::Write::write_all(&mut gz, &[7u8; 100]).unwrap();
     let small = gz.finish().unwrap();
-    let err = isolab_experiments::io::volume::inflate(&small, isolab_experiments::io::volume::Compression::Gzip, 1 << 40, &path)
+    let err = isolab_io::volume::inflate(&small, isolab_io::volume::Compression::Gzip, 1 << 40, &path)
         .expect_err("a terabyte is not in 100 bytes");
     assert!(err.to_string().contains("decompresses to only 100"), "{err}");
 }

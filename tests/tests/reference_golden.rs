@@ -8,7 +8,7 @@
 
 use glam::Vec3;
 use isolab_algorithms::{TetMesh, TriMesh};
-use isolab_experiments::io::read_mesh;
+use isolab_io::read_mesh;
 use isolab_metrics::tet_quality::{dihedral_angles, tet_shape};
 use isolab_metrics::{quality, MeshMetrics, Sampling};
 use serde_json::Value;
@@ -75,7 +75,7 @@ fn triangle_metrics_match_cgal_meshlab_and_vtk() {
             expect("outward", m.topology.outward == cgal["outward"].as_bool().unwrap(), format!("{}", m.topology.outward));
         }
         let si = cgal["self_intersections"].as_u64().unwrap() as usize;
-        expect("self-intersections", m.self_intersections.count == si, format!("{} vs {si}", m.self_intersections.count));
+        expect("self-intersections", m.intersecting_pairs() == si, format!("{} vs {si}", m.intersecting_pairs()));
         let ml = &g["meshlab"];
         let t = &m.topology;
         expect("components", t.components as u64 == ml["components"].as_u64().unwrap(), format!("{}", t.components));
@@ -174,16 +174,9 @@ fn defect_meshes_match_meshlab_libigl_and_cgal() {
             );
             assert_eq!(t.outward, cgal["outward"].as_bool().unwrap(), "{name} outward");
             let pairs = cgal["self_intersections"].as_u64().unwrap() as usize;
-            assert_eq!(m.self_intersections.count, pairs, "{name} self-intersections");
+            assert_eq!(m.intersecting_pairs(), pairs, "{name} self-intersections");
         }
-        seen.push((
-            name,
-            t.non_manifold_edges,
-            t.non_manifold_vertices,
-            t.outward,
-            t.misoriented_edges,
-            m.self_intersections.count,
-        ));
+        seen.push((name, t.non_manifold_edges, t.non_manifold_vertices, t.outward, t.misoriented_edges, m.intersecting_pairs()));
     }
     // Each mesh shows its defect (so the goldens above are not all zeros).
     assert_eq!(
@@ -266,7 +259,7 @@ fn tetrahedron_metrics_match_vtk() {
 /// diagonals of the same polygon move area and volume a little).
 #[test]
 fn marching_cubes_matches_vtk_and_scikit_image() {
-    use isolab_experiments::run::{run, RunConfig};
+    use isolab_pipeline::{run, RunConfig};
     let golden: Value =
         serde_json::from_str(&std::fs::read_to_string(root().join("tests/reference/golden/mc-equivalence.json")).unwrap())
             .unwrap();

@@ -5,9 +5,9 @@
 
 use glam::Vec3;
 use isolab_algorithms::{extractors, TriMesh};
-use isolab_experiments::io::volume::Inside;
-use isolab_experiments::io::{self, MeshExtras};
-use isolab_experiments::run::{run, OutputSpace, RunConfig, VolumeGrid};
+use isolab_io::volume::Inside;
+use isolab_io::{self as io, MeshExtras};
+use isolab_pipeline::{run, OutputSpace, RunConfig, VolumeGrid};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -85,7 +85,7 @@ fn marching_cubes_on_every_volume_copy_matches_scikit_image_in_world_coordinates
         let by_library = &g["triangles_by_library"];
         assert_eq!(by_library["vtkFlyingEdges3D"], by_library["skimage-lorensen"]);
         assert_eq!(mesh.triangles.len() as u64, by_library["vtkFlyingEdges3D"].as_u64().unwrap(), "{name}: triangles");
-        let m = &out.report.metrics.topology;
+        let m = &out.report.metrics.as_ref().unwrap().topology;
         assert!(m.closed && m.outward && m.edge_manifold && m.vertex_manifold, "{name}: {m:?}");
         assert_eq!(out.report.inside, Inside::Above, "{name}: scans default to inside above");
     }
@@ -99,7 +99,7 @@ fn every_surface_extractor_meshes_a_scan_closed_and_outward() {
             continue;
         }
         let out = run(&scan_config(info.name, "mni-small.nii.gz", 60.5)).unwrap();
-        let t = &out.report.metrics.topology;
+        let t = &out.report.metrics.as_ref().unwrap().topology;
         assert!(
             out.extraction.surface.triangles.len() > 3000,
             "{}: {} triangles",
@@ -117,7 +117,7 @@ fn volume_extractors_mesh_a_scan_too() {
     config.options.set("cells", "6");
     let out = run(&config).unwrap();
     assert!(!out.extraction.volume.tetrahedra.is_empty());
-    assert!(out.report.metrics.topology.outward, "{:?}", out.report.metrics.topology);
+    assert!(out.report.metrics.as_ref().unwrap().topology.outward, "{:?}", out.report.metrics.as_ref().unwrap().topology);
 }
 
 #[test]
@@ -127,8 +127,12 @@ fn resampling_a_scan_keeps_its_shape_and_the_output_space_can_be_lps() {
     config.volume_grid = VolumeGrid::Resampled;
     config.resolution = 96;
     let resampled = run(&config).unwrap();
-    let (a, b) = (native.report.metrics.volume, resampled.report.metrics.volume);
-    assert!(resampled.report.metrics.topology.outward, "{:?}", resampled.report.metrics.topology);
+    let (a, b) = (native.report.metrics.as_ref().unwrap().volume, resampled.report.metrics.as_ref().unwrap().volume);
+    assert!(
+        resampled.report.metrics.as_ref().unwrap().topology.outward,
+        "{:?}",
+        resampled.report.metrics.as_ref().unwrap().topology
+    );
     assert!((a - b).abs() < 0.03 * a, "native volume {a} mm^3, resampled {b}");
     config.space = OutputSpace::Lps;
     config.volume_grid = VolumeGrid::Native;

@@ -234,8 +234,8 @@ fn intersection_caveat(algorithm: &str, compared: &compare_algorithms::Data) -> 
         .iter()
         .filter(|r| r.algorithm == algorithm && (r.resolution == level || r.resolution == model_level))
         .collect();
-    let pairs: usize = middle.iter().map(|r| r.metrics.self_intersections.count).sum();
-    let hit = middle.iter().filter(|r| r.metrics.self_intersections.count > 0).count();
+    let pairs: usize = middle.iter().map(|r| r.metrics.intersecting_pairs()).sum();
+    let hit = middle.iter().filter(|r| r.metrics.intersecting_pairs() > 0).count();
     if pairs == 0 {
         return String::new();
     }

@@ -5,11 +5,11 @@
 use super::context::{measure, model_path, ms, Context, Experiment, ExperimentError, Measured};
 use crate::figures::color_of;
 use crate::figures::plot::{self, HistogramPlot, Scale, Series, Style, XyPlot};
-use crate::figures::render::{render, save_png, save_turntable, side_by_side, RenderOptions, Shading};
 use crate::report::{first_seen, markdown_table};
-use crate::run::{lattice_for, load_field, RunConfig};
 use isolab_algorithms::{extractors, fields, Samples};
+use isolab_cli::render::{render, save_png, save_turntable, side_by_side, RenderOptions, Shading};
 use isolab_metrics::Histogram;
+use isolab_pipeline::{lattice_for, load_field, RunConfig};
 use serde::{Deserialize, Serialize};
 
 /// The experiment.
@@ -284,7 +284,7 @@ fn summary(data: &Data) -> String {
                 a.clone(),
                 rows.len().to_string(),
                 format!("{}/{}", manifold.count(), rows.len()),
-                rows.iter().map(|r| r.metrics.self_intersections.count).sum::<usize>().to_string(),
+                rows.iter().map(|r| r.metrics.intersecting_pairs()).sum::<usize>().to_string(),
                 format!("{:.2}", median(rows.iter().map(|r| r.metrics.quality.aspect_ratio.mean).collect())),
                 format!("{:.1}", median(rows.iter().map(|r| r.metrics.quality.min_angle_deg).collect())),
                 format!(
@@ -392,7 +392,7 @@ fn section(data: &Data) -> String {
                 closed_cell(t.closed, open.contains(&r.field)).into(),
                 yes(t.edge_manifold && t.vertex_manifold && t.oriented).into(),
                 format!("{} / {}", t.euler, t.genus.map_or("-".into(), |g| g.to_string())),
-                m.self_intersections.count.to_string(),
+                m.intersecting_pairs().to_string(),
                 format!("{:.2} / {:.0}", m.quality.aspect_ratio.mean, m.quality.aspect_ratio.max),
                 format!("{:.2}", m.quality.min_angle_deg),
                 m.surface_distance.map_or("-".into(), |d| format!("{:.4}", d.mean / r.spacing)),

@@ -2,11 +2,11 @@
 //! trait, and the shared helpers (loading the report's objects, measuring an extractor). The
 //! registry in `experiment/mod.rs` lists the experiments; they import this, not the registry.
 
-use crate::io::IoError;
-use crate::run::RunError;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use isolab_algorithms::{Extraction, Extractor, Field, Samples};
+use isolab_io::IoError;
 use isolab_metrics::MeshMetrics;
+use isolab_pipeline::RunError;
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -102,7 +102,7 @@ impl Context {
         if let Some(dir) = path.parent() {
             std::fs::create_dir_all(dir).map_err(|source| IoError::Write { path: dir.into(), source })?;
         }
-        crate::run::write_json(&path, data)?;
+        isolab_pipeline::write_json(&path, data)?;
         Ok(())
     }
 
@@ -146,7 +146,7 @@ pub fn model_path(name: &str) -> String {
 /// signed-distance field: the objects the paper reproductions use.
 pub fn load_object(name: &str) -> Result<Arc<dyn Field>, ExperimentError> {
     if std::path::Path::new(&model_path(name)).exists() {
-        Ok(crate::run::load_field(&model_path(name), isolab_algorithms::fields::DEFAULT_SEED)?)
+        Ok(isolab_pipeline::load_field(&model_path(name), isolab_algorithms::fields::DEFAULT_SEED)?)
     } else {
         Ok(isolab_algorithms::fields::builtin(name, Default::default())?)
     }

@@ -126,7 +126,7 @@ fn run_native(
         .find(|l| l.trim_start().starts_with('{'))
         .ok_or_else(|| format!("{} printed no result", program.display()))?;
     let answer: NativeAnswer = serde_json::from_str(line).map_err(|e| format!("{} printed {line:?}: {e}", program.display()))?;
-    let mesh = crate::io::read_mesh(out).map_err(|e| e.to_string())?;
+    let mesh = isolab_io::read_mesh(out).map_err(|e| e.to_string())?;
     Ok((answer.ms.iter().map(|&ms| Duration::from_secs_f64(ms / 1e3)).collect(), mesh))
 }
 
@@ -174,7 +174,7 @@ impl Experiment for Decimation {
             }
         };
         let tmp = std::env::temp_dir().join(format!("isolab-decimation-{}", std::process::id()));
-        std::fs::create_dir_all(&tmp).map_err(|source| crate::io::IoError::Write { path: tmp.clone(), source })?;
+        std::fs::create_dir_all(&tmp).map_err(|source| isolab_io::IoError::Write { path: tmp.clone(), source })?;
         let bar = ctx.bar(NAME, OBJECTS.len() as u64);
         let mut rows = Vec::new();
         for (name, dims) in OBJECTS {
@@ -185,9 +185,9 @@ impl Experiment for Decimation {
             MarchingTetrahedra::default().extract(&samples, &mut mt)?;
             let input = mt.surface.clone();
             let input_path = tmp.join(format!("{name}.ply"));
-            crate::io::write_mesh(&input_path, &input)?;
+            isolab_io::write_mesh(&input_path, &input)?;
             let input_obj = tmp.join(format!("{name}.obj"));
-            crate::io::write_mesh(&input_obj, &input)?;
+            isolab_io::write_mesh(&input_obj, &input)?;
             // The paper's sweep sets the first target.
             let mut sweep = Vec::new();
             let mut out = mt.clone();
@@ -224,7 +224,7 @@ impl Experiment for Decimation {
                             Err(e) => failed = Some(e),
                         }
                     }
-                    match (failed, crate::io::read_mesh(&out_path)) {
+                    match (failed, isolab_io::read_mesh(&out_path)) {
                         (None, Ok(mesh)) => {
                             rows.push(row(name, &input, target, "pymeshlab quadric edge collapse", &mesh, times, grid.spacing))
                         }

@@ -15,10 +15,10 @@
 //! chunks are skipped unsampled ([`isolab_algorithms::field::Field::block_side`]).
 
 use super::context::{Context, Experiment, ExperimentError};
-use crate::io::PlyStream;
 use crate::report::markdown_table;
 use isolab_algorithms::chunks::stream_chunked;
 use isolab_algorithms::{extractors, fields, Grid};
+use isolab_io::PlyStream;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 

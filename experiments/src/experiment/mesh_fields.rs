@@ -16,11 +16,11 @@
 //! samples (the mesh must be the same, bit for bit).
 
 use super::{Context, Experiment, ExperimentError};
-use crate::io::read_mesh;
 use crate::peers::python::PythonServer;
 use crate::report::markdown_table;
 use isolab_algorithms::fields::{MeshField, CAP_WINDING_BOUND, CROSSING_TOLERANCE, DEFAULT_BAND_CELLS};
 use isolab_algorithms::{extractors, Extraction, Field, Grid, Options, Samples};
+use isolab_io::read_mesh;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::sync::Arc;

@@ -28,7 +28,7 @@ pub mod viewer;
 
 pub use context::*;
 
-use crate::io::write_atomic;
+use isolab_io::write_atomic;
 use std::path::PathBuf;
 
 /// Every experiment, in report order.

@@ -304,7 +304,7 @@ impl Experiment for Peers {
             .collect::<Result<Vec<_>, ExperimentError>>()?;
         let mut entries = entries(server.as_ref(), &root);
         let tmp = std::env::temp_dir().join(format!("isolab-peers-{}", std::process::id()));
-        std::fs::create_dir_all(&tmp).map_err(|source| crate::io::IoError::Write { path: tmp.clone(), source })?;
+        std::fs::create_dir_all(&tmp).map_err(|source| isolab_io::IoError::Write { path: tmp.clone(), source })?;
         let mut grids: Vec<(&str, usize)> = FIELDS.iter().flat_map(|&f| SIZES.iter().map(move |&n| (f, n))).collect();
         grids.extend(LARGE.1.iter().map(|&f| (f, LARGE.0)));
         let bar = ctx.bar(NAME, grids.len() as u64);
@@ -326,7 +326,7 @@ impl Experiment for Peers {
             let samples = Samples::sample_cubic(field, grid, 0.0)?;
             // A file per grid: the Python side caches the grid it read last by path.
             let raw: PathBuf = tmp.join(format!("{field_name}-{n}.raw"));
-            crate::io::write_samples(&raw, &samples, None)?;
+            isolab_io::write_samples(&raw, &samples, None)?;
             let large = n == LARGE.0;
             let mut runs: BTreeMap<(usize, Protocol), (Vec<f64>, usize, usize)> = BTreeMap::new();
             let mut failed = vec![false; entries.len()];

@@ -22,17 +22,17 @@
 //! the section says so.
 
 use super::context::{Context, Experiment, ExperimentError};
-use crate::figures::render::{grid, render, save_png, RenderOptions, Shading};
-use crate::io::volume::{read_volume, Inside, VolumeOptions};
 use crate::peers::python::{PythonPeer, PythonServer};
 use crate::peers::{Job, Peer, Protocol};
 use crate::report::markdown_table;
 use crate::report::Spread;
-use crate::run::{volume_samples, LatticeKind};
 use glam::Vec3;
 use isolab_algorithms::fields::{volume::otsu_threshold, Complement, VolumeField};
 use isolab_algorithms::{extractors, Extraction, Field, TriMesh};
+use isolab_cli::render::{grid, render, save_png, RenderOptions, Shading};
+use isolab_io::volume::{read_volume, Inside, VolumeOptions};
 use isolab_metrics::MeshMetrics;
+use isolab_pipeline::{volume_samples, LatticeKind};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -155,7 +155,7 @@ fn row(
         manifold: t.edge_manifold && t.vertex_manifold,
         outward: t.outward,
         oriented: t.oriented,
-        self_intersections: m.self_intersections.count,
+        self_intersections: m.intersecting_pairs(),
         distance_mean: d.mean,
         distance_max: d.max,
     }
@@ -267,7 +267,7 @@ impl Experiment for RealVolumes {
                                     times[surface.len() + p][t].push(run.time.as_secs_f64() * 1e3);
                                 }
                                 if last {
-                                    meshes[surface.len() + p] = Some(crate::io::read_mesh(&out)?);
+                                    meshes[surface.len() + p] = Some(isolab_io::read_mesh(&out)?);
                                 }
                             }
                             Err(e) => errors[p] = Some(e.to_string()),
@@ -549,6 +549,6 @@ fn yes_no(b: bool) -> String {
 
 fn tempfile_dir() -> Result<std::path::PathBuf, ExperimentError> {
     let tmp = std::env::temp_dir().join(format!("isolab-real-volumes-{}", std::process::id()));
-    std::fs::create_dir_all(&tmp).map_err(|source| crate::io::IoError::Write { path: tmp.clone(), source })?;
+    std::fs::create_dir_all(&tmp).map_err(|source| isolab_io::IoError::Write { path: tmp.clone(), source })?;
     Ok(tmp)
 }

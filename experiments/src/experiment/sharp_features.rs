@@ -4,9 +4,9 @@
 //! the field's normals and should land on the corners; the others cut them.
 
 use super::context::{Context, Experiment, ExperimentError};
-use crate::figures::render::{render, save_png, RenderOptions};
 use crate::report::markdown_table;
 use isolab_algorithms::{extractors, fields, Extraction, Grid, Lattice, Samples, Vec3};
+use isolab_cli::render::{render, save_png, RenderOptions};
 use serde::{Deserialize, Serialize};
 
 /// The experiment.

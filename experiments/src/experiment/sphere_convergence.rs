@@ -5,8 +5,8 @@ use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::color_of;
 use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
 use crate::report::markdown_table;
-use crate::run::{lattice_for, RunConfig};
 use isolab_algorithms::{extractors, fields, Extraction, Samples};
+use isolab_pipeline::{lattice_for, RunConfig};
 use serde::{Deserialize, Serialize};
 
 /// The experiment.

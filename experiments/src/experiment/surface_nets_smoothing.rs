@@ -7,10 +7,10 @@
 
 use super::context::{ms, Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, BarChart, BarSeries};
-use crate::figures::render::{render, save_png, RenderOptions};
 use crate::report::{markdown_table, median};
 use isolab_algorithms::extractors::surface_nets::{Smoothing, SnOptions, SurfaceNets};
 use isolab_algorithms::{fields, Extraction, Extractor, Field, Grid, Lattice, Samples};
+use isolab_cli::render::{render, save_png, RenderOptions};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 

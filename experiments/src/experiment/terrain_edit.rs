@@ -8,10 +8,10 @@
 
 use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
-use crate::figures::render::{self, RenderOptions, Shading};
 use crate::report::markdown_table;
 use isolab_algorithms::chunks::{Brush, ChunkedVolume};
 use isolab_algorithms::{extractors, fields, materials, Chunking, Extraction, Grid, Lattice, Samples};
+use isolab_cli::render::{self, RenderOptions, Shading};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 

@@ -6,10 +6,10 @@
 //! boundary (0 when watertight), manifoldness, time; a picture coloured by level.
 
 use super::context::{Context, Experiment, ExperimentError};
-use crate::figures::render::{self, RenderOptions, Shading};
 use crate::report::{markdown_table, median};
 use isolab_algorithms::lod::{extract_lod, open_edges_off_bounds};
 use isolab_algorithms::{extractors, fields, Extraction, Grid, Lattice, Samples, TriMesh, Vec3};
+use isolab_cli::render::{self, RenderOptions, Shading};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::time::Instant;

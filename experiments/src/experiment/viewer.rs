@@ -8,10 +8,10 @@
 //! data, with the viewer's JavaScript pinned in `report/vendor/` (see `viewer/README.md`).
 
 use super::context::{Context, Experiment, ExperimentError};
-use crate::io::{write_atomic, IoError};
 use crate::report::markdown_table;
-use crate::run::{lattice_for, load_field, RunConfig};
 use isolab_algorithms::{extractors, fields, Extraction, Samples};
+use isolab_io::{write_atomic, IoError};
+use isolab_pipeline::{lattice_for, load_field, RunConfig};
 use serde::{Deserialize, Serialize};
 
 /// The experiment.
@@ -97,7 +97,7 @@ impl Experiment for Viewer {
                 let mut out = Extraction::default();
                 extractor.extract(&samples, &mut out)?;
                 let mut bytes = Vec::new();
-                crate::io::gltf::write_glb_quantized(&mut bytes, &out.surface, "isolab report viewer")
+                isolab_io::gltf::write_glb_quantized(&mut bytes, &out.surface, "isolab report viewer")
                     .map_err(|source| IoError::Write { path: "glb in memory".into(), source })?;
                 let path = format!("meshes/{}-{name}.glb", extractor.name());
                 let mesh = Mesh {
@@ -142,7 +142,7 @@ impl Experiment for Viewer {
              pictures, as binary glTF with {}-bit quantized positions (`KHR_mesh_quantization`), {} meshes and {:.1} MB in all \
              (budget {:.1} MB). The page loads them with `fetch`, which browsers refuse for `file://` pages: serve the \
              directory, for example `python3 -m http.server --directory report`, and open the address it prints.\n\n",
-            crate::io::gltf::QUANT_BITS,
+            isolab_io::gltf::QUANT_BITS,
             data.meshes.len(),
             total as f64 / 1e6,
             MESH_BUDGET_BYTES as f64 / 1e6,

@@ -1,12 +1,12 @@
 //! Our command line, `isolab extract`, run as a user runs it: a new process per call, on the very
 //! grid file the experiment wrote (`Job::Grid`'s `file`), timed by the `times_ms.extraction` it
-//! reports in its metrics JSON. One-shot only: a process makes one extraction, on pages the
+//! reports in the JSON it prints (no `-m`, so no mesh metric is computed). One-shot only: a process makes one extraction, on pages the
 //! kernel has never handed out, so this is the library's one-shot call as a process's first.
 //!
 //! Run with the CLI's default, where it re-executes itself with huge pages for malloc (Linux
 //! with glibc), or without (`ISOLAB_NO_HUGE_PAGES`), to show what the huge pages change.
 //!
-//! The binary is built first (`cargo build --release -p isolab-experiments --bin isolab`, which
+//! The binary is built first (`cargo build --release -p isolab-cli --bin isolab`, which
 //! does nothing when it is up to date), so the CLI measured is the code the report describes.
 
 use super::{Job, Peer, PeerError, PeerRun, Protocol};
@@ -42,7 +42,7 @@ pub fn build(root: &Path) -> Result<PathBuf, String> {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let status = Command::new(cargo)
         .current_dir(root)
-        .args(["build", "--release", "--quiet", "-p", "isolab-experiments", "--bin", "isolab"])
+        .args(["build", "--release", "--quiet", "-p", "isolab-cli", "--bin", "isolab"])
         .status()
         .map_err(|e| format!("cannot run cargo to build the isolab binary: {e}"))?;
     if !status.success() {
@@ -70,9 +70,9 @@ impl Peer for Cli {
         }
         let failed = |message: String| PeerError::Failed { peer: self.name(), message };
         let binary = self.binary.as_ref().map_err(|e| failed(e.clone()))?;
-        let metrics = file.with_extension(format!("cli-{}.json", std::process::id()));
+        // No `-m`: the run's JSON (times and counts, no mesh metric) comes on stdout.
         let mut command = Command::new(binary);
-        command.args(["extract", "-a", self.algorithm, "-f"]).arg(file).arg("-m").arg(&metrics);
+        command.args(["extract", "-a", self.algorithm, "-f"]).arg(file);
         for (k, v) in &self.options {
             command.arg("--set").arg(format!("{k}={v}"));
         }
@@ -89,14 +89,12 @@ impl Peer for Cli {
         if !output.status.success() {
             return Err(failed(String::from_utf8_lossy(&output.stderr).trim().to_owned()));
         }
-        let text = std::fs::read_to_string(&metrics).map_err(|e| failed(format!("{}: {e}", metrics.display())))?;
-        // Best effort: a file left behind in the experiment's temporary directory is harmless.
-        let _ = std::fs::remove_file(&metrics);
-        let json: serde_json::Value = serde_json::from_str(&text).map_err(|e| failed(format!("{}: {e}", metrics.display())))?;
+        let json: serde_json::Value =
+            serde_json::from_slice(&output.stdout).map_err(|e| failed(format!("its JSON on stdout: {e}")))?;
         let count = |key: &str| json[key].as_u64().map(|n| n as usize);
         let ms = json["times_ms"]["extraction"].as_f64();
         let (Some(ms), Some(vertices), Some(triangles)) = (ms, count("vertices"), count("triangles")) else {
-            return Err(failed(format!("{} lacks times_ms.extraction, vertices or triangles", metrics.display())));
+            return Err(failed("its JSON lacks times_ms.extraction, vertices or triangles".into()));
         };
         Ok(PeerRun { time: Duration::from_secs_f64(ms / 1e3), vertices, triangles, ..PeerRun::default() })
     }

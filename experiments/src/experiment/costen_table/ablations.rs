@@ -70,7 +70,7 @@ pub(super) fn projection_section(rows: &[ProjectionRow]) -> String {
                     format!("{:.3}", m.quality.aspect_ratio.mean),
                     format!("{:.1}°", m.quality.min_angle_deg),
                     if m.topology.is_watertight_manifold() { "yes".into() } else { "**no**".into() },
-                    m.self_intersections.count.to_string(),
+                    m.intersecting_pairs().to_string(),
                     num(t),
                 ]
             })

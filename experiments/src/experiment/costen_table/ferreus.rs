@@ -97,7 +97,7 @@ pub(super) fn peer_section(rows: &[PeerRow]) -> String {
                     format!("{:.2}", q.aspect_ratio.sd),
                     format!("{:.1}°", q.min_angle_deg),
                     if m.topology.is_watertight_manifold() { "yes".into() } else { "**no**".into() },
-                    m.self_intersections.count.to_string(),
+                    m.intersecting_pairs().to_string(),
                     m.surface_distance.as_ref().map_or("-".into(), |d| format!("{:.3} h", d.mean / r.spacing)),
                 ]
             };

@@ -10,7 +10,6 @@
 
 use super::context::{load_object, Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, BarChart, BarSeries};
-use crate::figures::render::{render, save_png, side_by_side, RenderOptions, Shading};
 use crate::report::{markdown_table, median, millis};
 use isolab_algorithms::extract::PostProcess;
 use isolab_algorithms::extractors::regularised_marching_tetrahedra::{RegularisedMarchingTetrahedra, RmtOptions};
@@ -19,6 +18,7 @@ use isolab_algorithms::mesh::manifold_defects;
 use isolab_algorithms::post::EdgeCollapse;
 use isolab_algorithms::tetrahedral::tetrahedron_count;
 use isolab_algorithms::{Extraction, Extractor, Grid, Lattice, Samples, Vec3};
+use isolab_cli::render::{render, save_png, side_by_side, RenderOptions, Shading};
 use isolab_metrics::MeshMetrics;
 use serde::{Deserialize, Serialize};
 use std::time::Duration;
@@ -448,7 +448,7 @@ fn section(ctx: &Context, data: &Data) -> String {
                 if m.topology.closed { "yes" } else { "**no**" }.into(),
                 if m.topology.is_watertight_manifold() { "yes".into() } else { format!("**no** ({} vertices)", r.defects) },
                 m.topology.euler.to_string(),
-                m.self_intersections.count.to_string(),
+                m.intersecting_pairs().to_string(),
                 h,
                 format!("{:.2}", m.overdraw.overshading),
             ]

@@ -18,9 +18,9 @@
 //!   the whole pipeline on the bunny at about 2,500 tetrahedra.
 
 use super::context::{load_object, Context, Experiment, ExperimentError};
-use crate::figures::render::{self, RenderOptions, Shading};
 use crate::report::{markdown_table, median};
 use isolab_algorithms::extractors::bcc_sculpt::{sculpt_surface, SculptOptions};
+use isolab_cli::render::{self, RenderOptions, Shading};
 use isolab_metrics::topology;
 use isolab_metrics::volume_mesh::volume_metrics;
 use serde::{Deserialize, Serialize};

@@ -6,10 +6,10 @@
 
 use clap::{Parser, Subcommand};
 use isolab_algorithms::{extractors, fields};
-use isolab_experiments::io;
-use isolab_experiments::io::volume::{Inside, VolumeOptions};
-use isolab_experiments::run::{run, write_json, LatticeKind, OutputSpace, RunConfig, RunError, VolumeGrid};
+use isolab_io as io;
+use isolab_io::volume::{Inside, VolumeOptions};
 use isolab_metrics::MeshMetrics;
+use isolab_pipeline::{run, write_json, LatticeKind, Measure, OutputSpace, RunConfig, RunError, VolumeGrid};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -96,9 +96,15 @@ enum Command {
         /// tetrahedra beside it (same name, .vtk).
         #[arg(long, short)]
         output: Option<PathBuf>,
-        /// Write the metrics JSON here (printed to stdout when absent).
+        /// Measure the mesh (quality, topology, volume, area, distance to the true surface, normal
+        /// deviation, overdraw) and write the run's JSON with them here (`-` for stdout). Without
+        /// it no mesh metric is computed and stdout gets the run's JSON with its times and counts.
         #[arg(long, short)]
         metrics: Option<PathBuf>,
+        /// Also count self-intersecting triangle pairs (exact predicates; many times the
+        /// extraction's cost on large meshes). Implies the metrics, on stdout without --metrics.
+        #[arg(long)]
+        self_intersections: bool,
         /// Write the sampled grid: raw little-endian f32, x fastest (`PATH`), and its dims, origin,
         /// spacing and iso as JSON (`PATH.json`), for running a peer library on the same samples.
         #[arg(long)]
@@ -262,6 +268,7 @@ fn main() -> ExitCode {
             set,
             output,
             metrics,
+            self_intersections,
             samples_out,
         } => {
             let mut options = isolab_algorithms::Options::new();
@@ -293,6 +300,11 @@ fn main() -> ExitCode {
                 options,
                 chunk,
                 materials,
+                measure: match (self_intersections, &metrics) {
+                    (true, _) => Measure::All,
+                    (false, Some(_)) => Measure::Metrics,
+                    (false, None) => Measure::Counts,
+                },
             };
             extract(&config, output, metrics, samples_out).map_err(|e| (e.exit_code(), e.to_string()))
         }
@@ -320,7 +332,7 @@ fn render(
     wireframe: bool,
     size: u32,
 ) -> Result<(), (i32, String)> {
-    use isolab_experiments::figures::render::{self, RenderOptions, Shading};
+    use isolab_cli::render::{self, RenderOptions, Shading};
     let mesh = io::read_mesh(file).map_err(|e| (2, e.to_string()))?;
     let bad = mesh.positions.iter().filter(|p| !p.is_finite()).count();
     if bad > 0 {
@@ -356,6 +368,7 @@ fn extract(
     samples_out: Option<PathBuf>,
 ) -> Result<(), RunError> {
     // Refuse unwritable outputs before spending time on extraction.
+    let metrics = metrics.filter(|p| p.as_os_str() != "-");
     for path in output.iter().chain(metrics.iter()).chain(samples_out.iter()) {
         let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
         if !dir.is_dir() {

@@ -14,7 +14,7 @@ use super::{
     check_size, data_path, decode, decode_text, inflate, pick_volume, volume, Compression, DataType, Inside, Space, VolumeFile,
     VolumeOptions,
 };
-use crate::io::IoError;
+use crate::IoError;
 use glam::{DAffine3, DMat3, DVec3};
 use std::collections::HashMap;
 use std::path::Path;
@@ -60,7 +60,7 @@ pub fn parse_metaimage(
             if line == 1 {
                 malformed(1, "not a MetaImage file: it does not start with 'Key = Value' lines".into())
             } else {
-                malformed(line, format!("'{}' is not 'Key = Value'", crate::io::shown(&text)))
+                malformed(line, format!("'{}' is not 'Key = Value'", crate::shown(&text)))
             }
         })?;
         let (key, value) = (key.trim().to_owned(), value.trim().to_owned());

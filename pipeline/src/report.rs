@@ -3,8 +3,8 @@
 
 use super::{OutputSpace, VolumeGrid};
 use crate::input::InputKind;
-use crate::io::volume::Inside;
 use isolab_algorithms::chunks::ChunkStats;
+use isolab_io::volume::Inside;
 use isolab_metrics::{MeshMetrics, VolumeMetrics};
 use serde::Serialize;
 
@@ -83,9 +83,22 @@ pub struct RunReport {
     /// What the extractor warned about (an open input surface, non-convergence).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
-    /// Mesh measures.
-    #[serde(flatten)]
-    pub metrics: MeshMetrics,
+    /// The surface's vertex and triangle counts, when no mesh metric was asked for
+    /// ([`crate::Measure::Counts`]; otherwise `metrics` has them, under the same names).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub counts: Option<MeshCounts>,
+    /// Mesh measures, when asked for ([`crate::Measure`]).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub metrics: Option<MeshMetrics>,
+}
+
+/// The counts a run always reports.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct MeshCounts {
+    /// Surface vertices.
+    pub vertices: usize,
+    /// Surface triangles.
+    pub triangles: usize,
 }
 
 /// The metrics JSON's `input`: what kind of input, and for volumes, what the file said.

@@ -257,8 +257,8 @@ pub fn grid(images: &[&Image], columns: usize) -> Image {
 }
 
 /// Writes a PNG atomically.
-pub fn save_png(path: &Path, image: &Image) -> Result<(), crate::io::IoError> {
-    crate::io::write_atomic(path, |w| {
+pub fn save_png(path: &Path, image: &Image) -> Result<(), isolab_io::IoError> {
+    isolab_io::write_atomic(path, |w| {
         let mut encoder = png::Encoder::new(w, image.width, image.height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
@@ -275,7 +275,7 @@ pub fn save_turntable(
     opts: &RenderOptions,
     frames: u32,
     delay_cs: u16,
-) -> Result<(), crate::io::IoError> {
+) -> Result<(), isolab_io::IoError> {
     let images: Vec<Image> = (0..frames)
         .map(|k| render(mesh, &RenderOptions { spin: k as f32 / frames as f32 * std::f32::consts::TAU, ..*opts }))
         .collect();
@@ -284,9 +284,9 @@ pub fn save_turntable(
 
 /// Writes frames (all of the first frame's size) as a looping GIF, `delay_cs` hundredths of a
 /// second each, atomically.
-pub fn save_gif(path: &Path, images: &[Image], delay_cs: u16) -> Result<(), crate::io::IoError> {
+pub fn save_gif(path: &Path, images: &[Image], delay_cs: u16) -> Result<(), isolab_io::IoError> {
     let (width, height) = images.first().map_or((1, 1), |i| (i.width as u16, i.height as u16));
-    crate::io::write_atomic(path, |w| {
+    isolab_io::write_atomic(path, |w| {
         let mut encoder = gif::Encoder::new(w, width, height, &[]).map_err(std::io::Error::other)?;
         encoder.set_repeat(gif::Repeat::Infinite).map_err(std::io::Error::other)?;
         for img in images {

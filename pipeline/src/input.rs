@@ -8,10 +8,10 @@
 //! field still has an inside: the generalized winding number decides it).
 
 use crate::error::RunError;
-use crate::io::volume::{self, Inside, VolumeFile, VolumeOptions};
-use crate::io::{self, Coordinates};
-use isolab_algorithms::fields::{self, MeshField, VolumeField};
+use isolab_algorithms::fields::{self, MeshField, Volume, VolumeField};
 use isolab_algorithms::{Field, TriMesh};
+use isolab_io::volume::{self, Inside, VolumeFile, VolumeOptions};
+use isolab_io::{self as io, Coordinates};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -26,6 +26,8 @@ pub enum InputKind {
     Mesh,
     /// A volume file.
     Volume,
+    /// An array handed over in memory (the Python package's numpy arrays).
+    Array,
 }
 
 /// An input, loaded.
@@ -45,6 +47,31 @@ pub struct Input {
 }
 
 impl Input {
+    /// A volume already in memory (values `i + ni * (j + nj * k)`, checked by [`Volume::new`]),
+    /// as an input: `format` and `data_type` name where it came from (`"numpy"`, `"uint8"`), and
+    /// `inside` is the side meshed as inside unless the run says otherwise.
+    pub fn from_volume(volume: Volume, format: &'static str, data_type: &'static str, inside: Inside) -> Input {
+        let volume = Arc::new(volume);
+        let file = VolumeFile {
+            volume: volume.clone(),
+            format,
+            data_type,
+            space: volume::Space::Unknown,
+            inside,
+            iso: None,
+            centres: None,
+            notes: Vec::new(),
+        };
+        Input {
+            field: Arc::new(VolumeField::new(volume)),
+            kind: InputKind::Array,
+            volume: Some(Arc::new(file)),
+            mesh_format: None,
+            warnings: Vec::new(),
+            read_time: Duration::ZERO,
+        }
+    }
+
     /// Which side is inside unless the user says: the volume file's own, below otherwise.
     pub fn default_inside(&self) -> Inside {
         self.volume.as_ref().map_or(Inside::Below, |v| v.inside)

@@ -1,16 +1,27 @@
-//! The pipeline shared by the CLI and the experiments: resolve an input and an algorithm by
+//! # isolab pipeline
+//!
+//! The one run shared by the `isolab` CLI, the Python package and the report's experiments:
+//! resolve an input ([`input`]: a built-in field, a mesh file, a volume file) and an algorithm by
 //! name, sample once (or take a volume's own voxels), extract, post-process, map to world
-//! coordinates, measure, and describe the run as the metrics JSON.
+//! coordinates, measure, and describe the run as the metrics JSON ([`RunReport`]). Errors are one
+//! type ([`RunError`]) whose messages the CLI prints and Python raises.
+//!
+//! Depends on `isolab-algorithms`, `isolab-metrics` and `isolab-io` only: no command-line parser
+//! (the `clap` feature derives `clap::ValueEnum` for the CLI's enums), no plotting.
+
+pub mod error;
+pub mod input;
 
 pub use crate::input::load_field;
-use crate::input::{load_input, Input, InputKind, MeshChecks};
-use crate::io::volume::{Inside, Space, VolumeOptions};
-use crate::io::{self, IoError};
+pub use crate::input::Input;
+use crate::input::{load_input, InputKind, MeshChecks};
 use glam::{DAffine3, DMat3, DVec3};
 use isolab_algorithms::chunks::extract_chunked;
 use isolab_algorithms::fields::Complement;
-use isolab_algorithms::{extractors, fields, Extraction, Field, Grid, Lattice, Options, Samples};
-use isolab_metrics::{volume_metrics, MeshMetrics};
+use isolab_algorithms::{extractors, fields, Extraction, Field, Grid, Lattice, Options, Samples, TetMesh, TriMesh};
+use isolab_io::volume::{Inside, Space, VolumeOptions};
+use isolab_io::{self as io, IoError};
+use isolab_metrics::{volume_metrics, MeshMetrics, VolumeMetrics};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::path::Path;
@@ -21,10 +32,11 @@ mod report;
 
 pub use crate::error::RunError;
 
-pub use report::{ChunkReport, InputReport, RunReport, TimesMs};
+pub use report::{ChunkReport, InputReport, MeshCounts, RunReport, TimesMs};
 
 /// Which lattice to sample on.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum LatticeKind {
     /// A cubic grid.
@@ -46,7 +58,8 @@ pub enum VolumeGrid {
 }
 
 /// The coordinate system meshes of anatomical volumes are written in.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum OutputSpace {
     /// Right, Anterior, Superior: NIfTI's world, FreeSurfer's, what 3D Slicer displays.
     #[default]
@@ -76,6 +89,21 @@ impl OutputSpace {
             }
         }
     }
+}
+
+/// Which measures of the mesh a run computes. The run's own numbers (stage times, counts,
+/// active cells, buffer bytes) are always there; the mesh metrics cost as much as the extraction
+/// or (self-intersections) many times it, so a run computes them only when asked.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Measure {
+    /// None: the report has the vertex and triangle counts only.
+    Counts,
+    /// Every mesh metric but the exact self-intersection test.
+    Metrics,
+    /// Every mesh metric, self-intersections included (what the report's experiments use).
+    #[default]
+    All,
 }
 
 /// What to run.
@@ -113,6 +141,8 @@ pub struct RunConfig {
     pub chunk: Option<usize>,
     /// Give every vertex the field's material (`--materials`).
     pub materials: bool,
+    /// Which measures of the mesh to compute (`RunConfig::new`: all of them).
+    pub measure: Measure,
 }
 
 impl RunConfig {
@@ -134,6 +164,7 @@ impl RunConfig {
             options: Options::new(),
             chunk: None,
             materials: false,
+            measure: Measure::All,
         }
     }
 }
@@ -195,6 +226,9 @@ pub struct RunOutcome {
     pub space_tag: Option<&'static str>,
     /// Things to tell the user that are not warnings (the grid a volume was meshed on).
     pub notes: Vec<String>,
+    /// The true surface the mesh can be measured against ([`measure`]); `None` once the mesh was
+    /// mapped out of the field's world (to LPS).
+    pub truth: Option<Truth>,
     /// The metrics JSON.
     pub report: RunReport,
 }
@@ -211,7 +245,7 @@ struct Sampled {
 /// cubes (no mapping needed), else in voxel index coordinates, with the affine that maps a mesh
 /// of them to the world. `iso` is in the volume's own values.
 pub fn volume_samples(
-    file: &crate::io::volume::VolumeFile,
+    file: &isolab_io::volume::VolumeFile,
     lattice: LatticeKind,
     inside: Inside,
     iso: f32,
@@ -243,7 +277,7 @@ pub fn volume_samples(
 }
 
 fn native_samples(
-    file: &crate::io::volume::VolumeFile,
+    file: &isolab_io::volume::VolumeFile,
     config: &RunConfig,
     inside: Inside,
     iso: f32,
@@ -255,8 +289,28 @@ fn native_samples(
     Ok(Sampled { samples, to_world, notes: vec![note] })
 }
 
-/// Samples, extracts, post-processes and measures.
+/// Loads the input `config.field` names, then samples, extracts, post-processes and measures
+/// ([`run_input`]).
 pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
+    check_names(config)?;
+    let input = load_input(&config.field, config.seed, config.volume, MeshChecks::Warn)?;
+    run_input(config, input)
+}
+
+/// Refuses an unknown algorithm, option or post-process before anything is read.
+fn check_names(config: &RunConfig) -> Result<(), RunError> {
+    extractors::build(&config.algorithm, &config.options)?
+        .ok_or_else(|| RunError::UnknownAlgorithm { name: config.algorithm.clone(), valid: extractors::names() })?;
+    for p in &config.post {
+        extractors::build_post(p)?.ok_or_else(|| RunError::UnknownPost { name: p.clone(), valid: extractors::post_names() })?;
+    }
+    Ok(())
+}
+
+/// Samples an input already loaded (a file, a built-in field, or an array handed over in
+/// memory: [`Input::from_volume`]), extracts, post-processes and measures. `config.field` is
+/// not read.
+pub fn run_input(config: &RunConfig, input: Input) -> Result<RunOutcome, RunError> {
     let extractor = extractors::build(&config.algorithm, &config.options)?
         .ok_or_else(|| RunError::UnknownAlgorithm { name: config.algorithm.clone(), valid: extractors::names() })?;
     let posts = config
@@ -269,7 +323,6 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
     if let Some(iso) = config.iso.filter(|v| !v.is_finite()) {
         return Err(RunError::BadIso(iso));
     }
-    let input = load_input(&config.field, config.seed, config.volume, MeshChecks::Warn)?;
     let inside = config.inside.unwrap_or(input.default_inside());
     let (iso, iso_from) = choose_iso(&input, config.iso);
     // Inside is `f < iso` in isolab: "above" meshes the complement at `-iso`.
@@ -330,9 +383,11 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
             .map(|(id, &n)| (isolab_algorithms::materials::name(id as u8), n))
             .collect()
     });
-    let metrics = MeshMetrics::measure(&extraction.surface, Some((field.as_ref(), internal_iso)));
-    let volume_mesh =
-        volume_metrics(&extraction.volume, &extraction.surface, Some((field.as_ref(), internal_iso)), extraction.stats.converged);
+    let world_truth = Truth { field: field.clone(), iso: internal_iso, converged: extraction.stats.converged };
+    let (metrics, volume_mesh) = measure(&extraction.surface, &extraction.volume, Some(&world_truth), config.measure);
+    let counts = metrics
+        .is_none()
+        .then_some(MeshCounts { vertices: extraction.surface.positions.len(), triangles: extraction.surface.triangles.len() });
     // Anatomical volumes: the mesh in the space asked for (metrics are the same in either).
     let anatomical = input.volume.as_ref().is_some_and(|v| v.space == Space::Ras);
     let space = anatomical.then_some(config.space);
@@ -340,6 +395,13 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
         extraction.surface.transform(&map);
         extraction.volume.transform(&map);
     }
+    // The true surface, for measuring later: in the world the field is in (RAS), so not once
+    // the mesh has been mapped to LPS.
+    let truth = space.and_then(OutputSpace::map_from_ras).is_none().then(|| Truth {
+        field: field.clone(),
+        iso: internal_iso,
+        converged: extraction.stats.converged,
+    });
     let samples_to_world = match (to_world, space.and_then(OutputSpace::map_from_ras)) {
         (Some(a), Some(m)) => Some(m * a),
         (Some(a), None) => Some(a),
@@ -359,7 +421,7 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
         }
     }
     let t = extraction.stats.times;
-    let ms = crate::report::millis;
+    let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
     let input_report = InputReport {
         kind: input.kind,
         format: input.volume.as_ref().map(|v| v.format).or(input.mesh_format),
@@ -403,6 +465,7 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
         chunks,
         materials: material_counts,
         warnings,
+        counts,
         metrics,
     };
     Ok(RunOutcome {
@@ -412,8 +475,38 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
         samples_to_world,
         space_tag: space.map(OutputSpace::tag),
         notes,
+        truth,
         report,
     })
+}
+
+/// The field a run meshed and its iso-value (inside `f < iso`), with which a mesh of it can be
+/// measured against the true surface after the run ([`measure`]).
+#[derive(Clone)]
+pub struct Truth {
+    /// The field as meshed (the complement when inside was above).
+    pub field: Arc<dyn Field>,
+    /// The iso-value in the field's values.
+    pub iso: f32,
+    /// Whether a volume extractor's relaxation converged, where it reports it.
+    pub converged: Option<bool>,
+}
+
+/// Measures a run's surface and volume meshes as [`run`] does for `measure` (nothing for
+/// [`Measure::Counts`]), against the true surface where `truth` is given.
+pub fn measure(
+    surface: &TriMesh,
+    volume: &TetMesh,
+    truth: Option<&Truth>,
+    measure: Measure,
+) -> (Option<MeshMetrics>, Option<VolumeMetrics>) {
+    let field = truth.map(|t| (t.field.as_ref(), t.iso));
+    let metrics = match measure {
+        Measure::Counts => return (None, None),
+        Measure::Metrics => MeshMetrics::measure_without_self_intersections(surface, field),
+        Measure::All => MeshMetrics::measure(surface, field),
+    };
+    (Some(metrics), volume_metrics(volume, surface, field, truth.and_then(|t| t.converged)))
 }
 
 /// The iso-value of a run, in the input's own values, and how it was chosen when not given.

@@ -96,6 +96,32 @@ fn extract_writes_mesh_and_metrics_that_metrics_command_reproduces() {
 }
 
 #[test]
+fn extract_computes_only_the_measures_asked_for() {
+    let run = |extra: &[&str]| {
+        let mut args = vec!["extract", "-a", "marching-cubes", "-f", "torus", "-r", "24"];
+        args.extend_from_slice(extra);
+        let o = isolab(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()
+    };
+    // Nothing asked: the run's times and counts, no mesh metric.
+    let plain = run(&[]);
+    assert!(plain["triangles"].as_u64().unwrap() > 500 && plain["vertices"].as_u64().unwrap() > 250, "{plain}");
+    assert!(plain["times_ms"]["extraction"].is_number(), "{plain}");
+    for key in ["closed", "genus", "aspect_ratio", "area", "surface_distance", "self_intersections", "overdraw"] {
+        assert!(plain.get(key).is_none(), "'{key}' was computed unasked: {plain}");
+    }
+    // -m: every metric but the exact self-intersection test.
+    let metrics = run(&["-m", "-"]);
+    assert_eq!((metrics["closed"].as_bool(), metrics["genus"].as_u64()), (Some(true), Some(1)), "{metrics}");
+    assert_eq!(metrics["triangles"], plain["triangles"]);
+    assert!(metrics.get("self_intersections").is_none(), "{metrics}");
+    // --self-intersections: that test too (on stdout without -m).
+    let all = run(&["--self-intersections"]);
+    assert_eq!(all["self_intersections"]["count"], 0, "{all}");
+    assert_eq!(all["genus"], 1);
+}
+#[test]
 fn unknown_names_exit_2_and_list_the_valid_ones() {
     let o = isolab(&["extract", "-a", "marching-cube", "-f", "sphere"]);
     assert_clean_failure(&o, 2, &["unknown algorithm 'marching-cube'", "marching-cubes"]);

@@ -25,7 +25,8 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 
 /// Which side of the iso-value a file's object is on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Inside {
     /// Values above the iso-value are inside (scans: the object is brighter than its background).

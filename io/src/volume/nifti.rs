@@ -12,7 +12,7 @@
 use super::{
     check_size, decode, inflate, is_gzip, pick_volume, volume, Compression, DataType, Inside, Space, VolumeFile, VolumeOptions,
 };
-use crate::io::IoError;
+use crate::IoError;
 use glam::{DAffine3, DMat3, DVec3};
 use std::path::Path;
 

@@ -15,7 +15,7 @@ use super::{
     check_size, data_path, decode, decode_text, inflate, pick_volume, volume, Compression, DataType, Inside, Space, VolumeFile,
     VolumeOptions,
 };
-use crate::io::IoError;
+use crate::IoError;
 use glam::{DAffine3, DMat3, DVec3};
 use std::collections::HashMap;
 use std::path::Path;
@@ -99,9 +99,8 @@ pub fn parse_nrrd(
         if text.contains(":=") {
             continue; // key/value pairs: free-form metadata
         }
-        let (key, value) = text
-            .split_once(": ")
-            .ok_or_else(|| malformed(line, format!("'{}' is not 'field: value'", crate::io::shown(&text))))?;
+        let (key, value) =
+            text.split_once(": ").ok_or_else(|| malformed(line, format!("'{}' is not 'field: value'", crate::shown(&text))))?;
         fields.insert(key.trim().to_ascii_lowercase().replace(' ', ""), (value.trim().to_owned(), line));
     }
     let data_start = at;

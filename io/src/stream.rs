@@ -101,7 +101,7 @@ mod tests {
         s.vertices(&[Vec3::Z]).unwrap();
         s.triangles(&[[0, 2, 3], [1, 3, 2]]).unwrap();
         let bytes = s.finish().unwrap();
-        let back = super::super::read_mesh(&path).unwrap();
+        let back = crate::read_mesh(&path).unwrap();
         assert_eq!((back.positions.len(), back.triangles.len()), (4, 3));
         assert_eq!(back.triangles[2], [1, 3, 2]);
         assert_eq!(bytes, std::fs::metadata(&path).unwrap().len());

@@ -1,8 +1,8 @@
 //! The one error type of a run, shared by the input loader and the pipeline (so neither imports
 //! the other for it), with the CLI's exit code.
 
-use crate::io::IoError;
 use isolab_algorithms::{ExtractError, FieldError, LatticeError, OptionError, SampleError};
+use isolab_io::IoError;
 
 /// Everything that can go wrong in a run. [`RunError::exit_code`] maps it to the CLI's code.
 #[derive(Debug, thiserror::Error)]

@@ -5,7 +5,7 @@
 //! can read the very samples isolab meshed; `-f PATH` reads it back (the same mesh again).
 
 use super::{volume, Inside, Space, VolumeFile};
-use crate::io::{write_atomic, IoError};
+use crate::{write_atomic, IoError};
 use glam::{DAffine3, DMat3, DVec3};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -50,7 +50,7 @@ pub fn write_samples(
 /// Reads a grid `--samples-out` wrote.
 pub fn read_samples(path: &Path) -> Result<VolumeFile, IoError> {
     let json_path = header_path(path);
-    let text = crate::io::read_bytes(&json_path)?;
+    let text = crate::read_bytes(&json_path)?;
     let bad = |reason: String| IoError::Invalid { path: json_path.clone(), reason };
     let header: serde_json::Value = serde_json::from_slice(&text).map_err(|e| bad(format!("not JSON: {e}")))?;
     let dims: [usize; 3] =
@@ -82,7 +82,7 @@ pub fn read_samples(path: &Path) -> Result<VolumeFile, IoError> {
         "bcc" => dims.iter().map(|d| d.saturating_sub(1)).product(),
         other => return Err(bad(format!("lattice '{other}' is not cubic or bcc"))),
     };
-    let bytes = crate::io::read_bytes(path)?;
+    let bytes = crate::read_bytes(path)?;
     let need = (corners + centres).checked_mul(4).ok_or_else(|| bad(format!("dims {dims:?} are too large")))?;
     if bytes.len() != need {
         return Err(IoError::Invalid {

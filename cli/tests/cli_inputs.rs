@@ -2,7 +2,7 @@
 //! files that work, and every bad one the "Bring your own data" issue lists (a message naming
 //! the file and what is wrong, exit code 1, no panic, no output file left behind).
 
-use isolab_experiments::io::volume::nifti::write::nifti1;
+use isolab_io::volume::nifti::write::nifti1;
 mod common;
 
 use common::{isolab, stderr};
@@ -99,7 +99,7 @@ fn a_4d_volume_meshes_the_volume_picked() {
     let empty = vec![0u8; 216];
     let four: Vec<u8> = empty.iter().chain(ball().iter()).copied().collect();
     std::fs::write(&path, nifti1(&[6, 6, 6, 2], 2, 8, &four, ID, 1.0, 0.0)).unwrap();
-    let o = isolab(&["extract", "-a", "surface-nets", "-f", path.to_str().unwrap(), "--volume", "1", "--iso", "100"]);
+    let o = isolab(&["extract", "-a", "surface-nets", "-f", path.to_str().unwrap(), "--volume", "1", "--iso", "100", "-m", "-"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let m: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(m["triangles"].as_u64().unwrap() > 20 && m["closed"].as_bool().unwrap() && m["outward"].as_bool().unwrap(), "{m}");
@@ -162,7 +162,7 @@ fn mesh_files_in_any_format_are_fields_and_inward_ones_say_so() {
     ])
     .status
     .success());
-    let o = isolab(&["extract", "-a", "marching-cubes", "-f", ply.to_str().unwrap(), "-r", "24"]);
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", ply.to_str().unwrap(), "-r", "24", "-m", "-"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let m: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(m["input"]["format"], "PLY");
@@ -178,7 +178,7 @@ fn mesh_files_in_any_format_are_fields_and_inward_ones_say_so() {
         .collect();
     let path = dir.path().join("spot-inward.obj");
     std::fs::write(&path, inward).unwrap();
-    let o = isolab(&["extract", "-a", "surface-nets", "-f", path.to_str().unwrap(), "-r", "32"]);
+    let o = isolab(&["extract", "-a", "surface-nets", "-f", path.to_str().unwrap(), "-r", "32", "-m", "-"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("warning: input mesh 'spot-inward' faces inward"), "{}", stderr(&o));
     let m: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();

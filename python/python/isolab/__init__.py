@@ -1,0 +1,349 @@
+"""isolab: isosurface meshes from numpy arrays.
+
+Two ways in:
+
+* :func:`marching_cubes` has scikit-image's signature, return value and conventions
+  (``skimage.measure.marching_cubes``), so replacing the import is enough.
+* :func:`extract` runs any registered isolab extractor (marching cubes, surface nets, dual
+  contouring, marching tetrahedra, regularised marching tetrahedra, bcc-sculpt, ...) and its
+  post-processes on an array, a built-in field or a file, and returns a :class:`Mesh` that can
+  be measured (:meth:`Mesh.metrics`) and saved (:meth:`Mesh.save`).
+
+>>> import numpy as np, isolab
+>>> i, j, k = np.mgrid[-1:1:40j, -1:1:40j, -1:1:40j]
+>>> ball = (i**2 + j**2 + k**2).astype(np.float32)
+>>> verts, faces, normals, values = isolab.marching_cubes(ball, 0.5)
+>>> mesh = isolab.extract(ball, 0.5, "surface-nets")
+>>> mesh.metrics()["closed"]
+True
+
+Every call releases the GIL while it works; ``threads=N`` runs it on a pool of N threads (kept
+for later calls), ``threads=None`` on rayon's global pool (one thread per core, or
+``RAYON_NUM_THREADS``).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _isolab
+
+__all__ = ["marching_cubes", "extract", "Mesh", "metrics", "load", "algorithms", "fields", "__version__"]
+__version__ = _isolab.__version__
+
+# The dtypes read in place; any other is converted to float32 first (a copy).
+_READ_IN_PLACE = {np.dtype(t) for t in (np.bool_, np.uint8, np.int8, np.uint16, np.int16, np.uint32, np.int32,
+                                        np.uint64, np.int64, np.float32, np.float64)}
+
+
+def _as_volume(volume: Any) -> np.ndarray:
+    if not isinstance(volume, np.ndarray):
+        volume = np.asarray(volume)
+    if volume.dtype not in _READ_IN_PLACE:
+        volume = volume.astype(np.float32)
+    return volume
+
+
+def marching_cubes(volume: np.ndarray, level: Optional[float] = None, *, spacing: Sequence[float] = (1.0, 1.0, 1.0),
+                   gradient_direction: str = "descent", step_size: int = 1, allow_degenerate: bool = True,
+                   method: str = "lewiner", mask: Optional[np.ndarray] = None,
+                   threads: Optional[int] = None) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Marching cubes with scikit-image's interface: ``skimage.measure.marching_cubes``'s
+    arguments, return value, axis order, winding and errors.
+
+    Parameters
+    ----------
+    volume : (M, N, P) array
+        Any numeric dtype (bool, 8- to 64-bit integers, float32, float64), C or Fortran order, or
+        a strided view. The values are converted once into isolab's float32 samples (scikit-image
+        makes a float32 C-ordered copy too); C and Fortran order are read in place, a view
+        through its strides. Other dtypes (float16, ...) are converted with ``astype(float32)``
+        first, one more copy.
+    level : float, optional
+        The iso-value; by default the middle of the data range, ``(min + max) / 2``. A level
+        outside the range raises ``ValueError``.
+    spacing : 3 floats
+        Voxel spacing along each axis; the vertices are scaled by it (the normals are not, as in
+        scikit-image).
+    gradient_direction : 'descent' or 'ascent'
+        'descent' (the object is brighter than its surroundings) winds the faces as
+        scikit-image does; 'ascent' reverses them.
+    step_size : int
+        Mesh every ``step_size``-th sample along each axis (a coarser mesh).
+    allow_degenerate : bool
+        With False, triangles of zero area are removed (and the vertices they alone used).
+    method : 'lewiner' or 'lorensen'
+        'lorensen' gives scikit-image's ``method='lorensen'`` vertices (linear interpolation on
+        every crossing edge, within float32 rounding) and triangle count: isolab's
+        ``marching-cubes`` table makes as many triangles as scikit-image's classic table in every
+        one of the 256 corner patterns (tested), though it may cut a polygon along other
+        diagonals. 'lewiner' is isolab's ``marching-cubes-decider``: every ambiguous face follows the
+        trilinear interpolant (the asymptotic decider), the mesh is closed wherever it does not
+        reach the volume's boundary and manifold, and no triangle has zero area (a crossing
+        within 1e-4 of a sample is kept that far from it). It differs from scikit-image's
+        Lewiner (Marching Cubes 33) in the cell interiors: scikit-image adds a vertex inside a
+        cell whose interior is ambiguous (tunnels), isolab does not resolve the interior.
+    mask : (M, N, P) bool array, optional
+        Only the cells whose highest corner (the largest index along every axis) is True are
+        meshed, the corner scikit-image reads the mask at.
+    threads : int, optional
+        Threads for this call (isolab's addition; None: every core).
+
+    Returns
+    -------
+    verts : (V, 3) float32
+        Vertex positions in index order (axis 0, 1, 2) times ``spacing``.
+    faces : (F, 3) int32
+        Triangles, indices into ``verts``.
+    normals : (V, 3) float32
+        Unit normals from the volume's gradient (central differences), toward decreasing values.
+    values : (V,) float32
+        For each vertex, the largest range of values, ``max(0, max - level) - min(0, min -
+        level)``, over the cells whose triangles use it (scikit-image's measure).
+
+    >>> import numpy as np, isolab
+    >>> i, j, k = np.mgrid[-1:1:32j, -1:1:32j, -1:1:32j]
+    >>> verts, faces, normals, values = isolab.marching_cubes(i**2 + j**2 + k**2, 0.5, method="lorensen")
+    >>> verts.dtype, faces.dtype, faces.shape[1]
+    (dtype('float32'), dtype('int32'), 3)
+    >>> bool(np.allclose(np.linalg.norm(verts / 15.5 - 1, axis=1), 0.5 ** 0.5, atol=0.02))
+    True
+    """
+    if not isinstance(volume, np.ndarray) or volume.ndim != 3:
+        raise ValueError("Input volume should be a 3D numpy array.")
+    if volume.shape[0] < 2 or volume.shape[1] < 2 or volume.shape[2] < 2:
+        raise ValueError("Input array must be at least 2x2x2.")
+    if len(spacing) != 3:
+        raise ValueError("`spacing` must consist of three floats.")
+    step_size = int(step_size)
+    if step_size < 1:
+        raise ValueError("step_size must be at least one.")
+    if gradient_direction not in ("descent", "ascent"):
+        raise ValueError(f"Incorrect input {gradient_direction} in `gradient_direction`, see docstring.")
+    if method == "lewiner":
+        faces_rule, on_iso = "decider", "separate"
+    elif method == "lorensen":
+        faces_rule, on_iso = "separate", "exact"
+    else:
+        raise ValueError("method should be either 'lewiner' or 'lorensen'")
+    if mask is not None:
+        if not mask.shape == volume.shape:
+            raise ValueError("volume and mask must have the same shape.")
+        mask = np.asarray(mask, dtype=bool)
+    volume = _as_volume(volume)
+    out = _isolab.marching_cubes(volume, None if level is None else float(level), tuple(float(s) for s in spacing),
+                                 step_size, faces_rule, on_iso, gradient_direction == "ascent", mask, threads)
+    verts, faces, normals, values = out["vertices"], out["faces"], out["normals"], out["values"]
+    if not len(verts):
+        raise RuntimeError("No surface found at the given iso value.")
+    if not allow_degenerate:
+        verts, faces, normals, values = _remove_degenerate(verts, faces, normals, values)
+    return verts, faces, normals, values
+
+
+def _remove_degenerate(verts, faces, normals, values):
+    a, b, c = verts[faces[:, 0]], verts[faces[:, 1]], verts[faces[:, 2]]
+    keep = np.any(np.cross(b - a, c - a) != 0, axis=1)
+    faces = faces[keep]
+    used = np.zeros(len(verts), dtype=bool)
+    used[faces.ravel()] = True
+    renumber = np.cumsum(used, dtype=np.int64) - 1
+    return verts[used], renumber[faces].astype(np.int32), normals[used], values[used]
+
+
+class Mesh:
+    """A mesh :func:`extract` made: numpy arrays in world coordinates and the run's numbers.
+
+    Attributes
+    ----------
+    vertices : (N, 3) float32
+    faces : (M, 3) int32
+        Counter-clockwise seen from outside (normals toward the outside of ``inside``).
+    normals : (N, 3) float32 or None
+    materials : (N,) uint8 or None
+        Each vertex's material (``materials=True``).
+    tet_vertices, tetrahedra : (K, 3) float32 and (T, 4) int32, or None
+        The tetrahedral mesh of a volume extractor (``bcc-sculpt``, the marching tetrahedra
+        family with ``output=volume``).
+    stats : dict
+        The CLI's JSON for the run: stage times in ``times_ms``, counts, the input, warnings.
+    warnings : list of str
+    """
+
+    def __init__(self, parts: Dict[str, Any]):
+        self.vertices: np.ndarray = parts["vertices"]
+        self.faces: np.ndarray = parts["faces"]
+        normals = parts.get("normals")
+        self.normals: Optional[np.ndarray] = normals if normals is not None and len(normals) else None
+        self.materials: Optional[np.ndarray] = parts.get("materials")
+        self.tet_vertices: Optional[np.ndarray] = parts.get("tet_vertices")
+        self.tetrahedra: Optional[np.ndarray] = parts.get("tetrahedra")
+        self.warnings: List[str] = list(parts.get("warnings", []))
+        self.notes: List[str] = list(parts.get("notes", []))
+        self._run = parts["run"]
+        self._space = parts.get("space")
+        self.stats: Dict[str, Any] = json.loads(self._run.report())
+
+    def __repr__(self) -> str:
+        tets = "" if self.tetrahedra is None else f", {len(self.tetrahedra)} tetrahedra"
+        return f"<isolab.Mesh {self.stats.get('algorithm')}: {len(self.vertices)} vertices, {len(self.faces)} faces{tets}>"
+
+    def metrics(self, self_intersections: bool = False, threads: Optional[int] = None) -> Dict[str, Any]:
+        """The CLI's metrics of this mesh (``isolab extract -m``): triangle quality, topology
+        (closed, manifold, oriented, genus), volume, area, distance of the vertices to the true
+        surface and normal deviation (the field the mesh came from is kept for this), quad
+        overdraw, histograms; the tetrahedra's measures for a volume extractor. The exact
+        self-intersection test (``--self-intersections``; seconds on millions of triangles)
+        only with ``self_intersections=True``.
+
+        >>> import isolab
+        >>> m = isolab.extract("torus", algorithm="marching-cubes", resolution=32).metrics()
+        >>> m["closed"], m["genus"]
+        (True, 1)
+        """
+        return json.loads(_isolab.metrics(self.vertices, self.faces, self.normals, self.tet_vertices, self.tetrahedra,
+                                          self._run, self_intersections, threads))
+
+    def save(self, path: Union[str, os.PathLike]) -> None:
+        """Writes the mesh in the format the extension names: ``.obj``, ``.ply``, ``.stl``
+        (binary), ``.glb`` or ``.gltf`` (with normals, and vertex colours for materials),
+        atomically (a failed write leaves no file); a volume extractor's tetrahedra beside it as
+        ``.vtk``. Raises ``OSError`` for an unwritable path, ``ValueError`` for another
+        extension.
+        """
+        colours = None
+        if self.materials is not None:
+            palette = np.asarray(_isolab.material_colours(), dtype=np.uint8)
+            colours = [tuple(c) for c in palette[self.materials]]
+        _isolab.save(os.fspath(path), self.vertices, self.faces, self.normals, colours, self.tet_vertices, self.tetrahedra,
+                     self._space)
+
+
+def extract(data: Union[np.ndarray, str, os.PathLike], level: Optional[float] = None, algorithm: str = "marching-cubes", *,
+            spacing: Optional[Sequence[float]] = None, affine: Optional[np.ndarray] = None, inside: Optional[str] = None,
+            options: Optional[Mapping[str, Any]] = None, post: Sequence[str] = (), threads: Optional[int] = None,
+            resolution: Optional[int] = None, dims: Optional[Sequence[int]] = None, lattice: str = "cubic",
+            seed: Optional[int] = None, chunk: Optional[int] = None, materials: bool = False) -> Mesh:
+    """Meshes ``data`` with a registered extractor (``isolab.algorithms()`` lists them) and
+    post-processes, through the pipeline the ``isolab extract`` CLI runs.
+
+    Parameters
+    ----------
+    data : 3-D numpy array, str or path
+        An array (any numeric dtype, C or Fortran order or strided; meshed on its own grid,
+        sample ``[i, j, k]`` at index ``(i, j, k)``; read once into isolab's float32 volume and
+        copied once more into the extractor's samples), a built-in field name (``"sphere"``,
+        ``"torus"``, ``"gyroid"``, ... ``isolab.fields()``) sampled at ``resolution``, or a path
+        to any file the CLI reads (a mesh: .obj .ply .stl .glb .gltf, meshed as its signed
+        distance; a volume: .nii .nii.gz .nrrd .nhdr .mhd .mha).
+    level : float, optional
+        The iso-value; default 0 for fields and arrays, Otsu's threshold for a scan file.
+    algorithm : str
+        An extractor name, e.g. ``"marching-cubes"``, ``"surface-nets"``, ``"dual-contouring"``.
+    spacing : 3 floats, optional
+        Voxel spacing of an array along its axes (world = index * spacing).
+    affine : (4, 4) array, optional
+        An array's index-to-world matrix (as nibabel's ``img.affine``); overrides ``spacing``.
+    inside : 'below' or 'above', optional
+        Which side of ``level`` is inside; the mesh is wound outward from it. Default 'below'
+        for arrays and fields (signed distances), the file's own for volume files (scans:
+        'above').
+    options : dict, optional
+        Extractor options as the CLI's ``--set NAME=VALUE`` (``{"smoothing": "elastic"}``).
+    post : list of str
+        Post-processes to apply in order (``"edge-collapse"``, ...).
+    threads : int, optional
+        Threads for this call; 1 runs the extractors that have a serial path serially.
+    resolution, dims, lattice, seed, chunk, materials
+        As the CLI's ``--resolution`` (samples along the longest side; for a volume file it
+        resamples), ``--dims``, ``--lattice`` ('cubic' or 'bcc'), ``--seed``, ``--chunk`` and
+        ``--materials``.
+
+    Returns
+    -------
+    Mesh
+        No mesh metric is computed unless asked for (:meth:`Mesh.metrics`).
+
+    Raises ``ValueError`` with the CLI's message for an unknown algorithm, option or
+    post-process, NaN or infinite data, an impossible lattice; ``OSError`` for an unreadable file.
+
+    >>> import numpy as np, isolab
+    >>> i, j, k = np.mgrid[-1:1:48j, -1:1:48j, -1:1:48j]
+    >>> mesh = isolab.extract(i**2 + j**2 + k**2 - 0.5, algorithm="surface-nets", spacing=(2/47, 2/47, 2/47))
+    >>> mesh.stats["algorithm"], mesh.faces.shape[1]
+    ('surface-nets', 3)
+    >>> bool(abs(np.linalg.norm(mesh.vertices - 1, axis=1).mean() - 0.5 ** 0.5) < 0.01)
+    True
+    """
+    opts = None if options is None else {str(k): str(v) for k, v in options.items()}
+    dims_ = None if dims is None else tuple(int(d) for d in dims)
+    if len(dims_ or (0, 0, 0)) != 3:
+        raise ValueError(f"dims must be three numbers of samples, not {dims!r}")
+    affine_ = None
+    if isinstance(data, (str, os.PathLike)):
+        data = os.fspath(data)
+    else:
+        data = _as_volume(data)
+        if affine is not None:
+            affine_ = np.asarray(affine, dtype=np.float64)
+            if affine_.shape != (4, 4):
+                raise ValueError(f"affine must be a 4 x 4 matrix; its shape is {affine_.shape}")
+            affine_ = [list(map(float, row)) for row in affine_]
+        elif spacing is not None:
+            if len(spacing) != 3:
+                raise ValueError("spacing must consist of three floats.")
+            sx, sy, sz = (float(s) for s in spacing)
+            affine_ = [[sx, 0.0, 0.0, 0.0], [0.0, sy, 0.0, 0.0], [0.0, 0.0, sz, 0.0], [0.0, 0.0, 0.0, 1.0]]
+    parts = _isolab.extract(data, None if level is None else float(level), algorithm, affine_, inside, opts, list(post),
+                            threads, resolution, dims_, lattice, seed, chunk, materials)
+    return Mesh(parts)
+
+
+def metrics(vertices: np.ndarray, faces: np.ndarray, *, self_intersections: bool = True,
+            threads: Optional[int] = None) -> Dict[str, Any]:
+    """The metrics ``isolab metrics FILE`` prints, for any triangle mesh given as arrays:
+    quality, topology, volume, area, overdraw, histograms and (unless
+    ``self_intersections=False``) the exact count of self-intersecting triangle pairs.
+
+    >>> import numpy as np, isolab
+    >>> tetra = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float32)
+    >>> m = isolab.metrics(tetra, np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]))
+    >>> m["closed"], m["euler"], m["self_intersections"]["count"], round(m["volume"], 6)
+    (True, 2, 0, 0.166667)
+    """
+    return json.loads(_isolab.metrics(vertices, faces, None, None, None, None, self_intersections, threads))
+
+
+def load(path: Union[str, os.PathLike]) -> Union[Tuple[np.ndarray, np.ndarray], Tuple[np.ndarray, np.ndarray]]:
+    """Reads a file the CLI reads. A volume file (NIfTI, NRRD, MetaImage, isolab's grid) gives
+    ``(array, affine)``: the voxels in index order ``[i, j, k]`` (float32, Fortran-ordered over
+    the buffer isolab read, no copy) and the 4 x 4 index-to-world affine (RAS for anatomical
+    files, as nibabel's). A mesh file gives ``(vertices, faces)``. Raises ``OSError`` or
+    ``ValueError`` naming the file and what is wrong.
+    """
+    kind, a, b = _isolab.load(os.fspath(path))
+    if kind == "volume":
+        return a, np.asarray(b, dtype=np.float64)
+    return a, b
+
+
+def algorithms() -> List[Dict[str, Any]]:
+    """The registered extractors and post-processes: ``name``, ``kind`` ('extractor' or
+    'post-process'), ``description``, ``options`` and ``guarantees`` (for extractors: the
+    lattices they mesh and whether their surface is closed, manifold, outward and free of
+    self-intersections, as the contract test checks).
+
+    >>> import isolab
+    >>> "marching-cubes" in [a["name"] for a in isolab.algorithms()]
+    True
+    """
+    return _isolab.algorithms()
+
+
+def fields() -> List[Tuple[str, str]]:
+    """The built-in fields :func:`extract` samples by name: ``(name, description)``."""
+    return _isolab.fields()

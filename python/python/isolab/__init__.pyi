@@ -1,0 +1,60 @@
+"""Type stubs for isolab (the docstrings are in __init__.py)."""
+
+import os
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+def marching_cubes(
+    volume: npt.NDArray[Any],
+    level: Optional[float] = None,
+    *,
+    spacing: Sequence[float] = (1.0, 1.0, 1.0),
+    gradient_direction: str = "descent",
+    step_size: int = 1,
+    allow_degenerate: bool = True,
+    method: str = "lewiner",
+    mask: Optional[npt.NDArray[np.bool_]] = None,
+    threads: Optional[int] = None,
+) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32], npt.NDArray[np.float32], npt.NDArray[np.float32]]: ...
+
+class Mesh:
+    vertices: npt.NDArray[np.float32]
+    faces: npt.NDArray[np.int32]
+    normals: Optional[npt.NDArray[np.float32]]
+    materials: Optional[npt.NDArray[np.uint8]]
+    tet_vertices: Optional[npt.NDArray[np.float32]]
+    tetrahedra: Optional[npt.NDArray[np.int32]]
+    stats: Dict[str, Any]
+    warnings: List[str]
+    notes: List[str]
+    def metrics(self, self_intersections: bool = False, threads: Optional[int] = None) -> Dict[str, Any]: ...
+    def save(self, path: Union[str, os.PathLike[str]]) -> None: ...
+
+def extract(
+    data: Union[npt.NDArray[Any], str, os.PathLike[str]],
+    level: Optional[float] = None,
+    algorithm: str = "marching-cubes",
+    *,
+    spacing: Optional[Sequence[float]] = None,
+    affine: Optional[npt.ArrayLike] = None,
+    inside: Optional[str] = None,
+    options: Optional[Mapping[str, Any]] = None,
+    post: Sequence[str] = (),
+    threads: Optional[int] = None,
+    resolution: Optional[int] = None,
+    dims: Optional[Sequence[int]] = None,
+    lattice: str = "cubic",
+    seed: Optional[int] = None,
+    chunk: Optional[int] = None,
+    materials: bool = False,
+) -> Mesh: ...
+def metrics(
+    vertices: npt.ArrayLike, faces: npt.ArrayLike, *, self_intersections: bool = True, threads: Optional[int] = None
+) -> Dict[str, Any]: ...
+def load(path: Union[str, os.PathLike[str]]) -> Tuple[npt.NDArray[Any], npt.NDArray[Any]]: ...
+def algorithms() -> List[Dict[str, Any]]: ...
+def fields() -> List[Tuple[str, str]]: ...

@@ -101,9 +101,8 @@ fn read_typed<T: Sample>(
     let readonly = array.try_readonly().map_err(|e| PyValueError::new_err(format!("the volume cannot be read: {e}")))?;
     let shape = [array.shape()[0], array.shape()[1], array.shape()[2]];
     let fortran = !array.is_c_contiguous() && array.is_fortran_contiguous();
-    let contiguous = step == 1 && readonly.as_slice().is_ok();
-    let (values, dims, layout) = if contiguous {
-        let slice = readonly.as_slice().map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let contiguous = if step == 1 { readonly.as_slice().ok() } else { None };
+    let (values, dims, layout) = if let Some(slice) = contiguous {
         let values = py.allow_threads(|| crate::pools::install(pool, || convert(slice, sign)));
         if fortran {
             (values, shape, Layout::Fortran)

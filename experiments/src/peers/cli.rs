@@ -1,7 +1,8 @@
 //! Our command line, `isolab extract`, run as a user runs it: a new process per call, on the very
 //! grid file the experiment wrote (`Job::Grid`'s `file`), timed by the `times_ms.extraction` it
-//! reports in the JSON it prints (no `-m`, so no mesh metric is computed). One-shot only: a process makes one extraction, on pages the
-//! kernel has never handed out, so this is the library's one-shot call as a process's first.
+//! reports in the JSON it prints (no `-m`, so no mesh metric is computed). One-shot only: a
+//! process makes one extraction, on pages the kernel has never handed out, so this is the
+//! library's one-shot call as a process's first.
 //!
 //! Run with the CLI's default, where it re-executes itself with huge pages for malloc (Linux
 //! with glibc), or without (`ISOLAB_NO_HUGE_PAGES`), to show what the huge pages change.

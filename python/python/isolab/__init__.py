@@ -79,9 +79,9 @@ def marching_cubes(volume: np.ndarray, level: Optional[float] = None, *, spacing
     method : 'lewiner' or 'lorensen'
         'lorensen' gives scikit-image's ``method='lorensen'`` vertices (linear interpolation on
         every crossing edge, within float32 rounding) and triangle count: isolab's
-        ``marching-cubes`` table makes as many triangles as scikit-image's classic table in every
-        one of the 256 corner patterns (tested), though it may cut a polygon along other
-        diagonals. 'lewiner' is isolab's ``marching-cubes-decider``: every ambiguous face follows the
+        ``marching-cubes`` table makes as many triangles as scikit-image's classic table in each of
+        the 254 corner patterns that have a surface (tested), though it may cut a polygon along
+        other diagonals. 'lewiner' is isolab's ``marching-cubes-decider``: every ambiguous face follows the
         trilinear interpolant (the asymptotic decider), the mesh is closed wherever it does not
         reach the volume's boundary and manifold, and no triangle has zero area (a crossing
         within 1e-4 of a sample is kept that far from it). It differs from scikit-image's

@@ -18,11 +18,11 @@ use numpy::PyUntypedArray;
 use pyo3::exceptions::{PyMemoryError, PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::Path;
 
 mod arrays;
+mod blocks;
 mod out;
 mod pools;
 
@@ -38,7 +38,7 @@ fn run_error(e: RunError) -> PyErr {
     }
 }
 
-fn value_error(e: impl std::fmt::Display) -> PyErr {
+pub(crate) fn value_error(e: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(e.to_string())
 }
 
@@ -59,6 +59,15 @@ fn algorithms(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
         g.set_item("outward", e.guarantees.outward)?;
         g.set_item("intersection_free", e.guarantees.intersection_free)?;
         d.set_item("guarantees", g)?;
+        // How it meshes in blocks (isolab.dask, chunk=) with its default options.
+        let chunking = extractors::build(e.name, &Options::new()).ok().flatten().map(|x| x.chunking());
+        let (kind, apron) = match chunking {
+            Some(isolab_algorithms::Chunking::CellLocal) => ("cell-local", 0),
+            Some(isolab_algorithms::Chunking::Apron(a)) => ("apron", a),
+            _ => ("unsupported", 0),
+        };
+        d.set_item("chunking", kind)?;
+        d.set_item("apron", apron)?;
         out.push(d);
     }
     for p in extractors::POST_INFOS {
@@ -90,7 +99,7 @@ fn fields() -> Vec<(&'static str, &'static str)> {
 }
 
 /// Options from a `{name: value}` mapping (values as the CLI's `--set NAME=VALUE` text).
-fn options_from(options: Option<BTreeMap<String, String>>) -> Options {
+pub(crate) fn options_from(options: Option<BTreeMap<String, String>>) -> Options {
     let mut o = Options::new();
     for (k, v) in options.unwrap_or_default() {
         o.set(&k, &v);
@@ -156,7 +165,8 @@ fn mc_core(
     extractor: &dyn Extractor,
     mask: Option<&[bool]>,
 ) -> PyResult<(TriMesh, Vec<f32>)> {
-    if let Some(at) = array.values.par_iter().position_first(|v| !v.is_finite()) {
+    if !array.finite {
+        let at = array.values.iter().position(|v| !v.is_finite()).unwrap_or(0);
         let [nx, ny, _] = array.dims;
         let xyz = [at % nx, at / nx % ny, at / (nx * ny)];
         let ijk = if array.layout == Layout::C { [xyz[2], xyz[1], xyz[0]] } else { xyz };
@@ -189,9 +199,16 @@ fn mc_core(
 /// A finished run, kept for its true surface (what `Mesh.metrics()` measures against) and its
 /// JSON report.
 #[pyclass(module = "isolab._isolab", frozen)]
-struct Run {
+pub(crate) struct Run {
     truth: Option<Truth>,
     report: String,
+}
+
+impl Run {
+    /// A run with no true surface to measure against (a welded mesh of blocks).
+    pub(crate) fn without_truth(report: String) -> Run {
+        Run { truth: None, report }
+    }
 }
 
 #[pymethods]
@@ -399,6 +416,9 @@ fn _isolab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(metrics, m)?)?;
     m.add_function(wrap_pyfunction!(save, m)?)?;
     m.add_function(wrap_pyfunction!(load, m)?)?;
+    m.add_function(wrap_pyfunction!(blocks::block_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(blocks::mesh_block, m)?)?;
+    m.add_function(wrap_pyfunction!(blocks::weld_fragments, m)?)?;
     m.add_class::<Run>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

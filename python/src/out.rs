@@ -76,6 +76,46 @@ fn triangle_cell(mesh: &TriMesh, t: [u32; 3], grid: &Grid) -> [usize; 3] {
     [at(c.x, grid.dims[0]), at(c.y, grid.dims[1]), at(c.z, grid.dims[2])]
 }
 
+/// The largest cell range among the up to four cells around the lattice edge from `base` along
+/// `axis`. The cells share columns (two samples along `axis`): the 3 x 3 columns around the edge
+/// are each read once, 18 samples for the four cells' 32 corners.
+fn edge_cells_range(values: &[f32], dims: [usize; 3], strides: [usize; 3], base: [usize; 3], axis: usize, iso: f32) -> f32 {
+    let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
+    let at = base[0] + strides[1] * base[1] + strides[2] * base[2];
+    // columns[du][dw]: (min, max) of the column at base + (du - 1) e_u + (dw - 1) e_w.
+    let mut columns = [[(f32::INFINITY, f32::NEG_INFINITY); 3]; 3];
+    let inside = |coord: usize, d: usize, n: usize| coord + d >= 1 && coord + d < n + 1;
+    for (du, row) in columns.iter_mut().enumerate() {
+        if !inside(base[u], du, dims[u]) {
+            continue;
+        }
+        for (dw, column) in row.iter_mut().enumerate() {
+            if !inside(base[w], dw, dims[w]) {
+                continue;
+            }
+            let i = at + du * strides[u] + dw * strides[w] - strides[u] - strides[w];
+            let (a, b) = (values[i], values[i + strides[axis]]);
+            *column = (a.min(b), a.max(b));
+        }
+    }
+    let mut best = 0.0f32;
+    for cu in 0..2 {
+        for cw in 0..2 {
+            // The cell whose lowest corner is base + (cu - 1) e_u + (cw - 1) e_w.
+            if base[u] + cu < 1 || base[u] + cu >= dims[u] || base[w] + cw < 1 || base[w] + cw >= dims[w] {
+                continue;
+            }
+            let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+            for column in [columns[cu][cw], columns[cu + 1][cw], columns[cu][cw + 1], columns[cu + 1][cw + 1]] {
+                lo = lo.min(column.0);
+                hi = hi.max(column.1);
+            }
+            best = best.max((hi - iso).max(0.0) - (lo - iso).min(0.0));
+        }
+    }
+    best
+}
+
 fn cell_index(cell: [usize; 3], grid: &Grid) -> usize {
     cell[0] + grid.dims[0] * (cell[1] + grid.dims[1] * cell[2])
 }
@@ -108,11 +148,11 @@ pub fn keep_masked_cells(mesh: &mut TriMesh, grid: &Grid, mask: &[bool]) {
 }
 
 /// scikit-image's `values`: for each vertex, the largest value range, `max(0, max - iso) -
-/// min(0, min - iso)` over the eight corners, among the cells whose triangles use it (zero for
-/// a vertex no triangle uses). Symmetric in the sign of the values, so negated samples give the
-/// volume's own ranges. Without a mask every cell around a crossing edge uses its vertex, so a
-/// vertex on an edge (two integer coordinates) reads the up to four cells around that edge, in
-/// parallel; the others (a vertex at a sample, or with a mask) take it from their triangles.
+/// min(0, min - iso)` over the eight corners, among the cells around it: the up to four cells
+/// around its edge for a vertex on an edge (two integer coordinates), the up to eight cells
+/// around its sample for a vertex at a sample. Symmetric in the sign of the values, so negated
+/// samples give the volume's own ranges. With a mask, a vertex reads the cells whose triangles
+/// use it (zero for a vertex no triangle uses).
 pub fn cell_ranges(mesh: &TriMesh, grid: &Grid, values: &[f32], iso: f32, masked: bool) -> Vec<f32> {
     let [nx, ny, nz] = grid.dims;
     let cell_range = |[x, y, z]: [usize; 3]| {
@@ -128,6 +168,20 @@ pub fn cell_ranges(mesh: &TriMesh, grid: &Grid, values: &[f32], iso: f32, masked
         }
         hi - lo
     };
+    let dims = [nx, ny, nz];
+    let strides = [1, nx, nx * ny];
+    // A vertex at a sample (its value at the iso-value) reads every cell around that sample, as
+    // scikit-image does (tested on level sets, where such vertices occur).
+    let sample_cells_range = |at: [usize; 3]| {
+        let mut best = 0.0f32;
+        for corner in 0..8 {
+            let d = [corner & 1, (corner >> 1) & 1, (corner >> 2) & 1];
+            if (0..3).all(|k| at[k] >= d[k] && at[k] - d[k] + 1 < dims[k]) {
+                best = best.max(cell_range([at[0] - d[0], at[1] - d[1], at[2] - d[2]]));
+            }
+        }
+        best
+    };
     // NaN marks a vertex whose cells are found from its triangles.
     let mut out: Vec<f32> = mesh
         .positions
@@ -135,34 +189,17 @@ pub fn cell_ranges(mesh: &TriMesh, grid: &Grid, values: &[f32], iso: f32, masked
         .with_min_len(1 << 12)
         .map(|p| {
             let c = p.to_array();
-            let free = c.map(|v| v.fract() != 0.0);
-            let axis = match free {
+            let axis = match c.map(|v| v.fract() != 0.0) {
                 [true, false, false] => 0,
                 [false, true, false] => 1,
                 [false, false, true] => 2,
+                [false, false, false] if !masked => return sample_cells_range(c.map(|v| v as usize)),
                 _ => return f32::NAN,
             };
             if masked {
                 return f32::NAN;
             }
-            let base = c.map(|v| v.floor() as usize);
-            let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
-            let mut best = 0.0f32;
-            for du in 0..2usize {
-                for dw in 0..2usize {
-                    let mut cell = base;
-                    if du == 0 && cell[u] == 0 || dw == 0 && cell[w] == 0 {
-                        continue;
-                    }
-                    cell[u] -= 1 - du;
-                    cell[w] -= 1 - dw;
-                    let dims = [nx, ny, nz];
-                    if cell.iter().zip(dims).all(|(&c, n)| c + 1 < n) {
-                        best = best.max(cell_range(cell));
-                    }
-                }
-            }
-            best
+            edge_cells_range(values, dims, strides, c.map(|v| v.floor() as usize), axis, iso)
         })
         .collect();
     if out.iter().any(|v| v.is_nan()) {

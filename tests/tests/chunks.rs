@@ -39,22 +39,12 @@ fn assert_same_mesh(whole: &Extraction, welded: &Extraction, what: &str) {
     assert!((va - vb).abs() <= 1e-5 * (va.abs() + sa.powf(1.5)), "{what}: volume {va} vs {vb}");
 }
 
-/// Every surface extractor that chunks.
-const CHUNKED: [&str; 6] = [
-    "marching-cubes",
-    "marching-cubes-decider",
-    "marching-tetrahedra",
-    "surface-nets",
-    "dual-contouring",
-    "regularised-marching-tetrahedra",
-];
-
 #[test]
 fn welded_chunks_equal_the_single_volume_on_terrain_asteroid_and_gyroid() {
     for name in ["terrain", "asteroid", "gyroid"] {
         let samples = sampled(name, 65, false);
-        for algorithm in CHUNKED {
-            let e = extractors::by_name(algorithm).unwrap();
+        for e in chunking_extractors() {
+            let algorithm = e.name();
             let mut whole = Extraction::default();
             e.extract(&samples, &mut whole).unwrap();
             for chunk in [8, 16, 32] {
@@ -122,8 +112,8 @@ proptest! {
         chunk in prop::sample::select(vec![2usize, 4, 8]),
     ) {
         let samples = blob_field(17, &blobs, threshold);
-        for algorithm in CHUNKED {
-            let e = extractors::by_name(algorithm).unwrap();
+        for e in chunking_extractors() {
+            let algorithm = e.name();
             let mut whole = Extraction::default();
             e.extract(&samples, &mut whole).unwrap();
             let mut welded = Extraction::default();
@@ -269,5 +259,105 @@ mod streaming {
         let grid = *sampled("sphere", 33, false).grid();
         let err = stream_chunked(sn.as_ref(), field.as_ref(), grid, 0.0, 16, &mut Memory::default(), |_, _| {}).unwrap_err();
         assert!(err.to_string().contains("cell-local"), "{err}");
+    }
+}
+
+/// Every registered extractor that meshes in chunks with its default options, from the registry
+/// (a new chunking extractor is checked here without being listed).
+fn chunking_extractors() -> Vec<Box<dyn isolab_algorithms::Extractor>> {
+    extractors::registry().into_iter().filter(|e| e.chunking() != Chunking::Unsupported).collect()
+}
+
+/// Each block of a plan meshed on its own from its own samples (as a distributed task does),
+/// then the fragments welded in the plan's order.
+fn blocks_welded(e: &dyn isolab_algorithms::Extractor, samples: &Samples, chunk: usize) -> Extraction {
+    use isolab_algorithms::chunks::{mesh_block, weld_fragments, BlockPlan};
+    let grid = *samples.grid();
+    let plan = BlockPlan::new(e, grid.dims, chunk).unwrap();
+    let fragments: Vec<_> = plan
+        .blocks()
+        .map(|b| {
+            let mut values = Vec::with_capacity(b.dims.iter().product());
+            for z in b.lo[2]..b.lo[2] + b.dims[2] {
+                for y in b.lo[1]..b.lo[1] + b.dims[1] {
+                    let row = grid.index(b.lo[0], y, z);
+                    values.extend_from_slice(&samples.values()[row..row + b.dims[0]]);
+                }
+            }
+            mesh_block(e, &plan, b.id, values, samples.iso()).unwrap()
+        })
+        .collect();
+    let mut out = Extraction::default();
+    weld_fragments(&fragments, &mut out);
+    // To the grid's world coordinates, as extract_chunked places its chunks.
+    for p in &mut out.surface.positions {
+        *p = grid.origin + *p * grid.spacing;
+    }
+    out
+}
+
+#[test]
+fn blocks_meshed_apart_weld_to_exactly_the_chunked_extraction() {
+    // Samples without their field: a block is only its values, as a task reading a file has.
+    let field_samples = sampled("gyroid", 49, false);
+    let samples = Samples::from_values(*field_samples.lattice(), field_samples.values().to_vec(), 0.0).unwrap();
+    let extractors = chunking_extractors();
+    assert!(extractors.len() >= 6, "the registry's chunking extractors: {}", extractors.len());
+    for e in extractors {
+        for chunk in [8, 16] {
+            let mut chunked = Extraction::default();
+            extract_chunked(e.as_ref(), &samples, chunk, &mut chunked).unwrap();
+            let welded = blocks_welded(e.as_ref(), &samples, chunk);
+            let what = format!("{} in blocks of {chunk}", e.name());
+            assert_eq!(welded.surface.positions, chunked.surface.positions, "{what}: vertices");
+            assert_eq!(welded.surface.triangles, chunked.surface.triangles, "{what}: triangles");
+        }
+    }
+}
+
+#[test]
+fn blocks_that_do_not_divide_the_grid_still_give_the_whole_volume() {
+    // 45 x 38 x 51 samples: no block size divides every axis's cells.
+    let field = object_field("asteroid");
+    let grid = Grid::with_dims(&field.domain(), [45, 38, 51]).unwrap();
+    let sampled = Samples::sample(field, Lattice::Cubic(grid), 0.0).unwrap();
+    // Without the field (dual contouring would ask it for normals the blocks do not have).
+    let samples = Samples::from_values(Lattice::Cubic(grid), sampled.values().to_vec(), 0.0).unwrap();
+    for e in chunking_extractors() {
+        let mut whole = Extraction::default();
+        e.extract(&samples, &mut whole).unwrap();
+        for chunk in [7, 16] {
+            let welded = blocks_welded(e.as_ref(), &samples, chunk);
+            let what = format!("{} on 45x38x51 in uneven blocks of {chunk}", e.name());
+            assert_same_mesh(&whole, &welded, &what);
+            if e.chunking() == Chunking::CellLocal {
+                assert_eq!(welded.surface.positions.len(), whole.surface.positions.len(), "{what}: every vertex");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_block_plan_refuses_what_it_cannot_mesh_by_name() {
+    use isolab_algorithms::chunks::{mesh_block, BlockPlan};
+    let mc = MarchingCubes::default();
+    let plan = BlockPlan::new(&mc, [20, 11, 9], 8).unwrap();
+    assert_eq!((plan.counts, plan.len()), ([3, 2, 1], 6));
+    assert_eq!(plan.block([2, 1, 0]).map(|b| (b.lo, b.dims)), Some(([16, 8, 0], [4, 3, 9])));
+    assert!(refusal(BlockPlan::new(&mc, [20, 11, 9], 1)).contains("below 2 cells"));
+    assert!(refusal(BlockPlan::new(&mc, [20, 1, 9], 8)).contains("no cells"));
+    let bcc = extractors::by_name("bcc-sculpt").unwrap();
+    assert!(refusal(BlockPlan::new(bcc.as_ref(), [20, 11, 9], 8)).contains("cannot mesh in blocks"));
+    assert!(refusal(mesh_block(&mc, &plan, [0, 0, 0], vec![0.0; 5], 0.0)).contains("it was given 5"));
+    assert!(refusal(mesh_block(&mc, &plan, [3, 0, 0], vec![0.0; 5], 0.0)).contains("outside the plan"));
+    let mut values = vec![1.0; 9 * 9 * 9];
+    values[10] = f32::NAN;
+    assert!(refusal(mesh_block(&mc, &plan, [0, 0, 0], values, 0.0)).contains("[1, 1, 0] is NaN"));
+}
+
+fn refusal<T>(r: Result<T, isolab_algorithms::ExtractError>) -> String {
+    match r {
+        Ok(_) => panic!("accepted"),
+        Err(e) => e.to_string(),
     }
 }

@@ -240,6 +240,16 @@ const REVIEWED: &[(&str, &str, &str)] = &[
         "the sphere's volume and area formulas, and the slope second-order convergence has",
     ),
     (
+        "python_users/mod.rs",
+        "glibc.malloc.hugetlb=",
+        "the glibc tunable that asks for huge pages: a setting's name and value, not a result",
+    ),
+    (
+        "python_users/mod.rs",
+        "faults once per 2 MiB instead of once per 4 KiB",
+        "the x86-64 kernel's huge and base page sizes, by definition",
+    ),
+    (
         "scaling.rs",
         "A slope near 1 means",
         "the slopes that cost proportional to cells (1) and to surface area (2/3) have, by definition",

@@ -223,7 +223,7 @@ impl ChunkedVolume {
     pub fn welded(&self, out: &mut Extraction) -> ChunkStats {
         out.clear();
         let mut stats = ChunkStats { chunks: self.counts, apron: apron_of(self.chunking), ..Default::default() };
-        weld(self.slots.iter(), out, &mut stats);
+        weld(self.slots.iter().map(ChunkSlot::piece), out, &mut stats);
         out.finish_counts(0);
         stats
     }

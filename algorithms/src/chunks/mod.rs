@@ -32,7 +32,9 @@
 //! changed, and re-meshing a chunk reuses its buffers.
 //!
 //! Files: this one (chunk counts, slots, [`extract_chunked`]); `weld` (joining chunk meshes);
-//! `stream` ([`stream_chunked`], [`MeshSink`]); `edit` ([`ChunkedVolume`], [`Brush`]).
+//! `stream` ([`stream_chunked`], [`MeshSink`]); `edit` ([`ChunkedVolume`], [`Brush`]); `blocks`
+//! (one block meshed on its own into a [`Fragment`], and [`weld_fragments`]: a distributed driver's
+//! two steps).
 
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
 use crate::field::{BlockSide, Field};
@@ -45,10 +47,12 @@ use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Instant;
 
+mod blocks;
 mod edit;
 mod stream;
 mod weld;
 
+pub use blocks::*;
 pub use edit::*;
 pub use stream::*;
 use weld::*;
@@ -241,6 +245,29 @@ impl ChunkSlot {
         Self { id, block, samples, mesh: Extraction::default(), keys: Vec::new(), remap: Vec::new(), state: ChunkState::Empty }
     }
 
+    /// A slot for chunk `id` holding `values`, its block's samples (index coordinates, no field).
+    fn with_values(id: [usize; 3], block: Block, values: Vec<f32>, iso: f32) -> Self {
+        let local = Grid {
+            origin: Vec3::new(block.lo[0] as f32, block.lo[1] as f32, block.lo[2] as f32),
+            spacing: 1.0,
+            dims: block.dims,
+        };
+        let samples =
+            Samples::from_values(Lattice::Cubic(local), values, iso).expect("the caller checked the count and finiteness");
+        Self { id, block, samples, mesh: Extraction::default(), keys: Vec::new(), remap: Vec::new(), state: ChunkState::Empty }
+    }
+
+    /// What the weld reads of this slot.
+    fn piece(&self) -> WeldPiece<'_> {
+        WeldPiece {
+            state: self.state,
+            surface: &self.mesh.surface,
+            keys: &self.keys,
+            active_cells: self.mesh.stats.active_cells,
+            discarded_triangles: self.mesh.stats.discarded_triangles,
+        }
+    }
+
     /// Copies the chunk's samples out of the world's and meshes them (or records it empty/full).
     fn remesh(&mut self, extractor: &dyn Extractor, chunking: Chunking, grid: &Grid, values: &[f32]) -> Result<(), ExtractError> {
         let b = self.block;
@@ -426,7 +453,7 @@ pub fn extract_chunked(
     out.clear();
     out.stats.times.sampling = samples.sampling_time();
     let mut stats = ChunkStats { chunks: counts, apron, ..Default::default() };
-    weld(slots.iter(), out, &mut stats);
+    weld(slots.iter().map(ChunkSlot::piece), out, &mut stats);
     field_normals(samples.field(), out);
     out.stats.times.geometry = start.elapsed();
     out.finish_counts(0);

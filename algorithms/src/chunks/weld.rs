@@ -3,6 +3,7 @@
 //! vertex and its ordinal there).
 
 use super::*;
+use crate::mesh::TriMesh;
 
 /// A weld key from exact position bits.
 pub(super) fn position_key(p: Vec3) -> u128 {
@@ -10,35 +11,43 @@ pub(super) fn position_key(p: Vec3) -> u128 {
     x | y << 32 | z << 64
 }
 
+/// What the weld needs of one chunk: a persistent slot's mesh or a block's [`Fragment`].
+pub(super) struct WeldPiece<'a> {
+    pub state: ChunkState,
+    pub surface: &'a TriMesh,
+    pub keys: &'a [Option<u128>],
+    pub active_cells: usize,
+    pub discarded_triangles: usize,
+}
+
 /// Welds the chunks' meshes into `out` (cleared first) and fills the counts of `stats`.
-pub(super) fn weld<'a>(slots: impl Iterator<Item = &'a ChunkSlot>, out: &mut Extraction, stats: &mut ChunkStats) {
+pub(super) fn weld<'a>(pieces: impl Iterator<Item = WeldPiece<'a>>, out: &mut Extraction, stats: &mut ChunkStats) {
     out.surface.clear();
     let mut index: HashMap<u128, u32> = HashMap::new();
     let mut with_normals = true;
-    for slot in slots {
-        match slot.state {
+    for piece in pieces {
+        match piece.state {
             ChunkState::Empty => stats.empty += 1,
             ChunkState::Full => stats.full += 1,
             ChunkState::Meshed => {
                 stats.meshed += 1;
-                let e = &slot.mesh;
-                out.stats.discarded_triangles += e.stats.discarded_triangles;
-                out.stats.active_cells += e.stats.active_cells;
-                with_normals &= e.surface.normals.len() == e.surface.positions.len();
+                let e = piece.surface;
+                out.stats.discarded_triangles += piece.discarded_triangles;
+                out.stats.active_cells += piece.active_cells;
+                with_normals &= e.normals.len() == e.positions.len();
                 let remap: Vec<u32> = e
-                    .surface
                     .positions
                     .iter()
                     .enumerate()
                     .map(|(i, &p)| {
                         let next = out.surface.positions.len() as u32;
-                        let id = match slot.keys[i] {
+                        let id = match piece.keys[i] {
                             Some(key) => *index.entry(key).or_insert(next),
                             None => next,
                         };
                         if id == next {
                             out.surface.positions.push(p);
-                            if let Some(&n) = e.surface.normals.get(i) {
+                            if let Some(&n) = e.normals.get(i) {
                                 out.surface.normals.push(n);
                             }
                         } else {
@@ -47,7 +56,7 @@ pub(super) fn weld<'a>(slots: impl Iterator<Item = &'a ChunkSlot>, out: &mut Ext
                         id
                     })
                     .collect();
-                out.surface.triangles.extend(e.surface.triangles.iter().map(|t| t.map(|v| remap[v as usize])));
+                out.surface.triangles.extend(e.triangles.iter().map(|t| t.map(|v| remap[v as usize])));
             }
         }
     }

@@ -15,6 +15,7 @@ pub mod decimation;
 pub mod large_world;
 pub mod mesh_fields;
 pub mod peers;
+pub mod python_users;
 pub mod real_volumes;
 pub mod scaling;
 pub mod sharp_features;
@@ -40,6 +41,7 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(sharp_features::SharpFeatures),
         Box::new(costen_table::CostenTable),
         Box::new(peers::Peers),
+        Box::new(python_users::PythonUsers),
         Box::new(mesh_fields::MeshFields),
         Box::new(real_volumes::RealVolumes),
         Box::new(scaling::Scaling),

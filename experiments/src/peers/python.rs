@@ -11,7 +11,7 @@
 use super::{Job, Peer, PeerError, PeerRun, Protocol};
 use std::cell::RefCell;
 use std::io::{BufRead, BufReader, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 use std::rc::Rc;
 use std::time::Duration;
@@ -30,17 +30,7 @@ pub type Hello = serde_json::Value;
 impl PythonServer {
     /// Starts `peers.py` in the reference environment under `root`, creating it when missing.
     pub fn start(root: &Path) -> Result<(Rc<RefCell<PythonServer>>, Hello), String> {
-        let python = root.join("tests/reference/.venv/bin/python");
-        if !python.exists() {
-            let status = Command::new("bash")
-                .arg(root.join("tests/reference/run.sh"))
-                .arg("setup")
-                .status()
-                .map_err(|e| format!("cannot run tests/reference/run.sh setup: {e}"))?;
-            if !status.success() {
-                return Err("tests/reference/run.sh setup failed (no Python peers)".into());
-            }
-        }
+        let python = reference_python(root)?;
         let mut child = Command::new(&python)
             .arg(root.join("tests/reference/peers.py"))
             .stdin(Stdio::piped())
@@ -68,6 +58,23 @@ impl PythonServer {
         let n = |k: &str| v[k].as_u64().unwrap_or(0) as usize;
         Ok((v["ms"].as_f64().unwrap_or(f64::NAN), n("vertices"), n("triangles")))
     }
+}
+
+/// The Python of the pinned reference environment under `root` (`tests/reference/.venv`), made
+/// by `tests/reference/run.sh setup` when missing.
+pub fn reference_python(root: &Path) -> Result<PathBuf, String> {
+    let python = root.join("tests/reference/.venv/bin/python");
+    if !python.exists() {
+        let status = Command::new("bash")
+            .arg(root.join("tests/reference/run.sh"))
+            .arg("setup")
+            .status()
+            .map_err(|e| format!("cannot run tests/reference/run.sh setup: {e}"))?;
+        if !status.success() {
+            return Err("tests/reference/run.sh setup failed (no Python peers)".into());
+        }
+    }
+    Ok(python)
 }
 
 impl Drop for PythonServer {

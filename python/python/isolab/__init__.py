@@ -103,7 +103,8 @@ def marching_cubes(volume: np.ndarray, level: Optional[float] = None, *, spacing
         Unit normals from the volume's gradient (central differences), toward decreasing values.
     values : (V,) float32
         For each vertex, the largest range of values, ``max(0, max - level) - min(0, min -
-        level)``, over the cells whose triangles use it (scikit-image's measure).
+        level)``, over the cells around it (around its edge; around its sample for a vertex at
+        a sample; with a mask, the cells whose triangles use it): scikit-image's measure.
 
     >>> import numpy as np, isolab
     >>> i, j, k = np.mgrid[-1:1:32j, -1:1:32j, -1:1:32j]
@@ -335,11 +336,14 @@ def algorithms() -> List[Dict[str, Any]]:
     """The registered extractors and post-processes: ``name``, ``kind`` ('extractor' or
     'post-process'), ``description``, ``options`` and ``guarantees`` (for extractors: the
     lattices they mesh and whether their surface is closed, manifold, outward and free of
-    self-intersections, as the contract test checks).
+    self-intersections, as the contract test checks); for extractors also ``chunking``, how they
+    mesh in blocks (``chunk=``, :mod:`isolab.dask`) with their default options: 'cell-local'
+    (blocks share their boundary samples), 'apron' (blocks also read ``apron`` samples of their
+    neighbours) or 'unsupported'.
 
     >>> import isolab
-    >>> "marching-cubes" in [a["name"] for a in isolab.algorithms()]
-    True
+    >>> [(a["chunking"], a["apron"]) for a in isolab.algorithms() if a["name"] == "marching-cubes"]
+    [('cell-local', 0)]
     """
     return _isolab.algorithms()
 

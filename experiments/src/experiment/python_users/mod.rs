@@ -1,0 +1,347 @@
+//! `python_users`: marching cubes as a researcher with a numpy array meets it, in one Python
+//! process: `isolab.marching_cubes` (the Python package, both methods) beside scikit-image's
+//! `marching_cubes` (Lorensen, Lewiner), PyMCubes, zmesh and VTK's `vtkFlyingEdges3D`, on the
+//! same arrays, one-shot, alternating, on one and two threads, with every conversion between the
+//! user's array and the returned arrays inside the timed call.
+//!
+//! The timing runs in `bench.py` beside this file (its header is the protocol), in the pinned
+//! reference environment (`tests/reference/.venv`) with the package installed from `python/` by
+//! this experiment, so it times the code of this commit. Inputs: a gyroid at 64³ to 512³
+//! (float32, C order) and the MNI152 T1 template as nibabel hands it over (float64).
+
+use super::context::{Context, Experiment, ExperimentError};
+use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
+use crate::report::{markdown_table, ms, Spread};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::process::Command;
+
+/// The experiment.
+pub struct PythonUsers;
+
+const NAME: &str = "python_users";
+const SIZES: [usize; 4] = [64, 128, 256, 512];
+/// From this size on, `LARGE_REPEATS` rounds (scikit-image takes seconds a call there).
+const LARGE: usize = 512;
+const LARGE_REPEATS: usize = 3;
+/// The thread counts timed (the second: this machine's two cores).
+const THREADS: [usize; 2] = [1, 2];
+/// The implementation every ratio is taken against.
+const OURS: &str = "isolab lorensen";
+/// The second run's label: the same script in a process whose glibc malloc asks the kernel for
+/// transparent huge pages, on the sizes where first-touch page faults weigh.
+const HUGE_PAGES: &str = "huge pages";
+const HUGE_PAGES_TUNABLE: &str = "glibc.malloc.hugetlb=1";
+const HUGE_PAGE_SIZES: [usize; 2] = [256, 512];
+/// Rows written before there was a second run.
+fn default_environment() -> String {
+    "default".into()
+}
+
+/// One implementation on one input on some threads, as `bench.py` writes it.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Row {
+    implementation: String,
+    input: String,
+    n: usize,
+    threads: usize,
+    /// How the Python process was started: "default", or [`HUGE_PAGES`].
+    #[serde(default = "default_environment")]
+    environment: String,
+    /// Every recorded call, ms, in the order run.
+    ms: Vec<f64>,
+    vertices: usize,
+    triangles: usize,
+    /// What the call converts on the way in and out.
+    converts: String,
+}
+
+/// An input as `bench.py` describes it.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Input {
+    input: String,
+    n: usize,
+    dtype: String,
+    order: String,
+    shape: Vec<usize>,
+    level: f64,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Data {
+    #[serde(default)]
+    repeats: usize,
+    #[serde(default)]
+    large_repeats: usize,
+    versions: BTreeMap<String, String>,
+    notes: Vec<String>,
+    inputs: Vec<Input>,
+    rows: Vec<Row>,
+}
+
+impl Experiment for PythonUsers {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn question(&self) -> &'static str {
+        "How fast is isolab's marching cubes from Python, against scikit-image, PyMCubes, zmesh and VTK on the same numpy arrays?"
+    }
+
+    fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
+        let root = ctx.report_dir.join("..");
+        let python = crate::peers::python::reference_python(&root).map_err(ExperimentError::Figure)?;
+        install_package(&python, &root)?;
+        let repeats = ctx.repeats.max(1);
+        let sizes: Vec<String> = SIZES.iter().map(usize::to_string).collect();
+        let mut data = bench(&python, &[&["--sizes", &sizes.join(","), "--mni", "nilearn"]], repeats, None)?;
+        let large: Vec<String> = HUGE_PAGE_SIZES.iter().map(usize::to_string).collect();
+        let huge =
+            bench(&python, &[&["--sizes", &large.join(","), "--environment", HUGE_PAGES]], repeats, Some(HUGE_PAGES_TUNABLE))?;
+        data.rows.extend(huge.rows);
+        data.notes.extend(huge.notes.into_iter().map(|n| format!("{HUGE_PAGES}: {n}")));
+        ctx.write_data(NAME, &data)?;
+        figures(ctx, &data)
+    }
+
+    fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
+        let data: Data = ctx.read_data(NAME)?;
+        Ok(section(&data))
+    }
+}
+
+/// Runs `bench.py` with `args` (and `GLIBC_TUNABLES=tunable` when given) and reads what it wrote.
+fn bench(python: &Path, args: &[&[&str]], repeats: usize, tunable: Option<&str>) -> Result<Data, ExperimentError> {
+    let out = std::env::temp_dir().join(format!("isolab-python-users-{}.json", std::process::id()));
+    let mut command = Command::new(python);
+    command.arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/experiment/python_users/bench.py")).arg(&out).args([
+        "--repeats",
+        &repeats.to_string(),
+        "--large-repeats",
+        &LARGE_REPEATS.to_string(),
+    ]);
+    for a in args {
+        command.args(*a);
+    }
+    if let Some(t) = tunable {
+        command.env("GLIBC_TUNABLES", t);
+    }
+    let status =
+        command.status().map_err(|e| ExperimentError::Figure(format!("cannot run bench.py with {}: {e}", python.display())))?;
+    if !status.success() {
+        return Err(ExperimentError::Figure(format!("bench.py failed ({status})")));
+    }
+    let text = std::fs::read_to_string(&out).map_err(|e| ExperimentError::Data { path: out.clone(), reason: e.to_string() })?;
+    let _ = std::fs::remove_file(&out);
+    let mut bench: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| ExperimentError::Data { path: out.clone(), reason: e.to_string() })?;
+    bench["repeats"] = repeats.into();
+    bench["large_repeats"] = LARGE_REPEATS.into();
+    serde_json::from_value(bench).map_err(|e| ExperimentError::Data { path: out, reason: e.to_string() })
+}
+
+/// `pip install ./python` into the reference environment: the package of this commit, built by
+/// maturin as a user's `pip install` builds it.
+fn install_package(python: &Path, root: &Path) -> Result<(), ExperimentError> {
+    let status = Command::new(python)
+        .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "--no-deps", "--force-reinstall"])
+        .arg(root.join("python"))
+        .status()
+        .map_err(|e| ExperimentError::Figure(format!("cannot run pip with {}: {e}", python.display())))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(ExperimentError::Figure(format!("pip install ./python failed ({status})")))
+    }
+}
+
+fn spread(row: &Row) -> Spread {
+    Spread::of(row.ms.clone())
+}
+
+fn find<'a>(data: &'a Data, environment: &str, implementation: &str, input: &str, n: usize, threads: usize) -> Option<&'a Row> {
+    data.rows.iter().find(|r| {
+        r.environment == environment && r.implementation == implementation && r.input == input && r.n == n && r.threads == threads
+    })
+}
+
+/// The inputs in the order run: (input, n).
+fn inputs(data: &Data) -> Vec<(String, usize)> {
+    crate::report::first_seen(data.rows.iter().map(|r| (r.input.clone(), r.n)))
+}
+
+fn label(input: &str, n: usize, data: &Data) -> String {
+    match data.inputs.iter().find(|i| i.input == input && i.n == n) {
+        Some(i) if i.shape.len() == 3 && i.shape.iter().all(|&s| s == n) => format!("{input} {n}³"),
+        Some(i) => format!("{input} {}", i.shape.iter().map(usize::to_string).collect::<Vec<_>>().join("×")),
+        None => format!("{input} {n}"),
+    }
+}
+
+fn ratio(a: f64, b: Option<f64>) -> String {
+    match b {
+        Some(b) if b > 0.0 => format!("{:.2}", a / b),
+        _ => "–".into(),
+    }
+}
+
+/// One table: per input, every implementation run on `threads` in `environment`, its median and
+/// spread and its ratio to ours on the same input, threads and environment (and, for the huge
+/// pages run, to its own default run).
+fn timing_table(data: &Data, environment: &str, threads: usize) -> String {
+    let against_default = environment != "default";
+    let mut rows = Vec::new();
+    for (input, n) in inputs(data) {
+        let ours = find(data, environment, OURS, &input, n, threads).map(|r| spread(r).median);
+        for r in data.rows.iter().filter(|r| r.environment == environment && r.input == input && r.n == n && r.threads == threads)
+        {
+            let s = spread(r);
+            let mut row = vec![
+                label(&input, n, data),
+                r.implementation.clone(),
+                r.triangles.to_string(),
+                ms(s.median),
+                format!("{}–{}", ms(s.min), ms(s.max)),
+                ratio(s.median, ours),
+            ];
+            if against_default {
+                let default = find(data, "default", &r.implementation, &input, n, threads).map(|d| spread(d).median);
+                row.push(ratio(s.median, default));
+            }
+            rows.push(row);
+        }
+    }
+    let ours_header = format!("÷ {OURS}");
+    let mut header = vec!["input", "implementation", "triangles", "ms (median)", "fastest–slowest", &ours_header];
+    if against_default {
+        header.push("÷ its default run");
+    }
+    markdown_table(&header, &rows)
+}
+
+/// The sentence for one input: how many times longer each peer takes than ours, one thread.
+fn headline(data: &Data, input: &str, n: usize) -> Option<String> {
+    let ours = spread(find(data, "default", OURS, input, n, 1)?).median;
+    let peers: Vec<String> = ["skimage lorensen", "skimage lewiner", "PyMCubes", "zmesh", "VTK flying edges"]
+        .iter()
+        .filter_map(|p| find(data, "default", p, input, n, 1).map(|r| format!("{p} {:.2}×", spread(r).median / ours)))
+        .collect();
+    Some(format!(
+        "On {} on one thread, `isolab.marching_cubes(method='lorensen')` takes {} ms (median); the others take, as a multiple \
+         of that: {}.",
+        label(input, n, data),
+        ms(ours),
+        peers.join(", ")
+    ))
+}
+
+fn section(data: &Data) -> String {
+    let mut md = String::from("## Marching cubes from Python, on a numpy array (`python_users`)\n\n");
+    let two = THREADS[1];
+    md.push_str(&format!(
+        "What a researcher with a numpy array meets: each implementation called from one Python process on the same \
+         array, one-shot (nothing kept between calls: a new VTK filter, a new zmesh `Mesher`), every conversion between \
+         the user's array and the returned numpy arrays inside the timed call. Alternating: after one unrecorded warm-up \
+         round, every round calls each implementation once, in an order rotated by one each round. {two} threads: \
+         isolab (`threads={two}`) and VTK (its STDThread SMP backend, `Initialize({two})`); scikit-image, PyMCubes and \
+         zmesh have no threads to give and run in the one-thread rounds only. The script is \
+         `experiments/src/experiment/python_users/bench.py`, run in `tests/reference/.venv` after `pip install ./python` \
+         of this commit.\n\n",
+    ));
+    md.push_str(&format!(
+        "Rounds: {} per input ({} from {LARGE}³ on). Versions: {}.\n\n",
+        data.repeats,
+        data.large_repeats,
+        data.versions.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
+    ));
+    for (input, n) in inputs(data) {
+        if input == "gyroid" && n != 256 {
+            continue;
+        }
+        if let Some(h) = headline(data, &input, n) {
+            md.push_str(&format!("{h}\n\n"));
+        }
+    }
+    md.push_str("### One thread\n\n");
+    md.push_str(&timing_table(data, "default", THREADS[0]));
+    md.push_str("\n![time against samples](figures/python_users/time-gyroid.png)\n\n");
+    md.push_str(&format!("### {two} threads\n\n"));
+    md.push_str(&timing_table(data, "default", two));
+    md.push('\n');
+    if data.rows.iter().any(|r| r.environment == HUGE_PAGES) {
+        md.push_str(&format!(
+            "### With huge pages for malloc\n\nThe same script in a second process started with \
+             `GLIBC_TUNABLES={HUGE_PAGES_TUNABLE}` (glibc's malloc then asks the kernel for transparent huge pages, so \
+             first touching a fresh buffer faults once per 2 MiB instead of once per 4 KiB), at the sizes where buffers are \
+             largest. Every implementation's allocations are affected alike; isolab's copy of the array into its float32 \
+             samples is one of them.\n\n"
+        ));
+        for threads in THREADS {
+            md.push_str(&format!("{} thread{}:\n\n", threads, if threads == 1 { "" } else { "s" }));
+            md.push_str(&timing_table(data, HUGE_PAGES, threads));
+            md.push('\n');
+        }
+    }
+    md.push_str("### Inputs\n\n");
+    let rows: Vec<Vec<String>> = data
+        .inputs
+        .iter()
+        .map(|i| vec![label(&i.input, i.n, data), i.dtype.clone(), i.order.clone(), format!("{:.4}", i.level)])
+        .collect();
+    md.push_str(&markdown_table(&["input", "dtype", "memory order", "level"], &rows));
+    md.push_str(
+        "\nThe gyroid is `sin x cos y + sin y cos z + sin z cos x` over three periods, sampled by numpy at the centres of n \
+         samples a side; the MNI152 T1 template is the one nilearn ships, as `nibabel.load(path).get_fdata()` returns it, \
+         at the level `isolab.extract` picks for the file (Otsu's threshold).\n\n",
+    );
+    md.push_str("### What each call converts\n\n");
+    let converts: Vec<Vec<String>> =
+        crate::report::first_seen(data.rows.iter().map(|r| (r.implementation.clone(), r.converts.clone())))
+            .into_iter()
+            .map(|(i, c)| vec![i, c])
+            .collect();
+    md.push_str(&markdown_table(&["implementation", "conversion, inside the timed call"], &converts));
+    md.push_str(
+        "\nzmesh meshes label volumes, not intensities: it is given the thresholded array and meshes that binary volume's \
+         boundary (its triangle counts differ for that reason); its time includes the threshold.\n",
+    );
+    if !data.notes.is_empty() {
+        md.push_str("\nNotes from the run: ");
+        md.push_str(&data.notes.join("; "));
+        md.push_str(".\n");
+    }
+    md
+}
+
+fn figures(ctx: &Context, data: &Data) -> Result<(), ExperimentError> {
+    let dir = ctx.figure_dir(NAME)?;
+    let implementations =
+        crate::report::first_seen(data.rows.iter().filter(|r| r.threads == 1).map(|r| r.implementation.clone()));
+    let series = implementations
+        .iter()
+        .enumerate()
+        .map(|(k, implementation)| Series {
+            label: implementation.clone(),
+            color: crate::figures::series_color(k),
+            points: data
+                .rows
+                .iter()
+                .filter(|r| {
+                    r.environment == "default" && r.input == "gyroid" && r.threads == 1 && &r.implementation == implementation
+                })
+                .map(|r| ((r.n as f64).powi(3), spread(r).median))
+                .collect(),
+        })
+        .collect();
+    let chart = XyPlot {
+        title: "Gyroid, one thread, numpy array in and out".into(),
+        x_label: "samples".into(),
+        y_label: "ms (median)".into(),
+        x_scale: Scale::Log,
+        y_scale: Scale::Log,
+        style: Style::Lines,
+        series,
+    };
+    plot::xy(&dir.join("time-gyroid"), &chart).map_err(ExperimentError::Figure)
+}

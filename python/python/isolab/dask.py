@@ -1,0 +1,246 @@
+"""Volumes bigger than one machine, meshed block by block on Dask.
+
+``mesh_volume`` splits a volume into blocks of ``chunk``³ cells. Each Dask task reads one block
+(its cells plus the samples its extractor's apron needs: none beyond the shared boundary for
+marching cubes and Kuhn marching tetrahedra, one to a few for surface nets, dual contouring and
+regularised marching tetrahedra), meshes it with isolab's chunk engine in the volume's sample
+indices, and returns (or writes to ``out``) a *fragment*: the block's mesh and an integer weld
+key for every vertex another block can make. The weld joins the fragments by those keys, never by
+float positions, into exactly the mesh ``isolab.extract(array, chunk=...)`` makes in one process
+(the same vertices in the same order, the same triangles), which for marching cubes is the
+whole-volume mesh.
+
+Needs ``dask`` (and ``distributed`` for a cluster; ``zarr`` to read zarr stores):
+``pip install "./python[dask]"``.
+
+>>> import numpy as np, isolab, isolab.dask
+>>> i, j, k = np.mgrid[-1:1:41j, -1:1:33j, -1:1:37j]
+>>> ball = (i**2 + j**2 + k**2 - 0.6).astype(np.float32)
+>>> mesh = isolab.dask.mesh_volume(ball, 0.0, chunk=16)
+>>> whole = isolab.extract(ball, 0.0)
+>>> mesh.faces.shape == whole.faces.shape, mesh.stats["blocks"]["meshed"]
+(True, 12)
+"""
+import contextlib
+import json
+import os
+import tempfile
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
+
+import numpy as np
+
+from . import Mesh, _isolab
+
+try:
+    import dask
+except ImportError as e:  # pragma: no cover - the message is the point
+    raise ImportError("isolab.dask needs dask: pip install \"./python[dask]\" (dask, distributed, zarr)") from e
+
+__all__ = ["mesh_volume", "load_fragment"]
+
+MANIFEST = "manifest.json"
+
+
+def _options(options: Optional[Mapping[str, Any]]) -> Optional[Dict[str, str]]:
+    return None if options is None else {str(k): str(v) for k, v in options.items()}
+
+
+def _affine(spacing, affine) -> Optional[List[List[float]]]:
+    if affine is not None:
+        a = np.asarray(affine, dtype=np.float64)
+        if a.shape != (4, 4):
+            raise ValueError(f"affine must be a 4 x 4 matrix; its shape is {a.shape}")
+        return [list(map(float, row)) for row in a]
+    if spacing is not None:
+        if len(spacing) != 3:
+            raise ValueError("spacing must consist of three floats.")
+        sx, sy, sz = (float(s) for s in spacing)
+        return [[sx, 0.0, 0.0, 0.0], [0.0, sy, 0.0, 0.0], [0.0, 0.0, sz, 0.0], [0.0, 0.0, 0.0, 1.0]]
+    return None
+
+
+def _is_dask_array(array) -> bool:
+    try:
+        import dask.array as da
+    except ImportError:  # pragma: no cover
+        return False
+    return isinstance(array, da.Array)
+
+
+def _fragment_name(block_id: Sequence[int]) -> str:
+    return "fragment-{}-{}-{}.npz".format(*block_id)
+
+
+def save_fragment(path: str, fragment: Dict[str, Any]) -> None:
+    """Writes a fragment as ``.npz``, atomically: a temporary file in the same folder, renamed
+    over ``path`` once complete, so a reader (or a rerun) never sees half a fragment."""
+    folder = os.path.dirname(path) or "."
+    fd, tmp = tempfile.mkstemp(prefix=".fragment-", suffix=".npz.tmp", dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, id=np.asarray(fragment["id"], dtype=np.int64), state=np.asarray(fragment["state"]),
+                     active_cells=np.asarray(fragment["active_cells"], dtype=np.int64),
+                     discarded_triangles=np.asarray(fragment["discarded_triangles"], dtype=np.int64),
+                     positions=fragment["positions"], normals=fragment["normals"], triangles=fragment["triangles"],
+                     keys=fragment["keys"], keyed=fragment["keyed"])
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def load_fragment(path: str) -> Dict[str, Any]:
+    """A fragment ``mesh_volume(..., out=...)`` wrote: the block's mesh (``positions`` in the
+    volume's sample indices, isolab's x = numpy's last axis), ``triangles``, ``normals``, the
+    weld ``keys`` (N x 2 uint64) and ``keyed`` flags, its ``id`` and ``state``."""
+    with np.load(path) as z:
+        return {"id": tuple(int(v) for v in z["id"]), "state": str(z["state"]),
+                "active_cells": int(z["active_cells"]), "discarded_triangles": int(z["discarded_triangles"]),
+                "positions": z["positions"], "normals": z["normals"], "triangles": z["triangles"], "keys": z["keys"],
+                "keyed": z["keyed"]}
+
+
+def _write_json(path: str, value: Any) -> None:
+    folder = os.path.dirname(path) or "."
+    fd, tmp = tempfile.mkstemp(prefix=".manifest-", suffix=".tmp", dir=folder)
+    with os.fdopen(fd, "w") as f:
+        json.dump(value, f, indent=1)
+    os.replace(tmp, path)
+
+
+def _mesh_task(source, slices, block_id, job: Dict[str, Any], path: Optional[str]):
+    """One Dask task: read a block, mesh it, write or return its fragment."""
+    if path is not None and os.path.exists(path):
+        return path  # a rerun of a task whose fragment was written (a worker died after writing)
+    block = source if slices is None else source[slices]
+    block = np.ascontiguousarray(np.asarray(block))
+    fragment = _isolab.mesh_block(block, job["algorithm"], job["options"], job["dims"], job["chunk"], block_id,
+                                  job["level"], job["inside"] == "above", job["threads"])
+    if path is None:
+        return fragment
+    save_fragment(path, fragment)
+    return path
+
+
+def mesh_volume(array, level: float, algorithm: str = "marching-cubes", *, chunk: int = 64,
+                spacing: Optional[Sequence[float]] = None, affine: Optional[np.ndarray] = None, inside: str = "below",
+                options: Optional[Mapping[str, Any]] = None, client=None, out: Optional[Union[str, os.PathLike]] = None,
+                merge: bool = True, progress: bool = False, threads: int = 1) -> Union[Mesh, List[str]]:
+    """Meshes a 3-D volume block by block on Dask and welds the blocks into one mesh.
+
+    Parameters
+    ----------
+    array : zarr array, dask array or numpy array
+        Any numeric dtype, shape (I, J, K) (isolab's x is the last axis, as for a C-ordered
+        array in :func:`isolab.extract`). A zarr array (or anything sliceable and picklable, such
+        as an h5py dataset opened per worker) is read block by block on the workers, so no task
+        holds more than one block; a dask array's blocks are computed by Dask as the tasks'
+        inputs; a numpy array is shared with the tasks (``client.scatter`` on a cluster).
+    level : float
+        The iso-value.
+    algorithm : str
+        A registered extractor that meshes in chunks (``isolab.algorithms()``: its
+        ``chunking`` is not ``"unsupported"``).
+    chunk : int
+        Cells per block along each axis (the last block on an axis takes what remains).
+    spacing, affine
+        Voxel spacing along the array's axes, or a 4 x 4 index-to-world matrix (as nibabel's
+        ``img.affine``), as in :func:`isolab.extract`.
+    inside : 'below' or 'above'
+        Which side of ``level`` is inside (the mesh winds outward from it).
+    options : dict, optional
+        Extractor options, as :func:`isolab.extract`'s.
+    client : distributed.Client, optional
+        Where the tasks run; by default Dask's current scheduler (a ``Client`` created in this
+        process, else Dask's threads).
+    out : path, optional
+        A folder for the fragments (``fragment-X-Y-Z.npz``, each written atomically) and
+        ``manifest.json`` (the run's parameters and the blocks done). A second run with the
+        same ``out`` and parameters meshes only the blocks whose fragment is missing; an ``out``
+        holding another run's fragments is refused.
+    merge : bool
+        Weld the fragments into one :class:`isolab.Mesh` (default), or return the fragment
+        paths (needs ``out``) for a reader that streams them (:func:`load_fragment`).
+    progress : bool
+        Show Dask's progress bar (``distributed.progress`` on a client, else
+        ``dask.diagnostics.ProgressBar``).
+    threads : int
+        Threads each task's extraction uses (1: let Dask's workers be the parallelism).
+
+    Returns
+    -------
+    isolab.Mesh, or a list of fragment paths when ``merge=False``
+        The mesh's ``stats`` hold the counts and ``blocks`` (meshed, empty, full, and vertices
+        welded at seams).
+    """
+    shape = tuple(int(s) for s in array.shape)
+    if len(shape) != 3:
+        raise ValueError(f"the volume must be a 3-D array; this one has {len(shape)} dimensions")
+    if inside not in ("below", "above"):
+        raise ValueError(f"inside '{inside}': expected 'below' or 'above'")
+    if not merge and out is None:
+        raise ValueError("merge=False keeps the fragments in `out`: give out=FOLDER")
+    opts = _options(options)
+    dims = [shape[2], shape[1], shape[0]]
+    counts, apron, blocks = _isolab.block_plan(algorithm, opts, dims, int(chunk))
+    job = {"algorithm": algorithm, "options": opts, "dims": dims, "chunk": int(chunk), "level": float(level),
+           "inside": inside, "threads": int(threads)}
+    params = dict(job, shape=list(shape), dtype=str(array.dtype))
+    params.pop("threads")
+    out_dir = None if out is None else os.fspath(out)
+    if out_dir is not None:
+        os.makedirs(out_dir, exist_ok=True)
+        manifest_path = os.path.join(out_dir, MANIFEST)
+        if os.path.exists(manifest_path):
+            with open(manifest_path) as f:
+                old = json.load(f).get("params")
+            if old != params:
+                raise ValueError(f"out {out_dir!r} holds the fragments of another run ({old}); give another folder or "
+                                 "empty it")
+        _write_json(manifest_path, {"params": params, "blocks": len(blocks), "counts": counts, "apron": apron,
+                                    "done": None})
+    affine_ = _affine(spacing, affine)
+
+    source = array
+    if not _is_dask_array(array) and isinstance(array, np.ndarray):
+        source = client.scatter(array, broadcast=True) if client is not None else dask.delayed(array, name="isolab-volume")
+    tasks, paths = [], []
+    for block_id, lo, bdims in blocks:
+        slices = tuple(slice(lo[a], lo[a] + bdims[a]) for a in (2, 1, 0))
+        path = None if out_dir is None else os.path.join(out_dir, _fragment_name(block_id))
+        paths.append(path)
+        if path is not None and os.path.exists(path):
+            tasks.append(path)
+            continue
+        if _is_dask_array(array):
+            task = dask.delayed(_mesh_task, pure=False)(array[slices], None, tuple(block_id), job, path)
+        else:
+            task = dask.delayed(_mesh_task, pure=False)(source, slices, tuple(block_id), job, path)
+        tasks.append(task)
+    pending = [t for t in tasks if not isinstance(t, str)]
+    if client is not None:
+        futures = client.compute(pending)
+        if progress:
+            from distributed import progress as show
+            show(futures)
+        results = iter(client.gather(futures))
+    else:
+        bar = contextlib.nullcontext()
+        if progress:
+            from dask.diagnostics import ProgressBar
+            bar = ProgressBar()
+        with bar:
+            results = iter(dask.compute(*pending))
+    fragments = [t if isinstance(t, str) else next(results) for t in tasks]
+    if out_dir is not None:
+        _write_json(os.path.join(out_dir, MANIFEST), {"params": params, "blocks": len(blocks), "counts": counts,
+                                                     "apron": apron, "done": [os.path.basename(p) for p in paths]})
+    if not merge:
+        return list(paths)
+    loaded = [load_fragment(f) if isinstance(f, str) else f for f in fragments]
+    report = {"algorithm": algorithm, "driver": "isolab.dask", "shape": list(shape), "dims": dims, "iso": float(level),
+              "inside": inside, "chunk": int(chunk), "apron": apron, "block_counts": counts}
+    return Mesh(_isolab.weld_fragments(loaded, affine_, json.dumps(report)))

@@ -1,0 +1,203 @@
+//! Blocks of a volume meshed one at a time, for `isolab.dask`: the plan (which samples each block
+//! reads), one block's samples to a fragment of numpy arrays (its mesh in the volume's sample
+//! indices and each shareable vertex's integer weld key), and the weld of fragments into one mesh
+//! in world coordinates. The engine is `isolab_algorithms::chunks` (`BlockPlan`, `mesh_block`,
+//! `weld_fragments`), whose weld equals the one-process chunked extraction.
+//!
+//! Axes: a block arrives as a C-ordered numpy array, so isolab's x is numpy's last axis, as for
+//! any C-ordered array `isolab.extract` meshes; plans, ids and sample offsets here are in
+//! isolab's (x, y, z).
+
+use crate::arrays::{self, Layout, VolumeArray};
+use crate::{out, pools, value_error, Run};
+use isolab_algorithms::chunks::{self, BlockPlan, ChunkState, Fragment};
+use isolab_algorithms::{extractors, Extraction, Extractor, Options, TriMesh};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::collections::BTreeMap;
+
+fn extractor(algorithm: &str, options: Option<BTreeMap<String, String>>, serial: bool) -> PyResult<Box<dyn Extractor>> {
+    let mut options = crate::options_from(options);
+    if serial && extractors::INFOS.iter().any(|e| e.name == algorithm && e.options.contains(&"parallelism")) {
+        options.set("parallelism", "serial");
+    }
+    build(algorithm, &options)
+}
+
+fn build(algorithm: &str, options: &Options) -> PyResult<Box<dyn Extractor>> {
+    match extractors::build(algorithm, options).map_err(value_error)? {
+        Some(e) => Ok(e),
+        None => Err(PyValueError::new_err(format!(
+            "unknown algorithm '{algorithm}' (isolab.algorithms() lists them: {})",
+            extractors::INFOS.iter().map(|e| e.name).collect::<Vec<_>>().join(", ")
+        ))),
+    }
+}
+
+fn plan_for(extractor: &dyn Extractor, dims: [usize; 3], chunk: usize) -> PyResult<BlockPlan> {
+    BlockPlan::new(extractor, dims, chunk).map_err(value_error)
+}
+
+/// The blocks of a volume of `dims` samples (isolab's x, y, z) for `algorithm` at `chunk` cells:
+/// `(counts, apron, [(id, lo, dims), ...])` in weld order.
+#[pyfunction]
+#[pyo3(signature = (algorithm, options, dims, chunk))]
+#[allow(clippy::type_complexity)]
+pub fn block_plan(
+    algorithm: &str,
+    options: Option<BTreeMap<String, String>>,
+    dims: [usize; 3],
+    chunk: usize,
+) -> PyResult<([usize; 3], usize, Vec<([usize; 3], [usize; 3], [usize; 3])>)> {
+    let e = extractor(algorithm, options, true)?;
+    let plan = plan_for(e.as_ref(), dims, chunk)?;
+    Ok((plan.counts, plan.apron, plan.blocks().map(|b| (b.id, b.lo, b.dims)).collect()))
+}
+
+/// Meshes one block (a C-ordered 3-D array of the samples `block_plan` named for `id`, any
+/// numeric dtype) of a volume of `dims` samples. `above` makes values above `level` inside.
+/// Returns the fragment as arrays: `positions` (sample indices, x y z), `normals`, `triangles`,
+/// `keys` (N x 2 uint64: the low and high halves of each vertex's weld key), `keyed` (N bool),
+/// `state`, `active_cells`, `discarded_triangles`.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (block, algorithm, options, dims, chunk, id, level, above, threads=1))]
+pub fn mesh_block<'py>(
+    py: Python<'py>,
+    block: &Bound<'py, PyUntypedArray>,
+    algorithm: &str,
+    options: Option<BTreeMap<String, String>>,
+    dims: [usize; 3],
+    chunk: usize,
+    id: [usize; 3],
+    level: f64,
+    above: bool,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let e = extractor(algorithm, options, threads == Some(1))?;
+    let plan = plan_for(e.as_ref(), dims, chunk)?;
+    let sign = if above { -1.0 } else { 1.0 };
+    let pool = pools::pool(threads)?;
+    let VolumeArray { values, dims: block_dims, layout, .. } = arrays::read_volume(py, block, 1, sign, pool.as_deref())?;
+    let expected = plan.block(id).map(|b| b.dims);
+    if layout != Layout::C || Some(block_dims) != expected {
+        return Err(PyValueError::new_err(format!(
+            "block {id:?}: expected a C-ordered array of {:?} samples (numpy shape), got shape {:?}{}",
+            expected.map(|[x, y, z]| [z, y, x]),
+            block.shape(),
+            if layout == Layout::C { "" } else { " in Fortran order" }
+        )));
+    }
+    let iso = sign * level as f32;
+    let fragment = py.allow_threads(|| {
+        pools::install(pool.as_deref(), || chunks::mesh_block(e.as_ref(), &plan, id, values, iso).map_err(value_error))
+    })?;
+    fragment_dict(py, fragment)
+}
+
+fn state_name(state: ChunkState) -> &'static str {
+    match state {
+        ChunkState::Empty => "empty",
+        ChunkState::Full => "full",
+        ChunkState::Meshed => "meshed",
+    }
+}
+
+fn fragment_dict(py: Python<'_>, f: Fragment) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    let keys: Vec<u64> = f.keys.iter().flat_map(|k| k.map_or([0, 0], |k| [k as u64, (k >> 64) as u64])).collect();
+    let keyed: Vec<bool> = f.keys.iter().map(Option::is_some).collect();
+    let n = f.keys.len();
+    d.set_item("id", f.id)?;
+    d.set_item("state", state_name(f.state))?;
+    d.set_item("active_cells", f.active_cells)?;
+    d.set_item("discarded_triangles", f.discarded_triangles)?;
+    d.set_item("keys", PyArray1::from_vec(py, keys).reshape([n, 2])?)?;
+    d.set_item("keyed", PyArray1::from_vec(py, keyed))?;
+    let TriMesh { positions, normals, triangles, .. } = f.surface;
+    d.set_item("positions", out::vec3_array(py, positions)?)?;
+    d.set_item("normals", out::vec3_array(py, normals)?)?;
+    let t = triangles.len();
+    let flat: Vec<u32> = bytemuck::allocation::try_cast_vec(triangles)
+        .unwrap_or_else(|(_, t): (_, Vec<[u32; 3]>)| t.iter().flatten().copied().collect());
+    d.set_item("triangles", PyArray1::from_vec(py, flat).reshape([t, 3])?)?;
+    Ok(d)
+}
+
+/// A fragment dict (as `mesh_block` made it, or as loaded back from a file) as a `Fragment`.
+fn fragment_from(d: &Bound<'_, PyDict>) -> PyResult<Fragment> {
+    let item = |k: &str| d.get_item(k)?.ok_or_else(|| PyValueError::new_err(format!("fragment has no '{k}'")));
+    let state = match item("state")?.extract::<String>()?.as_str() {
+        "empty" => ChunkState::Empty,
+        "full" => ChunkState::Full,
+        "meshed" => ChunkState::Meshed,
+        other => return Err(PyValueError::new_err(format!("fragment state '{other}': expected meshed, empty or full"))),
+    };
+    let keys_array = item("keys")?;
+    let keys = keys_array.downcast::<PyArray2<u64>>().map_err(|_| PyValueError::new_err("fragment keys must be N x 2 uint64"))?;
+    let keys = keys.readonly();
+    let keys = keys.as_array();
+    let keyed_array = item("keyed")?;
+    let keyed = keyed_array.downcast::<PyArray1<bool>>().map_err(|_| PyValueError::new_err("fragment 'keyed' must be bool"))?;
+    let keyed = keyed.readonly();
+    let keyed = keyed.as_array();
+    let normals = item("normals")?;
+    let has_normals = normals.len()? > 0;
+    let surface = arrays::tri_mesh(&item("positions")?, &item("triangles")?, has_normals.then_some(&normals))?;
+    if keys.nrows() != surface.positions.len() || keyed.len() != surface.positions.len() || keys.ncols() != 2 {
+        return Err(PyValueError::new_err(format!(
+            "fragment has {} vertices but {} keys ({} keyed flags)",
+            surface.positions.len(),
+            keys.nrows(),
+            keyed.len()
+        )));
+    }
+    let keys =
+        keys.rows().into_iter().zip(keyed.iter()).map(|(k, &on)| on.then(|| u128::from(k[0]) | u128::from(k[1]) << 64)).collect();
+    Ok(Fragment {
+        id: item("id")?.extract()?,
+        state,
+        surface,
+        keys,
+        active_cells: item("active_cells")?.extract()?,
+        discarded_triangles: item("discarded_triangles")?.extract()?,
+    })
+}
+
+/// Welds fragments (in `block_plan`'s order) into one mesh, placed by `affine` (numpy index to
+/// world, 4 x 4; identity when `None`): the vertices, faces and normals as `extract` returns
+/// them, and a run whose report holds the counts.
+#[pyfunction]
+#[pyo3(signature = (fragments, affine, report))]
+pub fn weld_fragments<'py>(
+    py: Python<'py>,
+    fragments: Vec<Bound<'py, PyDict>>,
+    affine: Option<[[f64; 4]; 4]>,
+    report: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let fragments: Vec<Fragment> = fragments.iter().map(fragment_from).collect::<PyResult<_>>()?;
+    let to_world = arrays::index_to_world(affine, Layout::C).map_err(value_error)?;
+    let (mesh, stats) = py.allow_threads(|| {
+        let mut out = Extraction::default();
+        let stats = chunks::weld_fragments(&fragments, &mut out);
+        let mut mesh = std::mem::take(&mut out.surface);
+        mesh.transform(&to_world);
+        (mesh, stats)
+    });
+    let mut report: serde_json::Value = serde_json::from_str(report).map_err(value_error)?;
+    report["vertices"] = mesh.positions.len().into();
+    report["triangles"] = mesh.triangles.len().into();
+    report["blocks"] = serde_json::json!({
+        "meshed": stats.meshed, "empty": stats.empty, "full": stats.full, "welded_vertices": stats.welded,
+    });
+    let d = PyDict::new(py);
+    d.set_item("vertices", out::vec3_array(py, mesh.positions)?)?;
+    d.set_item("faces", out::faces_array(py, mesh.triangles)?)?;
+    d.set_item("normals", out::vec3_array(py, mesh.normals)?)?;
+    d.set_item("warnings", Vec::<String>::new())?;
+    d.set_item("notes", Vec::<String>::new())?;
+    d.set_item("run", Run::without_truth(report.to_string()))?;
+    Ok(d)
+}

@@ -201,3 +201,63 @@ pub fn weld_fragments<'py>(
     d.set_item("run", Run::without_truth(report.to_string()))?;
     Ok(d)
 }
+
+/// The world grid `bake_world` meshes: `cells` cells of the built-in field, from its domain's
+/// lowest corner, at the spacing that fits the domain's height in `cells[1]` cells (the grid of
+/// the `large_world` experiment).
+fn world_grid(field: &dyn isolab_algorithms::Field, cells: [usize; 3]) -> PyResult<isolab_algorithms::Grid> {
+    if cells.contains(&0) {
+        return Err(PyValueError::new_err(format!("size {cells:?}: a world needs at least one cell along each axis")));
+    }
+    let domain = field.domain();
+    let spacing = (domain.max.y - domain.min.y) / cells[1] as f32;
+    Ok(isolab_algorithms::Grid { origin: domain.min, spacing, dims: cells.map(|c| c + 1) })
+}
+
+/// One block of a built-in field's world (`cells` cells, see [`world_grid`]) sampled, or (with
+/// `prove`) proven empty or full without sampling: `{"side": "mixed"|"empty"|"full", "values":
+/// C-ordered float32 array of the block (numpy shape z, y, x) or None, "origin", "spacing"}`.
+#[pyfunction]
+#[pyo3(signature = (field, cells, lo, dims, seed=None, prove=true))]
+pub fn field_block<'py>(
+    py: Python<'py>,
+    field: &str,
+    cells: [usize; 3],
+    lo: [usize; 3],
+    dims: [usize; 3],
+    seed: Option<i32>,
+    prove: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    use isolab_algorithms::field::BlockSide;
+    let params = isolab_algorithms::fields::FieldParams { seed: seed.unwrap_or(isolab_algorithms::fields::DEFAULT_SEED) };
+    let f = isolab_algorithms::fields::builtin(field, params).map_err(value_error)?;
+    let grid = world_grid(f.as_ref(), cells)?;
+    if (0..3).any(|a| dims[a] == 0 || lo[a] + dims[a] > grid.dims[a]) {
+        return Err(PyValueError::new_err(format!("block at {lo:?} of {dims:?} samples is outside the world's {:?}", grid.dims)));
+    }
+    let d = PyDict::new(py);
+    d.set_item("origin", grid.origin.to_array())?;
+    d.set_item("spacing", grid.spacing)?;
+    let side = if prove { py.allow_threads(|| f.block_side(&grid, lo, dims, 0.0)) } else { None };
+    match side {
+        Some(BlockSide::Outside) => d.set_item("side", "empty")?,
+        Some(BlockSide::Inside) => d.set_item("side", "full")?,
+        None => {
+            let mut values = vec![0.0f32; dims.iter().product()];
+            py.allow_threads(|| f.sample_block(&grid, lo, dims, &mut values));
+            d.set_item("side", "mixed")?;
+            d.set_item("values", PyArray1::from_vec(py, values).reshape([dims[2], dims[1], dims[0]])?)?;
+        }
+    }
+    if !d.contains("values")? {
+        d.set_item("values", py.None())?;
+    }
+    Ok(d)
+}
+
+/// A fragment of a block proven empty or full: no mesh.
+#[pyfunction]
+pub fn skipped_fragment<'py>(py: Python<'py>, id: [usize; 3], full: bool) -> PyResult<Bound<'py, PyDict>> {
+    let state = if full { ChunkState::Full } else { ChunkState::Empty };
+    fragment_dict(py, Fragment { id, state, ..Default::default() })
+}

@@ -419,6 +419,8 @@ fn _isolab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(blocks::block_plan, m)?)?;
     m.add_function(wrap_pyfunction!(blocks::mesh_block, m)?)?;
     m.add_function(wrap_pyfunction!(blocks::weld_fragments, m)?)?;
+    m.add_function(wrap_pyfunction!(blocks::field_block, m)?)?;
+    m.add_function(wrap_pyfunction!(blocks::skipped_fragment, m)?)?;
     m.add_class::<Run>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

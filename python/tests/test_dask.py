@@ -34,6 +34,16 @@ def test_the_cluster_listens_on_loopback_only(client):
     assert len(client.scheduler_info()["workers"]) == 2
     assert client.scheduler.address.startswith("tcp://127.0.0.1:")
     assert all(w.startswith("tcp://127.0.0.1:") for w in client.scheduler_info()["workers"])
+    assert client.dashboard_link.startswith("http://127.0.0.1:")
+
+
+def test_progress_shows_the_blocks(client, capsys):
+    vol = gyroid((17, 17, 17))
+    with dask.config.set(scheduler="threads"):  # not the module's client, Dask's own threads
+        idask.mesh_volume(vol, 0.0, chunk=8, progress=True)  # dask.diagnostics' bar
+    assert "Completed" in capsys.readouterr().out
+    mesh = idask.mesh_volume(vol, 0.0, chunk=8, client=client, progress=True)  # distributed.progress
+    assert len(mesh.faces) == len(isolab.extract(vol, 0.0).faces)
 
 
 def test_every_chunking_extractor_is_listed():
@@ -96,7 +106,9 @@ def test_zarr_and_dask_arrays_are_read_block_by_block(client, tmp_path):
 
 def test_without_a_client_dask_threads_mesh_the_same():
     vol = gyroid((17, 25, 33))
-    np.testing.assert_array_equal(idask.mesh_volume(vol, 0.0, chunk=8).faces, isolab.extract(vol, 0.0, chunk=8).faces)
+    with dask.config.set(scheduler="threads"):  # Dask's threads, not a distributed client
+        mesh = idask.mesh_volume(vol, 0.0, chunk=8, threads=2)
+    np.testing.assert_array_equal(mesh.faces, isolab.extract(vol, 0.0, chunk=8).faces)
 
 
 def test_inside_above_and_any_dtype(client):
@@ -212,3 +224,32 @@ def test_a_worker_killed_mid_run_leaves_the_output_unchanged(tmp_path):
     assert 0 < written < 12 ** 3  # killed mid-run
     np.testing.assert_array_equal(result["mesh"].vertices, ref.vertices)
     np.testing.assert_array_equal(result["mesh"].faces, ref.faces)
+
+
+def test_a_baked_world_is_block_files_a_game_streams_and_welds_to_the_sampled_world(client, tmp_path):
+    from isolab import _isolab
+    cells = (128, 64, 96)
+    files = idask.bake_world("terrain", cells, chunk=32, out=tmp_path, client=client)
+    assert files and all(f.endswith(".glb") and os.path.exists(f) for f in files)
+    per_block = [isolab.load(f) for f in files]
+    mesh = idask.bake_world("terrain", cells, chunk=32, out=tmp_path, client=client, merge=True)
+    assert sum(len(faces) for _, faces in per_block) == len(mesh.faces)
+    # The same world sampled whole and meshed in one process, placed by the same affine.
+    world = _isolab.field_block("terrain", list(cells), [0, 0, 0], [c + 1 for c in cells], None)
+    (ox, oy, oz), h = world["origin"], world["spacing"]
+    affine = [[0, 0, h, ox], [0, h, 0, oy], [h, 0, 0, oz], [0, 0, 0, 1]]
+    ref = isolab.extract(world["values"], 0.0, chunk=32, affine=affine)
+    np.testing.assert_array_equal(mesh.vertices, ref.vertices)
+    np.testing.assert_array_equal(mesh.faces, ref.faces)
+    # Block files are in world space: each lies inside its block's box.
+    lo = np.min([v.min(axis=0) for v, _ in per_block], axis=0)
+    assert np.all(lo >= np.array([ox, oy, oz]) - 1e-6)
+    manifest = __import__("json").load(open(tmp_path / "manifest.json"))
+    assert len(manifest["done"]) == 4 * 2 * 3 and {d["state"] for d in manifest["done"]} <= {"meshed", "empty", "full"}
+
+
+def test_bake_world_refuses_unknown_fields_and_formats(tmp_path):
+    with pytest.raises(ValueError, match="unknown field"):
+        idask.bake_world("no-such-field", (32, 32, 32), out=tmp_path)
+    with pytest.raises(ValueError, match="format"):
+        idask.bake_world("terrain", (32, 32, 32), out=tmp_path, format="fbx")

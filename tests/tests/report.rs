@@ -250,6 +250,12 @@ const REVIEWED: &[(&str, &str, &str)] = &[
         "the x86-64 kernel's huge and base page sizes, by definition",
     ),
     (
+        "distributed/mod.rs",
+        "bound to \\\n         127.0.0.1",
+        "the loopback address the cluster listens on: a setting, not a result",
+    ),
+    ("distributed/mod.rs", "tls://scheduler:8786", "distributed's default scheduler port in an example address"),
+    (
         "scaling.rs",
         "A slope near 1 means",
         "the slopes that cost proportional to cells (1) and to surface area (2/3) have, by definition",

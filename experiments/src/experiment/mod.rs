@@ -12,6 +12,7 @@ pub mod compare_algorithms;
 pub mod context;
 pub mod costen_table;
 pub mod decimation;
+pub mod distributed;
 pub mod large_world;
 pub mod mesh_fields;
 pub mod peers;
@@ -42,6 +43,7 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(costen_table::CostenTable),
         Box::new(peers::Peers),
         Box::new(python_users::PythonUsers),
+        Box::new(distributed::Distributed),
         Box::new(mesh_fields::MeshFields),
         Box::new(real_volumes::RealVolumes),
         Box::new(scaling::Scaling),

@@ -77,6 +77,48 @@ pub fn reference_python(root: &Path) -> Result<PathBuf, String> {
     Ok(python)
 }
 
+/// `pip install ./python` into the reference environment's `python`: the package of this commit,
+/// built by maturin as a user's `pip install` builds it (for experiments that time the package).
+pub fn install_package(python: &Path, root: &Path) -> Result<(), String> {
+    let status = Command::new(python)
+        .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "--no-deps", "--force-reinstall"])
+        .arg(root.join("python"))
+        .status()
+        .map_err(|e| format!("cannot run pip with {}: {e}", python.display()))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("pip install ./python failed ({status})"))
+    }
+}
+
+/// Runs an experiment's Python `script` with `args` (its first argument the JSON file it
+/// writes), `env` set, and returns what it wrote, parsed.
+pub fn run_script<T: serde::de::DeserializeOwned>(
+    python: &Path,
+    script: &Path,
+    args: &[String],
+    env: &[(&str, &str)],
+) -> Result<T, String> {
+    let out = std::env::temp_dir().join(format!(
+        "isolab-{}-{}.json",
+        script.file_stem().and_then(|s| s.to_str()).unwrap_or("script"),
+        std::process::id()
+    ));
+    let mut command = Command::new(python);
+    command.arg(script).arg(&out).args(args);
+    for (k, v) in env {
+        command.env(k, v);
+    }
+    let status = command.status().map_err(|e| format!("cannot run {} with {}: {e}", script.display(), python.display()))?;
+    if !status.success() {
+        return Err(format!("{} failed ({status})", script.display()));
+    }
+    let text = std::fs::read_to_string(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let _ = std::fs::remove_file(&out);
+    serde_json::from_str(&text).map_err(|e| format!("{}: {e}", out.display()))
+}
+
 impl Drop for PythonServer {
     fn drop(&mut self) {
         let _ = self.child.kill();

@@ -36,7 +36,7 @@ try:
 except ImportError as e:  # pragma: no cover - the message is the point
     raise ImportError("isolab.dask needs dask: pip install \"./python[dask]\" (dask, distributed, zarr)") from e
 
-__all__ = ["mesh_volume", "load_fragment"]
+__all__ = ["mesh_volume", "bake_world", "load_fragment", "save_fragment"]
 
 MANIFEST = "manifest.json"
 
@@ -109,6 +109,42 @@ def _write_json(path: str, value: Any) -> None:
     with os.fdopen(fd, "w") as f:
         json.dump(value, f, indent=1)
     os.replace(tmp, path)
+
+
+def _open_out(out, params: Dict[str, Any], blocks, counts, apron) -> Optional[str]:
+    """Creates ``out`` with a manifest of the run's parameters, or checks that the manifest
+    already there is this run's (a rerun resumes it); returns the folder."""
+    if out is None:
+        return None
+    out_dir = os.fspath(out)
+    os.makedirs(out_dir, exist_ok=True)
+    manifest_path = os.path.join(out_dir, MANIFEST)
+    if os.path.exists(manifest_path):
+        with open(manifest_path) as f:
+            old = json.load(f).get("params")
+        if old != params:
+            raise ValueError(f"out {out_dir!r} holds the fragments of another run ({old}); give another folder or "
+                             "empty it")
+    _write_json(manifest_path, {"params": params, "blocks": len(blocks), "counts": counts, "apron": apron,
+                                "done": None})
+    return out_dir
+
+
+def _compute(tasks, client, progress: bool) -> Sequence[Any]:
+    """Runs the delayed tasks on ``client`` (else Dask's current scheduler), with a progress bar
+    when asked."""
+    if client is not None:
+        futures = client.compute(tasks)
+        if progress:
+            from distributed import progress as show
+            show(futures)
+        return client.gather(futures)
+    bar = contextlib.nullcontext()
+    if progress:
+        from dask.diagnostics import ProgressBar
+        bar = ProgressBar()
+    with bar:
+        return dask.compute(*tasks)
 
 
 def _mesh_task(source, slices, block_id, job: Dict[str, Any], path: Optional[str]):
@@ -190,18 +226,7 @@ def mesh_volume(array, level: float, algorithm: str = "marching-cubes", *, chunk
            "inside": inside, "threads": int(threads)}
     params = dict(job, shape=list(shape), dtype=str(array.dtype))
     params.pop("threads")
-    out_dir = None if out is None else os.fspath(out)
-    if out_dir is not None:
-        os.makedirs(out_dir, exist_ok=True)
-        manifest_path = os.path.join(out_dir, MANIFEST)
-        if os.path.exists(manifest_path):
-            with open(manifest_path) as f:
-                old = json.load(f).get("params")
-            if old != params:
-                raise ValueError(f"out {out_dir!r} holds the fragments of another run ({old}); give another folder or "
-                                 "empty it")
-        _write_json(manifest_path, {"params": params, "blocks": len(blocks), "counts": counts, "apron": apron,
-                                    "done": None})
+    out_dir = _open_out(out, params, blocks, counts, apron)
     affine_ = _affine(spacing, affine)
 
     source = array
@@ -220,20 +245,7 @@ def mesh_volume(array, level: float, algorithm: str = "marching-cubes", *, chunk
         else:
             task = dask.delayed(_mesh_task, pure=False)(source, slices, tuple(block_id), job, path)
         tasks.append(task)
-    pending = [t for t in tasks if not isinstance(t, str)]
-    if client is not None:
-        futures = client.compute(pending)
-        if progress:
-            from distributed import progress as show
-            show(futures)
-        results = iter(client.gather(futures))
-    else:
-        bar = contextlib.nullcontext()
-        if progress:
-            from dask.diagnostics import ProgressBar
-            bar = ProgressBar()
-        with bar:
-            results = iter(dask.compute(*pending))
+    results = iter(_compute([t for t in tasks if not isinstance(t, str)], client, progress))
     fragments = [t if isinstance(t, str) else next(results) for t in tasks]
     if out_dir is not None:
         _write_json(os.path.join(out_dir, MANIFEST), {"params": params, "blocks": len(blocks), "counts": counts,
@@ -244,3 +256,98 @@ def mesh_volume(array, level: float, algorithm: str = "marching-cubes", *, chunk
     report = {"algorithm": algorithm, "driver": "isolab.dask", "shape": list(shape), "dims": dims, "iso": float(level),
               "inside": inside, "chunk": int(chunk), "apron": apron, "block_counts": counts}
     return Mesh(_isolab.weld_fragments(loaded, affine_, json.dumps(report)))
+
+
+def _bake_task(block_id, lo, dims, job: Dict[str, Any], fragment_path: str, mesh_path: str) -> Dict[str, Any]:
+    """One block of a baked world: sampled from the field (or proven empty or full without
+    sampling), meshed, written as a fragment (for the weld) and, when it has triangles, as a
+    world-space mesh file a game streams."""
+    if os.path.exists(fragment_path):
+        f = load_fragment(fragment_path)
+    else:
+        b = _isolab.field_block(job["field"], job["cells"], lo, dims, job["seed"])
+        if b["side"] == "mixed":
+            f = _isolab.mesh_block(b["values"], job["algorithm"], job["options"], job["dims"], job["chunk"], block_id,
+                                   0.0, False, job["threads"])
+        else:
+            f = _isolab.skipped_fragment(block_id, b["side"] == "full")
+        if len(f["triangles"]):
+            origin, h = np.asarray(b["origin"], dtype=np.float64), float(b["spacing"])
+            vertices = (origin + f["positions"].astype(np.float64) * h).astype(np.float32)
+            normals = f["normals"] if len(f["normals"]) else None
+            _isolab.save(mesh_path, vertices, f["triangles"].astype(np.int32), normals, None, None, None, None)
+        save_fragment(fragment_path, f)
+    return {"id": tuple(block_id), "state": f["state"], "triangles": int(len(f["triangles"])),
+            "mesh": os.path.basename(mesh_path) if len(f["triangles"]) else None}
+
+
+def bake_world(field: str = "terrain", size: Sequence[int] = (8192, 512, 8192), *, out: Union[str, os.PathLike],
+               chunk: int = 128, algorithm: str = "marching-cubes", options: Optional[Mapping[str, Any]] = None,
+               seed: Optional[int] = None, format: str = "glb", client=None, merge: bool = False,
+               progress: bool = False, threads: int = 1) -> Union[Mesh, List[str]]:
+    """Bakes a built-in field's world block by block on Dask: each task samples its block from
+    the field (blocks the field proves all air or all solid are skipped unsampled), meshes it and
+    writes one world-space mesh per block (``chunk-X-Y-Z.glb`` or ``.ply``) that a game streams,
+    plus the block's weld fragment; the manifest lists every block's file and triangle count.
+
+    Parameters
+    ----------
+    field : str
+        A built-in field (``isolab.fields()``), e.g. ``"terrain"``.
+    size : 3 ints
+        Cells along x, y (up) and z. The world starts at the field's domain's lowest corner, at
+        the spacing that fits the domain's height in ``size[1]`` cells (the ``large_world``
+        experiment's grid).
+    out : path
+        The folder for the block meshes, fragments and ``manifest.json``; a rerun with the same
+        parameters bakes only the missing blocks.
+    chunk, algorithm, options, seed
+        Cells per block, the extractor (one that meshes in chunks), its options, the noise seed.
+    format : 'glb' or 'ply'
+    merge : bool
+        Also weld every block into one :class:`isolab.Mesh` (world coordinates) and return it;
+        by default the block files' paths are returned (blocks with no triangles have none).
+    client, progress, threads
+        As :func:`mesh_volume`.
+
+    >>> import tempfile, isolab.dask
+    >>> files = isolab.dask.bake_world("terrain", (64, 32, 64), chunk=32, out=tempfile.mkdtemp())
+    >>> len(files) > 0 and all(f.endswith(".glb") for f in files)
+    True
+    """
+    if format not in ("glb", "ply"):
+        raise ValueError(f"format '{format}': expected 'glb' or 'ply'")
+    cells = [int(s) for s in size]
+    if len(cells) != 3:
+        raise ValueError(f"size must be three cell counts, not {size!r}")
+    opts = _options(options)
+    dims = [c + 1 for c in cells]
+    counts, apron, blocks = _isolab.block_plan(algorithm, opts, dims, int(chunk))
+    job = {"field": field, "cells": cells, "seed": seed, "algorithm": algorithm, "options": opts, "dims": dims,
+           "chunk": int(chunk), "threads": int(threads)}
+    params = dict(job, format=format)
+    params.pop("threads")
+    if field not in [name for name, _ in _isolab.fields()]:
+        raise ValueError(f"unknown field '{field}' (isolab.fields() lists them)")
+    out_dir = _open_out(out, params, blocks, counts, apron)
+    tasks, fragment_paths = [], []
+    for block_id, lo, bdims in blocks:
+        x, y, z = block_id
+        fragment_path = os.path.join(out_dir, _fragment_name(block_id))
+        mesh_path = os.path.join(out_dir, f"chunk-{x}-{y}-{z}.{format}")
+        fragment_paths.append(fragment_path)
+        tasks.append(dask.delayed(_bake_task, pure=False)(tuple(block_id), list(lo), list(bdims), job, fragment_path,
+                                                          mesh_path))
+    done = list(_compute(tasks, client, progress))
+    _write_json(os.path.join(out_dir, MANIFEST), {"params": params, "blocks": len(blocks), "counts": counts,
+                                                 "apron": apron, "done": done})
+    files = [os.path.join(out_dir, d["mesh"]) for d in done if d["mesh"]]
+    if not merge:
+        return files
+    b = _isolab.field_block(field, cells, [0, 0, 0], [2, 2, 2], seed)
+    (ox, oy, oz), h = b["origin"], float(b["spacing"])
+    # World = origin + h * (x, y, z); the weld's affine is in numpy index order (z, y, x).
+    affine_ = [[0.0, 0.0, h, ox], [0.0, h, 0.0, oy], [h, 0.0, 0.0, oz], [0.0, 0.0, 0.0, 1.0]]
+    report = {"algorithm": algorithm, "driver": "isolab.dask.bake_world", "field": field, "size": cells, "dims": dims,
+              "iso": 0.0, "inside": "below", "chunk": int(chunk), "apron": apron, "block_counts": counts}
+    return Mesh(_isolab.weld_fragments([load_fragment(p) for p in fragment_paths], affine_, json.dumps(report)))

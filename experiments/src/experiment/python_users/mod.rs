@@ -11,11 +11,11 @@
 
 use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
+use crate::peers::python;
 use crate::report::{markdown_table, ms, Spread};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
-use std::process::Command;
 
 /// The experiment.
 pub struct PythonUsers;
@@ -91,8 +91,8 @@ impl Experiment for PythonUsers {
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let root = ctx.report_dir.join("..");
-        let python = crate::peers::python::reference_python(&root).map_err(ExperimentError::Figure)?;
-        install_package(&python, &root)?;
+        let python = python::reference_python(&root).map_err(ExperimentError::Figure)?;
+        python::install_package(&python, &root).map_err(ExperimentError::Figure)?;
         let repeats = ctx.repeats.max(1);
         let sizes: Vec<String> = SIZES.iter().map(usize::to_string).collect();
         let mut data = bench(&python, &[&["--sizes", &sizes.join(","), "--mni", "nilearn"]], repeats, None)?;
@@ -113,47 +113,23 @@ impl Experiment for PythonUsers {
 
 /// Runs `bench.py` with `args` (and `GLIBC_TUNABLES=tunable` when given) and reads what it wrote.
 fn bench(python: &Path, args: &[&[&str]], repeats: usize, tunable: Option<&str>) -> Result<Data, ExperimentError> {
-    let out = std::env::temp_dir().join(format!("isolab-python-users-{}.json", std::process::id()));
-    let mut command = Command::new(python);
-    command.arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/experiment/python_users/bench.py")).arg(&out).args([
-        "--repeats",
-        &repeats.to_string(),
-        "--large-repeats",
-        &LARGE_REPEATS.to_string(),
-    ]);
-    for a in args {
-        command.args(*a);
-    }
-    if let Some(t) = tunable {
-        command.env("GLIBC_TUNABLES", t);
-    }
-    let status =
-        command.status().map_err(|e| ExperimentError::Figure(format!("cannot run bench.py with {}: {e}", python.display())))?;
-    if !status.success() {
-        return Err(ExperimentError::Figure(format!("bench.py failed ({status})")));
-    }
-    let text = std::fs::read_to_string(&out).map_err(|e| ExperimentError::Data { path: out.clone(), reason: e.to_string() })?;
-    let _ = std::fs::remove_file(&out);
-    let mut bench: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| ExperimentError::Data { path: out.clone(), reason: e.to_string() })?;
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/experiment/python_users/bench.py");
+    let mut all: Vec<String> = vec![
+        "--repeats".into(),
+        repeats.to_string(),
+        "--large-repeats".into(),
+        LARGE_REPEATS.to_string(),
+        "--large-size".into(),
+        LARGE.to_string(),
+        "--threads".into(),
+        THREADS.map(|t| t.to_string()).join(","),
+    ];
+    all.extend(args.iter().flat_map(|a| a.iter().map(|s| (*s).to_owned())));
+    let env: Vec<(&str, &str)> = tunable.map(|t| ("GLIBC_TUNABLES", t)).into_iter().collect();
+    let mut bench: serde_json::Value = python::run_script(python, &script, &all, &env).map_err(ExperimentError::Figure)?;
     bench["repeats"] = repeats.into();
     bench["large_repeats"] = LARGE_REPEATS.into();
-    serde_json::from_value(bench).map_err(|e| ExperimentError::Data { path: out, reason: e.to_string() })
-}
-
-/// `pip install ./python` into the reference environment: the package of this commit, built by
-/// maturin as a user's `pip install` builds it.
-fn install_package(python: &Path, root: &Path) -> Result<(), ExperimentError> {
-    let status = Command::new(python)
-        .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "--no-deps", "--force-reinstall"])
-        .arg(root.join("python"))
-        .status()
-        .map_err(|e| ExperimentError::Figure(format!("cannot run pip with {}: {e}", python.display())))?;
-    if status.success() {
-        Ok(())
-    } else {
-        Err(ExperimentError::Figure(format!("pip install ./python failed ({status})")))
-    }
+    serde_json::from_value(bench).map_err(|e| ExperimentError::Figure(format!("bench.py wrote: {e}")))
 }
 
 fn spread(row: &Row) -> Spread {

@@ -1,0 +1,313 @@
+//! `distributed`: `isolab.dask.mesh_volume` on a `distributed.LocalCluster` of one and two
+//! worker processes on this machine's cores, on zarr volumes larger than each worker's memory
+//! limit: wall time, blocks per second, each worker's peak memory, the weld's time, the welded
+//! mesh against the one-process mesh, a run with a worker killed mid-run, and zmesh on the same
+//! blocks merged naively. The runs are `bench.py` beside this file (its header is the protocol),
+//! in the reference environment with the package of this commit installed.
+
+use super::context::{Context, Experiment, ExperimentError};
+use crate::peers::python;
+use crate::report::{markdown_table, Spread};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The experiment.
+pub struct Distributed;
+
+const NAME: &str = "distributed";
+/// Each worker's memory limit, MiB (a worker starts at about a third of it).
+const MEMORY_LIMIT_MIB: usize = 256;
+/// Cells per block along each axis.
+const CHUNK: usize = 64;
+/// The synthetic volume's samples per side (float32: 1000 MiB).
+const SYNTHETIC_N: usize = 640;
+/// The MNI T1 tiled this many times along its axes.
+const TILES: [usize; 3] = [4, 4, 2];
+/// The worker counts (the second: this machine's two cores).
+const WORKERS: [usize; 2] = [1, 2];
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Run {
+    volume: String,
+    round: usize,
+    workers: usize,
+    seconds: f64,
+    blocks: usize,
+    blocks_per_second: f64,
+    worker_peak_rss_mib: Vec<f64>,
+    restarted: bool,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Killed {
+    seconds: f64,
+    fragments_before_kill: usize,
+    worker_replaced: bool,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Topology {
+    closed: bool,
+    boundary_edges: usize,
+    non_manifold_edges: usize,
+    genus: i64,
+    components: usize,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Zmesh {
+    seconds: f64,
+    vertices_before_merge: usize,
+    coincident_vertices_merged: usize,
+    vertices: usize,
+    triangles: usize,
+    collapsed_triangles: usize,
+    boundary_edges: usize,
+    non_manifold_edges: usize,
+    closed: bool,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Volume {
+    volume: String,
+    shape: Vec<usize>,
+    dtype: String,
+    mib: f64,
+    level: f64,
+    inside: String,
+    weld_seconds: f64,
+    vertices: usize,
+    triangles: usize,
+    topology: Topology,
+    killed: Killed,
+    killed_equal: bool,
+    #[serde(default)]
+    equals_one_process: Option<bool>,
+    #[serde(default)]
+    zmesh: Option<Zmesh>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Data {
+    versions: BTreeMap<String, String>,
+    notes: Vec<String>,
+    memory_limit_mib: usize,
+    chunk: usize,
+    repeats: usize,
+    cores: usize,
+    runs: Vec<Run>,
+    volumes: Vec<Volume>,
+}
+
+impl Experiment for Distributed {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn question(&self) -> &'static str {
+        "Does a volume larger than a worker's memory mesh block by block on a Dask cluster, seam-exact, and how does it scale?"
+    }
+
+    fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
+        let root = ctx.report_dir.join("..");
+        let py = python::reference_python(&root).map_err(ExperimentError::Figure)?;
+        python::install_package(&py, &root).map_err(ExperimentError::Figure)?;
+        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/experiment/distributed/bench.py");
+        let args: Vec<String> = [
+            ("--repeats", ctx.repeats.clamp(1, 3).to_string()),
+            ("--memory-limit-mib", MEMORY_LIMIT_MIB.to_string()),
+            ("--chunk", CHUNK.to_string()),
+            ("--synthetic-n", SYNTHETIC_N.to_string()),
+            ("--tiles", TILES.map(|t| t.to_string()).join(",")),
+        ]
+        .into_iter()
+        .flat_map(|(k, v)| [k.to_owned(), v])
+        .collect();
+        let data: Data = python::run_script(&py, &script, &args, &[]).map_err(ExperimentError::Figure)?;
+        ctx.write_data(NAME, &data)
+    }
+
+    fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
+        let data: Data = ctx.read_data(NAME)?;
+        Ok(section(&data))
+    }
+}
+
+fn seconds(runs: &[&Run]) -> Spread {
+    Spread::of(runs.iter().map(|r| r.seconds).collect())
+}
+
+fn runs_of<'a>(data: &'a Data, volume: &str, workers: usize) -> Vec<&'a Run> {
+    data.runs.iter().filter(|r| r.volume == volume && r.workers == workers).collect()
+}
+
+fn yes(b: bool) -> &'static str {
+    if b {
+        "yes"
+    } else {
+        "no"
+    }
+}
+
+fn section(data: &Data) -> String {
+    let mut md = String::from("## Bigger than one machine: zarr volumes on a Dask cluster (`distributed`)\n\n");
+    md.push_str(&format!(
+        "`isolab.dask.mesh_volume` on a `distributed.LocalCluster` (worker processes with one thread each, bound to \
+         127.0.0.1) on this machine's {} cores. Each worker may use {} MiB; each volume is a zarr array on disk several \
+         times that, read block by block by the tasks ({}³-cell blocks, every block a fragment written atomically). \
+         Each run starts a fresh cluster and a fresh fragment folder and is timed from submitting the tasks to the last \
+         fragment written; runs alternate between the worker counts, {} round(s). The weld of the fragments into one \
+         mesh is timed apart, in the driver process. Worker peak memory is each worker process's high-water resident \
+         set (`VmHWM`), start-up included. Script: `experiments/src/experiment/distributed/bench.py`. Versions: {}.\n\n",
+        data.cores,
+        data.memory_limit_mib,
+        data.chunk,
+        data.repeats,
+        data.versions.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
+    ));
+    let mut rows = Vec::new();
+    let mut speedups = Vec::new();
+    for v in &data.volumes {
+        let one = seconds(&runs_of(data, &v.volume, WORKERS[0]));
+        for workers in WORKERS {
+            let runs = runs_of(data, &v.volume, workers);
+            if runs.is_empty() {
+                continue;
+            }
+            let s = seconds(&runs);
+            let blocks = runs[0].blocks;
+            let peak = runs.iter().flat_map(|r| r.worker_peak_rss_mib.iter().copied()).fold(0.0f64, f64::max);
+            rows.push(vec![
+                v.volume.clone(),
+                format!("{}", v.shape.iter().map(usize::to_string).collect::<Vec<_>>().join("×")),
+                format!("{:.0} ({:.1}× a worker's limit)", v.mib, v.mib / data.memory_limit_mib as f64),
+                workers.to_string(),
+                format!("{:.1}", s.median),
+                format!("{:.1}–{:.1}", s.min, s.max),
+                format!("{:.0}", blocks as f64 / s.median),
+                format!("{peak:.0}"),
+                yes(runs.iter().any(|r| r.restarted)).into(),
+                format!("{:.2}", one.median / s.median),
+            ]);
+            if workers == WORKERS[1] {
+                speedups.push((v.volume.clone(), v.mib, one.median / s.median));
+            }
+        }
+    }
+    md.push_str(&markdown_table(
+        &[
+            "volume",
+            "shape",
+            "MiB",
+            "workers",
+            "wall s (median)",
+            "fastest–slowest",
+            "blocks/s",
+            "worker peak MiB (largest)",
+            "a worker restarted",
+            "speed-up over one worker",
+        ],
+        &rows,
+    ));
+    if let Some((volume, _, s)) = speedups.iter().max_by(|a, b| a.1.total_cmp(&b.1)) {
+        md.push_str(&format!(
+            "\nOn the largest volume ({volume}), {} workers take {:.2}× less time than {}.\n",
+            WORKERS[1], s, WORKERS[0]
+        ));
+    }
+    md.push_str("\n### Seams, faults and the weld\n\n");
+    let rows: Vec<Vec<String>> = data
+        .volumes
+        .iter()
+        .map(|v| {
+            vec![
+                v.volume.clone(),
+                v.triangles.to_string(),
+                format!("{:.1}", v.weld_seconds),
+                format!(
+                    "{}, {} boundary edges, {} non-manifold edges, genus {}, {} components",
+                    if v.topology.closed { "closed" } else { "open" },
+                    v.topology.boundary_edges,
+                    v.topology.non_manifold_edges,
+                    v.topology.genus,
+                    v.topology.components
+                ),
+                v.equals_one_process.map_or("not checked".into(), |b| yes(b).to_owned()),
+                format!(
+                    "{} (killed after {} fragments; replaced: {}; {:.1} s)",
+                    yes(v.killed_equal),
+                    v.killed.fragments_before_kill,
+                    yes(v.killed.worker_replaced),
+                    v.killed.seconds
+                ),
+            ]
+        })
+        .collect();
+    md.push_str(&markdown_table(
+        &["volume", "triangles", "weld s", "welded mesh", "equals the one-process mesh", "a worker killed mid-run: same mesh"],
+        &rows,
+    ));
+    md.push_str(
+        "\n\"Equals the one-process mesh\": the welded mesh against `isolab.extract` of the whole array in the driver \
+         process, as sets: the same vertices bit for bit and the same triangles over them. \"Killed\": a worker process \
+         is sent SIGKILL once the first fragment is on disk; distributed reruns its tasks on the other worker and the \
+         nanny starts a new one; the welded result is compared with the undisturbed run's.\n",
+    );
+    let zmesh: Vec<Vec<String>> = data
+        .volumes
+        .iter()
+        .filter_map(|v| v.zmesh.as_ref().map(|z| (v, z)))
+        .map(|(v, z)| {
+            vec![
+                v.volume.clone(),
+                format!("{:.1}", z.seconds),
+                z.vertices_before_merge.to_string(),
+                z.coincident_vertices_merged.to_string(),
+                z.triangles.to_string(),
+                z.collapsed_triangles.to_string(),
+                z.boundary_edges.to_string(),
+                z.non_manifold_edges.to_string(),
+                yes(z.closed).into(),
+            ]
+        })
+        .collect();
+    if !zmesh.is_empty() {
+        md.push_str("\n### zmesh on the same blocks, merged naively\n\n");
+        md.push_str(
+            "zmesh (`zmesh.Mesher` per block, the kernel igneous distributes) on the same blocks, one after another in \
+             the driver, given each block's inside as a binary label (zmesh meshes labels, not intensities, so its surface \
+             is not ours), each block's vertices moved to the volume's sample indices, then merged by exact position. \
+             The seam defects a naive merge leaves are what the columns after the merge count.\n\n",
+        );
+        md.push_str(&markdown_table(
+            &[
+                "volume",
+                "s (serial)",
+                "vertices before merge",
+                "coincident vertices merged",
+                "triangles",
+                "triangles collapsed by the merge",
+                "boundary edges",
+                "non-manifold edges",
+                "closed",
+            ],
+            &zmesh,
+        ));
+    }
+    md.push_str(
+        "\n### On many machines\n\nThe same call with `client=distributed.Client(\"tls://scheduler:8786\", \
+         security=Security(...))` runs the tasks on a cluster's workers: each task needs only the zarr store's address \
+         (a shared file system, or object storage through fsspec) and writes its fragment where every machine can \
+         read it, so nothing but the plan crosses the network. What changes at terabyte scale: fragments go to object \
+         storage beside the volume (atomic puts replace the rename), the manifest becomes the restart record of a \
+         long job, and the weld, which here holds the whole mesh in one process, becomes either no weld at all \
+         (`merge=False`: a viewer or game streams the fragments, which already share their seam vertices' keys) or a \
+         merge tree that welds neighbouring fragments pairwise and keeps only the keys on the outer faces of each \
+         merged group, as `stream_chunked` keeps only one slab's top face.\n",
+    );
+    if !data.notes.is_empty() {
+        md.push_str(&format!("\nNotes from the run: {}.\n", data.notes.join("; ")));
+    }
+    md
+}

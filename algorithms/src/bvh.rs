@@ -144,11 +144,6 @@ impl TriangleBvh {
         Some((nearest * (1.0 - 1e-5)) as f32)
     }
 
-    /// The closest point on any triangle to `p`, its squared distance, and the triangle's id.
-    pub fn closest_triangle(&self, p: Vec3) -> Option<(Vec3, f32, u32)> {
-        self.closest(p)
-    }
-
     /// The triangles, in tree order.
     pub fn triangles(&self) -> &[[Vec3; 3]] {
         &self.triangles

@@ -27,14 +27,6 @@ impl TriMesh {
             + self.triangles.capacity() * std::mem::size_of::<[u32; 3]>()
     }
 
-    /// Appends `other`, offsetting its indices.
-    pub fn append(&mut self, other: &TriMesh) {
-        let offset = self.positions.len() as u32;
-        self.positions.extend_from_slice(&other.positions);
-        self.normals.extend_from_slice(&other.normals);
-        self.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + offset)));
-    }
-
     /// Recomputes normals as the area-weighted mean of incident triangle normals, in the normals'
     /// own buffer (no allocation once it has grown).
     pub fn compute_face_weighted_normals(&mut self) {

@@ -127,11 +127,6 @@ impl Samples {
         self.iso
     }
 
-    /// Changes the iso-value (no resampling needed).
-    pub fn set_iso(&mut self, iso: f32) {
-        self.iso = iso;
-    }
-
     /// The field the samples came from, if known.
     pub fn field(&self) -> Option<&Arc<dyn Field>> {
         self.field.as_ref()

@@ -119,3 +119,22 @@ fn unwritable_metrics_and_pictures_of_nothing_are_refused() {
     let out = isolab(&["render", mesh.to_str().unwrap(), "-o", png.to_str().unwrap()]);
     assert!(out.status.success() && png.exists(), "{}", stderr(&out));
 }
+
+/// A volume too large for memory is refused from its header, before its data is read: each file
+/// here claims 4096³ samples but holds a few bytes, so only a refusal that never read the data
+/// names memory.
+#[test]
+fn a_volume_too_large_for_memory_is_refused_before_its_data_is_read() {
+    let dir = std::env::temp_dir().join(format!("isolab-huge-volume-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let nrrd = dir.join("huge.nrrd");
+    std::fs::write(&nrrd, b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4096 4096 4096\nencoding: raw\n\n01234567").unwrap();
+    let mhd = dir.join("huge.mhd");
+    std::fs::write(&mhd, b"NDims = 3\nDimSize = 4096 4096 4096\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n0123").unwrap();
+    let out = dir.join("out.ply");
+    for file in [&nrrd, &mhd] {
+        let args = ["extract", "-a", "marching-cubes", "-f", file.to_str().unwrap(), "-o", out.to_str().unwrap()];
+        refused(&args, 1, &["[4096, 4096, 4096] cubic lattice needs about", "isolab.dask.mesh_volume"], &out);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

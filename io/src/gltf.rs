@@ -237,12 +237,6 @@ fn quantized_document(mesh: &TriMesh, generator: &str) -> (serde_json::Value, Ve
     (doc, bin)
 }
 
-/// Reads the triangles of every mesh in a glTF file's default scene (node transforms applied),
-/// or of every mesh when it has no scene. External buffers are read beside `path`.
-pub fn read_gltf(path: &Path) -> Result<TriMesh, IoError> {
-    parse_gltf_beside(&super::read_bytes(path)?, path)
-}
-
 /// Parses the bytes of the glTF file at `path`, already read; external buffers are read beside it.
 pub fn parse_gltf_beside(bytes: &[u8], path: &Path) -> Result<TriMesh, IoError> {
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();

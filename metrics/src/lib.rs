@@ -2,12 +2,19 @@
 //!
 //! Read-only measures of meshes. Nothing here mutates a mesh. Every report field documents its
 //! formula and ideal value; definitions follow the libraries people compare against (Verdict /
-//! VTK's vtkMeshQuality, CGAL, OpenMesh), as `../DESIGN.md`-style notes in each module say.
+//! VTK's vtkMeshQuality, CGAL, OpenMesh), as each module's doc says.
 //!
 //! - [`quality`]: triangle aspect ratios, radius ratio, angles;
 //! - [`topology`](mod@topology): closed, manifold, oriented, outward, components, Euler characteristic, genus,
 //!   with the offending edges and vertices listed;
-//! - [`accuracy`]: volume, area, distance of vertices to the true surface;
+//! - [`accuracy`]: volume, area, distance of vertices to the true surface, Hausdorff distance,
+//!   normal deviation;
+//! - [`intersections`]: self-intersecting triangle pairs (BVH candidates, exact predicates);
+//! - [`overdraw`]: quad overshading of a rasterised view;
+//! - [`histogram`]: fixed-bin histograms;
+//! - [`tet_quality`](mod@tet_quality): tetrahedra's dihedral angles, aspect and radius ratios, inverted count;
+//! - [`volume_mesh`](mod@volume_mesh): a volume extractor's measures (dihedral range, boundary
+//!   distance, volume ratio, enclosure of the input surface, convergence);
 //! - [`MeshMetrics`]: all of the above in one serializable struct, the metrics JSON's core.
 
 pub mod accuracy;

@@ -45,7 +45,11 @@ pub enum RunError {
     #[error("iso-value {0} is not finite")]
     BadIso(f32),
     /// Not enough memory for the lattice.
-    #[error("a {dims:?} {lattice} lattice needs about {need_mib} MiB, but only {available_mib} MiB of memory is available; lower --resolution")]
+    #[error(
+        "a {dims:?} {lattice} lattice needs about {need_mib} MiB, but only {available_mib} MiB of memory is available; lower \
+         --resolution (a volume file is then resampled), or mesh it block by block in bounded memory with \
+         isolab.dask.mesh_volume (Python)"
+    )]
     OutOfMemory {
         /// Samples per axis.
         dims: [usize; 3],

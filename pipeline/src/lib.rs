@@ -293,8 +293,23 @@ fn native_samples(
 /// ([`run_input`]).
 pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
     check_names(config)?;
+    check_volume_size(config)?;
     let input = load_input(&config.field, config.seed, config.volume, MeshChecks::Warn)?;
     run_input(config, input)
+}
+
+/// Refuses a volume file meshed on its own grid that cannot fit in memory, from its header,
+/// before its data is read (a file whose header does not say plainly is left to the reader).
+fn check_volume_size(config: &RunConfig) -> Result<(), RunError> {
+    if config.volume_grid != VolumeGrid::Native || !input::is_file_spec(&config.field) {
+        return Ok(());
+    }
+    let Some(dims) = isolab_io::volume::peek_dims(std::path::Path::new(&config.field)) else { return Ok(()) };
+    let grid = Grid { origin: glam::Vec3::ZERO, spacing: 1.0, dims };
+    check_memory(&match config.lattice {
+        LatticeKind::Cubic => Lattice::Cubic(grid),
+        LatticeKind::Bcc => Lattice::Bcc(grid),
+    })
 }
 
 /// Refuses an unknown algorithm, option or post-process before anything is read.

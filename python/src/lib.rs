@@ -1,9 +1,9 @@
 //! # isolab's native Python module (`isolab._isolab`)
 //!
 //! What the `isolab` package (`python/python/isolab/__init__.py`, which holds the signatures,
-//! argument checks and docstrings users read) calls: numpy arrays in ([`arrays`]), the one run of
+//! argument checks and docstrings users read) calls: numpy arrays in (`arrays`), the one run of
 //! `isolab-pipeline` or a lean marching cubes for the scikit-image drop-in, meshes out as numpy
-//! arrays ([`out`]), metrics, files. Every call releases the GIL while it works and runs on the
+//! arrays (`out`), blocks of a volume for `isolab.dask` (`blocks`), metrics, files. Every call releases the GIL while it works and runs on the
 //! global rayon pool or, with `threads=N`, on a kept pool of N threads.
 //!
 //! Errors are the pipeline's messages (the CLI prints the same), raised as `ValueError` (bad

@@ -65,8 +65,9 @@ fn steady_state_brush_edits_allocate_nothing() {
     let inside = |y: usize| samples.values()[grid.index(32, y, 32)] < 0.0;
     let y = (1..32).find(|&y| inside(y) != inside(y + 1)).unwrap();
     let centre = grid.position(32, y, 32);
-    for name in ["marching-cubes", "surface-nets", "dual-contouring", "marching-tetrahedra", "regularised-marching-tetrahedra"] {
-        let e = extractors::by_name(name).unwrap();
+    // Every registered extractor that meshes in chunks (the registry's list, not a hand-kept one).
+    for e in extractors::registry().into_iter().filter(|e| e.chunking() != isolab_algorithms::Chunking::Unsupported) {
+        let name = e.name();
         let mut world = ChunkedVolume::new(e.as_ref(), samples.clone(), 16).unwrap();
         let counts = pool.install(|| {
             world.remesh_dirty(e.as_ref()).unwrap();

@@ -119,11 +119,6 @@ impl ChunkedVolume {
         &self.slots
     }
 
-    /// Chunks waiting to be re-meshed.
-    pub fn dirty_count(&self) -> usize {
-        self.dirty.iter().filter(|&&d| d).count()
-    }
-
     /// Applies `brush` to the samples and marks every chunk holding a changed sample dirty;
     /// returns how many chunks it dirtied.
     pub fn apply(&mut self, brush: &Brush) -> Result<usize, EditError> {

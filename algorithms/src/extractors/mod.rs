@@ -84,11 +84,6 @@ pub fn build(name: &str, options: &Options) -> Result<Option<Box<dyn Extractor>>
     INFOS.iter().find(|i| i.name == name).map(|i| (i.make)(options)).transpose()
 }
 
-/// The post-process called `name` with default options, or `None`.
-pub fn post_by_name(name: &str) -> Option<Box<dyn PostProcess>> {
-    build_post(name).ok().flatten()
-}
-
 /// Comma-separated names of all extractors (for error messages).
 pub fn names() -> String {
     INFOS.iter().map(|e| e.name).collect::<Vec<_>>().join(", ")

@@ -160,11 +160,6 @@ impl TetScratch {
     pub fn rewritten_vertices(&self) -> Option<&[u32]> {
         self.rewritten_valid.then_some(&self.rewritten[..])
     }
-
-    /// Samples currently forbidden to merge.
-    pub fn unmerged_samples(&self) -> usize {
-        self.no_merge.iter().filter(|&&b| b).count()
-    }
 }
 
 /// Sample addressing in doubled coordinates.

@@ -34,6 +34,9 @@ pub enum ExperimentError {
     /// A figure could not be drawn.
     #[error("figure: {0}")]
     Figure(String),
+    /// A Python script, or the reference environment it runs in, failed.
+    #[error("Python: {0}")]
+    Python(String),
     /// A peer implementation failed where the experiment needs it.
     #[error("peer {0}")]
     Peer(#[from] crate::peers::PeerError),

@@ -394,6 +394,54 @@ pub fn data_path(header: &Path, name: &str) -> PathBuf {
     header.parent().unwrap_or(Path::new("")).join(name)
 }
 
+/// The samples per axis of a 3-D volume file, read from its header alone (the first bytes of the
+/// file, gunzipped for `.nii.gz`), so that a volume too large to mesh can be refused before its
+/// data is read. `None` when the header does not say plainly (4-D files, detached NIfTI
+/// headers, anything malformed: the full reader then decides and names the problem).
+pub fn peek_dims(path: &Path) -> Option<[usize; 3]> {
+    let mut prefix = Vec::new();
+    std::fs::File::open(path).ok()?.take(1 << 16).read_to_end(&mut prefix).ok()?;
+    let three = |v: &[usize]| (v.len() == 3 && v.iter().all(|&n| n > 0)).then(|| [v[0], v[1], v[2]]);
+    match detect(path, &prefix)? {
+        VolumeFormat::Nifti => {
+            let head = if is_gzip(&prefix) {
+                gunzip_prefix(&prefix, 540, path).or_else(|_| gunzip_prefix(&prefix, 348, path)).ok()?
+            } else {
+                prefix
+            };
+            let h = nifti::parse_header(&head, path).ok()?;
+            let d = h.dim;
+            (d[0] == 3).then(|| three(&[d[1] as usize, d[2] as usize, d[3] as usize])).flatten()
+        }
+        VolumeFormat::Nrrd => {
+            let text = String::from_utf8_lossy(&prefix);
+            let value = |key: &str| {
+                text.lines().take_while(|l| !l.trim().is_empty()).find_map(|l| {
+                    let (k, v) = l.split_once(':')?;
+                    (k.trim().eq_ignore_ascii_case(key)).then(|| v.trim().to_owned())
+                })
+            };
+            let sizes: Vec<usize> = value("sizes")?.split_whitespace().map(|s| s.parse().ok()).collect::<Option<_>>()?;
+            three(&sizes)
+        }
+        VolumeFormat::MetaImage => {
+            let text = String::from_utf8_lossy(&prefix);
+            let value = |key: &str| {
+                text.lines().find_map(|l| {
+                    let (k, v) = l.split_once('=')?;
+                    (k.trim().eq_ignore_ascii_case(key)).then(|| v.trim().to_owned())
+                })
+            };
+            if value("NDims")? != "3" {
+                return None;
+            }
+            let sizes: Vec<usize> = value("DimSize")?.split_whitespace().map(|s| s.parse().ok()).collect::<Option<_>>()?;
+            three(&sizes)
+        }
+        VolumeFormat::Samples => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -4,18 +4,19 @@ block by block on a distributed.LocalCluster of 1 and 2 worker processes (loopba
 Run by the `distributed` experiment (`distributed/mod.rs`) in the reference environment with
 isolab installed from `python/`:
 
-    python bench.py OUT.json [--repeats 3] [--memory-limit-mib 300] [--chunk 64] [--synthetic-n 640]
+    python bench.py OUT.json [--repeats 3] [--memory-limit-mib 256] [--chunks 128,64] [--synthetic-n 640]
         [--tiles 4,4,2] [--mni nilearn] [--work DIR]
 
 Volumes (written to zarr in DIR, chunks of 64³, zarr's default compression):
 - synthetic: the built-in `asteroid` field sampled at n³ (float32), block by block through isolab;
 - MNI152 T1 tiled: nilearn's template as nibabel's get_fdata() returns it, cast to float32, tiled.
-For each volume and worker count, `repeats` runs alternate between 1 and 2 workers, each on a fresh
-cluster and a fresh fragment folder (merge=False: the blocks only), timed from submitting the
-tasks to the last fragment written; then the weld of those fragments, timed alone, in this
-process. Per run: wall time, blocks per second, each worker's peak resident memory
-(VmHWM, which includes the worker's start-up), whether any worker was restarted. Once per
-volume: the welded mesh against `isolab.extract(whole array, chunk=...)` in this process (the
+For each volume, block size and worker count, `repeats` runs alternate between 1 and 2 workers,
+each on a fresh cluster and a fresh fragment folder (merge=False: the blocks only), timed from
+submitting the tasks to the last fragment written; then the weld of those fragments, timed alone,
+in this process. Per run: wall time, blocks per second, each worker's peak resident memory
+(VmHWM, which includes the worker's start-up), the workers' and this driver process's CPU
+seconds (the scheduler and the nannies live in the driver), whether any worker was restarted.
+Once per volume, at the first block size: the welded mesh against `isolab.extract(whole array, chunk=...)` in this process (the
 one-process chunked mesh, which for marching cubes is the whole-volume mesh); a run in which one
 worker process is killed (SIGKILL) once the first fragment is written, checked against the same;
 and, for the synthetic volume, the same blocks meshed by zmesh (`zmesh.Mesher` per block, as
@@ -48,6 +49,10 @@ def version(name):
         return importlib.metadata.version(name)
     except importlib.metadata.PackageNotFoundError:
         return "not installed"
+
+
+# The zarr stores' chunk edge (samples).
+STORE_CHUNK = 64
 
 
 def log(*a):
@@ -88,21 +93,31 @@ def peak_rss_mib():
     return float("nan")
 
 
-def one_run(vol, level, inside, workers, args, work):
+def cpu_seconds():
+    return time.process_time()
+
+
+def one_run(vol, level, inside, workers, chunk, args, work):
     out = tempfile.mkdtemp(prefix="fragments-", dir=work)
     c, client = cluster(workers, f"{args.memory_limit_mib}MiB")
     try:
         pids = client.run(os.getpid)
+        worker_cpu = client.run(cpu_seconds)
+        driver = os.times()
         t = time.perf_counter()
-        paths = idask.mesh_volume(vol, level, chunk=args.chunk, inside=inside, client=client, out=out, merge=False)
+        paths = idask.mesh_volume(vol, level, chunk=chunk, inside=inside, client=client, out=out, merge=False)
         seconds = time.perf_counter() - t
+        driver_after = os.times()
+        worker_cpu = sum(v - worker_cpu[k] for k, v in client.run(cpu_seconds).items())
         restarted = client.run(os.getpid) != pids
         peaks = sorted(client.run(peak_rss_mib).values())
     finally:
         client.close()
         c.close()
-    return {"workers": workers, "seconds": seconds, "blocks": len(paths), "blocks_per_second": len(paths) / seconds,
-            "worker_peak_rss_mib": peaks, "restarted": restarted}, out, paths
+    driver_cpu = (driver_after.user - driver.user) + (driver_after.system - driver.system)
+    return {"workers": workers, "chunk": chunk, "seconds": seconds, "blocks": len(paths),
+            "blocks_per_second": len(paths) / seconds, "worker_peak_rss_mib": peaks, "restarted": restarted,
+            "worker_cpu_seconds": worker_cpu, "driver_cpu_seconds": driver_cpu}, out, paths
 
 
 def weld(paths, report):
@@ -112,14 +127,14 @@ def weld(paths, report):
     return parts, time.perf_counter() - t
 
 
-def killed_run(vol, level, inside, args, work):
+def killed_run(vol, level, inside, chunk, args, work):
     out = tempfile.mkdtemp(prefix="killed-", dir=work)
     c, client = cluster(2, f"{args.memory_limit_mib}MiB")
     result = {}
     try:
         victim = next(iter(client.run(os.getpid).values()))
         run = threading.Thread(target=lambda: result.update(paths=idask.mesh_volume(
-            vol, level, chunk=args.chunk, inside=inside, client=client, out=out, merge=False)))
+            vol, level, chunk=chunk, inside=inside, client=client, out=out, merge=False)))
         t = time.perf_counter()
         run.start()
         written = 0
@@ -197,26 +212,29 @@ def topology(vertices, faces):
 
 def measure_volume(name, vol, level, inside, args, work, rows, checks):
     log(f"{name}: {vol.shape} {vol.dtype}, {vol.nbytes / 2**20:.0f} MiB")
-    paths = None
-    for r in range(args.repeats):
-        for workers in ((1, 2) if r % 2 == 0 else (2, 1)):
-            row, out, paths = one_run(vol, level, inside, workers, args, work)
-            row.update(volume=name, round=r)
-            rows.append(row)
-            log(f"  {workers} worker(s): {row['seconds']:.1f} s, peaks {row['worker_peak_rss_mib']}")
-            if r == args.repeats - 1 and workers == 2:
-                kept = out
-            else:
-                shutil.rmtree(out)
+    kept = paths = None
+    for chunk in args.chunks:
+        for r in range(args.repeats):
+            for workers in ((1, 2) if r % 2 == 0 else (2, 1)):
+                row, out, run_paths = one_run(vol, level, inside, workers, chunk, args, work)
+                row.update(volume=name, round=r)
+                rows.append(row)
+                log(f"  chunk {chunk}, {workers} worker(s): {row['seconds']:.1f} s, worker CPU "
+                    f"{row['worker_cpu_seconds']:.1f} s, driver CPU {row['driver_cpu_seconds']:.1f} s")
+                if kept is None and chunk == args.chunks[0]:
+                    kept, paths = out, run_paths
+                else:
+                    shutil.rmtree(out)
+    chunk = args.chunks[0]
     report = {"algorithm": "marching-cubes", "driver": "isolab.dask"}
     parts, weld_seconds = weld(paths, report)
     shutil.rmtree(kept)
     ref = isolab.extract(np.asarray(vol[:]), level, inside=inside) if args.check else None
-    killed_paths, killed, killed_out = killed_run(vol, level, inside, args, work)
+    killed_paths, killed, killed_out = killed_run(vol, level, inside, chunk, args, work)
     killed_parts, _ = weld(killed_paths, report)
     shutil.rmtree(killed_out)
     check = {"volume": name, "shape": list(vol.shape), "dtype": str(vol.dtype), "mib": vol.nbytes / 2**20,
-             "level": level, "inside": inside, "weld_seconds": weld_seconds,
+             "level": level, "inside": inside, "chunk": chunk, "weld_seconds": weld_seconds,
              "vertices": int(len(parts["vertices"])), "triangles": int(len(parts["faces"])),
              "topology": topology(parts["vertices"], parts["faces"]), "killed": killed,
              "killed_equal": bool(np.array_equal(killed_parts["vertices"], parts["vertices"])
@@ -235,23 +253,24 @@ def main():
     p = argparse.ArgumentParser()
     p.add_argument("out")
     p.add_argument("--repeats", type=int, default=3)
-    p.add_argument("--memory-limit-mib", type=int, default=300)
-    p.add_argument("--chunk", type=int, default=64)
+    p.add_argument("--memory-limit-mib", type=int, default=256)
+    p.add_argument("--chunks", default="128,64", help="block sizes in cells; checks run at the first")
     p.add_argument("--synthetic-n", type=int, default=640)
     p.add_argument("--tiles", default="4,4,2")
     p.add_argument("--mni", default="nilearn")
     p.add_argument("--work", default=None)
     p.add_argument("--no-check", dest="check", action="store_false")
     args = p.parse_args()
+    args.chunks = [int(c) for c in args.chunks.split(",")]
     work = tempfile.mkdtemp(prefix="isolab-distributed-", dir=args.work)
     rows, checks, notes = [], [], []
     try:
         t = time.perf_counter()
-        vol = synthetic(os.path.join(work, "asteroid.zarr"), args.synthetic_n, args.chunk)
+        vol = synthetic(os.path.join(work, "asteroid.zarr"), args.synthetic_n, STORE_CHUNK)
         log(f"synthetic volume written in {time.perf_counter() - t:.1f} s")
         check = measure_volume("asteroid", vol, 0.0, "below", args, work, rows, checks)
         try:
-            check["zmesh"] = zmesh_naive(vol, 0.0, "below", args.chunk)
+            check["zmesh"] = zmesh_naive(vol, 0.0, "below", args.chunks[0])
             check["ours_blocks"] = check["topology"]
         except ImportError as e:
             notes.append(f"zmesh not run: {e}")
@@ -263,7 +282,7 @@ def main():
                                "mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz")
         if mni and os.path.exists(mni):
             tiles = tuple(int(t) for t in args.tiles.split(","))
-            vol = mni_tiled(os.path.join(work, "mni.zarr"), mni, tiles, args.chunk)
+            vol = mni_tiled(os.path.join(work, "mni.zarr"), mni, tiles, STORE_CHUNK)
             level = float(isolab.extract(mni).stats["iso"])
             check = measure_volume("MNI152 T1 tiled " + "x".join(map(str, tiles)), vol, level, "above", args, work, rows,
                                    checks)
@@ -273,7 +292,8 @@ def main():
         shutil.rmtree(work, ignore_errors=True)
     versions = {k: version(k) for k in ("isolab", "dask", "distributed", "zarr", "zmesh", "numpy")}
     versions["python"] = sys.version.split()[0]
-    doc = {"versions": versions, "notes": notes, "memory_limit_mib": args.memory_limit_mib, "chunk": args.chunk,
+    doc = {"versions": versions, "notes": notes, "memory_limit_mib": args.memory_limit_mib, "chunks": args.chunks,
+           "store_chunk": STORE_CHUNK,
            "repeats": args.repeats, "cores": os.cpu_count(), "runs": rows, "volumes": checks}
     with open(args.out + ".tmp", "w") as f:
         json.dump(doc, f)

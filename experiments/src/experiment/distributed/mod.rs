@@ -18,8 +18,8 @@ pub struct Distributed;
 const NAME: &str = "distributed";
 /// Each worker's memory limit, MiB (a worker starts at about a third of it).
 const MEMORY_LIMIT_MIB: usize = 256;
-/// Cells per block along each axis.
-const CHUNK: usize = 64;
+/// Cells per block along each axis, in the order run (the checks run at the first).
+const CHUNKS: [usize; 2] = [128, 64];
 /// The synthetic volume's samples per side (float32: 1000 MiB).
 const SYNTHETIC_N: usize = 640;
 /// The MNI T1 tiled this many times along its axes.
@@ -32,6 +32,9 @@ struct Run {
     volume: String,
     round: usize,
     workers: usize,
+    chunk: usize,
+    worker_cpu_seconds: f64,
+    driver_cpu_seconds: f64,
     seconds: f64,
     blocks: usize,
     blocks_per_second: f64,
@@ -76,6 +79,7 @@ struct Volume {
     mib: f64,
     level: f64,
     inside: String,
+    chunk: usize,
     weld_seconds: f64,
     vertices: usize,
     triangles: usize,
@@ -93,7 +97,8 @@ struct Data {
     versions: BTreeMap<String, String>,
     notes: Vec<String>,
     memory_limit_mib: usize,
-    chunk: usize,
+    chunks: Vec<usize>,
+    store_chunk: usize,
     repeats: usize,
     cores: usize,
     runs: Vec<Run>,
@@ -111,20 +116,20 @@ impl Experiment for Distributed {
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let root = ctx.report_dir.join("..");
-        let py = python::reference_python(&root).map_err(ExperimentError::Figure)?;
-        python::install_package(&py, &root).map_err(ExperimentError::Figure)?;
+        let py = python::reference_python(&root).map_err(ExperimentError::Python)?;
+        python::install_package(&py, &root).map_err(ExperimentError::Python)?;
         let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/experiment/distributed/bench.py");
         let args: Vec<String> = [
             ("--repeats", ctx.repeats.clamp(1, 3).to_string()),
             ("--memory-limit-mib", MEMORY_LIMIT_MIB.to_string()),
-            ("--chunk", CHUNK.to_string()),
+            ("--chunks", CHUNKS.map(|c| c.to_string()).join(",")),
             ("--synthetic-n", SYNTHETIC_N.to_string()),
             ("--tiles", TILES.map(|t| t.to_string()).join(",")),
         ]
         .into_iter()
         .flat_map(|(k, v)| [k.to_owned(), v])
         .collect();
-        let data: Data = python::run_script(&py, &script, &args, &[]).map_err(ExperimentError::Figure)?;
+        let data: Data = python::run_script(&py, &script, &args, &[]).map_err(ExperimentError::Python)?;
         ctx.write_data(NAME, &data)
     }
 
@@ -138,8 +143,19 @@ fn seconds(runs: &[&Run]) -> Spread {
     Spread::of(runs.iter().map(|r| r.seconds).collect())
 }
 
-fn runs_of<'a>(data: &'a Data, volume: &str, workers: usize) -> Vec<&'a Run> {
-    data.runs.iter().filter(|r| r.volume == volume && r.workers == workers).collect()
+fn runs_of<'a>(data: &'a Data, volume: &str, chunk: usize, workers: usize) -> Vec<&'a Run> {
+    data.runs.iter().filter(|r| r.volume == volume && r.chunk == chunk && r.workers == workers).collect()
+}
+
+fn median(values: impl Iterator<Item = f64>) -> f64 {
+    Spread::of(values.collect()).median
+}
+
+/// Storage chunks a block of `chunk` cells reads per storage chunk of its own cells: it reads
+/// `chunk + 1` samples per axis, one storage chunk more per axis than it covers.
+fn read_amplification(chunk: usize, store: usize) -> f64 {
+    let own = chunk as f64 / store as f64;
+    ((chunk + 1).div_ceil(store) as f64 / own).powi(3)
 }
 
 fn yes(b: bool) -> &'static str {
@@ -152,46 +168,49 @@ fn yes(b: bool) -> &'static str {
 
 fn section(data: &Data) -> String {
     let mut md = String::from("## Bigger than one machine: zarr volumes on a Dask cluster (`distributed`)\n\n");
+    let chunks = data.chunks.iter().map(|c| format!("{c}³")).collect::<Vec<_>>().join(" and ");
     md.push_str(&format!(
         "`isolab.dask.mesh_volume` on a `distributed.LocalCluster` (worker processes with one thread each, bound to \
          127.0.0.1) on this machine's {} cores. Each worker may use {} MiB; each volume is a zarr array on disk several \
-         times that, read block by block by the tasks ({}³-cell blocks, every block a fragment written atomically). \
-         Each run starts a fresh cluster and a fresh fragment folder and is timed from submitting the tasks to the last \
-         fragment written; runs alternate between the worker counts, {} round(s). The weld of the fragments into one \
-         mesh is timed apart, in the driver process. Worker peak memory is each worker process's high-water resident \
-         set (`VmHWM`), start-up included. Script: `experiments/src/experiment/distributed/bench.py`. Versions: {}.\n\n",
+         times that ({}³ storage chunks), read block by block by the tasks (blocks of {chunks} cells, every block a \
+         fragment written atomically). Each run starts a fresh cluster and a fresh fragment folder and is timed from \
+         submitting the tasks to the last fragment written; runs alternate between the worker counts, {} round(s). The \
+         weld of the fragments into one mesh is timed apart, in the driver process. Worker peak memory is each worker \
+         process's high-water resident set (`VmHWM`), start-up included; CPU seconds are the workers' together and the \
+         driver's (the client, the scheduler and the nannies share that process). Script: \
+         `experiments/src/experiment/distributed/bench.py`. Versions: {}.\n\n",
         data.cores,
         data.memory_limit_mib,
-        data.chunk,
+        data.store_chunk,
         data.repeats,
         data.versions.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
     ));
     let mut rows = Vec::new();
-    let mut speedups = Vec::new();
     for v in &data.volumes {
-        let one = seconds(&runs_of(data, &v.volume, WORKERS[0]));
-        for workers in WORKERS {
-            let runs = runs_of(data, &v.volume, workers);
-            if runs.is_empty() {
-                continue;
-            }
-            let s = seconds(&runs);
-            let blocks = runs[0].blocks;
-            let peak = runs.iter().flat_map(|r| r.worker_peak_rss_mib.iter().copied()).fold(0.0f64, f64::max);
-            rows.push(vec![
-                v.volume.clone(),
-                format!("{}", v.shape.iter().map(usize::to_string).collect::<Vec<_>>().join("×")),
-                format!("{:.0} ({:.1}× a worker's limit)", v.mib, v.mib / data.memory_limit_mib as f64),
-                workers.to_string(),
-                format!("{:.1}", s.median),
-                format!("{:.1}–{:.1}", s.min, s.max),
-                format!("{:.0}", blocks as f64 / s.median),
-                format!("{peak:.0}"),
-                yes(runs.iter().any(|r| r.restarted)).into(),
-                format!("{:.2}", one.median / s.median),
-            ]);
-            if workers == WORKERS[1] {
-                speedups.push((v.volume.clone(), v.mib, one.median / s.median));
+        for &chunk in &data.chunks {
+            let one = seconds(&runs_of(data, &v.volume, chunk, WORKERS[0]));
+            for workers in WORKERS {
+                let runs = runs_of(data, &v.volume, chunk, workers);
+                if runs.is_empty() {
+                    continue;
+                }
+                let s = seconds(&runs);
+                let peak = runs.iter().flat_map(|r| r.worker_peak_rss_mib.iter().copied()).fold(0.0f64, f64::max);
+                rows.push(vec![
+                    v.volume.clone(),
+                    v.shape.iter().map(usize::to_string).collect::<Vec<_>>().join("×"),
+                    format!("{:.0} ({:.1}× a worker's limit)", v.mib, v.mib / data.memory_limit_mib as f64),
+                    format!("{chunk}³"),
+                    workers.to_string(),
+                    format!("{:.1}", s.median),
+                    format!("{:.1}–{:.1}", s.min, s.max),
+                    format!("{:.0}", runs[0].blocks as f64 / s.median),
+                    format!("{:.1}", median(runs.iter().map(|r| r.worker_cpu_seconds))),
+                    format!("{:.1}", median(runs.iter().map(|r| r.driver_cpu_seconds))),
+                    format!("{peak:.0}"),
+                    yes(runs.iter().any(|r| r.restarted)).into(),
+                    format!("{:.2}", one.median / s.median),
+                ]);
             }
         }
     }
@@ -200,22 +219,58 @@ fn section(data: &Data) -> String {
             "volume",
             "shape",
             "MiB",
+            "block",
             "workers",
             "wall s (median)",
             "fastest–slowest",
             "blocks/s",
+            "worker CPU s",
+            "driver CPU s",
             "worker peak MiB (largest)",
             "a worker restarted",
             "speed-up over one worker",
         ],
         &rows,
     ));
-    if let Some((volume, _, s)) = speedups.iter().max_by(|a, b| a.1.total_cmp(&b.1)) {
+    if let Some(v) = data.volumes.iter().max_by(|a, b| a.mib.total_cmp(&b.mib)) {
+        let ratios: Vec<String> = data
+            .chunks
+            .iter()
+            .filter_map(|&chunk| {
+                let one = runs_of(data, &v.volume, chunk, WORKERS[0]);
+                let two = runs_of(data, &v.volume, chunk, WORKERS[1]);
+                (!one.is_empty() && !two.is_empty()).then(|| {
+                    let busy = median(one.iter().map(|r| r.worker_cpu_seconds)) / seconds(&one).median;
+                    format!(
+                        "{:.2}× with {chunk}³ blocks (where one worker alone keeps {busy:.2} cores busy: CPU seconds over \
+                         wall seconds)",
+                        seconds(&one).median / seconds(&two).median
+                    )
+                })
+            })
+            .collect();
         md.push_str(&format!(
-            "\nOn the largest volume ({volume}), {} workers take {:.2}× less time than {}.\n",
-            WORKERS[1], s, WORKERS[0]
+            "\nOn the largest volume ({}), {} workers against {}: {}.\n",
+            v.volume,
+            WORKERS[1],
+            WORKERS[0],
+            ratios.join(", ")
         ));
     }
+    let amplification: Vec<String> = data
+        .chunks
+        .iter()
+        .map(|&c| format!("{c}³ blocks read {:.2}× the storage chunks they cover", read_amplification(c, data.store_chunk)))
+        .collect();
+    md.push_str(&format!(
+        "\nOne worker with one Dask thread keeps more than one core busy (its CPU seconds over the wall seconds; zarr \
+         reads and decompresses on threads of its own), and the driver, where the scheduler runs, takes its share of \
+         the same cores: the one-worker baseline is more than one core's work, so two workers cannot halve it. A block reads \
+         one sample more per axis than it has cells, so from a zarr store it decompresses one more storage chunk per \
+         axis than it covers: {}. Each task also pays the scheduler's round trip and writes its fragment; the driver CPU \
+         column is the scheduler's share of the machine's cores.\n",
+        amplification.join(", ")
+    ));
     md.push_str("\n### Seams, faults and the weld\n\n");
     let rows: Vec<Vec<String>> = data
         .volumes
@@ -223,6 +278,7 @@ fn section(data: &Data) -> String {
         .map(|v| {
             vec![
                 v.volume.clone(),
+                format!("{}³", v.chunk),
                 v.triangles.to_string(),
                 format!("{:.1}", v.weld_seconds),
                 format!(
@@ -245,7 +301,15 @@ fn section(data: &Data) -> String {
         })
         .collect();
     md.push_str(&markdown_table(
-        &["volume", "triangles", "weld s", "welded mesh", "equals the one-process mesh", "a worker killed mid-run: same mesh"],
+        &[
+            "volume",
+            "block",
+            "triangles",
+            "weld s",
+            "welded mesh",
+            "equals the one-process mesh",
+            "a worker killed mid-run: same mesh",
+        ],
         &rows,
     ));
     md.push_str(
@@ -294,6 +358,29 @@ fn section(data: &Data) -> String {
             ],
             &zmesh,
         ));
+        for v in &data.volumes {
+            let Some(z) = &v.zmesh else { continue };
+            let defects = z.boundary_edges + z.non_manifold_edges + z.collapsed_triangles;
+            md.push_str(&format!(
+                "\nOn {}: {}{}\n",
+                v.volume,
+                if defects == 0 {
+                    format!(
+                        "the naive merge left no seam defect here: zmesh's vertices on a face two blocks share coincide bit \
+                         for bit, so merging by position closed every seam ({} coincident vertices merged).",
+                        z.coincident_vertices_merged
+                    )
+                } else {
+                    format!("the naive merge left {defects} seam defects (boundary and non-manifold edges, collapsed triangles).")
+                },
+                if z.triangles == v.triangles {
+                    " zmesh's triangle count equals ours: marching cubes' triangulation depends only on which corners are \
+                     inside, which the threshold keeps; the positions differ (zmesh's sit at edge midpoints)."
+                } else {
+                    ""
+                }
+            ));
+        }
     }
     md.push_str(
         "\n### On many machines\n\nThe same call with `client=distributed.Client(\"tls://scheduler:8786\", \

@@ -91,8 +91,8 @@ impl Experiment for PythonUsers {
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let root = ctx.report_dir.join("..");
-        let python = python::reference_python(&root).map_err(ExperimentError::Figure)?;
-        python::install_package(&python, &root).map_err(ExperimentError::Figure)?;
+        let python = python::reference_python(&root).map_err(ExperimentError::Python)?;
+        python::install_package(&python, &root).map_err(ExperimentError::Python)?;
         let repeats = ctx.repeats.max(1);
         let sizes: Vec<String> = SIZES.iter().map(usize::to_string).collect();
         let mut data = bench(&python, &[&["--sizes", &sizes.join(","), "--mni", "nilearn"]], repeats, None)?;
@@ -126,10 +126,10 @@ fn bench(python: &Path, args: &[&[&str]], repeats: usize, tunable: Option<&str>)
     ];
     all.extend(args.iter().flat_map(|a| a.iter().map(|s| (*s).to_owned())));
     let env: Vec<(&str, &str)> = tunable.map(|t| ("GLIBC_TUNABLES", t)).into_iter().collect();
-    let mut bench: serde_json::Value = python::run_script(python, &script, &all, &env).map_err(ExperimentError::Figure)?;
+    let mut bench: serde_json::Value = python::run_script(python, &script, &all, &env).map_err(ExperimentError::Python)?;
     bench["repeats"] = repeats.into();
     bench["large_repeats"] = LARGE_REPEATS.into();
-    serde_json::from_value(bench).map_err(|e| ExperimentError::Figure(format!("bench.py wrote: {e}")))
+    serde_json::from_value(bench).map_err(|e| ExperimentError::Python(format!("bench.py wrote: {e}")))
 }
 
 fn spread(row: &Row) -> Spread {

@@ -5,7 +5,7 @@
 //! included, moves toward the volume-weighted mean of its tetrahedra's circumcentres "by an amount
 //! proportional to a predetermined time step" (the step is not given); boundary vertices are kept
 //! off `S` by El Topo's collision handling; iterations continue while any boundary vertex is
-//! farther than `d_offset`. Ours is that update with the time step [`STUDY_STEPS`], exact
+//! farther than `d_offset`. Ours is that update with the time steps of `STUDY_STEPS`, exact
 //! collision tests instead of El Topo (a colliding step is halved, then refused), and, by default,
 //! a quality floor the paper does not have. The study runs the paper's update (no floor) at each
 //! time step and ours with the floor, on one unperturbed lattice per model at the Table 2

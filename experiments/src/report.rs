@@ -88,7 +88,8 @@ pub struct Spread {
     pub min: f64,
     /// Slowest run.
     pub max: f64,
-    /// Every run, in the order measured.
+    /// Every run, in the order measured (absent from data written before it was kept).
+    #[serde(default)]
     pub runs: Vec<f64>,
 }
 

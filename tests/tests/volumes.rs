@@ -1,6 +1,6 @@
 //! Bring your own data: volume files in every format we read give the mesh scikit-image gives
-//! (the goldens of `tests/reference/volumes.py`), every surface extractor meshes a real scan
-//! closed and outward, grids round-trip through `--samples-out`, and mesh inputs give the same
+//! (the goldens of `tests/reference/volumes.py`), every surface extractor meshes a real scan as
+//! its declared guarantees say (closed, outward), grids round-trip through `--samples-out`, and mesh inputs give the same
 //! field whatever their format and orientation.
 
 use glam::Vec3;
@@ -92,7 +92,7 @@ fn marching_cubes_on_every_volume_copy_matches_scikit_image_in_world_coordinates
 }
 
 #[test]
-fn every_surface_extractor_meshes_a_scan_closed_and_outward() {
+fn every_surface_extractor_meshes_a_scan_as_its_guarantees_declare() {
     for info in extractors::INFOS {
         let extractor = extractors::by_name(info.name).unwrap();
         if extractor.produces_volume() {
@@ -106,7 +106,10 @@ fn every_surface_extractor_meshes_a_scan_closed_and_outward() {
             info.name,
             out.extraction.surface.triangles.len()
         );
-        assert!(t.closed && t.oriented && t.outward, "{}: {t:?}", info.name);
+        // What the extractor declares, held on a real scan (the scan's surface stays inside).
+        let g = info.guarantees;
+        assert!(!g.closed || t.closed, "{} declares closed: {t:?}", info.name);
+        assert!(!g.outward || (t.oriented && t.outward), "{} declares outward: {t:?}", info.name);
         assert!(out.report.warnings.is_empty(), "{}: {:?}", info.name, out.report.warnings);
     }
 }

@@ -17,7 +17,7 @@
 
 use super::{Context, Experiment, ExperimentError};
 use crate::peers::python::PythonServer;
-use crate::report::markdown_table;
+use crate::report::{markdown_table, Spread};
 use isolab_algorithms::fields::{MeshField, CAP_WINDING_BOUND, CROSSING_TOLERANCE, DEFAULT_BAND_CELLS};
 use isolab_algorithms::{extractors, Extraction, Field, Grid, Options, Samples};
 use isolab_io::read_mesh;
@@ -42,24 +42,6 @@ const MODELS: [&str; 6] = ["stanford-bunny", "rocker-arm", "cheburashka", "fandi
 
 /// The `mesh_fields` experiment.
 pub struct MeshFields;
-
-/// Median, fastest and slowest of a set of runs, ms.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct Spread {
-    /// Median.
-    pub median: f64,
-    /// Fastest.
-    pub min: f64,
-    /// Slowest.
-    pub max: f64,
-}
-
-impl Spread {
-    fn of(mut ms: Vec<f64>) -> Spread {
-        ms.sort_by(f64::total_cmp);
-        Spread { median: ms[ms.len() / 2], min: ms[0], max: ms[ms.len() - 1] }
-    }
-}
 
 /// One model.
 #[derive(Clone, Debug, Serialize, Deserialize)]

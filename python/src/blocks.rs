@@ -9,9 +9,10 @@
 //! isolab's (x, y, z).
 
 use crate::arrays::{self, Layout, VolumeArray};
-use crate::{out, pools, value_error, Run};
+use crate::{out, pools, run_error, value_error, Run};
 use isolab_algorithms::chunks::{self, BlockPlan, ChunkState, Fragment};
-use isolab_algorithms::{extractors, Extraction, Extractor, Options, TriMesh};
+use isolab_algorithms::{extractors, Extraction, Extractor, TriMesh};
+use isolab_pipeline::RunError;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -20,20 +21,12 @@ use std::collections::BTreeMap;
 
 fn extractor(algorithm: &str, options: Option<BTreeMap<String, String>>, serial: bool) -> PyResult<Box<dyn Extractor>> {
     let mut options = crate::options_from(options);
-    if serial && extractors::INFOS.iter().any(|e| e.name == algorithm && e.options.contains(&"parallelism")) {
-        options.set("parallelism", "serial");
+    if serial {
+        crate::serial_where_possible(&mut options, algorithm);
     }
-    build(algorithm, &options)
-}
-
-fn build(algorithm: &str, options: &Options) -> PyResult<Box<dyn Extractor>> {
-    match extractors::build(algorithm, options).map_err(value_error)? {
-        Some(e) => Ok(e),
-        None => Err(PyValueError::new_err(format!(
-            "unknown algorithm '{algorithm}' (isolab.algorithms() lists them: {})",
-            extractors::INFOS.iter().map(|e| e.name).collect::<Vec<_>>().join(", ")
-        ))),
-    }
+    extractors::build(algorithm, &options)
+        .map_err(value_error)?
+        .ok_or_else(|| run_error(RunError::UnknownAlgorithm { name: algorithm.to_owned(), valid: extractors::names() }))
 }
 
 fn plan_for(extractor: &dyn Extractor, dims: [usize; 3], chunk: usize) -> PyResult<BlockPlan> {

@@ -98,6 +98,13 @@ fn fields() -> Vec<(&'static str, &'static str)> {
     builtin_fields::registry().iter().map(|f| (f.name, f.description)).collect()
 }
 
+/// `parallelism=serial` for an extractor that has the option (what `threads=1` means).
+pub(crate) fn serial_where_possible(options: &mut Options, algorithm: &str) {
+    if extractors::INFOS.iter().any(|e| e.name == algorithm && e.options.contains(&"parallelism")) {
+        options.set("parallelism", "serial");
+    }
+}
+
 /// Options from a `{name: value}` mapping (values as the CLI's `--set NAME=VALUE` text).
 pub(crate) fn options_from(options: Option<BTreeMap<String, String>>) -> Options {
     let mut o = Options::new();
@@ -266,8 +273,8 @@ fn extract<'py>(
     config.chunk = chunk;
     config.materials = materials;
     config.measure = Measure::Counts;
-    if threads == Some(1) && extractors::INFOS.iter().any(|e| e.name == algorithm && e.options.contains(&"parallelism")) {
-        config.options.set("parallelism", "serial");
+    if threads == Some(1) {
+        serial_where_possible(&mut config.options, &algorithm);
     }
     let pool = pools::pool(threads)?;
     let outcome = if let Ok(array) = data.downcast::<PyUntypedArray>() {

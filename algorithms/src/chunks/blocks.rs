@@ -40,7 +40,8 @@ pub struct BlockPlan {
 impl BlockPlan {
     /// The plan for `extractor` on a volume of `dims` samples, or an error saying why it cannot
     /// mesh in blocks (an extractor that cannot chunk, a chunk under 2 cells, a volume under 2
-    /// samples or above 2²⁴ on an axis).
+    /// samples or above 2²⁴ on an axis: the checks [`chunk_counts`] makes, without asking the
+    /// chunk to divide the volume).
     pub fn new(extractor: &dyn Extractor, dims: [usize; 3], chunk: usize) -> Result<BlockPlan, ExtractError> {
         let algorithm = extractor.name();
         let chunking = extractor.chunking();
@@ -50,22 +51,11 @@ impl BlockPlan {
                 reason: "it cannot mesh in blocks (its output is a volume or depends on the whole grid)".into(),
             });
         }
-        if chunk < 2 {
-            return Err(ExtractError::BadInput { algorithm, reason: format!("chunk size {chunk} is below 2 cells") });
-        }
+        check_chunk_and_size(dims, chunk, algorithm)?;
         if dims.iter().any(|&d| d < 2) {
             return Err(ExtractError::BadInput {
                 algorithm,
                 reason: format!("a volume of {}x{}x{} samples has no cells", dims[0], dims[1], dims[2]),
-            });
-        }
-        if dims.iter().any(|&d| d > 1 << 24) {
-            return Err(ExtractError::BadInput {
-                algorithm,
-                reason: format!(
-                    "a volume of {}x{}x{} samples is above 2^24 samples on an axis (index coordinates would not be exact)",
-                    dims[0], dims[1], dims[2]
-                ),
             });
         }
         let counts = dims.map(|d| (d - 1).div_ceil(chunk));

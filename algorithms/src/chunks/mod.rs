@@ -76,9 +76,7 @@ pub struct ChunkStats {
 
 /// Chunks per axis for chunks of `chunk` cells, or an error naming what does not fit.
 pub fn chunk_counts(grid: &Grid, chunk: usize, algorithm: &'static str) -> Result<[usize; 3], ExtractError> {
-    if chunk < 2 {
-        return Err(ExtractError::BadInput { algorithm, reason: format!("chunk size {chunk} is below 2 cells") });
-    }
+    check_chunk_and_size(grid.dims, chunk, algorithm)?;
     let cells = grid.dims.map(|d| d.saturating_sub(1));
     if cells.iter().any(|&c| c % chunk != 0) {
         return Err(ExtractError::BadInput {
@@ -89,16 +87,24 @@ pub fn chunk_counts(grid: &Grid, chunk: usize, algorithm: &'static str) -> Resul
             ),
         });
     }
-    if grid.dims.iter().any(|&d| d > 1 << 24) {
+    Ok(cells.map(|c| c / chunk))
+}
+
+/// A chunk of at least 2 cells, and a grid whose index coordinates are exact in `f32`.
+fn check_chunk_and_size(dims: [usize; 3], chunk: usize, algorithm: &'static str) -> Result<(), ExtractError> {
+    if chunk < 2 {
+        return Err(ExtractError::BadInput { algorithm, reason: format!("chunk size {chunk} is below 2 cells") });
+    }
+    if dims.iter().any(|&d| d > 1 << 24) {
         return Err(ExtractError::BadInput {
             algorithm,
             reason: format!(
                 "grid {}x{}x{} is above 2^24 samples on an axis (index coordinates would not be exact)",
-                grid.dims[0], grid.dims[1], grid.dims[2]
+                dims[0], dims[1], dims[2]
             ),
         });
     }
-    Ok(cells.map(|c| c / chunk))
+    Ok(())
 }
 
 /// How `extractor` meshes chunks, and the grid of `samples` (cubic only).

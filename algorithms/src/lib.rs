@@ -33,6 +33,7 @@ pub mod extractors;
 pub mod field;
 pub mod fields;
 pub mod geometry;
+pub mod labels;
 pub mod lattice;
 pub mod lod;
 pub mod materials;

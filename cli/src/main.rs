@@ -1,4 +1,5 @@
-//! `isolab`: list algorithms and fields, extract a mesh with metrics, or measure a mesh file.
+//! `isolab`: list algorithms and fields, extract a mesh with metrics, mesh a label map, or measure
+//! a mesh file.
 //!
 //! Exit codes: 0 success; 1 a failed extraction (bad mesh or volume file, impossible lattice,
 //! non-finite field, unwritable output); 2 a usage error (unknown algorithm, post-process or
@@ -12,6 +13,8 @@ use isolab_metrics::MeshMetrics;
 use isolab_pipeline::{run, write_json, LatticeKind, Measure, OutputSpace, RunConfig, RunError, VolumeGrid};
 use std::path::PathBuf;
 use std::process::ExitCode;
+
+mod labels;
 
 #[derive(Parser)]
 #[command(name = "isolab", version, about = "Extract and compare isosurface meshes from scalar fields")]
@@ -110,6 +113,44 @@ enum Command {
         #[arg(long)]
         samples_out: Option<PathBuf>,
     },
+    /// Mesh a label map (a segmentation): one closed surface per label; neighbouring labels
+    /// share their interface triangles.
+    Labels {
+        /// The label map: a volume file (.nii, .nii.gz, .nrrd, .nhdr, .mhd, .mha) of whole-number
+        /// labels, 0 the background.
+        #[arg(long, short)]
+        field: PathBuf,
+        /// Label extractor: surface-nets (Frisken 2022, smoothed) or marching-tetrahedra
+        /// (manifold for every map); see `isolab list`.
+        #[arg(long, short, default_value = "surface-nets")]
+        algorithm: String,
+        /// The labels to mesh, comma-separated (default: every label but 0); the others count as
+        /// background.
+        #[arg(long, value_delimiter = ',')]
+        labels: Option<Vec<u32>>,
+        /// Which 3-D volume of a 4-D file (from 0).
+        #[arg(long)]
+        volume: Option<usize>,
+        /// Coordinate system of the meshes of anatomical label maps.
+        #[arg(long, value_enum, default_value_t = OutputSpace::Ras)]
+        space: OutputSpace,
+        /// Any algorithm option, NAME=VALUE (repeatable): smoothing=none|constrained,
+        /// iterations=N, relaxation=L, border=closed|open.
+        #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_option)]
+        set: Vec<(String, String)>,
+        /// Where to write: a folder (one mesh file per label, `<name>-label-<n>.<format>`,
+        /// created if missing) or a `.glb` file (one named, coloured node per label).
+        #[arg(long, short)]
+        output: Option<PathBuf>,
+        /// Format of the per-label files in a folder: ply, obj, stl, glb or gltf.
+        #[arg(long, default_value = "ply")]
+        format: String,
+        /// Write each label's metrics (closed, manifold, area, volume, triangle shape, triangles
+        /// shared with each neighbour) as JSON here (`-` for stdout); without it, stdout gets one
+        /// line per label.
+        #[arg(long, short)]
+        metrics: Option<PathBuf>,
+    },
     /// Print the metrics JSON of a mesh file (.obj, .ply, .stl, .glb or .gltf).
     Metrics {
         /// The mesh file.
@@ -192,6 +233,14 @@ fn list() {
             ("no new self-intersection", g.adds_no_intersection),
         ];
         println!("  {:<34} keeps: {}", "", promised(&flags, "nothing promised"));
+    }
+    println!("label extractors (isolab labels -a NAME; options: --set NAME=VALUE):");
+    for e in isolab_algorithms::labels::LABEL_INFOS {
+        println!("  {:<34} {}", e.name, e.description);
+        println!("  {:<34} options: {}", "", e.options.join(", "));
+        let g = &e.guarantees;
+        let flags = [("closed", g.closed), ("manifold", g.manifold), ("outward", g.outward)];
+        println!("  {:<34} every label's mesh: {}", "", promised(&flags, "nothing promised"));
     }
     println!(
         "fields (or a path to a mesh file: .obj .ply .stl .glb .gltf; or a volume file: .nii .nii.gz .nrrd .nhdr .mhd .mha):"
@@ -307,6 +356,15 @@ fn main() -> ExitCode {
                 },
             };
             extract(&config, output, metrics, samples_out).map_err(|e| (e.exit_code(), e.to_string()))
+        }
+        Command::Labels { field, algorithm, labels: select, volume, space, set, output, format, metrics } => {
+            let mut options = isolab_algorithms::Options::new();
+            for (k, v) in &set {
+                options.set(k, v);
+            }
+            let config = isolab_pipeline::labels::LabelConfig { algorithm, options, select, space };
+            let job = labels::Job { input: field, volume, config, output, format, metrics };
+            labels::run(&job).map_err(|e| (e.exit_code(), e.to_string()))
         }
         Command::Metrics { file } => io::read_mesh(&file)
             .map(|mesh| {

@@ -146,6 +146,93 @@ pub fn write_gltf(
     }
 }
 
+/// One named, coloured mesh of a scene ([`write_glb_parts`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Part<'a> {
+    /// The node's name (a viewer lists it).
+    pub name: &'a str,
+    /// Its mesh.
+    pub mesh: &'a TriMesh,
+    /// Its material's colour (sRGB).
+    pub colour: [u8; 3],
+}
+
+/// Writes `parts` as one binary glTF: a node per part, named, with its own material colour (a
+/// segmentation's labels, say). Parts without triangles are left out; with none left the file is
+/// one empty node, as [`write_gltf`] writes an empty mesh.
+pub fn write_glb_parts(w: &mut impl Write, parts: &[Part<'_>], generator: &str) -> std::io::Result<()> {
+    let parts: Vec<&Part<'_>> = parts.iter().filter(|p| !p.mesh.triangles.is_empty() && !p.mesh.positions.is_empty()).collect();
+    if parts.is_empty() {
+        let (doc, bin) = document(&TriMesh::default(), None, generator);
+        return write_glb(w, &doc, bin);
+    }
+    let mut bin = Vec::new();
+    let (mut views, mut accessors, mut nodes, mut meshes, mut materials) = (vec![], vec![], vec![], vec![], vec![]);
+    let mut push_view = |bin: &mut Vec<u8>, bytes: &[u8], target: u32| {
+        while bin.len() % 4 != 0 {
+            bin.push(0);
+        }
+        views.push(json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len(), "target": target }));
+        bin.extend_from_slice(bytes);
+        views.len() - 1
+    };
+    for (k, part) in parts.iter().enumerate() {
+        let mesh = part.mesh;
+        let indices: Vec<u8> = mesh.triangles.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
+        let positions: Vec<u8> = mesh.positions.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect();
+        let normals: Vec<u8> = unit_normals(mesh).iter().flat_map(|n| n.to_array()).flat_map(f32::to_le_bytes).collect();
+        let (min, max) = mesh
+            .positions
+            .iter()
+            .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let max_index = mesh.triangles.iter().flatten().copied().max().unwrap_or(0);
+        let min_index = mesh.triangles.iter().flatten().copied().min().unwrap_or(0);
+        let (vi, vp, vn) = (
+            push_view(&mut bin, &indices, ELEMENT_ARRAY_BUFFER),
+            push_view(&mut bin, &positions, ARRAY_BUFFER),
+            push_view(&mut bin, &normals, ARRAY_BUFFER),
+        );
+        let a = accessors.len();
+        accessors
+            .push(json!({ "bufferView": vi, "componentType": UNSIGNED_INT, "count": 3 * mesh.triangles.len(), "type": "SCALAR",
+                               "min": [min_index], "max": [max_index] }));
+        accessors.push(json!({ "bufferView": vp, "componentType": FLOAT, "count": mesh.positions.len(), "type": "VEC3",
+                               "min": min.to_array(), "max": max.to_array() }));
+        accessors.push(json!({ "bufferView": vn, "componentType": FLOAT, "count": mesh.positions.len(), "type": "VEC3" }));
+        meshes.push(
+            json!({ "name": part.name, "primitives": [{ "attributes": { "POSITION": a + 1, "NORMAL": a + 2 }, "indices": a,
+                                                                "material": k, "mode": 4 }] }),
+        );
+        // glTF colour factors are linear; the part's colour is sRGB.
+        let linear = part.colour.map(|c| {
+            let c = f64::from(c) / 255.0;
+            if c <= 0.04045 {
+                c / 12.92
+            } else {
+                ((c + 0.055) / 1.055).powf(2.4)
+            }
+        });
+        materials.push(json!({ "name": part.name, "pbrMetallicRoughness": {
+            "baseColorFactor": [linear[0], linear[1], linear[2], 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8 } }));
+        nodes.push(json!({ "mesh": k, "name": part.name }));
+    }
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let doc = json!({
+        "asset": { "version": "2.0", "generator": generator },
+        "scene": 0,
+        "scenes": [{ "nodes": (0..nodes.len()).collect::<Vec<_>>() }],
+        "nodes": nodes,
+        "meshes": meshes,
+        "materials": materials,
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{ "byteLength": bin.len() }],
+    });
+    write_glb(w, &doc, bin)
+}
+
 /// Writes `mesh` as a small binary glTF for web viewers: positions quantized to 16 bits over the
 /// mesh's bounding box (`KHR_mesh_quantization`; the node's translation and scale map them back,
 /// so the error is at most half a box / 65535 per axis), 16-bit indices where they fit, and no

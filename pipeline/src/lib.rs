@@ -11,6 +11,7 @@
 
 pub mod error;
 pub mod input;
+pub mod labels;
 
 pub use crate::input::load_field;
 pub use crate::input::Input;
@@ -81,7 +82,7 @@ impl OutputSpace {
     }
 
     /// The map from RAS to this space.
-    fn map_from_ras(self) -> Option<DAffine3> {
+    pub(crate) fn map_from_ras(self) -> Option<DAffine3> {
         match self {
             OutputSpace::Ras => None,
             OutputSpace::Lps => {

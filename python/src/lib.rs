@@ -23,13 +23,14 @@ use std::path::Path;
 
 mod arrays;
 mod blocks;
+mod labels;
 mod out;
 mod pools;
 
 use arrays::{read_volume, Layout, VolumeArray};
 
 /// A pipeline error as the Python exception a user expects, with the CLI's message.
-fn run_error(e: RunError) -> PyErr {
+pub(crate) fn run_error(e: RunError) -> PyErr {
     match e {
         RunError::Io(isolab_io::IoError::UnknownFormat { .. }) => PyValueError::new_err(e.to_string()),
         RunError::Io(_) => PyOSError::new_err(e.to_string()),
@@ -42,7 +43,8 @@ pub(crate) fn value_error(e: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(e.to_string())
 }
 
-/// The registered extractors and post-processes, with their options and guarantees.
+/// The registered extractors, post-processes and label extractors, with their options and
+/// guarantees.
 #[pyfunction]
 fn algorithms(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
     let mut out = Vec::new();
@@ -80,6 +82,19 @@ fn algorithms(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
         g.set_item("keeps_closed_manifold", p.guarantees.keeps_closed_manifold)?;
         g.set_item("keeps_outward", p.guarantees.keeps_outward)?;
         g.set_item("adds_no_intersection", p.guarantees.adds_no_intersection)?;
+        d.set_item("guarantees", g)?;
+        out.push(d);
+    }
+    for e in isolab_algorithms::labels::LABEL_INFOS {
+        let d = PyDict::new(py);
+        d.set_item("name", e.name)?;
+        d.set_item("kind", "labels")?;
+        d.set_item("description", e.description)?;
+        d.set_item("options", e.options.to_vec())?;
+        let g = PyDict::new(py);
+        g.set_item("closed", e.guarantees.closed)?;
+        g.set_item("manifold", e.guarantees.manifold)?;
+        g.set_item("outward", e.guarantees.outward)?;
         d.set_item("guarantees", g)?;
         out.push(d);
     }
@@ -423,6 +438,7 @@ fn _isolab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(metrics, m)?)?;
     m.add_function(wrap_pyfunction!(save, m)?)?;
     m.add_function(wrap_pyfunction!(load, m)?)?;
+    m.add_function(wrap_pyfunction!(labels::mesh_labels, m)?)?;
     m.add_function(wrap_pyfunction!(blocks::block_plan, m)?)?;
     m.add_function(wrap_pyfunction!(blocks::mesh_block, m)?)?;
     m.add_function(wrap_pyfunction!(blocks::weld_fragments, m)?)?;

@@ -224,8 +224,9 @@ def polygons_match_flying_edges(check, path, obj):
 
 
 def gltf_validator(isolab, check):
-    """isolab's .glb and .gltf outputs (with and without vertex colours, and an empty mesh) pass
-    the Khronos glTF validator with no errors."""
+    """isolab's .glb and .gltf outputs (with and without vertex colours, an empty mesh, and a label
+    map's scene of one named, coloured node per label) pass the Khronos glTF validator with no
+    errors."""
     node_dir = HERE
     if not os.path.exists(os.path.join(node_dir, "node_modules", "gltf-validator")):
         check("gltf-validator", False, "tests/reference/node_modules/gltf-validator is not installed (run.sh installs it with npm ci)")
@@ -235,9 +236,17 @@ def gltf_validator(isolab, check):
                  ("sphere.gltf", ["-a", "surface-nets", "-f", "sphere", "-r", "24"]),
                  ("scan.glb", ["-a", "marching-cubes", "-f", os.path.join(FIXTURES, "mni-small.nii.gz"), "--iso", "60.5"]),
                  ("empty.glb", ["-a", "marching-cubes", "-f", "sphere", "-r", "16", "--iso", "5"])]
-        for name, args in cases:
+        cases = [(name, ["extract", *args], True) for name, args in cases]
+        seg = np.zeros((12, 10, 8), np.uint8)
+        seg[2:6, 2:8, 2:6], seg[6:10, 2:8, 2:6], seg[4, 8, 6] = 1, 2, 7
+        labels = os.path.join(tmp, "seg.nrrd")
+        with open(labels, "wb") as f:
+            f.write(b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 12 10 8\nencoding: raw\n\n" + seg.tobytes(order="F"))
+        cases.append(("labels.glb", ["labels", "-f", labels], False))
+        for name, args, with_metrics in cases:
             path = os.path.join(tmp, name)
-            subprocess.run([isolab, "extract", *args, "-o", path, "-m", path + ".json"], check=True, stdout=subprocess.DEVNULL,
+            metrics = ["-m", path + ".json"] if with_metrics else []
+            subprocess.run([isolab, *args, "-o", path, *metrics], check=True, stdout=subprocess.DEVNULL,
                            stderr=subprocess.DEVNULL)
             r = subprocess.run(["node", os.path.join(HERE, "validate_gltf.mjs"), path], capture_output=True, text=True)
             try:

@@ -6,7 +6,9 @@
 //! so instead of recommending. Nothing here is measured: rerun the experiments to change a pick.
 
 use super::context::{Context, ExperimentError};
-use super::{compare_algorithms, decimation, real_volumes, sharp_features, sphere_convergence, stuart_tables, terrain_edit};
+use super::{
+    compare_algorithms, decimation, real_volumes, segmentations, sharp_features, sphere_convergence, stuart_tables, terrain_edit,
+};
 use crate::report::first_seen;
 
 /// The bound on the sphere's relative volume error used to compare triangle counts at equal
@@ -30,12 +32,13 @@ struct UseCase {
     choose: fn(&Context) -> Result<Choice, ExperimentError>,
 }
 
-const USE_CASES: [UseCase; 5] = [
+const USE_CASES: [UseCase; 6] = [
     UseCase {
         title: "Deformable game terrain",
         choose: |ctx| terrain(&ctx.read_data("terrain_edit")?, &ctx.read_data("compare_algorithms")?),
     },
     UseCase { title: "Scans (a real MRI)", choose: |ctx| scans(&ctx.read_data("real_volumes")?) },
+    UseCase { title: "Segmentations (label maps)", choose: |ctx| label_maps(&ctx.read_data("segmentations")?) },
     UseCase {
         title: "Sharp CAD shapes",
         choose: |ctx| sharp(&ctx.read_data("sharp_features")?, &ctx.read_data("compare_algorithms")?),
@@ -181,6 +184,43 @@ fn scans(data: &real_volumes::Data) -> Result<Choice, ExperimentError> {
         why.push_str(&format!(" Left out: {}.", failed.join("; ")));
     }
     Ok(Choice { pick: pick.into(), why, pages: vec!["real_volumes"] })
+}
+
+/// Label maps: among our label extractors, the fastest (total one-thread median over the inputs)
+/// whose every label's mesh is closed and manifold on every input (ours share their interfaces by
+/// construction); a faster one of ours that is not is named with its non-manifold count.
+fn label_maps(data: &segmentations::Data) -> Result<Choice, ExperimentError> {
+    let one: Vec<&segmentations::Row> = data.rows.iter().filter(|r| r.threads == 1).collect();
+    let ours = first_seen(one.iter().filter(|r| r.implementation.starts_with("isolab ")).map(|r| r.implementation.as_str()));
+    let rows = |name: &str| -> Vec<&segmentations::Row> { one.iter().copied().filter(|r| r.implementation == name).collect() };
+    let total_ms = |name: &str| rows(name).iter().map(|r| segmentations::median_ms(r)).sum::<f64>();
+    let clean = |r: &segmentations::Row| r.labels_closed == Some(r.labels) && r.labels_manifold == Some(r.labels);
+    let good: Vec<&str> = ours.iter().copied().filter(|&n| rows(n).iter().all(|r| clean(r))).collect();
+    let pick = *good
+        .iter()
+        .min_by(|a, b| total_ms(a).total_cmp(&total_ms(b)))
+        .ok_or_else(|| missing("label extractor closed and manifold on every map"))?;
+    let inputs = first_seen(one.iter().map(|r| r.input.as_str()));
+    let mut why = format!(
+        "On {} label maps ({}), the fastest of our label extractors whose every label's mesh is closed and manifold (the \
+         meshes of two labels share their interface triangles): {:.1} ms on one thread for all maps",
+        inputs.len(),
+        inputs.join(", "),
+        total_ms(pick)
+    );
+    let faster: Vec<String> = ours
+        .iter()
+        .filter(|n| !good.contains(n) && total_ms(n) < total_ms(pick))
+        .map(|n| {
+            let defects: usize = rows(n).iter().filter_map(|r| r.non_manifold).sum();
+            format!("`{n}` ({:.1} ms) leaves {defects} non-manifold edges and vertices where three labels meet", total_ms(n))
+        })
+        .collect();
+    why.push_str(if faster.is_empty() { "." } else { "; faster, " });
+    if !faster.is_empty() {
+        why.push_str(&format!("{}.", faster.join("; ")));
+    }
+    Ok(Choice { pick: pick.into(), why, pages: vec!["segmentations"] })
 }
 
 /// What makes a real-volume mesh unclean, in words.

@@ -19,6 +19,7 @@ pub mod peers;
 pub mod python_users;
 pub mod real_volumes;
 pub mod scaling;
+pub mod segmentations;
 pub mod sharp_features;
 pub mod sphere_convergence;
 pub mod stuart_tables;
@@ -44,6 +45,7 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(peers::Peers),
         Box::new(python_users::PythonUsers),
         Box::new(distributed::Distributed),
+        Box::new(segmentations::Segmentations),
         Box::new(mesh_fields::MeshFields),
         Box::new(real_volumes::RealVolumes),
         Box::new(scaling::Scaling),

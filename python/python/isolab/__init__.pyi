@@ -58,3 +58,26 @@ def metrics(
 def load(path: Union[str, os.PathLike[str]]) -> Tuple[npt.NDArray[Any], npt.NDArray[Any]]: ...
 def algorithms() -> List[Dict[str, Any]]: ...
 def fields() -> List[Tuple[str, str]]: ...
+
+class LabelMeshes(Dict[int, Mesh]):
+    vertices: np.ndarray
+    faces: np.ndarray
+    pairs: np.ndarray
+    missing: List[int]
+    notes: List[str]
+    extract_ms: float
+    def __init__(self, parts: Dict[str, Any]) -> None: ...
+
+def mesh_labels(
+    label_map: Union[np.ndarray, str, os.PathLike],
+    /,
+    *,
+    spacing: Optional[Sequence[float]] = ...,
+    affine: Optional[np.ndarray] = ...,
+    labels: Optional[Sequence[int]] = ...,
+    algorithm: str = ...,
+    smoothing: Optional[Union[bool, str]] = ...,
+    border: str = ...,
+    options: Optional[Mapping[str, Any]] = ...,
+    threads: Optional[int] = ...,
+) -> LabelMeshes: ...

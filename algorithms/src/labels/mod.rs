@@ -1,0 +1,331 @@
+//! # Label maps to surfaces
+//!
+//! A label map (a segmentation: every sample an integer label, `0` the background) meshed into
+//! the interfaces between its labels, after S. F. Frisken, "SurfaceNets for Multi-Label
+//! Segmentations with Preservation of Sharp Boundaries", JCGT 11(1), 2022.
+//!
+//! One pass gives one surface of every interface ([`LabelSurface`]): each triangle carries the
+//! pair of labels it separates, `[inside, outside]` with `inside > outside`, wound so that its
+//! normal points from `inside` into `outside`. Each label's own closed mesh
+//! ([`LabelSurface::label_mesh`]) is the triangles that name it, those where it is `outside`
+//! reversed: the interface between two labels is the same triangles, reversed, in both meshes,
+//! so neighbouring labels meet with no gap and no overlap by construction.
+//!
+//! The extractors behind [`LabelExtractor`] are registered in [`LABEL_INFOS`], one line each, as
+//! the intensity extractors are in `extractors::INFOS`; each states its guarantees as data
+//! ([`LabelGuarantees`]), which `tests/tests/labels.rs` checks for every entry.
+//!
+//! Coordinates: sample `(x, y, z)` is at `(x, y, z)` (voxel index coordinates); the front ends map
+//! meshes to the world by the volume's affine.
+
+pub mod cell;
+pub mod marching_tetrahedra;
+pub mod surface_nets;
+
+use std::collections::BTreeMap;
+
+use crate::extract::ExtractError;
+use crate::mesh::TriMesh;
+use crate::options::{OptionError, Options};
+
+/// A label map: `dims` samples, `labels[x + nx * (y + ny * z)]`, `0` the background.
+#[derive(Clone, Copy, Debug)]
+pub struct LabelMap<'a, T> {
+    /// Samples along x, y and z.
+    pub dims: [usize; 3],
+    /// One label per sample, x fastest.
+    pub labels: &'a [T],
+}
+
+impl<'a, T: Label> LabelMap<'a, T> {
+    /// Checks that `labels` holds one label per sample and that every axis has a sample.
+    pub fn new(dims: [usize; 3], labels: &'a [T]) -> Result<Self, ExtractError> {
+        let count = dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
+        if dims.contains(&0) || count != Some(labels.len()) {
+            return Err(ExtractError::BadInput {
+                algorithm: "labels",
+                reason: format!("a {dims:?} label map needs one label per sample, but {} were given", labels.len()),
+            });
+        }
+        Ok(Self { dims, labels })
+    }
+
+    /// The distinct labels present, the background included if present, in increasing order.
+    pub fn present(&self) -> Vec<u32> {
+        let mut seen = std::collections::BTreeSet::new();
+        let mut last = None;
+        for &l in self.labels {
+            if last != Some(l) {
+                seen.insert(l.id());
+                last = Some(l);
+            }
+        }
+        seen.into_iter().collect()
+    }
+}
+
+/// A label value: an unsigned integer that names its label.
+pub trait Label: Copy + Eq + Send + Sync + Default + 'static {
+    /// The label's number.
+    fn id(self) -> u32;
+}
+
+impl Label for u8 {
+    fn id(self) -> u32 {
+        u32::from(self)
+    }
+}
+impl Label for u16 {
+    fn id(self) -> u32 {
+        u32::from(self)
+    }
+}
+impl Label for u32 {
+    fn id(self) -> u32 {
+        self
+    }
+}
+
+/// What happens where a label touches the edge of the map.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Border {
+    /// Outside the map is background: every label's mesh is closed (the default).
+    #[default]
+    Closed,
+    /// Nothing outside the map: meshes are open where a label reaches the border.
+    Open,
+}
+
+/// Every interface of a label map in one mesh, each triangle tagged with its label pair.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LabelSurface {
+    /// The interfaces; each triangle's normal points from `pairs[t][0]` into `pairs[t][1]`.
+    pub mesh: TriMesh,
+    /// `[inside, outside]` of each triangle, `inside > outside`.
+    pub pairs: Vec<[u32; 2]>,
+    /// Surface cells (cells whose corners are not all one label).
+    pub active_cells: usize,
+}
+
+impl LabelSurface {
+    /// Empties the surface, keeping capacity.
+    pub fn clear(&mut self) {
+        self.mesh.clear();
+        self.pairs.clear();
+        self.active_cells = 0;
+    }
+
+    /// The labels that have a mesh (every label named by a triangle, the background excluded),
+    /// in increasing order.
+    pub fn labels(&self) -> Vec<u32> {
+        let mut seen = rustc_hash::FxHashSet::default();
+        let mut last = [u32::MAX; 2];
+        for p in &self.pairs {
+            if *p != last {
+                seen.extend(p.iter().copied().filter(|&l| l != 0));
+                last = *p;
+            }
+        }
+        let mut all: Vec<u32> = seen.into_iter().collect();
+        all.sort_unstable();
+        all
+    }
+
+    /// Label `label`'s mesh: the triangles that name it, wound outward from it (those where it is
+    /// `outside` reversed), with only the vertices they use, in their first-use order (normals
+    /// from the faces when the surface has normals).
+    pub fn label_mesh(&self, label: u32) -> TriMesh {
+        let mut map = vec![u32::MAX; self.mesh.positions.len()];
+        let mut out = TriMesh::default();
+        for (t, pair) in self.triangles_of(label) {
+            let tri = if pair[0] == label { t } else { [t[0], t[2], t[1]] };
+            out.triangles.push(tri.map(|v| {
+                let m = &mut map[v as usize];
+                if *m == u32::MAX {
+                    *m = out.positions.len() as u32;
+                    out.positions.push(self.mesh.positions[v as usize]);
+                }
+                *m
+            }));
+        }
+        if !self.mesh.normals.is_empty() {
+            out.compute_face_weighted_normals();
+        }
+        out
+    }
+
+    /// Every label's mesh ([`Self::label_mesh`]), by label: one pass over the tags to bucket the
+    /// triangles by label, then the labels in parallel, each with its own vertex map.
+    pub fn label_meshes(&self) -> BTreeMap<u32, TriMesh> {
+        use rayon::prelude::*;
+        let labels = self.labels();
+        // Each triangle's two slots (its labels' places in `labels`; NONE for the background).
+        const NONE: u32 = u32::MAX;
+        let slots: Vec<[u32; 2]> = {
+            let max = labels.last().copied().unwrap_or(0) as usize;
+            if max < 1 << 20 {
+                let mut table = vec![NONE; max + 1];
+                for (k, &l) in labels.iter().enumerate() {
+                    table[l as usize] = k as u32;
+                }
+                self.pairs.iter().map(|p| [table[p[0] as usize], if p[1] == 0 { NONE } else { table[p[1] as usize] }]).collect()
+            } else {
+                let find = |l: u32| labels.binary_search(&l).map_or(NONE, |k| k as u32);
+                self.pairs.iter().map(|p| [find(p[0]), find(p[1])]).collect()
+            }
+        };
+        // Triangles of each label, compressed by counting: `(triangle, reversed)`.
+        let mut start = vec![0usize; labels.len() + 1];
+        for s in &slots {
+            for &k in s {
+                if k != NONE {
+                    start[k as usize + 1] += 1;
+                }
+            }
+        }
+        for k in 0..labels.len() {
+            start[k + 1] += start[k];
+        }
+        let mut fill = start.clone();
+        let mut bucket = vec![(0u32, false); start[labels.len()]];
+        for (t, s) in slots.iter().enumerate() {
+            for (side, &k) in s.iter().enumerate() {
+                if k != NONE {
+                    bucket[fill[k as usize]] = (t as u32, side == 1);
+                    fill[k as usize] += 1;
+                }
+            }
+        }
+        let positions = &self.mesh.positions;
+        let triangles = &self.mesh.triangles;
+        let meshes: Vec<TriMesh> = (0..labels.len())
+            .into_par_iter()
+            .map_init(
+                || vec![NONE; positions.len()],
+                |map, k| {
+                    let mine = &bucket[start[k]..start[k + 1]];
+                    let mut out = TriMesh { triangles: Vec::with_capacity(mine.len()), ..TriMesh::default() };
+                    for &(t, reversed) in mine {
+                        let [a, b, c] = triangles[t as usize];
+                        let order = if reversed { [a, c, b] } else { [a, b, c] };
+                        let mut tri = [0u32; 3];
+                        for (slot, v) in tri.iter_mut().zip(order) {
+                            let m = &mut map[v as usize];
+                            if *m == NONE {
+                                *m = out.positions.len() as u32;
+                                out.positions.push(positions[v as usize]);
+                            }
+                            *slot = *m;
+                        }
+                        out.triangles.push(tri);
+                    }
+                    // Reset only what this label touched, for the next label on this thread.
+                    for &(t, _) in mine {
+                        for v in triangles[t as usize] {
+                            map[v as usize] = NONE;
+                        }
+                    }
+                    if !self.mesh.normals.is_empty() {
+                        out.compute_face_weighted_normals();
+                    }
+                    out
+                },
+            )
+            .collect();
+        labels.into_iter().zip(meshes).collect()
+    }
+
+    fn triangles_of(&self, label: u32) -> impl Iterator<Item = ([u32; 3], [u32; 2])> + '_ {
+        self.mesh.triangles.iter().zip(&self.pairs).filter(move |(_, p)| p[0] == label || p[1] == label).map(|(t, p)| (*t, *p))
+    }
+}
+
+/// What a label extractor promises, as data (checked for every entry by `tests/tests/labels.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LabelGuarantees {
+    /// Every label's mesh is closed with the default [`Border::Closed`].
+    pub closed: bool,
+    /// Every label's mesh is edge- and vertex-manifold.
+    pub manifold: bool,
+    /// Every label's mesh is wound outward (positive signed volume when closed).
+    pub outward: bool,
+}
+
+/// A registry entry: the name, what it does, its options and its constructor.
+#[derive(Clone, Copy, Debug)]
+pub struct LabelExtractorInfo {
+    /// The name used on the command line and in Python.
+    pub name: &'static str,
+    /// One line for listings.
+    pub description: &'static str,
+    /// Option names accepted by `make`.
+    pub options: &'static [&'static str],
+    /// Builds the extractor from named options.
+    pub make: fn(&Options) -> Result<Box<dyn LabelExtractor>, OptionError>,
+    /// What it promises.
+    pub guarantees: LabelGuarantees,
+}
+
+/// A label-map extractor. Label maps come as `u8`, `u16` or `u32` samples; the three methods are
+/// the same algorithm.
+pub trait LabelExtractor: Send + Sync {
+    /// The entry it was built from.
+    fn info(&self) -> &'static LabelExtractorInfo;
+    /// Meshes a `u8` label map into `out` (cleared first).
+    fn extract_u8(&self, map: LabelMap<'_, u8>, out: &mut LabelSurface) -> Result<(), ExtractError>;
+    /// Meshes a `u16` label map into `out` (cleared first).
+    fn extract_u16(&self, map: LabelMap<'_, u16>, out: &mut LabelSurface) -> Result<(), ExtractError>;
+    /// Meshes a `u32` label map into `out` (cleared first).
+    fn extract_u32(&self, map: LabelMap<'_, u32>, out: &mut LabelSurface) -> Result<(), ExtractError>;
+}
+
+/// Every label extractor, one line each.
+pub const LABEL_INFOS: &[LabelExtractorInfo] = &[surface_nets::INFO, marching_tetrahedra::INFO];
+
+/// The label extractor called `name`, built from `options`; `Ok(None)` for an unknown name.
+pub fn build(name: &str, options: &Options) -> Result<Option<Box<dyn LabelExtractor>>, OptionError> {
+    match LABEL_INFOS.iter().find(|i| i.name == name) {
+        Some(info) => (info.make)(options).map(Some),
+        None => Ok(None),
+    }
+}
+
+/// The registered names, for messages.
+pub fn names() -> Vec<&'static str> {
+    LABEL_INFOS.iter().map(|i| i.name).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_entry_builds_and_names_itself() {
+        for info in LABEL_INFOS {
+            let e = (info.make)(&Options::new()).unwrap();
+            assert_eq!(e.info().name, info.name);
+        }
+        assert!(build("no-such", &Options::new()).unwrap().is_none());
+    }
+
+    #[test]
+    fn all_label_meshes_at_once_equal_each_alone() {
+        let mut random = crate::random::Random::new(5);
+        let map: Vec<u8> = (0..7 * 6 * 5).map(|_| (random.next_u64() % 4) as u8).collect();
+        for info in LABEL_INFOS {
+            let mut out = LabelSurface::default();
+            (info.make)(&Options::new()).unwrap().extract_u8(LabelMap::new([7, 6, 5], &map).unwrap(), &mut out).unwrap();
+            let all = out.label_meshes();
+            assert_eq!(all.keys().copied().collect::<Vec<_>>(), out.labels());
+            for (&l, mesh) in &all {
+                assert_eq!(*mesh, out.label_mesh(l), "{} label {l}", info.name);
+            }
+        }
+    }
+
+    #[test]
+    fn a_map_of_the_wrong_size_is_refused() {
+        let err = LabelMap::new([2, 2, 2], &[0u8; 7]).unwrap_err().to_string();
+        assert!(err.contains("[2, 2, 2]") && err.contains('7'), "{err}");
+    }
+}

@@ -1,0 +1,119 @@
+//! `isolab labels`: a label map to one mesh per label (files in a folder, or one `.glb` with a
+//! named, coloured node per label), with each label's metrics.
+
+use std::path::{Path, PathBuf};
+
+use isolab_io as io;
+use isolab_pipeline::labels::{self, LabelConfig, LabelVolume};
+use isolab_pipeline::{write_json, RunError};
+
+/// One `isolab labels` call.
+pub struct Job {
+    /// The label map file.
+    pub input: PathBuf,
+    /// Which 3-D volume of a 4-D file.
+    pub volume: Option<usize>,
+    /// Algorithm, options, labels, space.
+    pub config: LabelConfig,
+    /// A folder or a `.glb`.
+    pub output: Option<PathBuf>,
+    /// Per-label file format in a folder.
+    pub format: String,
+    /// Metrics JSON path (`-`: stdout).
+    pub metrics: Option<PathBuf>,
+}
+
+/// Where the meshes go.
+enum Target {
+    /// One `.glb`, a node per label.
+    Scene(PathBuf),
+    /// A folder, a file per label with this extension.
+    Folder(PathBuf, String),
+}
+
+fn bad_output(path: &Path, reason: &str) -> RunError {
+    io::IoError::Write { path: path.into(), source: std::io::Error::new(std::io::ErrorKind::InvalidInput, reason.to_owned()) }
+        .into()
+}
+
+/// Checks the output before any work: a `.glb` in an existing folder, or a folder (created) and a
+/// mesh format.
+fn target(output: &Path, format: &str) -> Result<Target, RunError> {
+    let ext = io::extension(output);
+    if ext.as_deref() == Some("glb") {
+        let dir = output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        if !dir.is_dir() {
+            return Err(bad_output(output, "its folder does not exist"));
+        }
+        return Ok(Target::Scene(output.into()));
+    }
+    if ext.is_some() && io::MeshFormat::from_extension(output).is_some() {
+        return Err(bad_output(
+            output,
+            "one file holds every label only as .glb (a node per label); give a folder for one file per label",
+        ));
+    }
+    let probe = Path::new("label").with_extension(format);
+    if io::MeshFormat::from_extension(&probe).is_none() {
+        return Err(bad_output(output, &format!("--format {format} is not a mesh format (ply, obj, stl, glb, gltf)")));
+    }
+    std::fs::create_dir_all(output).map_err(|source| io::IoError::Write { path: output.into(), source })?;
+    Ok(Target::Folder(output.into(), format.to_owned()))
+}
+
+/// Runs the job: reads, meshes, writes, reports.
+pub fn run(job: &Job) -> Result<(), RunError> {
+    let target = job.output.as_deref().map(|o| target(o, &job.format)).transpose()?;
+    let volume = LabelVolume::read(&job.input, job.volume)?;
+    let outcome = labels::mesh_labels(&volume, &job.config)?;
+    for note in &outcome.notes {
+        eprintln!("note: {note}");
+    }
+    if labels::colours_repeat(outcome.meshes.len()) {
+        eprintln!("note: {} labels share 20 colours, so some colours repeat", outcome.meshes.len());
+    }
+    if outcome.meshes.is_empty() {
+        eprintln!("warning: {} has no label to mesh (every selected sample is background)", volume.name);
+    }
+    let name = |label: u32| format!("{}-label-{label}", volume.name);
+    match &target {
+        Some(Target::Scene(path)) => {
+            let names: Vec<String> = outcome.meshes.keys().map(|&l| format!("label {l}")).collect();
+            let parts: Vec<io::gltf::Part<'_>> = outcome
+                .meshes
+                .iter()
+                .zip(&names)
+                .map(|((&label, mesh), name)| io::gltf::Part { name, mesh, colour: labels::colour(label) })
+                .collect();
+            io::write_atomic(path, |w| io::gltf::write_glb_parts(w, &parts, concat!("isolab ", env!("CARGO_PKG_VERSION"))))?;
+        }
+        Some(Target::Folder(dir, ext)) => {
+            for (&label, mesh) in &outcome.meshes {
+                let path = dir.join(name(label)).with_extension(ext);
+                io::write_mesh_with(&path, mesh, io::MeshExtras { colours: None, space: outcome.space_tag })?;
+            }
+        }
+        None => {}
+    }
+    let metrics = labels::label_metrics(&outcome);
+    match job.metrics.as_deref() {
+        Some(path) if path.as_os_str() != "-" => write_json(path, &metrics)?,
+        Some(_) => println!("{}", serde_json::to_string_pretty(&metrics).unwrap_or_default()),
+        None => {
+            println!("{} labels meshed by {} in {:.1} ms", metrics.len(), job.config.algorithm, outcome.extract_ms);
+            for m in &metrics {
+                println!(
+                    "label {:>6}: {:>8} triangles, {}, {}, area {:.4}, volume {:.4}, neighbours {:?}",
+                    m.label,
+                    m.triangles,
+                    if m.closed { "closed" } else { "open" },
+                    if m.manifold { "manifold".to_owned() } else { format!("{} non-manifold", m.non_manifold) },
+                    m.area,
+                    m.volume,
+                    m.neighbours.keys().collect::<Vec<_>>()
+                );
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,144 @@
+//! `isolab labels`: a label map file to one mesh per label (a folder of files, or one `.glb`),
+//! neighbouring labels sharing their interface triangles; bad input refused with the input named
+//! and nothing written.
+
+mod common;
+
+use common::{isolab, stderr};
+use isolab_algorithms::TriMesh;
+use std::collections::HashSet;
+use std::path::Path;
+
+/// A raw NRRD of `dims` samples of `kind` ("uint8", "float") from little-endian `data`.
+fn nrrd(path: &Path, kind: &str, dims: [usize; 3], data: &[u8]) {
+    let mut bytes = format!(
+        "NRRD0004\ntype: {kind}\ndimension: 3\nsizes: {} {} {}\nencoding: raw\nendian: little\n\n",
+        dims[0], dims[1], dims[2]
+    )
+    .into_bytes();
+    bytes.extend_from_slice(data);
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// Labels 1 and 2 side by side and a lone label 5, in a 10 x 8 x 8 map.
+fn three_labels(dir: &Path) -> std::path::PathBuf {
+    let dims = [10, 8, 8];
+    let mut data = vec![0u8; 640];
+    for z in 2..6 {
+        for y in 2..6 {
+            for x in 1..9 {
+                data[x + 10 * (y + 8 * z)] = if x < 5 { 1 } else { 2 };
+            }
+        }
+    }
+    data[5 + 10 * (6 + 8 * 6)] = 5;
+    let path = dir.join("seg.nrrd");
+    nrrd(&path, "uint8", dims, &data);
+    path
+}
+
+/// Triangles as sets of vertex positions (bit patterns), for matching across meshes.
+fn triangle_set(mesh: &TriMesh) -> HashSet<Vec<[u32; 3]>> {
+    mesh.triangles
+        .iter()
+        .map(|t| {
+            let mut v: Vec<[u32; 3]> = t.iter().map(|&i| mesh.positions[i as usize].to_array().map(f32::to_bits)).collect();
+            v.sort_unstable();
+            v
+        })
+        .collect()
+}
+
+fn closed_outward(mesh: &TriMesh, what: &str) {
+    let t = isolab_metrics::topology::topology(mesh);
+    assert!(t.closed && t.edge_manifold && t.vertex_manifold && t.outward, "{what}: {t:#?}");
+}
+
+#[test]
+fn a_folder_gets_one_closed_mesh_per_label_sharing_interfaces() {
+    let dir = tempfile::tempdir().unwrap();
+    let seg = three_labels(dir.path());
+    let out = dir.path().join("meshes");
+    let m = dir.path().join("m.json");
+    for algorithm in ["surface-nets", "marching-tetrahedra"] {
+        let o = isolab(&[
+            "labels",
+            "-f",
+            seg.to_str().unwrap(),
+            "-a",
+            algorithm,
+            "-o",
+            out.to_str().unwrap(),
+            "-m",
+            m.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let meshes: Vec<TriMesh> =
+            [1, 2, 5].iter().map(|l| isolab_io::read_mesh(&out.join(format!("seg-label-{l}.ply"))).unwrap()).collect();
+        for (mesh, l) in meshes.iter().zip([1, 2, 5]) {
+            closed_outward(mesh, &format!("{algorithm} label {l}"));
+        }
+        // The 1|2 interface: the same triangles in both files.
+        let (one, two) = (triangle_set(&meshes[0]), triangle_set(&meshes[1]));
+        let shared = one.intersection(&two).count();
+        assert!(shared >= 2 * 16, "{algorithm}: {shared} shared triangles");
+        let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&m).unwrap()).unwrap();
+        let rows = json.as_array().unwrap();
+        assert_eq!(rows.len(), 3);
+        assert!(rows.iter().all(|r| r["closed"] == true), "{json}");
+        assert_eq!(rows[0]["neighbours"]["2"].as_u64(), Some(shared as u64), "{algorithm}: {json}");
+        assert_eq!(rows[2]["samples"], 1);
+    }
+}
+
+#[test]
+fn a_glb_gets_a_named_node_per_label() {
+    let dir = tempfile::tempdir().unwrap();
+    let seg = three_labels(dir.path());
+    let glb = dir.path().join("seg.glb");
+    let o = isolab(&["labels", "-f", seg.to_str().unwrap(), "-o", glb.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bytes = std::fs::read(&glb).unwrap();
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let doc: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+    let names: Vec<&str> = doc["nodes"].as_array().unwrap().iter().map(|n| n["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["label 1", "label 2", "label 5"]);
+    assert_eq!(doc["materials"].as_array().unwrap().len(), 3);
+    // The reader takes every node: the three meshes together.
+    let all = isolab_io::read_mesh(&glb).unwrap();
+    assert!(all.triangles.len() > 100);
+}
+
+#[test]
+fn bad_label_input_is_refused_with_nothing_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("out.glb");
+    // An intensity volume (fractional floats).
+    let floats: Vec<u8> = (0..64).flat_map(|i| (i as f32 * 0.37).to_le_bytes()).collect();
+    let scan = d.join("scan.nrrd");
+    nrrd(&scan, "float", [4, 4, 4], &floats);
+    let o = isolab(&["labels", "-f", scan.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("scan") && err.contains("intensity volume") && err.contains("isolab extract"), "{err}");
+    assert!(!err.contains("panicked") && !out.exists(), "{err}");
+    // Whole-number floats are labels, with a note.
+    let whole: Vec<u8> = (0..64).flat_map(|i| f32::from(u8::from(i % 3 == 0)).to_le_bytes()).collect();
+    nrrd(&scan, "float", [4, 4, 4], &whole);
+    let o = isolab(&["labels", "-f", scan.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(o.status.success() && stderr(&o).contains("whole number"), "{}", stderr(&o));
+    // A single mesh file that is not a .glb, an unknown algorithm, an absent label.
+    let seg = three_labels(d);
+    let ply = d.join("one.ply");
+    let o = isolab(&["labels", "-f", seg.to_str().unwrap(), "-o", ply.to_str().unwrap()]);
+    assert!(o.status.code() == Some(1) && stderr(&o).contains("folder") && !ply.exists(), "{}", stderr(&o));
+    let o = isolab(&["labels", "-f", seg.to_str().unwrap(), "-a", "marching-cubes"]);
+    assert!(o.status.code() == Some(2) && stderr(&o).contains("surface-nets, marching-tetrahedra"), "{}", stderr(&o));
+    let folder = d.join("some");
+    let o = isolab(&["labels", "-f", seg.to_str().unwrap(), "--labels", "2,9", "-o", folder.to_str().unwrap()]);
+    assert!(o.status.success() && stderr(&o).contains("[9] do not occur"), "{}", stderr(&o));
+    let written: Vec<String> =
+        std::fs::read_dir(&folder).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    assert_eq!(written, ["seg-label-2.ply"]);
+}

@@ -1,0 +1,145 @@
+"""isolab.mesh_labels: label maps from numpy (any integer dtype, C or Fortran order, strided views)
+and from files, against the CLI's `isolab labels`; bad input raises."""
+
+import os
+import subprocess
+import warnings
+
+import numpy as np
+import pytest
+
+import isolab
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+CLI = os.environ.get("ISOLAB_CLI", os.path.join(ROOT, "target", "release", "isolab"))
+needs_cli = pytest.mark.skipif(not os.path.exists(CLI), reason=f"no CLI at {CLI} (tests/all.sh builds it)")
+LABEL_EXTRACTORS = [a["name"] for a in isolab.algorithms() if a["kind"] == "labels"]
+
+
+def voronoi(shape, labels, seed=7):
+    """A label map with triple junctions: every sample the label of its nearest seed (0 among them)."""
+    rng = np.random.default_rng(seed)
+    seeds = rng.uniform(0, 1, (2 * labels, 3)) * np.array(shape)
+    grid = np.stack(np.meshgrid(*[np.arange(n) for n in shape], indexing="ij"), axis=-1).astype(np.float64)
+    d = ((grid[..., None, :] - seeds) ** 2).sum(-1)
+    return (np.argmin(d, axis=-1) % labels).astype(np.uint8)
+
+
+def triangles(mesh):
+    """A mesh's triangles as sorted tuples of vertex positions."""
+    return {tuple(sorted(map(tuple, mesh.vertices[f].round(5)))) for f in mesh.faces}
+
+
+def same_mesh(va, fa, vb, fb, tol=1e-4):
+    """Whether two meshes have the same vertices (within ``tol``) and triangles."""
+    from scipy.spatial import cKDTree
+    if len(va) != len(vb) or len(fa) != len(fb):
+        return False
+    d, to_b = cKDTree(vb).query(va)
+    if d.max(initial=0) > tol:
+        return False
+    return {tuple(sorted(t)) for t in to_b[fa]} == {tuple(sorted(t)) for t in fb}
+
+
+def test_the_label_extractors_are_listed_with_guarantees():
+    assert set(LABEL_EXTRACTORS) == {"surface-nets", "marching-tetrahedra"}
+    mt = next(a for a in isolab.algorithms() if a["kind"] == "labels" and a["name"] == "marching-tetrahedra")
+    assert mt["guarantees"] == {"closed": True, "manifold": True, "outward": True}
+
+
+@pytest.mark.parametrize("algorithm", LABEL_EXTRACTORS)
+def test_every_label_is_closed_and_interfaces_are_shared(algorithm):
+    seg = voronoi((18, 16, 14), 4)
+    meshes = isolab.mesh_labels(seg, algorithm=algorithm)
+    assert sorted(meshes) == [1, 2, 3]
+    guarantees = next(a for a in isolab.algorithms() if a["kind"] == "labels" and a["name"] == algorithm)["guarantees"]
+    for label, mesh in meshes.items():
+        m = mesh.metrics()
+        assert m["closed"], (label, m)
+        if m["edge_manifold"] and m["vertex_manifold"]:
+            assert m["volume"] > 0, (label, m)
+        # The label's samples are inside its box (vertices within one sample of them).
+        where = np.argwhere(seg == label)
+        assert (mesh.vertices.min(0) >= where.min(0) - 1).all() and (mesh.vertices.max(0) <= where.max(0) + 1).all()
+    if guarantees["manifold"]:
+        assert all(m["edge_manifold"] and m["vertex_manifold"] for m in (mesh.metrics() for mesh in meshes.values()))
+    # Each pair's interface: the same triangles in both meshes, as many as the tags say.
+    for a in (1, 2, 3):
+        for b in (1, 2, 3):
+            if a < b:
+                shared = len(triangles(meshes[a]) & triangles(meshes[b]))
+                tagged = int(((meshes.pairs == [b, a]).all(1)).sum())
+                assert shared == tagged == meshes[a].stats["neighbours"].get(str(b), 0), (a, b)
+
+
+def test_dtypes_orders_and_views_give_the_same_meshes():
+    seg = voronoi((12, 11, 10), 3)
+    want = {l: triangles(m) for l, m in isolab.mesh_labels(seg, smoothing=False).items()}
+    for variant in (np.asfortranarray(seg), seg.astype(np.int64), seg.astype(np.uint32), seg.astype(np.uint16),
+                    np.ascontiguousarray(np.pad(seg, ((0, 0), (0, 0), (0, 3)))[:, :, :10])):
+        got = {l: triangles(m) for l, m in isolab.mesh_labels(variant, smoothing=False).items()}
+        assert got == want, variant.dtype
+    strided = np.pad(seg, ((0, 0), (0, 0), (0, 10)))[:, :, ::2][:, :, :10]
+    assert not strided.flags.c_contiguous
+    expected = {l: triangles(m) for l, m in isolab.mesh_labels(np.ascontiguousarray(strided), smoothing=False).items()}
+    assert {l: triangles(m) for l, m in isolab.mesh_labels(strided, smoothing=False).items()} == expected
+
+
+def test_spacing_and_affine_place_the_meshes():
+    seg = np.zeros((8, 8, 8), np.uint8)
+    seg[2:6, 2:6, 2:6] = 4
+    plain = isolab.mesh_labels(seg, algorithm="marching-tetrahedra")[4]
+    scaled = isolab.mesh_labels(seg, algorithm="marching-tetrahedra", spacing=(2.0, 1.0, 0.5))[4]
+    assert np.allclose(scaled.vertices, plain.vertices * [2.0, 1.0, 0.5], atol=1e-5)
+    affine = np.diag([1.0, 1.0, 1.0, 1.0])
+    affine[:3, 3] = [10, 20, 30]
+    moved = isolab.mesh_labels(seg, algorithm="marching-tetrahedra", affine=affine)[4]
+    assert np.allclose(moved.vertices, plain.vertices + [10, 20, 30], atol=1e-5)
+    # A block of 64 samples: the volume of its dual cells with chamfered edges and corners.
+    volume = plain.metrics()["volume"]
+    assert 0.8 * 64 < volume < 64, volume
+
+
+def test_labels_select_and_absent_ones_warn():
+    seg = voronoi((10, 10, 10), 4)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        meshes = isolab.mesh_labels(seg, labels=[2, 9])
+    assert sorted(meshes) == [2] and meshes.missing == [9]
+    assert any("[9] do not occur" in str(w.message) for w in caught)
+    # Label 2 against everything else as background: closed, one neighbour (0).
+    assert set(meshes[2].stats["neighbours"]) == {"0"}
+
+
+def test_bad_label_maps_raise():
+    seg = voronoi((6, 6, 6), 3)
+    with pytest.raises(TypeError, match="intensity volume"):
+        isolab.mesh_labels(seg.astype(np.float32))
+    with pytest.raises(ValueError, match="-1"):
+        isolab.mesh_labels(seg.astype(np.int16) - 1)
+    with pytest.raises(ValueError, match="2-D|3-D"):
+        isolab.mesh_labels(seg[0])
+    with pytest.raises(ValueError, match="surface-nets, marching-tetrahedra"):
+        isolab.mesh_labels(seg, algorithm="marching-cubes")
+    with pytest.raises(ValueError, match="smoothing"):
+        isolab.mesh_labels(seg, algorithm="marching-tetrahedra", smoothing=True)
+    with pytest.raises(OSError):
+        isolab.mesh_labels("/no/such/file.nii.gz")
+
+
+@needs_cli
+def test_a_file_gives_the_clis_meshes(tmp_path):
+    seg = voronoi((9, 8, 7), 3)
+    # A raw NRRD, written by hand: x fastest, so the array's Fortran order.
+    path = tmp_path / "seg.nrrd"
+    header = "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 9 8 7\nencoding: raw\n\n".encode()
+    path.write_bytes(header + np.asfortranarray(seg).tobytes(order="F"))
+    out = tmp_path / "cli"
+    done = subprocess.run([CLI, "labels", "-f", str(path), "-o", str(out)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    from_file = isolab.mesh_labels(str(path))
+    from_array = isolab.mesh_labels(seg)
+    for label in (1, 2):
+        verts, faces = isolab.load(out / f"seg-label-{label}.ply")
+        f, a = from_file[label], from_array[label]
+        assert same_mesh(verts, faces, f.vertices, f.faces) and same_mesh(f.vertices, f.faces, a.vertices, a.faces), label

@@ -1,0 +1,257 @@
+//! Label-map extractors against what they promise: every registered entry, on every label pattern
+//! of one cell and of two cells sharing a face (up to four and three labels), and on random maps.
+//!
+//! Checked for every label's mesh: closed (with the default closed border), consistently wound and
+//! outward, edge-manifold; vertex-manifold where the entry claims it (and counted where it does
+//! not); every sample of the label inside its mesh and every other sample outside (generalized
+//! winding number); every vertex within half a sample's reach of a sample of each of its labels.
+
+use glam::Vec3;
+use isolab_algorithms::labels::{self, LabelExtractor, LabelMap, LabelSurface, LABEL_INFOS};
+use isolab_algorithms::random::Random;
+use isolab_algorithms::{Options, TriMesh};
+use isolab_metrics::topology;
+use rayon::prelude::*;
+
+/// The exact generalized winding number of `mesh` at `p` (the solid angles of its triangles, Van
+/// Oosterom and Strackee's formula, summed over 4 pi).
+fn winding_number(mesh: &TriMesh, p: Vec3) -> f64 {
+    let q = p.as_dvec3();
+    let total: f64 = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|v| mesh.positions[v as usize].as_dvec3() - q);
+            let (la, lb, lc) = (a.length(), b.length(), c.length());
+            let det = a.dot(b.cross(c));
+            let den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+            2.0 * det.atan2(den)
+        })
+        .sum();
+    total / (4.0 * std::f64::consts::PI)
+}
+
+/// What went wrong with one label's mesh, if anything: `Err` for a broken promise, `Ok(true)` when
+/// the mesh is pinched (not vertex-manifold) but otherwise sound.
+fn check_label(
+    mesh: &TriMesh,
+    label: u32,
+    map: &LabelMap<'_, u8>,
+    contain: bool,
+    what: &dyn Fn() -> String,
+) -> Result<bool, String> {
+    let t = topology::topology(mesh);
+    let manifold = t.edge_manifold && t.vertex_manifold;
+    // Orientation is read from manifold edges only: a non-manifold mesh is checked by its
+    // winding numbers below.
+    if !(t.closed && t.unused_vertices == 0 && (!manifold || (t.oriented && t.outward))) {
+        return Err(format!("{}: label {label}: {t:#?}", what()));
+    }
+    if !contain {
+        return Ok(!manifold);
+    }
+    let [nx, ny, _] = map.dims;
+    for (i, &l) in map.labels.iter().enumerate() {
+        let p = Vec3::new((i % nx) as f32, ((i / nx) % ny) as f32, (i / (nx * ny)) as f32);
+        let w = winding_number(mesh, p);
+        let inside = u32::from(l) == label;
+        if (inside && (w - 1.0).abs() > 0.1) || (!inside && w.abs() > 0.1) {
+            return Err(format!("{}: label {label}: sample {p} of label {l} has winding number {w}", what()));
+        }
+    }
+    Ok(!manifold)
+}
+
+/// Checks every label of one map; returns the number of pinched labels.
+fn check_map(e: &dyn LabelExtractor, map: LabelMap<'_, u8>, contain: bool, what: &dyn Fn() -> String) -> Result<usize, String> {
+    let mut out = LabelSurface::default();
+    e.extract_u8(map, &mut out).map_err(|err| format!("{}: {err}", what()))?;
+    let mut present: Vec<u32> = map.present().into_iter().filter(|&l| l != 0).collect();
+    present.sort_unstable();
+    if out.labels() != present {
+        return Err(format!("{}: labels meshed {:?}, present {present:?}", what(), out.labels()));
+    }
+    if out.pairs.iter().any(|p| p[0] <= p[1]) {
+        return Err(format!("{}: a pair not [inside > outside]", what()));
+    }
+    let mut pinched = 0;
+    for label in present {
+        let mesh = out.label_mesh(label);
+        if check_label(&mesh, label, &map, contain, what)? {
+            pinched += 1;
+        }
+    }
+    Ok(pinched)
+}
+
+/// Every entry unsmoothed (`true`: its surface must contain its samples) and smoothed (`false`:
+/// smoothing may move a surface past a sample).
+fn extractors() -> Vec<(Box<dyn LabelExtractor>, bool)> {
+    let mut all = Vec::new();
+    for info in LABEL_INFOS {
+        let smoothing: &[&str] = if info.options.contains(&"smoothing") { &["none", "constrained"] } else { &[""] };
+        for &s in smoothing {
+            let mut o = Options::new();
+            if !s.is_empty() {
+                o.set("smoothing", s);
+            }
+            all.push(((info.make)(&o).unwrap_or_else(|e| panic!("{}: {e}", info.name)), true));
+        }
+    }
+    all
+}
+
+/// Every pattern of `labels` labels over a map of `dims` (in parallel): the count of maps with a
+/// pinched label, failing on the first broken promise.
+fn sweep(e: &dyn LabelExtractor, contain: bool, dims: [usize; 3], labels: u8) -> usize {
+    sweep_maps(e, contain, dims, labels, false)
+}
+
+/// [`sweep`]; with `relabelled_once`, only maps whose non-background labels first appear in
+/// increasing order (one map of each class under renaming the labels: for entries whose
+/// topology reads only which labels are equal).
+fn sweep_maps(e: &dyn LabelExtractor, contain: bool, dims: [usize; 3], labels: u8, relabelled_once: bool) -> usize {
+    let n = dims.iter().product::<usize>() as u32;
+    (0..u64::from(labels).pow(n))
+        .into_par_iter()
+        .filter_map(|code| {
+            let mut c = code;
+            let map: Vec<u8> = (0..n)
+                .map(|_| {
+                    let m = (c % u64::from(labels)) as u8;
+                    c /= u64::from(labels);
+                    m
+                })
+                .collect();
+            let mut next = 1;
+            for &m in &map {
+                if m == next {
+                    next += 1;
+                } else if m > next && relabelled_once {
+                    return None;
+                }
+            }
+            Some(map)
+        })
+        .map(|map| {
+            let what = || format!("{} on {dims:?} map {map:?}", e.info().name);
+            match check_map(e, LabelMap::new(dims, &map).unwrap(), contain, &what) {
+                Ok(p) => usize::from(p > 0),
+                Err(msg) => panic!("{msg}"),
+            }
+        })
+        .sum()
+}
+
+#[test]
+fn every_pattern_of_one_cell_with_up_to_four_labels() {
+    for (e, contain) in extractors() {
+        let pinched = sweep(&*e, contain, [2, 2, 2], 4);
+        if e.info().guarantees.manifold {
+            assert_eq!(pinched, 0, "{}", e.info().name);
+        }
+        eprintln!("{}: {pinched} of 65536 one-cell maps pinch a label", e.info().name);
+    }
+}
+
+#[test]
+fn every_pattern_of_two_cells_with_two_labels_is_manifold() {
+    // Two labels (the background and one more): every entry is manifold, whatever it claims for
+    // junctions of three.
+    for (e, contain) in extractors() {
+        for dims in [[2, 2, 3], [3, 2, 2], [2, 3, 2]] {
+            assert_eq!(sweep(&*e, contain, dims, 2), 0, "{} on {dims:?}", e.info().name);
+        }
+    }
+}
+
+#[test]
+fn every_pattern_of_two_cells_with_three_labels_for_manifold_entries() {
+    // Topology only (the containment of samples is checked on one cell and on random maps), one
+    // map per renaming of the two labels: the manifold entry (marching tetrahedra) reads only
+    // which labels are equal.
+    for (e, _) in extractors() {
+        if e.info().guarantees.manifold {
+            assert_eq!(sweep_maps(&*e, false, [2, 2, 3], 3, true), 0, "{}", e.info().name);
+        }
+    }
+}
+
+/// A random map of `labels` labels on `dims`: blobs grown from seeds (so labels form regions with
+/// junctions), or white noise.
+fn random_map(random: &mut Random, dims: [usize; 3], labels: u8, noise: bool) -> Vec<u8> {
+    let n = dims.iter().product::<usize>();
+    if noise {
+        return (0..n).map(|_| (random.next_u64() % u64::from(labels)) as u8).collect();
+    }
+    let seeds: Vec<(Vec3, u8)> = (0..2 * labels as usize)
+        .map(|k| {
+            let p = Vec3::new(random.unit_f32(), random.unit_f32(), random.unit_f32())
+                * Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32);
+            (p, (k % labels as usize) as u8)
+        })
+        .collect();
+    (0..n)
+        .map(|i| {
+            let p = Vec3::new((i % dims[0]) as f32, ((i / dims[0]) % dims[1]) as f32, (i / (dims[0] * dims[1])) as f32);
+            seeds.iter().min_by(|a, b| a.0.distance_squared(p).total_cmp(&b.0.distance_squared(p))).unwrap().1
+        })
+        .collect()
+}
+
+#[test]
+fn random_maps_keep_every_promise() {
+    let mut random = Random::new(20261202);
+    for (e, contain) in extractors() {
+        let mut pinched = 0;
+        for case in 0..300 {
+            let dims = [3 + case % 5, 3 + case % 4, 3 + case % 6];
+            let labels = 2 + (case % 5) as u8;
+            let map = random_map(&mut random, dims, labels, case % 3 == 0);
+            let what = || format!("{} case {case} {dims:?} map {map:?}", e.info().name);
+            pinched += check_map(&*e, LabelMap::new(dims, &map).unwrap(), contain, &what).unwrap_or_else(|m| panic!("{m}"));
+        }
+        if e.info().guarantees.manifold {
+            assert_eq!(pinched, 0);
+        }
+    }
+}
+
+#[test]
+fn open_border_leaves_labels_open_where_they_reach_it() {
+    let map = [1u8; 27];
+    let mut o = Options::new();
+    o.set("border", "open");
+    let e = labels::build("surface-nets", &o).unwrap().unwrap();
+    let mut out = LabelSurface::default();
+    e.extract_u8(LabelMap::new([3, 3, 3], &map).unwrap(), &mut out).unwrap();
+    assert!(out.mesh.triangles.is_empty(), "one label filling the map has no interface with an open border");
+    let e = labels::build("surface-nets", &Options::new()).unwrap().unwrap();
+    e.extract_u8(LabelMap::new([3, 3, 3], &map).unwrap(), &mut out).unwrap();
+    let t = topology::topology(&out.label_mesh(1));
+    assert!(t.closed && t.outward && t.vertex_manifold && t.euler == 2, "{t:#?}");
+}
+
+#[test]
+fn slabs_in_parallel_give_the_one_sweep_mesh() {
+    let mut random = Random::new(42);
+    let dims = [19, 17, 90];
+    let map = random_map(&mut random, dims, 5, false);
+    let noisy = random_map(&mut random, dims, 3, true);
+    for info in LABEL_INFOS {
+        for map in [&map, &noisy] {
+            let e = (info.make)(&Options::new()).unwrap();
+            let run = |threads: usize| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                let mut out = LabelSurface::default();
+                pool.install(|| e.extract_u8(LabelMap::new(dims, map).unwrap(), &mut out)).unwrap();
+                out
+            };
+            let one = run(1);
+            assert!(!one.mesh.triangles.is_empty());
+            for threads in [2, 3, 5] {
+                assert_eq!(run(threads), one, "{} on {threads} threads", info.name);
+            }
+        }
+    }
+}

@@ -54,6 +54,46 @@ fn unit_normals(mesh: &TriMesh) -> Vec<Vec3> {
     normals.into_iter().map(|n| n.try_normalize().unwrap_or(Vec3::Z)).collect()
 }
 
+/// Appends `bytes` to the buffer (4-byte aligned) as a new buffer view; its index.
+fn push_view(bin: &mut Vec<u8>, views: &mut Vec<serde_json::Value>, bytes: &[u8], target: u32) -> usize {
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    views.push(json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len(), "target": target }));
+    bin.extend_from_slice(bytes);
+    views.len() - 1
+}
+
+/// Appends a mesh's indices, positions and unit normals to the buffer, a view and an accessor
+/// each (accessors `a`, `a + 1`, `a + 2`); returns `a`.
+fn push_mesh(
+    bin: &mut Vec<u8>,
+    views: &mut Vec<serde_json::Value>,
+    accessors: &mut Vec<serde_json::Value>,
+    mesh: &TriMesh,
+) -> usize {
+    let indices: Vec<u8> = mesh.triangles.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
+    let positions: Vec<u8> = mesh.positions.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect();
+    let normals: Vec<u8> = unit_normals(mesh).iter().flat_map(|n| n.to_array()).flat_map(f32::to_le_bytes).collect();
+    let (min, max) = mesh
+        .positions
+        .iter()
+        .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let max_index = mesh.triangles.iter().flatten().copied().max().unwrap_or(0);
+    let min_index = mesh.triangles.iter().flatten().copied().min().unwrap_or(0);
+    let vi = push_view(bin, views, &indices, ELEMENT_ARRAY_BUFFER);
+    let vp = push_view(bin, views, &positions, ARRAY_BUFFER);
+    let vn = push_view(bin, views, &normals, ARRAY_BUFFER);
+    let n = mesh.positions.len();
+    let a = accessors.len();
+    accessors.push(json!({ "bufferView": vi, "componentType": UNSIGNED_INT, "count": 3 * mesh.triangles.len(), "type": "SCALAR",
+                           "min": [min_index], "max": [max_index] }));
+    accessors.push(json!({ "bufferView": vp, "componentType": FLOAT, "count": n, "type": "VEC3",
+                           "min": min.to_array(), "max": max.to_array() }));
+    accessors.push(json!({ "bufferView": vn, "componentType": FLOAT, "count": n, "type": "VEC3" }));
+    a
+}
+
 /// The glTF JSON and its binary buffer for `mesh` (vertex colours from `colours`).
 fn document(mesh: &TriMesh, colours: Option<&[[u8; 3]]>, generator: &str) -> (serde_json::Value, Vec<u8>) {
     let asset = json!({ "version": "2.0", "generator": generator });
@@ -67,40 +107,15 @@ fn document(mesh: &TriMesh, colours: Option<&[[u8; 3]]>, generator: &str) -> (se
     }
     let mut bin = Vec::new();
     let mut views = Vec::new();
-    let mut push_view = |bin: &mut Vec<u8>, bytes: &[u8], target: u32| {
-        while bin.len() % 4 != 0 {
-            bin.push(0);
-        }
-        views.push(json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len(), "target": target }));
-        bin.extend_from_slice(bytes);
-        views.len() - 1
-    };
-    let indices: Vec<u8> = mesh.triangles.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
-    let positions: Vec<u8> = mesh.positions.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect();
-    let normals: Vec<u8> = unit_normals(mesh).iter().flat_map(|n| n.to_array()).flat_map(f32::to_le_bytes).collect();
-    let (min, max) = mesh
-        .positions
-        .iter()
-        .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-    let max_index = mesh.triangles.iter().flatten().copied().max().unwrap_or(0);
-    let min_index = mesh.triangles.iter().flatten().copied().min().unwrap_or(0);
-    let v_indices = push_view(&mut bin, &indices, ELEMENT_ARRAY_BUFFER);
-    let v_positions = push_view(&mut bin, &positions, ARRAY_BUFFER);
-    let v_normals = push_view(&mut bin, &normals, ARRAY_BUFFER);
+    let mut accessors = Vec::new();
+    push_mesh(&mut bin, &mut views, &mut accessors, mesh);
     let n = mesh.positions.len();
-    let mut accessors = vec![
-        json!({ "bufferView": v_indices, "componentType": UNSIGNED_INT, "count": 3 * mesh.triangles.len(), "type": "SCALAR",
-                "min": [min_index], "max": [max_index] }),
-        json!({ "bufferView": v_positions, "componentType": FLOAT, "count": n, "type": "VEC3",
-                "min": min.to_array(), "max": max.to_array() }),
-        json!({ "bufferView": v_normals, "componentType": FLOAT, "count": n, "type": "VEC3" }),
-    ];
     let mut attributes = json!({ "POSITION": 1, "NORMAL": 2 });
     let colours = colours.filter(|c| c.len() == n);
     if let Some(colours) = colours {
         // RGBA: vertex attribute elements must be 4-byte aligned, which RGB bytes are not.
         let rgba: Vec<u8> = colours.iter().flat_map(|&[r, g, b]| [r, g, b, 255]).collect();
-        let view = push_view(&mut bin, &rgba, ARRAY_BUFFER);
+        let view = push_view(&mut bin, &mut views, &rgba, ARRAY_BUFFER);
         accessors
             .push(json!({ "bufferView": view, "componentType": UNSIGNED_BYTE, "normalized": true, "count": n, "type": "VEC4" }));
         attributes["COLOR_0"] = json!(3);
@@ -168,37 +183,8 @@ pub fn write_glb_parts(w: &mut impl Write, parts: &[Part<'_>], generator: &str) 
     }
     let mut bin = Vec::new();
     let (mut views, mut accessors, mut nodes, mut meshes, mut materials) = (vec![], vec![], vec![], vec![], vec![]);
-    let mut push_view = |bin: &mut Vec<u8>, bytes: &[u8], target: u32| {
-        while bin.len() % 4 != 0 {
-            bin.push(0);
-        }
-        views.push(json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len(), "target": target }));
-        bin.extend_from_slice(bytes);
-        views.len() - 1
-    };
     for (k, part) in parts.iter().enumerate() {
-        let mesh = part.mesh;
-        let indices: Vec<u8> = mesh.triangles.iter().flatten().flat_map(|i| i.to_le_bytes()).collect();
-        let positions: Vec<u8> = mesh.positions.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect();
-        let normals: Vec<u8> = unit_normals(mesh).iter().flat_map(|n| n.to_array()).flat_map(f32::to_le_bytes).collect();
-        let (min, max) = mesh
-            .positions
-            .iter()
-            .fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-        let max_index = mesh.triangles.iter().flatten().copied().max().unwrap_or(0);
-        let min_index = mesh.triangles.iter().flatten().copied().min().unwrap_or(0);
-        let (vi, vp, vn) = (
-            push_view(&mut bin, &indices, ELEMENT_ARRAY_BUFFER),
-            push_view(&mut bin, &positions, ARRAY_BUFFER),
-            push_view(&mut bin, &normals, ARRAY_BUFFER),
-        );
-        let a = accessors.len();
-        accessors
-            .push(json!({ "bufferView": vi, "componentType": UNSIGNED_INT, "count": 3 * mesh.triangles.len(), "type": "SCALAR",
-                               "min": [min_index], "max": [max_index] }));
-        accessors.push(json!({ "bufferView": vp, "componentType": FLOAT, "count": mesh.positions.len(), "type": "VEC3",
-                               "min": min.to_array(), "max": max.to_array() }));
-        accessors.push(json!({ "bufferView": vn, "componentType": FLOAT, "count": mesh.positions.len(), "type": "VEC3" }));
+        let a = push_mesh(&mut bin, &mut views, &mut accessors, part.mesh);
         meshes.push(
             json!({ "name": part.name, "primitives": [{ "attributes": { "POSITION": a + 1, "NORMAL": a + 2 }, "indices": a,
                                                                 "material": k, "mode": 4 }] }),

@@ -43,21 +43,7 @@ impl LabelValues {
         }
     }
 
-    /// Number of samples.
-    pub fn len(&self) -> usize {
-        match self {
-            Self::U8(v) => v.len(),
-            Self::U16(v) => v.len(),
-            Self::U32(v) => v.len(),
-        }
-    }
-
-    /// Whether there are none.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// The values, borrowed.
+    /// The values, borrowed (their length: `as_slice().len()`).
     pub fn as_slice(&self) -> LabelSlice<'_> {
         match self {
             Self::U8(v) => LabelSlice::U8(v),

@@ -83,23 +83,11 @@ fn mesh_array(
         ($($t:ty),*) => {$(
             if let Ok(a) = array.downcast::<PyArrayDyn<$t>>() {
                 let ro = a.try_readonly().map_err(|e| PyValueError::new_err(format!("the label map cannot be read: {e}")))?;
-                let view = ro.as_array();
                 // Memory order when contiguous (as `dims` and `layout` say), else C order.
-                let in_order: Box<dyn Iterator<Item = &$t>> = match ro.as_slice() {
-                    Ok(slice) => Box::new(slice.iter()),
-                    Err(_) => Box::new(view.iter()),
+                let (values, dims, layout) = match ro.as_slice() {
+                    Ok(slice) => (to_labels(slice.iter().copied())?, dims, layout),
+                    Err(_) => (to_labels(ro.as_array().iter().copied())?, [shape[2], shape[1], shape[0]], Layout::C),
                 };
-                let dims = if ro.as_slice().is_ok() { dims } else { [shape[2], shape[1], shape[0]] };
-                let layout = if ro.as_slice().is_ok() { layout } else { Layout::C };
-                let mut values = Vec::with_capacity(view.len());
-                for (i, &v) in in_order.enumerate() {
-                    let label = u32::try_from(v).map_err(|_| {
-                        PyValueError::new_err(format!(
-                            "labels are whole numbers from 0 to 4294967295, but sample {i} (in memory order) is {v}"
-                        ))
-                    })?;
-                    values.push(label);
-                }
                 let to_world = arrays::index_to_world(affine, layout).map_err(value_error)?;
                 return run(py, LabelValues::narrowest(values).as_slice(), dims, to_world, config, pool);
             }
@@ -117,6 +105,23 @@ fn mesh_array(
          isolab.extract or isolab.marching_cubes; labels stored as floats convert with .astype(np.uint16)",
         array.dtype()
     )))
+}
+
+/// Integers as labels: each from 0 to 2^32 - 1, or an error naming the first that is not.
+fn to_labels<T: Copy + std::fmt::Display>(values: impl Iterator<Item = T>) -> PyResult<Vec<u32>>
+where
+    u32: TryFrom<T>,
+{
+    values
+        .enumerate()
+        .map(|(i, v)| {
+            u32::try_from(v).map_err(|_| {
+                PyValueError::new_err(format!(
+                    "labels are whole numbers from 0 to 4294967295, but sample {i} (in memory order) is {v}"
+                ))
+            })
+        })
+        .collect()
 }
 
 fn run(

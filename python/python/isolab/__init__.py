@@ -160,6 +160,22 @@ def _remove_degenerate(verts, faces, normals, values):
     return verts[used], renumber[faces].astype(np.int32), normals[used], values[used]
 
 
+def _index_to_world(affine: Optional[np.ndarray], spacing: Optional[Sequence[float]]) -> Optional[List[List[float]]]:
+    """An array's index-to-world matrix as rows: ``affine`` (4 x 4), else ``spacing`` on the
+    diagonal, else None (index coordinates)."""
+    if affine is not None:
+        a = np.asarray(affine, dtype=np.float64)
+        if a.shape != (4, 4):
+            raise ValueError(f"affine must be a 4 x 4 matrix; its shape is {a.shape}")
+        return [list(map(float, row)) for row in a]
+    if spacing is not None:
+        if len(spacing) != 3:
+            raise ValueError("spacing must consist of three floats.")
+        sx, sy, sz = (float(s) for s in spacing)
+        return [[sx, 0.0, 0.0, 0.0], [0.0, sy, 0.0, 0.0], [0.0, 0.0, sz, 0.0], [0.0, 0.0, 0.0, 1.0]]
+    return None
+
+
 class Mesh:
     """A mesh :func:`extract` made: numpy arrays in world coordinates and the run's numbers.
 
@@ -293,16 +309,7 @@ def extract(data: Union[np.ndarray, str, os.PathLike], level: Optional[float] = 
         data = os.fspath(data)
     else:
         data = _as_volume(data)
-        if affine is not None:
-            affine_ = np.asarray(affine, dtype=np.float64)
-            if affine_.shape != (4, 4):
-                raise ValueError(f"affine must be a 4 x 4 matrix; its shape is {affine_.shape}")
-            affine_ = [list(map(float, row)) for row in affine_]
-        elif spacing is not None:
-            if len(spacing) != 3:
-                raise ValueError("spacing must consist of three floats.")
-            sx, sy, sz = (float(s) for s in spacing)
-            affine_ = [[sx, 0.0, 0.0, 0.0], [0.0, sy, 0.0, 0.0], [0.0, 0.0, sz, 0.0], [0.0, 0.0, 0.0, 1.0]]
+        affine_ = _index_to_world(affine, spacing)
     parts = _isolab.extract(data, None if level is None else float(level), algorithm, affine_, inside, opts, list(post),
                             threads, resolution, dims_, lattice, seed, chunk, materials)
     return Mesh(parts)
@@ -413,16 +420,7 @@ def mesh_labels(label_map: Union[np.ndarray, str, os.PathLike], /, *, spacing: O
     else:
         if not isinstance(label_map, np.ndarray):
             label_map = np.asarray(label_map)
-        if affine is not None:
-            affine_ = np.asarray(affine, dtype=np.float64)
-            if affine_.shape != (4, 4):
-                raise ValueError(f"affine must be a 4 x 4 matrix; its shape is {affine_.shape}")
-            affine_ = [list(map(float, row)) for row in affine_]
-        elif spacing is not None:
-            if len(spacing) != 3:
-                raise ValueError("spacing must consist of three floats.")
-            sx, sy, sz = (float(s) for s in spacing)
-            affine_ = [[sx, 0.0, 0.0, 0.0], [0.0, sy, 0.0, 0.0], [0.0, 0.0, sz, 0.0], [0.0, 0.0, 0.0, 1.0]]
+        affine_ = _index_to_world(affine, spacing)
     chosen = None if labels is None else [int(s) for s in labels]
     out = LabelMeshes(_isolab.mesh_labels(label_map, affine_, chosen, algorithm, opts, threads))
     if out.missing:

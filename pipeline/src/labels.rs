@@ -13,112 +13,12 @@ use std::time::Instant;
 
 use glam::DAffine3;
 use isolab_algorithms::labels::{self, LabelMap, LabelSurface};
+pub use isolab_algorithms::labels::{LabelSamples, LabelValues};
 use isolab_algorithms::{ExtractError, Options, TriMesh};
 use isolab_metrics::{accuracy, quality, topology};
 use serde::Serialize;
 
 use crate::error::RunError;
-
-/// The samples of a label map, in the narrowest type that holds them.
-#[derive(Clone, Debug, PartialEq)]
-pub enum LabelValues {
-    /// Up to 255.
-    U8(Vec<u8>),
-    /// Up to 65535.
-    U16(Vec<u16>),
-    /// Anything else that fits 32 bits.
-    U32(Vec<u32>),
-}
-
-impl LabelValues {
-    /// Narrows `u32` labels to the smallest type that holds the largest.
-    pub fn narrowest(values: Vec<u32>) -> Self {
-        let max = values.iter().copied().max().unwrap_or(0);
-        if max <= u32::from(u8::MAX) {
-            Self::U8(values.into_iter().map(|v| v as u8).collect())
-        } else if max <= u32::from(u16::MAX) {
-            Self::U16(values.into_iter().map(|v| v as u16).collect())
-        } else {
-            Self::U32(values)
-        }
-    }
-
-    /// The values, borrowed (their length: `as_slice().len()`).
-    pub fn as_slice(&self) -> LabelSlice<'_> {
-        match self {
-            Self::U8(v) => LabelSlice::U8(v),
-            Self::U16(v) => LabelSlice::U16(v),
-            Self::U32(v) => LabelSlice::U32(v),
-        }
-    }
-}
-
-/// Borrowed label samples (a numpy array's memory, read in place).
-#[derive(Clone, Copy, Debug)]
-pub enum LabelSlice<'a> {
-    /// 8-bit labels.
-    U8(&'a [u8]),
-    /// 16-bit labels.
-    U16(&'a [u16]),
-    /// 32-bit labels.
-    U32(&'a [u32]),
-}
-
-impl LabelSlice<'_> {
-    /// Number of samples.
-    pub fn len(&self) -> usize {
-        match self {
-            Self::U8(v) => v.len(),
-            Self::U16(v) => v.len(),
-            Self::U32(v) => v.len(),
-        }
-    }
-
-    /// Whether there are none.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Every label's sample count (background included).
-    pub fn counts(&self) -> BTreeMap<u32, usize> {
-        fn count<T: labels::Label>(v: &[T]) -> BTreeMap<u32, usize> {
-            let mut out = BTreeMap::new();
-            let mut run: Option<(T, usize)> = None;
-            for &l in v {
-                match &mut run {
-                    Some((last, n)) if *last == l => *n += 1,
-                    _ => {
-                        if let Some((last, n)) = run {
-                            *out.entry(last.id()).or_insert(0) += n;
-                        }
-                        run = Some((l, 1));
-                    }
-                }
-            }
-            if let Some((last, n)) = run {
-                *out.entry(last.id()).or_insert(0) += n;
-            }
-            out
-        }
-        match self {
-            Self::U8(v) => count(v),
-            Self::U16(v) => count(v),
-            Self::U32(v) => count(v),
-        }
-    }
-
-    /// Every label not in `keep` (sorted) replaced by the background.
-    fn keep_only(&self, keep: &[u32]) -> LabelValues {
-        fn map<T: labels::Label>(v: &[T], keep: &[u32]) -> Vec<T> {
-            v.iter().map(|&l| if keep.binary_search(&l.id()).is_ok() { l } else { T::default() }).collect()
-        }
-        match self {
-            Self::U8(v) => LabelValues::U8(map(v, keep)),
-            Self::U16(v) => LabelValues::U16(map(v, keep)),
-            Self::U32(v) => LabelValues::U32(map(v, keep)),
-        }
-    }
-}
 
 /// A label map with its place in the world.
 #[derive(Clone, Debug)]
@@ -242,7 +142,7 @@ pub struct LabelMetrics {
 }
 
 /// A finished label run.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct LabelOutcome {
     /// Every interface, tagged, in world coordinates.
     pub surface: LabelSurface,
@@ -268,7 +168,7 @@ pub struct LabelInput<'a> {
     /// Samples along x, y and z.
     pub dims: [usize; 3],
     /// The labels, x fastest.
-    pub values: LabelSlice<'a>,
+    pub values: LabelSamples<'a>,
     /// Index to world.
     pub index_to_world: DAffine3,
     /// Whether the world is anatomical (RAS).
@@ -297,39 +197,63 @@ pub fn mesh_labels(volume: &LabelVolume, config: &LabelConfig) -> Result<LabelOu
 
 /// Meshes every selected label of `input`.
 pub fn mesh_label_input(input: LabelInput<'_>, config: &LabelConfig) -> Result<LabelOutcome, RunError> {
-    let extractor = labels::build(&config.algorithm, &config.options)?
-        .ok_or_else(|| RunError::UnknownAlgorithm { name: config.algorithm.clone(), valid: labels::names().join(", ") })?;
+    let extractor = build(config)?;
     let counts = input.values.counts();
+    let (keep, missing) = selection(config.select.as_deref(), &counts);
     let mut notes = Vec::new();
-    let (selected, missing) = match &config.select {
-        None => (None, Vec::new()),
-        Some(select) => {
-            let mut keep: Vec<u32> = select.iter().copied().filter(|l| *l != 0).collect();
-            keep.sort_unstable();
-            keep.dedup();
-            let missing: Vec<u32> = keep.iter().copied().filter(|l| !counts.contains_key(l)).collect();
-            (Some(input.values.keep_only(&keep)), missing)
-        }
-    };
     if !missing.is_empty() {
         notes.push(format!("label(s) {missing:?} do not occur in {}: no mesh for them", input.name));
     }
+    let selected = keep.map(|keep| input.values.keep_only(&keep));
     let values = selected.as_ref().map_or(input.values, LabelValues::as_slice);
     let mut surface = LabelSurface::default();
     let start = Instant::now();
     match values {
-        LabelSlice::U8(v) => extractor.extract_u8(LabelMap::new(input.dims, v)?, &mut surface)?,
-        LabelSlice::U16(v) => extractor.extract_u16(LabelMap::new(input.dims, v)?, &mut surface)?,
-        LabelSlice::U32(v) => extractor.extract_u32(LabelMap::new(input.dims, v)?, &mut surface)?,
+        LabelSamples::U8(v) => extractor.extract_u8(LabelMap::new(input.dims, v)?, &mut surface)?,
+        LabelSamples::U16(v) => extractor.extract_u16(LabelMap::new(input.dims, v)?, &mut surface)?,
+        LabelSamples::U32(v) => extractor.extract_u32(LabelMap::new(input.dims, v)?, &mut surface)?,
     }
     let extract_ms = start.elapsed().as_secs_f64() * 1e3;
-    surface.mesh.transform(&input.index_to_world);
     let space = input.anatomical.then_some(config.space);
+    Ok(outcome(
+        surface,
+        input.index_to_world,
+        space,
+        LabelOutcome { missing, notes, extract_ms, counts, ..LabelOutcome::default() },
+    ))
+}
+
+/// The label extractor `config` names.
+pub fn build(config: &LabelConfig) -> Result<Box<dyn labels::LabelExtractor>, RunError> {
+    labels::build(&config.algorithm, &config.options)?
+        .ok_or_else(|| RunError::UnknownAlgorithm { name: config.algorithm.clone(), valid: labels::names().join(", ") })
+}
+
+/// The labels to keep of `select` (sorted, without the background; `None` keeps all) and those
+/// asked for that `counts` does not have.
+pub fn selection(select: Option<&[u32]>, counts: &BTreeMap<u32, usize>) -> (Option<Vec<u32>>, Vec<u32>) {
+    let Some(select) = select else { return (None, Vec::new()) };
+    let mut keep: Vec<u32> = select.iter().copied().filter(|l| *l != 0).collect();
+    keep.sort_unstable();
+    keep.dedup();
+    let missing = keep.iter().copied().filter(|l| !counts.contains_key(l)).collect();
+    (Some(keep), missing)
+}
+
+/// A surface in voxel index coordinates to the outcome: mapped to the world (and to the output
+/// space of an anatomical volume), each label's mesh split off; `rest` gives the other fields.
+pub fn outcome(
+    mut surface: LabelSurface,
+    index_to_world: DAffine3,
+    space: Option<crate::OutputSpace>,
+    rest: LabelOutcome,
+) -> LabelOutcome {
+    surface.mesh.transform(&index_to_world);
     if let Some(map) = space.and_then(crate::OutputSpace::map_from_ras) {
         surface.mesh.transform(&map);
     }
     let meshes = surface.label_meshes();
-    Ok(LabelOutcome { surface, meshes, missing, notes, extract_ms, counts, space_tag: space.map(crate::OutputSpace::tag) })
+    LabelOutcome { surface, meshes, space_tag: space.map(crate::OutputSpace::tag), ..rest }
 }
 
 /// For each label, the triangles it shares with each neighbouring label (the background

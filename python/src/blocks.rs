@@ -112,10 +112,7 @@ fn fragment_dict(py: Python<'_>, f: Fragment) -> PyResult<Bound<'_, PyDict>> {
     let TriMesh { positions, normals, triangles, .. } = f.surface;
     d.set_item("positions", out::vec3_array(py, positions)?)?;
     d.set_item("normals", out::vec3_array(py, normals)?)?;
-    let t = triangles.len();
-    let flat: Vec<u32> = bytemuck::allocation::try_cast_vec(triangles)
-        .unwrap_or_else(|(_, t): (_, Vec<[u32; 3]>)| t.iter().flatten().copied().collect());
-    d.set_item("triangles", PyArray1::from_vec(py, flat).reshape([t, 3])?)?;
+    d.set_item("triangles", out::u32_rows(py, triangles)?)?;
     Ok(d)
 }
 

@@ -4,7 +4,7 @@
 
 use std::collections::BTreeMap;
 
-use isolab_pipeline::labels::{self, LabelConfig, LabelInput, LabelOutcome, LabelSlice, LabelValues, LabelVolume};
+use isolab_pipeline::labels::{self, LabelConfig, LabelInput, LabelOutcome, LabelSamples, LabelValues, LabelVolume};
 use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -69,7 +69,7 @@ fn mesh_array(
                 if contiguous {
                     let ro = a.try_readonly().map_err(|e| PyValueError::new_err(format!("the label map cannot be read: {e}")))?;
                     let slice = ro.as_slice().map_err(value_error)?;
-                    return run(py, LabelSlice::$v(slice), dims, to_world, config, pool);
+                    return run(py, LabelSamples::$v(slice), dims, to_world, config, pool);
                 }
                 let ro = a.try_readonly().map_err(|e| PyValueError::new_err(format!("the label map cannot be read: {e}")))?;
                 let values: Vec<u32> = ro.as_array().iter().map(|&v| u32::from(v)).collect();
@@ -98,17 +98,21 @@ fn mesh_array(
         let ro = a.try_readonly().map_err(|e| PyValueError::new_err(format!("the label map cannot be read: {e}")))?;
         let values: Vec<u8> = ro.as_array().iter().map(|&b| u8::from(b)).collect();
         let to_world = arrays::index_to_world(affine, Layout::C).map_err(value_error)?;
-        return run(py, LabelSlice::U8(&values), [shape[2], shape[1], shape[0]], to_world, config, pool);
+        return run(py, LabelSamples::U8(&values), [shape[2], shape[1], shape[0]], to_world, config, pool);
     }
-    Err(PyTypeError::new_err(format!(
-        "a label map holds integer labels, but this array's dtype is {}: an intensity volume is meshed at a level with \
-         isolab.extract or isolab.marching_cubes; labels stored as floats convert with .astype(np.uint16)",
-        array.dtype()
-    )))
+    Err(PyTypeError::new_err(not_labels_message(&array.dtype().to_string())))
+}
+
+/// Why an array of `dtype` is not a label map, with what to do.
+pub(crate) fn not_labels_message(dtype: &str) -> String {
+    format!(
+        "a label map holds integer labels, but this array's dtype is {dtype}: an intensity volume is meshed at a level \
+         with isolab.extract or isolab.marching_cubes; labels stored as floats convert with .astype(np.uint16)"
+    )
 }
 
 /// Integers as labels: each from 0 to 2^32 - 1, or an error naming the first that is not.
-fn to_labels<T: Copy + std::fmt::Display>(values: impl Iterator<Item = T>) -> PyResult<Vec<u32>>
+pub(crate) fn to_labels<T: Copy + std::fmt::Display>(values: impl Iterator<Item = T>) -> PyResult<Vec<u32>>
 where
     u32: TryFrom<T>,
 {
@@ -126,7 +130,7 @@ where
 
 fn run(
     py: Python<'_>,
-    values: LabelSlice<'_>,
+    values: LabelSamples<'_>,
     dims: [usize; 3],
     index_to_world: glam::DAffine3,
     config: &LabelConfig,
@@ -139,7 +143,7 @@ fn run(
 /// The outcome as Python objects; no mesh metric is computed (`Mesh.metrics()` measures on
 /// demand): each mesh's stats are its label, counts and the triangles it shares with each
 /// neighbour.
-fn to_python<'py>(py: Python<'py>, outcome: LabelOutcome, algorithm: &str) -> PyResult<Bound<'py, PyDict>> {
+pub(crate) fn to_python<'py>(py: Python<'py>, outcome: LabelOutcome, algorithm: &str) -> PyResult<Bound<'py, PyDict>> {
     let neighbours = labels::neighbours(&outcome.surface);
     let d = PyDict::new(py);
     let meshes = PyDict::new(py);
@@ -162,9 +166,7 @@ fn to_python<'py>(py: Python<'py>, outcome: LabelOutcome, algorithm: &str) -> Py
     let surface = outcome.surface;
     d.set_item("vertices", out::vec3_array(py, surface.mesh.positions)?)?;
     d.set_item("faces", out::faces_array(py, surface.mesh.triangles)?)?;
-    let n = surface.pairs.len();
-    let flat: Vec<u32> = surface.pairs.into_iter().flatten().collect();
-    d.set_item("pairs", numpy::PyArray1::from_vec(py, flat).reshape([n, 2])?)?;
+    d.set_item("pairs", out::u32_rows(py, surface.pairs)?)?;
     d.set_item("missing", outcome.missing)?;
     d.set_item("notes", outcome.notes)?;
     d.set_item("extract_ms", outcome.extract_ms)?;

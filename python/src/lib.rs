@@ -23,6 +23,7 @@ use std::path::Path;
 
 mod arrays;
 mod blocks;
+mod label_blocks;
 mod labels;
 mod out;
 mod pools;
@@ -444,6 +445,9 @@ fn _isolab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(blocks::weld_fragments, m)?)?;
     m.add_function(wrap_pyfunction!(blocks::field_block, m)?)?;
     m.add_function(wrap_pyfunction!(blocks::skipped_fragment, m)?)?;
+    m.add_function(wrap_pyfunction!(label_blocks::label_block_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(label_blocks::mesh_label_block, m)?)?;
+    m.add_function(wrap_pyfunction!(label_blocks::weld_label_fragments, m)?)?;
     m.add_class::<Run>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

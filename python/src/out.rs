@@ -44,6 +44,18 @@ pub fn faces_array<'py>(py: Python<'py>, t: Vec<[u32; 3]>) -> PyResult<Bound<'py
     PyArray1::from_vec(py, flat).reshape([n, 3])
 }
 
+/// Rows of unsigned integers (triangles, label pairs) as an M x N uint32 array over the same
+/// buffer.
+pub fn u32_rows<const N: usize>(py: Python<'_>, rows: Vec<[u32; N]>) -> PyResult<Bound<'_, PyArray2<u32>>>
+where
+    [u32; N]: bytemuck::Pod,
+{
+    let m = rows.len();
+    let flat: Vec<u32> = bytemuck::allocation::try_cast_vec(rows)
+        .unwrap_or_else(|(_, rows): (_, Vec<[u32; N]>)| rows.iter().flatten().copied().collect());
+    PyArray1::from_vec(py, flat).reshape([m, N])
+}
+
 /// Tetrahedra as a K x 4 int32 array.
 pub fn quads_array<'py>(py: Python<'py>, t: &[[u32; 4]]) -> PyResult<Bound<'py, PyArray2<i32>>> {
     let flat: Vec<i32> = t.iter().flat_map(|f| f.map(|i| i as i32)).collect();

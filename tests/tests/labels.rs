@@ -6,8 +6,13 @@
 //! not); every sample of the label inside its mesh and every other sample outside (generalized
 //! winding number); every vertex within half a sample's reach of a sample of each of its labels.
 
+use std::collections::BTreeMap;
+
 use glam::Vec3;
-use isolab_algorithms::labels::{self, LabelExtractor, LabelMap, LabelSurface, LABEL_INFOS};
+use isolab_algorithms::labels::blocks::{mesh_label_block, weld_label_fragments};
+use isolab_algorithms::labels::{
+    self, LabelBlockPlan, LabelExtractor, LabelFragment, LabelMap, LabelSamples, LabelSurface, LABEL_INFOS,
+};
 use isolab_algorithms::random::Random;
 use isolab_algorithms::{Options, TriMesh};
 use isolab_metrics::topology;
@@ -254,4 +259,111 @@ fn slabs_in_parallel_give_the_one_sweep_mesh() {
             }
         }
     }
+}
+
+/// A surface as comparable data: its used vertices' positions (bit patterns, sorted) and its
+/// triangles as position triples (rotated to start at the smallest, winding kept) with their
+/// label pairs, sorted.
+#[allow(clippy::type_complexity)]
+fn canonical(s: &LabelSurface) -> (Vec<[u32; 3]>, Vec<([[u32; 3]; 3], [u32; 2])>) {
+    let bits = |v: u32| s.mesh.positions[v as usize].to_array().map(f32::to_bits);
+    let mut used: Vec<[u32; 3]> = s.mesh.triangles.iter().flatten().map(|&v| bits(v)).collect();
+    used.sort_unstable();
+    used.dedup();
+    let mut triangles: Vec<([[u32; 3]; 3], [u32; 2])> = s
+        .mesh
+        .triangles
+        .iter()
+        .zip(&s.pairs)
+        .map(|(t, p)| {
+            let c = t.map(bits);
+            let k = (0..3).min_by_key(|&k| c[k]).unwrap();
+            ([c[k], c[(k + 1) % 3], c[(k + 2) % 3]], *p)
+        })
+        .collect();
+    triangles.sort_unstable();
+    (used, triangles)
+}
+
+/// Every block of `plan` meshed from the samples it names, welded, and the blocks' label
+/// counts added up.
+fn welded(e: &dyn LabelExtractor, plan: &LabelBlockPlan, map: &[u8]) -> (LabelSurface, BTreeMap<u32, usize>) {
+    let mut counts = BTreeMap::new();
+    let fragments: Vec<LabelFragment> = plan
+        .blocks()
+        .map(|b| {
+            let [nx, ny, _] = plan.dims;
+            let mut samples = Vec::with_capacity(b.dims.iter().product());
+            for z in b.lo[2]..b.lo[2] + b.dims[2] {
+                for y in b.lo[1]..b.lo[1] + b.dims[1] {
+                    let row = nx * (y + ny * z);
+                    samples.extend_from_slice(&map[row + b.lo[0]..row + b.lo[0] + b.dims[0]]);
+                }
+            }
+            for (l, n) in b.owned_counts(LabelSamples::U8(&samples)) {
+                *counts.entry(l).or_insert(0) += n;
+            }
+            let mut f = LabelFragment::default();
+            mesh_label_block(e, plan, b.id, LabelSamples::U8(&samples), &mut f).unwrap();
+            f
+        })
+        .collect();
+    (weld_label_fragments(&fragments), counts)
+}
+
+#[test]
+fn blocks_welded_by_their_keys_give_the_whole_map_surface() {
+    let mut random = Random::new(20261203);
+    let mut variants = Vec::new();
+    for info in LABEL_INFOS {
+        for border in ["closed", "open"] {
+            let smoothing: &[&str] = if info.options.contains(&"smoothing") { &["none", "constrained"] } else { &[""] };
+            for &s in smoothing {
+                let mut o = Options::new();
+                o.set("border", border);
+                if !s.is_empty() {
+                    o.set("smoothing", s);
+                    o.set("iterations", "3");
+                }
+                variants.push((info.name, border, s, (info.make)(&o).unwrap()));
+            }
+        }
+    }
+    for case in 0..24 {
+        let dims = [5 + case % 7, 4 + case % 5, 6 + case % 9];
+        let map = random_map(&mut random, dims, 2 + (case % 4) as u8, case % 4 == 0);
+        for (name, border, smoothing, e) in &variants {
+            let mut whole = LabelSurface::default();
+            e.extract_u8(LabelMap::new(dims, &map).unwrap(), &mut whole).unwrap();
+            for chunk in [2, 3, 5, 64] {
+                let plan = LabelBlockPlan::new(&**e, dims, chunk).unwrap();
+                let (joined, counts) = welded(&**e, &plan, &map);
+                let what = format!("{name} border={border} smoothing={smoothing} case {case} {dims:?} chunk {chunk}");
+                assert_eq!(canonical(&joined), canonical(&whole), "{what}");
+                assert_eq!(joined.active_cells, whole.active_cells, "{what}");
+                assert_eq!(counts, LabelSamples::U8(&map).counts(), "{what}: the blocks own every sample once");
+                if *name == "surface-nets" && *border == "closed" {
+                    // Keys in sweep order: the very vertices of the whole map, in its order.
+                    assert_eq!(joined.mesh.positions, whole.mesh.positions, "{what}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_block_plan_refuses_what_it_cannot_split() {
+    let e = labels::build("surface-nets", &Options::new()).unwrap().unwrap();
+    let err = LabelBlockPlan::new(&*e, [8, 8, 8], 1).unwrap_err().to_string();
+    assert!(err.contains("1 cells"), "{err}");
+    let err = LabelBlockPlan::new(&*e, [8, 0, 8], 4).unwrap_err().to_string();
+    assert!(err.contains("[8, 0, 8]"), "{err}");
+    let plan = LabelBlockPlan::new(&*e, [8, 8, 8], 4).unwrap();
+    // Smoothing's 16 passes: 17 cells of apron.
+    assert_eq!(plan.apron, 17);
+    let mut f = LabelFragment::default();
+    let err = mesh_label_block(&*e, &plan, [9, 0, 0], LabelSamples::U8(&[]), &mut f).unwrap_err().to_string();
+    assert!(err.contains("[9, 0, 0]") && err.contains("outside"), "{err}");
+    let err = mesh_label_block(&*e, &plan, [0, 0, 0], LabelSamples::U8(&[0; 5]), &mut f).unwrap_err().to_string();
+    assert!(err.contains("but 5 were given"), "{err}");
 }

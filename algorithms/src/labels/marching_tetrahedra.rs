@@ -49,6 +49,7 @@
 use glam::DVec3;
 use rustc_hash::FxHashMap;
 
+use super::blocks::{LabelBlock, LabelFragment};
 use super::{Border, Label, LabelExtractor, LabelExtractorInfo, LabelGuarantees, LabelMap, LabelSurface};
 use crate::extract::ExtractError;
 use crate::options::{OptionError, Options};
@@ -97,6 +98,24 @@ impl LabelExtractor for LabelMarchingTetrahedra {
     fn extract_u32(&self, map: LabelMap<'_, u32>, out: &mut LabelSurface) -> Result<(), ExtractError> {
         extract(map, self.border, out)
     }
+    fn apron(&self) -> usize {
+        0
+    }
+    fn border(&self) -> Border {
+        self.border
+    }
+    fn block_u8(&self, block: LabelBlock<'_, u8>, out: &mut LabelFragment) -> Result<(), ExtractError> {
+        extract_block(&block, out);
+        Ok(())
+    }
+    fn block_u16(&self, block: LabelBlock<'_, u16>, out: &mut LabelFragment) -> Result<(), ExtractError> {
+        extract_block(&block, out);
+        Ok(())
+    }
+    fn block_u32(&self, block: LabelBlock<'_, u32>, out: &mut LabelFragment) -> Result<(), ExtractError> {
+        extract_block(&block, out);
+        Ok(())
+    }
 }
 
 /// The six Kuhn tetrahedra of a cube as corner indices (corner `i` at offset bits `i`): the paths
@@ -135,13 +154,19 @@ struct Point {
 struct Builder<'s> {
     index: FxHashMap<Key, u32>,
     out: &'s mut LabelSurface,
+    /// Each vertex's key, when a block's fragment is made.
+    keys: Option<&'s mut Vec<Key>>,
 }
 
 impl Builder<'_> {
     fn vertex(&mut self, p: Point) -> u32 {
         let positions = &mut self.out.mesh.positions;
+        let keys = &mut self.keys;
         *self.index.entry(p.key).or_insert_with(|| {
             positions.push((p.at - DVec3::ONE).as_vec3());
+            if let Some(keys) = keys {
+                keys.push(p.key);
+            }
             (positions.len() - 1) as u32
         })
     }
@@ -159,29 +184,57 @@ impl Builder<'_> {
 
 fn extract<T: Label>(map: LabelMap<'_, T>, border: Border, out: &mut LabelSurface) -> Result<(), ExtractError> {
     out.clear();
-    let [nx, ny, nz] = map.dims;
-    let p = [nx + 2, ny + 2, nz + 2];
-    // Padded sample (x, y, z): background outside the map.
-    let label = |x: usize, y: usize, z: usize| -> T {
-        if x == 0 || y == 0 || z == 0 || x > nx || y > ny || z > nz {
-            T::default()
-        } else {
-            map.labels[(x - 1) + nx * ((y - 1) + ny * (z - 1))]
-        }
+    let whole = LabelBlock {
+        samples: map.labels,
+        window_lo: [0; 3],
+        window_dims: map.dims,
+        map_dims: map.dims,
+        cells: map.dims.map(|n| match border {
+            Border::Closed => 0..n + 1,
+            Border::Open => 1..n.max(1),
+        }),
+        apron: 0,
     };
-    let (lo, hi) = match border {
-        Border::Closed => (0, p.map(|n| n - 1)),
-        Border::Open => (1, p.map(|n| n - 2)),
+    mesh_cells(&whole, &mut Builder { index: FxHashMap::default(), out, keys: None });
+    Ok(())
+}
+
+/// Block `block`'s fragment: its cells' triangles, each vertex keyed by the samples it is the
+/// centre of.
+fn extract_block<T: Label>(block: &LabelBlock<'_, T>, out: &mut LabelFragment) {
+    let mut keys = Vec::new();
+    mesh_cells(block, &mut Builder { index: FxHashMap::default(), out: &mut out.surface, keys: Some(&mut keys) });
+    let p = block.map_dims.map(|n| n as u64 + 2);
+    out.keys = keys.into_iter().map(|k| weld_key(k, p)).collect();
+}
+
+/// A vertex key as an integer: the first sample's index, and what it is the centre of (the
+/// other samples as corner offsets from the first, which are 0 or 1 along each axis).
+fn weld_key(key: Key, p: [u64; 3]) -> u128 {
+    let offset = |from: u64, to: u64| -> u64 {
+        let d = to - from;
+        let z = d / (p[0] * p[1]);
+        let y = (d - z * p[0] * p[1]) / p[0];
+        let x = d - z * p[0] * p[1] - y * p[0];
+        x | y << 1 | z << 2
     };
-    let mut b = Builder { index: FxHashMap::default(), out };
-    for z in lo..hi[2] {
-        for y in lo..hi[1] {
-            for x in lo..hi[0] {
+    let (first, tag) = match key {
+        Key::Edge(a, b) => (a, 1 << 8 | offset(a, b)),
+        Key::Face(a, b, c) => (a, 2 << 8 | offset(a, b) << 3 | offset(a, c)),
+        Key::Tet(cube, t) => (cube, 3 << 8 | u64::from(t)),
+    };
+    u128::from(first) << 64 | u128::from(tag)
+}
+
+/// Every cell `block` owns.
+fn mesh_cells<T: Label>(block: &LabelBlock<'_, T>, b: &mut Builder<'_>) {
+    let p = block.map_dims.map(|n| n + 2);
+    let [xs, ys, zs] = block.cells.clone();
+    for z in zs {
+        for y in ys.clone() {
+            for x in xs.clone() {
                 let corner = |i: u8| [x + (i & 1) as usize, y + (i >> 1 & 1) as usize, z + (i >> 2 & 1) as usize];
-                let labels: [T; 8] = std::array::from_fn(|i| {
-                    let c = corner(i as u8);
-                    label(c[0], c[1], c[2])
-                });
+                let labels: [T; 8] = std::array::from_fn(|i| block.padded(corner(i as u8)));
                 if labels.iter().all(|&l| l == labels[0]) {
                     continue;
                 }
@@ -197,12 +250,11 @@ fn extract<T: Label>(map: LabelMap<'_, T>, border: Border, out: &mut LabelSurfac
                         DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)
                     });
                     let l = tet.map(|i| labels[i as usize].id());
-                    mesh_tetrahedron(&mut b, ids, at, l, Key::Tet(cube, t as u8));
+                    mesh_tetrahedron(b, ids, at, l, Key::Tet(cube, t as u8));
                 }
             }
         }
     }
-    Ok(())
 }
 
 /// One tetrahedron: corner sample ids, positions and labels.

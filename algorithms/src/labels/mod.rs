@@ -18,15 +18,19 @@
 //! Coordinates: sample `(x, y, z)` is at `(x, y, z)` (voxel index coordinates); the front ends map
 //! meshes to the world by the volume's affine.
 
+pub mod blocks;
 pub mod cell;
 pub mod marching_tetrahedra;
 pub mod surface_nets;
+pub mod values;
 
 use std::collections::BTreeMap;
 
 use crate::extract::ExtractError;
 use crate::mesh::TriMesh;
 use crate::options::{OptionError, Options};
+pub use blocks::{LabelBlock, LabelBlockPlan, LabelFragment};
+pub use values::{LabelSamples, LabelValues};
 
 /// A label map: `dims` samples, `labels[x + nx * (y + ny * z)]`, `0` the background.
 #[derive(Clone, Copy, Debug)]
@@ -277,6 +281,17 @@ pub trait LabelExtractor: Send + Sync {
     fn extract_u16(&self, map: LabelMap<'_, u16>, out: &mut LabelSurface) -> Result<(), ExtractError>;
     /// Meshes a `u32` label map into `out` (cleared first).
     fn extract_u32(&self, map: LabelMap<'_, u32>, out: &mut LabelSurface) -> Result<(), ExtractError>;
+    /// Cells beyond a block's own that it meshes so that its triangles equal the whole map's
+    /// ([`blocks`]): 0 for an extractor whose vertices depend only on their cell.
+    fn apron(&self) -> usize;
+    /// Its border rule, which decides the map's cells.
+    fn border(&self) -> Border;
+    /// Meshes one block of a `u8` map into `out` (empty on entry): [`blocks::mesh_label_block`].
+    fn block_u8(&self, block: LabelBlock<'_, u8>, out: &mut LabelFragment) -> Result<(), ExtractError>;
+    /// Meshes one block of a `u16` map into `out` (empty on entry).
+    fn block_u16(&self, block: LabelBlock<'_, u16>, out: &mut LabelFragment) -> Result<(), ExtractError>;
+    /// Meshes one block of a `u32` map into `out` (empty on entry).
+    fn block_u32(&self, block: LabelBlock<'_, u32>, out: &mut LabelFragment) -> Result<(), ExtractError>;
 }
 
 /// Every label extractor, one line each.

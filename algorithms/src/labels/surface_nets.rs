@@ -64,6 +64,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
+use super::blocks::{LabelBlock, LabelFragment};
 use super::cell::{cell_pieces, checkered_faces, edge_index, is_ring_face, larger_label_flips, CellPieces, EDGES};
 use super::{Border, Label, LabelExtractor, LabelExtractorInfo, LabelGuarantees, LabelMap, LabelSurface};
 use crate::extract::ExtractError;
@@ -151,30 +152,62 @@ impl LabelExtractor for LabelSurfaceNets {
     fn extract_u32(&self, map: LabelMap<'_, u32>, out: &mut LabelSurface) -> Result<(), ExtractError> {
         extract(map, &self.options, out)
     }
+    fn apron(&self) -> usize {
+        let o = &self.options;
+        1 + if o.smoothing == LabelSmoothing::Constrained { o.iterations } else { 0 }
+    }
+    fn border(&self) -> Border {
+        self.options.border
+    }
+    fn block_u8(&self, block: LabelBlock<'_, u8>, out: &mut LabelFragment) -> Result<(), ExtractError> {
+        extract_block(&block, &self.options, out);
+        Ok(())
+    }
+    fn block_u16(&self, block: LabelBlock<'_, u16>, out: &mut LabelFragment) -> Result<(), ExtractError> {
+        extract_block(&block, &self.options, out);
+        Ok(())
+    }
+    fn block_u32(&self, block: LabelBlock<'_, u32>, out: &mut LabelFragment) -> Result<(), ExtractError> {
+        extract_block(&block, &self.options, out);
+        Ok(())
+    }
 }
 
-/// The padded map: one sample of background around it, layer by layer.
-struct Padded<'a, T> {
-    map: LabelMap<'a, T>,
-    /// Padded sizes (`dims + 2`).
-    p: [usize; 3],
+/// The samples one sweep reads, in a local frame: local padded sample `s` is padded sample
+/// `s + origin` of the map (background outside the map).
+struct Window<'b, 'a, T> {
+    block: &'b LabelBlock<'a, T>,
+    /// The map's padded sample at local `0`.
+    origin: [usize; 3],
+    /// Local samples per layer row and column.
+    p: [usize; 2],
 }
 
-impl<T: Label> Padded<'_, T> {
-    /// Padded sample layer `pz` into `layer`: background outside the map (layers 0 and
-    /// `p[2] - 1`, and any beyond, which only the ring rule's neighbour lookups read).
+impl<T: Label> Window<'_, '_, T> {
+    /// Local sample layer `pz` into `layer`: background outside the map (and for the layers
+    /// below and above the window, which only the ring rule's neighbour lookups read).
     fn fill_layer(&self, pz: isize, layer: &mut Vec<T>) {
-        let [px, py, pzn] = self.p;
+        let [px, py] = self.p;
         layer.clear();
         layer.resize(px * py, T::default());
-        if pz <= 0 || pz >= pzn as isize - 1 {
+        let b = self.block;
+        let gz = pz + self.origin[2] as isize;
+        if gz <= 0 || gz > b.map_dims[2] as isize {
             return;
         }
-        let [nx, ny, _] = self.map.dims;
-        let z = pz as usize - 1;
-        for y in 0..ny {
-            let row = &self.map.labels[nx * (y + ny * z)..][..nx];
-            layer[px * (y + 1) + 1..][..nx].copy_from_slice(row);
+        let [wx, wy, _] = b.window_dims;
+        let z = gz as usize - 1 - b.window_lo[2];
+        // Local x with a map sample: padded 1 ..= nx.
+        let x0 = 1usize.saturating_sub(self.origin[0]);
+        let x1 = (b.map_dims[0] + 1 - self.origin[0]).min(px);
+        for y in 0..py {
+            let gy = y + self.origin[1];
+            if gy == 0 || gy > b.map_dims[1] || x0 >= x1 {
+                continue;
+            }
+            let row = wx * (gy - 1 - b.window_lo[1] + wy * z);
+            let from = row + x0 + self.origin[0] - 1 - b.window_lo[0];
+            layer[px * y + x0..px * y + x1].copy_from_slice(&b.samples[from..from + (x1 - x0)]);
         }
     }
 }
@@ -262,27 +295,108 @@ impl CellLayer {
 
 fn extract<T: Label>(map: LabelMap<'_, T>, o: &LabelSnOptions, out: &mut LabelSurface) -> Result<(), ExtractError> {
     out.clear();
-    let p = map.dims.map(|d| d + 2);
-    let padded = Padded { map, p };
-    // Cells by padded coordinate `c` (corners `c` and `c + 1`); closed meshes every cell of the
-    // padded map, open only those whose corners are all in the map.
-    let (lo, hi) = match o.border {
-        Border::Closed => (0usize, p.map(|n| n - 1)),
-        Border::Open => (1usize, p.map(|n| n - 2)),
+    let whole = LabelBlock {
+        samples: map.labels,
+        window_lo: [0; 3],
+        window_dims: map.dims,
+        map_dims: map.dims,
+        cells: std::array::from_fn(|a| all_cells(map.dims[a], o.border)),
+        apron: 0,
+    };
+    let (net, active_cells) = smoothed_net(&whole, o);
+    out.active_cells = active_cells;
+    triangulate(net, out);
+    Ok(())
+}
+
+/// Block `block`'s fragment: the whole map's triangles on the edges the block owns.
+fn extract_block<T: Label>(block: &LabelBlock<'_, T>, o: &LabelSnOptions, out: &mut LabelFragment) {
+    let (net, active_cells) = smoothed_net(block, o);
+    let owned = &block.cells;
+    let owner_owned = |q: &[u32; 4]| {
+        (0..3).all(|a| owned[a].contains(&(q.iter().map(|&v| net.cells[v as usize][a]).max().unwrap_or(0) as usize)))
+    };
+    let sizes = block.map_dims.map(|n| n + 2);
+    // Each vertex's weld key: its padded cell and its place among the cell's pieces.
+    let mut keys = Vec::with_capacity(net.positions.len());
+    for v in 0..net.positions.len() {
+        let c = net.cells[v];
+        let piece = if v > 0 && net.cells[v - 1] == c { (keys.last().copied().unwrap_or(0u128) & 0xff) as u64 + 1 } else { 0 };
+        keys.push(super::blocks::key(c.map(|x| x as usize), sizes, piece));
+    }
+    let mut local = vec![u32::MAX; net.positions.len()];
+    let surface = &mut out.surface;
+    surface.active_cells = active_cells;
+    for (q, pair) in net.quads.iter().zip(&net.pairs) {
+        if !owner_owned(q) {
+            continue;
+        }
+        let halves = split(q.map(|v| net.positions[v as usize]));
+        let q = q.map(|v| {
+            let m = &mut local[v as usize];
+            if *m == u32::MAX {
+                *m = surface.mesh.positions.len() as u32;
+                surface.mesh.positions.push(net.positions[v as usize] - Vec3::ONE);
+                out.keys.push(keys[v as usize]);
+            }
+            *m
+        });
+        surface.mesh.triangles.extend(halves.map(|t| t.map(|k| q[k])));
+        surface.pairs.extend([*pair, *pair]);
+    }
+}
+
+/// The cells of an axis of `n` samples (padded coordinates) under `border`.
+fn all_cells(n: usize, border: Border) -> std::ops::Range<usize> {
+    match border {
+        Border::Closed => 0..n + 1,
+        Border::Open => 1..n.max(1),
+    }
+}
+
+/// The net of `block`'s computed cells (its owned cells and apron), smoothed as `o` says, and
+/// the number of owned surface cells.
+fn smoothed_net<T: Label>(block: &LabelBlock<'_, T>, o: &LabelSnOptions) -> (Net, usize) {
+    let all: [std::ops::Range<usize>; 3] = std::array::from_fn(|a| all_cells(block.map_dims[a], o.border));
+    let computed: [std::ops::Range<usize>; 3] = std::array::from_fn(|a| block.computed(a, &all[a]));
+    // The local frame starts one sample before the first computed cell (or at the padding).
+    let origin = computed.clone().map(|r| r.start.saturating_sub(1));
+    let width = |a: usize| (computed[a].end + 1).min(block.map_dims[a] + 1) + 1 - origin[a];
+    let window = Window { block, origin, p: [width(0), width(1)] };
+    let local = |r: &std::ops::Range<usize>, a: usize| (r.start - origin[a])..(r.end - origin[a]);
+    let frame = Frame {
+        lo: std::array::from_fn(|a| computed[a].start - origin[a]),
+        hi: std::array::from_fn(|a| computed[a].end - origin[a]),
+        all: std::array::from_fn(|a| (all[a].start as isize - origin[a] as isize, all[a].end as isize - origin[a] as isize)),
+        owned: std::array::from_fn(|a| local(&block.cells[a].clone(), a)),
+        origin,
     };
     // Slabs of cell layers in parallel (one per thread, at least SLAB_LAYERS layers each), each
     // numbering its own vertices and naming those of the layer below it by their place in that
     // layer; joined in order, the net is the one a single sweep makes.
-    let layers = hi[2].saturating_sub(lo);
+    let (lo, hi) = (frame.lo[2], frame.hi[2]);
+    let layers = hi.saturating_sub(lo);
     let slabs = rayon::current_num_threads().min(layers / SLAB_LAYERS).max(1);
     let bounds: Vec<usize> = (0..=slabs).map(|k| lo + layers * k / slabs).collect();
-    let parts: Vec<Slab> = (0..slabs).into_par_iter().map(|k| sweep(&padded, lo, hi, bounds[k]..bounds[k + 1])).collect();
-    let mut net = join(parts, out);
+    let parts: Vec<Slab> = (0..slabs).into_par_iter().map(|k| sweep(&window, &frame, bounds[k]..bounds[k + 1])).collect();
+    let (mut net, active_cells) = join(parts);
     if o.smoothing == LabelSmoothing::Constrained {
         smooth(&mut net, o.iterations, o.relaxation);
     }
-    triangulate(net, out);
-    Ok(())
+    (net, active_cells)
+}
+
+/// The cells a sweep meshes, in the window's local frame.
+struct Frame {
+    /// Computed cells per axis: `lo[a]..hi[a]`.
+    lo: [usize; 3],
+    hi: [usize; 3],
+    /// The map's cells (the ring rule looks at a neighbour only if the map has it).
+    all: [(isize, isize); 3],
+    /// The block's own cells (counted as surface cells).
+    owned: [std::ops::Range<usize>; 3],
+    /// The map's padded sample at local `0`.
+    origin: [usize; 3],
 }
 
 /// Fewest cell layers a slab task takes.
@@ -301,14 +415,15 @@ struct Slab {
 
 /// The slabs' nets in order as one: vertex indices offset by the slabs before, [`BELOW`]
 /// vertices resolved to the previous slab's last layer.
-fn join(parts: Vec<Slab>, out: &mut LabelSurface) -> Net {
+fn join(parts: Vec<Slab>) -> (Net, usize) {
     let mut net = Net::default();
     net.label_start.push(0);
     let mut previous_last_layer = 0u32;
+    let mut active_cells = 0;
     for part in parts {
         let offset = net.positions.len() as u32;
         let label_offset = net.labels.len() as u32;
-        out.active_cells += part.active_cells;
+        active_cells += part.active_cells;
         net.positions.extend_from_slice(&part.net.positions);
         net.cells.extend_from_slice(&part.net.cells);
         net.labels.extend_from_slice(&part.net.labels);
@@ -319,13 +434,14 @@ fn join(parts: Vec<Slab>, out: &mut LabelSurface) -> Net {
         net.pairs.extend_from_slice(&part.net.pairs);
         previous_last_layer = offset + part.last_layer_start;
     }
-    net
+    (net, active_cells)
 }
 
 /// The sweep over cell layers `layers_range` (the vertex layer below the first one is recomputed
 /// to name its vertices, not kept).
-fn sweep<T: Label>(padded: &Padded<'_, T>, lo: usize, hi: [usize; 3], layers_range: std::ops::Range<usize>) -> Slab {
-    let p = padded.p;
+fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std::ops::Range<usize>) -> Slab {
+    let p = window.p;
+    let (lo, hi) = (frame.lo, frame.hi);
     let cells_x = p[0] - 1;
     let layer_cells = cells_x * (p[1] - 1);
     let mut cache = PieceCache::default();
@@ -334,19 +450,20 @@ fn sweep<T: Label>(padded: &Padded<'_, T>, lo: usize, hi: [usize; 3], layers_ran
     let mut active_cells = 0;
     let mut last_layer_start = 0;
     // The layer below the slab (not the map's first): its vertices are named, not made.
-    let first = if layers_range.start > lo { layers_range.start - 1 } else { layers_range.start };
+    let first = if layers_range.start > lo[2] { layers_range.start - 1 } else { layers_range.start };
     // Sample layers cz - 1 ..= cz + 2 (the ring rule reads the cells above and below).
     let mut layers: [Vec<T>; 4] = Default::default();
     for (k, layer) in layers.iter_mut().enumerate().skip(1) {
-        padded.fill_layer(first as isize + k as isize - 2, layer);
+        window.fill_layer(first as isize + k as isize - 2, layer);
     }
     let mut prev = CellLayer { first: Vec::new(), table: Vec::new() };
     let mut cur = CellLayer { first: Vec::new(), table: Vec::new() };
-    let in_range = |c: [isize; 3]| (0..3).all(|d| c[d] >= lo as isize && c[d] < hi[d] as isize);
+    let in_range = |c: [isize; 3]| (0..3).all(|d| c[d] >= frame.all[d].0 && c[d] < frame.all[d].1);
+    let owned = |c: [usize; 3]| (0..3).all(|d| frame.owned[d].contains(&c[d]));
     for cz in first..layers_range.end {
         let below = cz < layers_range.start;
         layers.rotate_left(1);
-        padded.fill_layer(cz as isize + 2, &mut layers[3]);
+        window.fill_layer(cz as isize + 2, &mut layers[3]);
         std::mem::swap(&mut prev, &mut cur);
         cur.reset(layer_cells);
         let px = p[0];
@@ -360,9 +477,9 @@ fn sweep<T: Label>(padded: &Padded<'_, T>, lo: usize, hi: [usize; 3], layers_ran
         last_layer_start = net.positions.len() as u32;
         let mut named = 0u32;
         const SKIP: usize = 16;
-        for cy in lo..hi[1] {
+        for cy in lo[1]..hi[1] {
             let rows = [&s0[px * cy..][..px], &s0[px * (cy + 1)..][..px], &s1[px * cy..][..px], &s1[px * (cy + 1)..][..px]];
-            let mut cx = lo;
+            let mut cx = lo[0];
             while cx < hi[0] {
                 // Skip a run of cells of one label: the four rows agree over the run and are
                 // constant along it.
@@ -381,7 +498,7 @@ fn sweep<T: Label>(padded: &Padded<'_, T>, lo: usize, hi: [usize; 3], layers_ran
                     continue;
                 }
                 let cx = x;
-                if !below {
+                if !below && owned([cx, cy, cz]) {
                     active_cells += 1;
                 }
                 let (plain, base) = cache.plain(&labels);
@@ -414,7 +531,8 @@ fn sweep<T: Label>(padded: &Padded<'_, T>, lo: usize, hi: [usize; 3], layers_ran
                     named += u32::from(pieces.count);
                 } else {
                     cur.first[c] = net.positions.len() as u32;
-                    add_vertices(&mut net, pieces, &labels, [cx, cy, cz]);
+                    let o = frame.origin;
+                    add_vertices(&mut net, pieces, &labels, [cx + o[0], cy + o[1], cz + o[2]]);
                 }
             }
         }
@@ -426,11 +544,11 @@ fn sweep<T: Label>(padded: &Padded<'_, T>, lo: usize, hi: [usize; 3], layers_ran
             continue;
         }
         // z edges from sample layer cz to cz + 1: their four cells are in layer cz.
-        for y in (lo + 1)..hi[1] {
+        for y in (lo[1] + 1)..hi[1] {
             if s0[px * y..][..px] == s1[px * y..][..px] {
                 continue;
             }
-            for x in (lo + 1)..hi[0] {
+            for x in (lo[0] + 1)..hi[0] {
                 let (a, b) = (at(s0, x, y), at(s1, x, y));
                 if a != b {
                     let q = [
@@ -444,17 +562,17 @@ fn sweep<T: Label>(padded: &Padded<'_, T>, lo: usize, hi: [usize; 3], layers_ran
             }
         }
         // x and y edges of sample layer cz: cells in layers cz - 1 and cz.
-        if cz > lo {
-            for y in lo..hi[1] {
+        if cz > lo[2] {
+            for y in lo[1]..hi[1] {
                 let row = &s0[px * y..][..px];
                 if row.iter().all(|&l| l == row[0]) && s0[px * (y + 1)..][..px] == *row {
                     continue;
                 }
-                for x in lo..hi[0] {
+                for x in lo[0]..hi[0] {
                     let a = at(s0, x, y);
                     // x edge (x, y) - (x + 1, y): cells (x, y - 1 ..= y, cz - 1 ..= cz).
                     let b = at(s0, x + 1, y);
-                    if y > lo && a != b {
+                    if y > lo[1] && a != b {
                         let q = [
                             vertex(&prev, x, y - 1, 0, 6),
                             vertex(&prev, x, y, 0, 4),
@@ -465,7 +583,7 @@ fn sweep<T: Label>(padded: &Padded<'_, T>, lo: usize, hi: [usize; 3], layers_ran
                     }
                     // y edge (x, y) - (x, y + 1): cells (x - 1 ..= x, y, cz - 1 ..= cz).
                     let b = at(s0, x, y + 1);
-                    if x > lo && a != b {
+                    if x > lo[0] && a != b {
                         let q = [
                             vertex(&prev, x - 1, y, 1, 5),
                             vertex(&cur, x - 1, y, 1, 1),
@@ -610,15 +728,19 @@ fn triangulate(net: Net, out: &mut LabelSurface) {
     out.mesh.triangles.reserve(quads.len() * 2);
     out.pairs.reserve(quads.len() * 2);
     for (q, pair) in quads.iter().zip(&pairs) {
-        let p = q.map(|v| positions[v as usize]);
-        if p[0].distance_squared(p[2]) <= p[1].distance_squared(p[3]) {
-            out.mesh.triangles.extend([[q[0], q[1], q[2]], [q[0], q[2], q[3]]]);
-        } else {
-            out.mesh.triangles.extend([[q[0], q[1], q[3]], [q[1], q[2], q[3]]]);
-        }
+        out.mesh.triangles.extend(split(q.map(|v| positions[v as usize])).map(|t| t.map(|k| q[k])));
         out.pairs.extend([*pair, *pair]);
     }
     out.mesh.positions = positions.into_iter().map(|p| p - Vec3::ONE).collect();
+}
+
+/// A quad with corners at `p` as two triangles (of corner slots) along its shorter diagonal.
+fn split(p: [Vec3; 4]) -> [[usize; 3]; 2] {
+    if p[0].distance_squared(p[2]) <= p[1].distance_squared(p[3]) {
+        [[0, 1, 2], [0, 2, 3]]
+    } else {
+        [[0, 1, 3], [1, 2, 3]]
+    }
 }
 
 /// How far smoothing keeps a vertex from its cell's faces, in samples: a label of one sample has

@@ -25,18 +25,20 @@ import contextlib
 import json
 import os
 import tempfile
+import warnings
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
-from . import Mesh, _isolab
+from . import LabelMeshes, Mesh, _isolab
 
 try:
     import dask
 except ImportError as e:  # pragma: no cover - the message is the point
     raise ImportError("isolab.dask needs dask: pip install \"./python[dask]\" (dask, distributed, zarr)") from e
 
-__all__ = ["mesh_volume", "bake_world", "load_fragment", "save_fragment"]
+__all__ = ["mesh_volume", "mesh_labels", "bake_world", "load_fragment", "save_fragment", "load_label_fragment",
+           "save_label_fragment"]
 
 MANIFEST = "manifest.json"
 
@@ -71,18 +73,14 @@ def _fragment_name(block_id: Sequence[int]) -> str:
     return "fragment-{}-{}-{}.npz".format(*block_id)
 
 
-def save_fragment(path: str, fragment: Dict[str, Any]) -> None:
-    """Writes a fragment as ``.npz``, atomically: a temporary file in the same folder, renamed
+def _save_npz(path: str, arrays: Dict[str, Any]) -> None:
+    """Writes ``arrays`` as ``.npz``, atomically: a temporary file in the same folder, renamed
     over ``path`` once complete, so a reader (or a rerun) never sees half a fragment."""
     folder = os.path.dirname(path) or "."
     fd, tmp = tempfile.mkstemp(prefix=".fragment-", suffix=".npz.tmp", dir=folder)
     try:
         with os.fdopen(fd, "wb") as f:
-            np.savez(f, id=np.asarray(fragment["id"], dtype=np.int64), state=np.asarray(fragment["state"]),
-                     active_cells=np.asarray(fragment["active_cells"], dtype=np.int64),
-                     discarded_triangles=np.asarray(fragment["discarded_triangles"], dtype=np.int64),
-                     positions=fragment["positions"], normals=fragment["normals"], triangles=fragment["triangles"],
-                     keys=fragment["keys"], keyed=fragment["keyed"])
+            np.savez(f, **arrays)
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
@@ -90,6 +88,15 @@ def save_fragment(path: str, fragment: Dict[str, Any]) -> None:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
+
+
+def save_fragment(path: str, fragment: Dict[str, Any]) -> None:
+    """Writes a volume fragment as ``.npz``, atomically (never half a file)."""
+    _save_npz(path, dict(id=np.asarray(fragment["id"], dtype=np.int64), state=np.asarray(fragment["state"]),
+                         active_cells=np.asarray(fragment["active_cells"], dtype=np.int64),
+                         discarded_triangles=np.asarray(fragment["discarded_triangles"], dtype=np.int64),
+                         positions=fragment["positions"], normals=fragment["normals"],
+                         triangles=fragment["triangles"], keys=fragment["keys"], keyed=fragment["keyed"]))
 
 
 def load_fragment(path: str) -> Dict[str, Any]:
@@ -233,24 +240,7 @@ def mesh_volume(array, level: float, algorithm: str = "marching-cubes", *, chunk
     out_dir = _open_out(out, params, blocks, counts, apron)
     affine_ = _affine(spacing, affine)
 
-    source = array
-    if not _is_dask_array(array) and isinstance(array, np.ndarray):
-        source = client.scatter(array, broadcast=True) if client is not None else dask.delayed(array, name="isolab-volume")
-    tasks, paths = [], []
-    for block_id, lo, bdims in blocks:
-        slices = tuple(slice(lo[a], lo[a] + bdims[a]) for a in (2, 1, 0))
-        path = None if out_dir is None else os.path.join(out_dir, _fragment_name(block_id))
-        paths.append(path)
-        if path is not None and os.path.exists(path):
-            tasks.append(path)
-            continue
-        if _is_dask_array(array):
-            task = dask.delayed(_mesh_task, pure=False)(array[slices], None, tuple(block_id), job, path)
-        else:
-            task = dask.delayed(_mesh_task, pure=False)(source, slices, tuple(block_id), job, path)
-        tasks.append(task)
-    results = iter(_compute([t for t in tasks if not isinstance(t, str)], client, progress))
-    fragments = [t if isinstance(t, str) else next(results) for t in tasks]
+    fragments, paths = _run_blocks(array, blocks, _mesh_task, job, client, out_dir, "isolab-volume", progress)
     if out_dir is not None:
         _write_json(os.path.join(out_dir, MANIFEST), {"params": params, "blocks": len(blocks), "counts": counts,
                                                      "apron": apron, "done": [os.path.basename(p) for p in paths]})
@@ -355,3 +345,136 @@ def bake_world(field: str = "terrain", size: Sequence[int] = (8192, 512, 8192), 
     report = {"algorithm": algorithm, "driver": "isolab.dask.bake_world", "field": field, "size": cells, "dims": dims,
               "iso": 0.0, "inside": "below", "chunk": int(chunk), "apron": apron, "block_counts": counts}
     return Mesh(_isolab.weld_fragments([load_fragment(p) for p in fragment_paths], affine_, json.dumps(report)))
+
+
+def save_label_fragment(path: str, fragment: Dict[str, Any]) -> None:
+    """Writes a label fragment (what one block of :func:`mesh_labels` makes) as ``.npz``,
+    atomically (never half a file)."""
+    labels = sorted(fragment["counts"])
+    _save_npz(path, dict(id=np.asarray(fragment["id"], dtype=np.int64),
+                         active_cells=np.asarray(fragment["active_cells"], dtype=np.int64),
+                         positions=fragment["positions"], triangles=fragment["triangles"], pairs=fragment["pairs"],
+                         keys=fragment["keys"], count_labels=np.asarray(labels, dtype=np.uint32),
+                         count_samples=np.asarray([fragment["counts"][k] for k in labels], dtype=np.int64)))
+
+
+def load_label_fragment(path: str) -> Dict[str, Any]:
+    """A fragment ``mesh_labels(..., out=...)`` wrote: the block's interface triangles
+    (``positions`` in the map's sample indices, isolab's x = numpy's last axis; ``triangles``;
+    ``pairs``, each triangle's ``(inside, outside)`` labels), the weld ``keys`` (N x 2 uint64),
+    its ``id``, ``active_cells`` and ``counts`` (each label's samples among those it owns)."""
+    with np.load(path) as z:
+        return {"id": tuple(int(v) for v in z["id"]), "active_cells": int(z["active_cells"]),
+                "positions": z["positions"], "triangles": z["triangles"], "pairs": z["pairs"], "keys": z["keys"],
+                "counts": {int(k): int(n) for k, n in zip(z["count_labels"], z["count_samples"])}}
+
+
+def _label_task(source, slices, block_id, job: Dict[str, Any], path: Optional[str]):
+    """One Dask task: read a block of labels, mesh it, write or return its fragment."""
+    if path is not None and os.path.exists(path):
+        return path
+    block = source if slices is None else source[slices]
+    block = np.ascontiguousarray(np.asarray(block))
+    fragment = _isolab.mesh_label_block(block, job["algorithm"], job["options"], job["dims"], job["chunk"], block_id,
+                                        job["labels"], job["threads"])
+    if path is None:
+        return fragment
+    save_label_fragment(path, fragment)
+    return path
+
+
+def _run_blocks(array, blocks, task, job, client, out_dir, name, progress):
+    """One task per block (``task(source, slices, id, job, path)``), skipping those whose file
+    is in ``out_dir``: the results (or paths) in plan order, and every block's path."""
+    source = array
+    if not _is_dask_array(array) and isinstance(array, np.ndarray):
+        source = client.scatter(array, broadcast=True) if client is not None else dask.delayed(array, name=name)
+    tasks, paths = [], []
+    for block_id, lo, bdims in blocks:
+        slices = tuple(slice(lo[a], lo[a] + bdims[a]) for a in (2, 1, 0))
+        path = None if out_dir is None else os.path.join(out_dir, _fragment_name(block_id))
+        paths.append(path)
+        if path is not None and os.path.exists(path):
+            tasks.append(path)
+            continue
+        if _is_dask_array(array):
+            tasks.append(dask.delayed(task, pure=False)(array[slices], None, tuple(block_id), job, path))
+        else:
+            tasks.append(dask.delayed(task, pure=False)(source, slices, tuple(block_id), job, path))
+    results = iter(_compute([t for t in tasks if not isinstance(t, str)], client, progress))
+    return [t if isinstance(t, str) else next(results) for t in tasks], paths
+
+
+def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] = None,
+                affine: Optional[np.ndarray] = None, labels: Optional[Sequence[int]] = None,
+                algorithm: str = "surface-nets", smoothing: Optional[Union[bool, str]] = None, border: str = "closed",
+                options: Optional[Mapping[str, Any]] = None, client=None, out: Optional[Union[str, os.PathLike]] = None,
+                merge: bool = True, progress: bool = False, threads: int = 1) -> Union[LabelMeshes, List[str]]:
+    """Meshes a label map (a segmentation) block by block on Dask into one mesh per label, as
+    :func:`isolab.mesh_labels` does in one process, and with the same result: each block meshes
+    its own cells (and the apron its extractor needs: none for ``marching-tetrahedra``, one cell,
+    plus one per smoothing pass, for ``surface-nets``, so that smoothing moves every vertex as in
+    the whole map); the fragments weld by integer keys into the very surface of the whole map,
+    then split per label.
+
+    Parameters
+    ----------
+    array : zarr array, dask array or numpy array
+        Integer labels (``0`` the background), shape (I, J, K); read block by block as
+        :func:`mesh_volume` reads volumes.
+    chunk : int
+        Cells per block along each axis. With smoothing, each block also meshes ``iterations +
+        1`` cells around it (17 by default), so blocks much larger than that waste less.
+    spacing, affine, labels, algorithm, smoothing, border, options
+        As :func:`isolab.mesh_labels`.
+    client, out, merge, progress, threads
+        As :func:`mesh_volume`: ``out`` keeps one ``fragment-X-Y-Z.npz`` per block
+        (:func:`load_label_fragment`) and a manifest, and a rerun meshes only the missing blocks.
+
+    Returns
+    -------
+    isolab.LabelMeshes, or a list of fragment paths when ``merge=False``
+        Its ``extract_ms`` is the weld's time (the blocks ran on the workers).
+
+    >>> import numpy as np, isolab, isolab.dask
+    >>> seg = np.zeros((30, 20, 24), np.uint8)
+    >>> seg[3:15, 3:17, 3:20] = 1
+    >>> seg[15:27, 3:17, 3:20] = 2
+    >>> blocks = isolab.dask.mesh_labels(seg, chunk=8)
+    >>> whole = isolab.mesh_labels(seg)
+    >>> sorted(blocks), all((blocks[l].faces.shape == whole[l].faces.shape) for l in (1, 2))
+    ([1, 2], True)
+    """
+    shape = tuple(int(s) for s in array.shape)
+    if len(shape) != 3:
+        raise ValueError(f"the label map must be a 3-D array; this one has {len(shape)} dimensions")
+    if np.dtype(array.dtype).kind == "f":
+        raise TypeError(f"a label map holds integer labels, but this array's dtype is {array.dtype}: an intensity "
+                        "volume is meshed at a level with mesh_volume; labels stored as floats convert with "
+                        ".astype(np.uint16)")
+    if not merge and out is None:
+        raise ValueError("merge=False keeps the fragments in `out`: give out=FOLDER")
+    opts = {} if options is None else {str(k): str(v) for k, v in options.items()}
+    if smoothing is not None:
+        opts["smoothing"] = ("constrained" if smoothing else "none") if isinstance(smoothing, bool) else str(smoothing)
+    opts["border"] = str(border)
+    chosen = None if labels is None else sorted({int(s) for s in labels})
+    dims = [shape[2], shape[1], shape[0]]
+    counts, apron, blocks = _isolab.label_block_plan(algorithm, opts, dims, int(chunk))
+    job = {"kind": "labels", "algorithm": algorithm, "options": opts, "dims": dims, "chunk": int(chunk),
+           "labels": chosen, "threads": int(threads)}
+    params = dict(job, shape=list(shape), dtype=str(array.dtype))
+    params.pop("threads")
+    out_dir = _open_out(out, params, blocks, counts, apron)
+    affine_ = _affine(spacing, affine)
+    fragments, paths = _run_blocks(array, blocks, _label_task, job, client, out_dir, "isolab-labels", progress)
+    if out_dir is not None:
+        _write_json(os.path.join(out_dir, MANIFEST), {"params": params, "blocks": len(blocks), "counts": counts,
+                                                     "apron": apron, "done": [os.path.basename(p) for p in paths]})
+    if not merge:
+        return list(paths)
+    loaded = [load_label_fragment(f) if isinstance(f, str) else f for f in fragments]
+    result = LabelMeshes(_isolab.weld_label_fragments(loaded, affine_, chosen, algorithm))
+    if result.missing:
+        warnings.warn(f"labels {result.missing} do not occur in the label map: no mesh for them", stacklevel=2)
+    return result

@@ -153,7 +153,7 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
     description: DESCRIPTION,
     options: OPTION_NAMES,
     make: from_options,
-    guarantees: Guarantees { cubic: true, bcc: false, closed: true, manifold: true, outward: true, intersection_free: false },
+    guarantees: Guarantees { cubic: true, bcc: false, closed: true, manifold: true, outward: true, intersection_free: true },
 };
 
 /// Nielson & Hamann 1991: marching cubes whose ambiguous faces follow the trilinear interpolant.
@@ -162,7 +162,7 @@ pub const DECIDER_INFO: ExtractorInfo = ExtractorInfo {
     description: DECIDER_DESCRIPTION,
     options: OPTION_NAMES,
     make: decider_from_options,
-    guarantees: Guarantees { cubic: true, bcc: false, closed: true, manifold: true, outward: true, intersection_free: false },
+    guarantees: Guarantees { cubic: true, bcc: false, closed: true, manifold: true, outward: true, intersection_free: true },
 };
 
 /// Builds marching cubes from named options.

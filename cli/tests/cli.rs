@@ -140,7 +140,7 @@ fn tetrahedral_options_are_checked() {
         assert_clean_failure(&o, 2, &["threshold", "(0, 100]"]);
     }
     let o = isolab(&["extract", "-a", "regularised-marching-tetrahedra", "-f", "sphere", "-r", "16", "--set", "guard=maybe"]);
-    assert_clean_failure(&o, 2, &["guard", "true, false"]);
+    assert_clean_failure(&o, 2, &["guard", "true, manifold, false"]);
     let o = isolab(&[
         "extract",
         "-a",

@@ -72,6 +72,7 @@ use std::sync::LazyLock;
 use std::time::Instant;
 
 pub mod engine;
+pub mod folds;
 pub mod geometry;
 pub mod repair;
 pub mod table;

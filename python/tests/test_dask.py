@@ -20,16 +20,6 @@ def gyroid(shape, period=9.0):
     return (np.sin(i) * np.cos(j) + np.sin(j) * np.cos(k) + np.sin(k) * np.cos(i)).astype(np.float32)
 
 
-@pytest.fixture(scope="module")
-def client():
-    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                       dashboard_address="127.0.0.1:0", memory_limit="1GiB", silence_logs=40)
-    c = distributed.Client(cluster, timeout=60)
-    yield c
-    c.close()
-    cluster.close()
-
-
 def test_the_cluster_listens_on_loopback_only(client):
     assert len(client.scheduler_info()["workers"]) == 2
     assert client.scheduler.address.startswith("tcp://127.0.0.1:")

@@ -19,16 +19,6 @@ CASES = [(a["name"], s) for a in isolab.algorithms() if a["kind"] == "labels"
          for s in ((True, False) if "smoothing" in a["options"] else (None,))]
 
 
-@pytest.fixture(scope="module")
-def client():
-    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                       dashboard_address="127.0.0.1:0", memory_limit="1GiB", silence_logs=40)
-    c = distributed.Client(cluster, timeout=60)
-    yield c
-    c.close()
-    cluster.close()
-
-
 def voronoi(shape, cells, seed=7, dtype=np.uint16):
     """Labels 1..cells of the nearest of `cells` random seeds, background 0 outside a ball."""
     rng = np.random.default_rng(seed)

@@ -30,7 +30,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
-from . import LabelMeshes, Mesh, _isolab
+from . import LabelMeshes, Mesh, _index_to_world, _isolab
 
 try:
     import dask
@@ -45,20 +45,6 @@ MANIFEST = "manifest.json"
 
 def _options(options: Optional[Mapping[str, Any]]) -> Optional[Dict[str, str]]:
     return None if options is None else {str(k): str(v) for k, v in options.items()}
-
-
-def _affine(spacing, affine) -> Optional[List[List[float]]]:
-    if affine is not None:
-        a = np.asarray(affine, dtype=np.float64)
-        if a.shape != (4, 4):
-            raise ValueError(f"affine must be a 4 x 4 matrix; its shape is {a.shape}")
-        return [list(map(float, row)) for row in a]
-    if spacing is not None:
-        if len(spacing) != 3:
-            raise ValueError("spacing must consist of three floats.")
-        sx, sy, sz = (float(s) for s in spacing)
-        return [[sx, 0.0, 0.0, 0.0], [0.0, sy, 0.0, 0.0], [0.0, 0.0, sz, 0.0], [0.0, 0.0, 0.0, 1.0]]
-    return None
 
 
 def _is_dask_array(array) -> bool:
@@ -118,6 +104,12 @@ def _write_json(path: str, value: Any) -> None:
     os.replace(tmp, path)
 
 
+def _write_manifest(out_dir: str, params: Dict[str, Any], blocks, counts, apron, done) -> None:
+    """The run's manifest: its parameters, its blocks and (once they ran) the blocks done."""
+    _write_json(os.path.join(out_dir, MANIFEST), {"params": params, "blocks": len(blocks), "counts": counts,
+                                                 "apron": apron, "done": done})
+
+
 def _open_out(out, params: Dict[str, Any], blocks, counts, apron) -> Optional[str]:
     """Creates ``out`` with a manifest of the run's parameters, or checks that the manifest
     already there is this run's (a rerun resumes it); returns the folder."""
@@ -132,8 +124,7 @@ def _open_out(out, params: Dict[str, Any], blocks, counts, apron) -> Optional[st
         if old != params:
             raise ValueError(f"out {out_dir!r} holds the fragments of another run ({old}); give another folder or "
                              "empty it")
-    _write_json(manifest_path, {"params": params, "blocks": len(blocks), "counts": counts, "apron": apron,
-                                "done": None})
+    _write_manifest(out_dir, params, blocks, counts, apron, None)
     return out_dir
 
 
@@ -238,12 +229,11 @@ def mesh_volume(array, level: float, algorithm: str = "marching-cubes", *, chunk
     params = dict(job, shape=list(shape), dtype=str(array.dtype))
     params.pop("threads")
     out_dir = _open_out(out, params, blocks, counts, apron)
-    affine_ = _affine(spacing, affine)
+    affine_ = _index_to_world(affine, spacing)
 
     fragments, paths = _run_blocks(array, blocks, _mesh_task, job, client, out_dir, "isolab-volume", progress)
     if out_dir is not None:
-        _write_json(os.path.join(out_dir, MANIFEST), {"params": params, "blocks": len(blocks), "counts": counts,
-                                                     "apron": apron, "done": [os.path.basename(p) for p in paths]})
+        _write_manifest(out_dir, params, blocks, counts, apron, [os.path.basename(p) for p in paths])
     if not merge:
         return list(paths)
     loaded = [load_fragment(f) if isinstance(f, str) else f for f in fragments]
@@ -333,8 +323,7 @@ def bake_world(field: str = "terrain", size: Sequence[int] = (8192, 512, 8192), 
         tasks.append(dask.delayed(_bake_task, pure=False)(tuple(block_id), list(lo), list(bdims), job, fragment_path,
                                                           mesh_path))
     done = list(_compute(tasks, client, progress))
-    _write_json(os.path.join(out_dir, MANIFEST), {"params": params, "blocks": len(blocks), "counts": counts,
-                                                 "apron": apron, "done": done})
+    _write_manifest(out_dir, params, blocks, counts, apron, done)
     files = [os.path.join(out_dir, d["mesh"]) for d in done if d["mesh"]]
     if not merge:
         return files
@@ -466,11 +455,10 @@ def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] =
     params = dict(job, shape=list(shape), dtype=str(array.dtype))
     params.pop("threads")
     out_dir = _open_out(out, params, blocks, counts, apron)
-    affine_ = _affine(spacing, affine)
+    affine_ = _index_to_world(affine, spacing)
     fragments, paths = _run_blocks(array, blocks, _label_task, job, client, out_dir, "isolab-labels", progress)
     if out_dir is not None:
-        _write_json(os.path.join(out_dir, MANIFEST), {"params": params, "blocks": len(blocks), "counts": counts,
-                                                     "apron": apron, "done": [os.path.basename(p) for p in paths]})
+        _write_manifest(out_dir, params, blocks, counts, apron, [os.path.basename(p) for p in paths])
     if not merge:
         return list(paths)
     loaded = [load_label_fragment(f) if isinstance(f, str) else f for f in fragments]

@@ -6,7 +6,10 @@
 //! - a lattice it does not declare is refused with `ExtractError::UnsupportedLattice`;
 //! - where the field changes sign inside the lattice the surface is not empty, and where it does
 //!   not the surface is empty (and no error);
-//! - closed, manifold, outward and free of self-intersections wherever it declares so;
+//! - closed, manifold, outward and free of self-intersections wherever it declares so; where the
+//!   surface leaves the lattice (inside samples on its border: white noise, a tilted plane, a
+//!   saddle), closed means open only along the lattice's border (every boundary edge within one
+//!   cell of it), and outward means consistently wound;
 //! - the stats agree with the output (`finish_counts` called: vertex, triangle and tetrahedron
 //!   counts), the sampling time is copied, the stage times are filled, normals are one per
 //!   vertex or none, every index is in range;
@@ -22,7 +25,7 @@ use glam::Vec3;
 use isolab_algorithms::extractors::{self, ExtractorInfo};
 use isolab_algorithms::{ExtractError, Extraction, Extractor, Options, Samples};
 use isolab_metrics::{self_intersections, topology};
-use isolab_tests::{lattice_blobs, unit_cube_samples};
+use isolab_tests::{lattice_blobs, lattice_samples, unit_cube_samples};
 use proptest::prelude::*;
 
 /// [`isolab_tests::unit_cube_samples`] under the name the tests here use.
@@ -120,14 +123,18 @@ fn check(info: &ExtractorInfo, samples: &Samples, crosses: bool, other: &Samples
     let g = info.guarantees;
     if crosses {
         let t = topology(mesh);
-        if g.closed {
+        let leaves = leaves_the_lattice(samples);
+        if g.closed && leaves {
+            let stray = boundary_edges_off_the_border(mesh, samples);
+            assert!(stray.is_empty(), "{what}: declared closed, but open inside the lattice at {stray:?}");
+        } else if g.closed {
             assert!(t.closed && t.boundary_edges == 0, "{what}: declared closed: {t:#?}");
         }
         if g.manifold {
             assert!(t.edge_manifold && t.vertex_manifold && t.unused_vertices == 0, "{what}: declared manifold: {t:#?}");
         }
         if g.outward {
-            assert!(t.oriented && t.outward, "{what}: declared outward: {t:#?}");
+            assert!(t.oriented && (leaves || t.outward), "{what}: declared outward: {t:#?}");
         }
         if g.intersection_free {
             let x = self_intersections(mesh);
@@ -174,6 +181,89 @@ fn fixed_fields_on_both_lattices() {
         // Many samples exactly at the iso-value (the gyroid has whole planes of them): vertices
         // must not meet at those samples.
         every_extractor(&on_iso(bcc, n, 11), true, &sphere, "values in {-1, 0, 1}");
+    }
+}
+
+/// Whether some sample on the lattice's border is inside: the surface then leaves the lattice.
+fn leaves_the_lattice(samples: &Samples) -> bool {
+    let [nx, ny, nz] = samples.grid().dims;
+    let (iso, values) = (samples.iso(), samples.values());
+    (0..nz).any(|z| {
+        (0..ny).any(|y| {
+            (0..nx).any(|x| {
+                let border = x == 0 || y == 0 || z == 0 || x + 1 == nx || y + 1 == ny || z + 1 == nz;
+                border && values[x + nx * (y + ny * z)] < iso
+            })
+        })
+    })
+}
+
+/// The boundary edges (used by one triangle) of `mesh` with an end farther than one cell from
+/// the border of `samples`' cubic grid: where a surface that leaves the lattice is open although
+/// it should not be.
+fn boundary_edges_off_the_border(mesh: &isolab_algorithms::TriMesh, samples: &Samples) -> Vec<[u32; 2]> {
+    let grid = samples.grid();
+    let (lo, hi) = (grid.origin, grid.position(grid.dims[0] - 1, grid.dims[1] - 1, grid.dims[2] - 1));
+    let near_border = |i: u32| {
+        let p = mesh.positions[i as usize];
+        let d = (p - lo).min(hi - p).min_element();
+        d <= grid.spacing * 1.0001
+    };
+    let mut uses = std::collections::HashMap::<[u32; 2], usize>::new();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *uses.entry([a.min(b), a.max(b)]).or_default() += 1;
+        }
+    }
+    let mut stray: Vec<[u32; 2]> =
+        uses.into_iter().filter(|&(e, n)| n == 1 && !(near_border(e[0]) && near_border(e[1]))).map(|(e, _)| e).collect();
+    stray.sort_unstable();
+    stray
+}
+
+/// White noise on the whole lattice, its border included: the surface leaves the lattice
+/// everywhere, through every kind of boundary cell (faces, edges and corners of the domain, and
+/// ambiguous faces on the border).
+fn open_noise(bcc: bool, n: usize, seed: u64) -> Samples {
+    let mut random = isolab_algorithms::random::Random::new(seed);
+    lattice_samples(bcc, [n, n, n], |_| {
+        let v = 0.1 + 0.9 * random.unit() as f32;
+        if random.unit() < 0.45 {
+            -v
+        } else {
+            v
+        }
+    })
+}
+
+#[test]
+fn surfaces_that_leave_the_lattice() {
+    for bcc in [false, true] {
+        let n = if bcc { 6 } else { 9 };
+        let last = 2.0 * (n - 1) as f32;
+        // Doubled lattice coordinates: a tilted plane and a saddle, both cut by the border.
+        let plane = lattice_samples(bcc, [n, n, n], |d| d[0] as f32 + 0.37 * d[1] as f32 - 0.21 * d[2] as f32 - 0.45 * last);
+        let saddle = lattice_samples(bcc, [n, n, n], |d| {
+            let [x, y, z] = d.map(|c| c as f32 / last - 0.5);
+            x * x - y * y + 0.3 * z - 0.013
+        });
+        let sphere = blobs(bcc, n, &[(Vec3::splat(0.5), 0.3)], 0.5);
+        every_extractor(&plane, true, &sphere, "a tilted plane through the lattice");
+        every_extractor(&saddle, true, &sphere, "a saddle through the lattice");
+        for seed in 0..24 {
+            for info in extractors::INFOS {
+                // Volume extractors on a few seeds only: bcc-sculpt takes seconds on each.
+                let volume = build(info).produces_volume();
+                if volume && seed >= 2 {
+                    continue;
+                }
+                let n = if volume { 4 } else { 3 + (seed as usize % 5) };
+                let samples = open_noise(bcc, n, seed);
+                let crosses = samples.values().iter().any(|&v| v < 0.0);
+                check(info, &samples, crosses, &sphere, &format!("white noise {n}³ to the border, seed {seed}"));
+            }
+        }
     }
 }
 

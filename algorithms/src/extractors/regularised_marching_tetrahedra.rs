@@ -334,7 +334,7 @@ impl Extractor for RegularisedMarchingTetrahedra {
 
 impl RegularisedMarchingTetrahedra {
     fn extract_with(&self, samples: &Samples, out: &mut Extraction, s: &mut RmtScratch) -> Result<(), ExtractError> {
-        extract_tetrahedral(samples, &self.options, &mut s.tet, out)?;
+        let counts = extract_tetrahedral(samples, &self.options, &mut s.tet, out)?;
         let first_pass_vertices = out.surface.positions.len();
         let mut repaired = false;
         if self.options.guard {
@@ -371,7 +371,9 @@ impl RegularisedMarchingTetrahedra {
         if out.origins.wanted && matches!(samples.lattice(), Lattice::Cubic(_)) {
             s.tet.fill_origins(samples.grid(), first_pass_vertices, &mut out.origins);
         }
-        if repaired {
+        // A crossing's vertex whose triangles all collapsed onto a merged neighbour (a piece of
+        // surface where it meets the lattice's border) is left unused: dropped here too.
+        if repaired || counts.discarded > 0 {
             finish_repair(out, &mut s.renumber);
         }
         compute_normals(out);
@@ -443,7 +445,7 @@ mod tests {
             RegularisedMarchingTetrahedra::default().extract(samples, &mut guarded).unwrap();
             // The guard as it was: every merged vertex checked every round.
             let (mut scratch, mut out) = (TetScratch::default(), Extraction::default());
-            extract_tetrahedral(samples, &RmtOptions::default(), &mut scratch, &mut out).unwrap();
+            let counts = extract_tetrahedral(samples, &RmtOptions::default(), &mut scratch, &mut out).unwrap();
             let (mut check, mut rounds, mut folds) = (ManifoldCheck::default(), 0, FoldCheck::default());
             loop {
                 let mut defects = check.defects_among(&out.surface, |v| scratch.is_merged(v)).to_vec();
@@ -455,7 +457,7 @@ mod tests {
                 }
                 rounds += 1;
             }
-            if rounds > 0 {
+            if rounds > 0 || counts.discarded > 0 {
                 finish_repair(&mut out, &mut Vec::new());
             }
             compute_normals(&mut out);

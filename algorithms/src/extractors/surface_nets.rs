@@ -24,7 +24,10 @@
 //!
 //! **Guarantees.** Every vertex lies in its cell, before and after smoothing. Quads never cross the
 //! lattice boundary, so the mesh is open where the surface leaves the grid. Consistent outward
-//! winding.
+//! winding. Where the boundary cuts one piece's quads into separate fans (two sheets of the cut
+//! surface touching in a boundary cell), the piece gets a vertex per fan, so no vertex is a
+//! bow-tie there; a piece with no quad at all (a corner of the domain cut off) gets none
+//! (`dual::cells::boundary_split`; the contract test's surfaces that leave the lattice).
 //!
 //! **Guarantees (topology).** Because each piece of surface has its own vertex and the cube table
 //! resolves ambiguous faces alike in both cells, the net is closed (where it stays inside the

@@ -74,6 +74,10 @@ pub struct Case {
     /// Which polygon each crossing edge belongs to (`u8::MAX` for edges that do not cross).
     /// Dual methods use it to give each piece its own vertex.
     pub edge_polygon: [u8; 12],
+    /// The next crossing edge around each crossing edge's polygon (`u8::MAX` for edges that do
+    /// not cross): the polygon's cycle, which the dual methods walk to split a piece that the
+    /// domain boundary cuts into separate fans.
+    pub next: [u8; 12],
     /// Bit `p` set when polygon `p` is fanned around an interior vertex at the mean of its edge
     /// crossings, referred to in `triangles` as `12 + p` (only some joined ambiguous faces need
     /// it; the default table never does).
@@ -272,7 +276,7 @@ pub fn generate_case(case: u8, rule: impl Fn(u8, usize) -> FaceRule) -> Case {
             count += 1;
         }
     }
-    Case { edge_mask, count: count as u8, triangles, polygons, edge_polygon, interior }
+    Case { edge_mask, count: count as u8, triangles, polygons, edge_polygon, next, interior }
 }
 
 /// The face cube edges `a` and `b` both lie on, if any (two edges share at most one face).

@@ -149,9 +149,10 @@ impl TetScratch {
         origins.fill_with_ordinals(grid, owners);
     }
 
-    /// Whether vertex `v` merged two or more crossings (only those can be unmerged).
+    /// Whether vertex `v` merged two or more crossings and stands (its sample not unmerged
+    /// since): only those can be unmerged.
     pub fn is_merged(&self, v: u32) -> bool {
-        self.owner.get(v as usize).is_some_and(|&(_, members, _)| members >= 2)
+        self.owner.get(v as usize).is_some_and(|&(sample, members, _)| members >= 2 && !self.no_merge[sample as usize])
     }
 
     /// The vertices whose triangles the last repair's re-pass changed (removed or made, with
@@ -429,7 +430,8 @@ impl VertexPass<'_> {
                             }
                         };
                         // First the flags only; positions for the rare samples that own a crossing.
-                        let (mut nearby, mut neighbours, mut changes) = (0u16, 0u16, 0u16);
+                        let (mut nearby, mut changes) = (0u16, 0u16);
+                        let neighbours: u16;
                         if let Some(toward) = &toward {
                             // The sign changes come from the sign bits; only the edges that change
                             // are read (a neighbour that exists is at the same index offset on
@@ -459,9 +461,12 @@ impl VertexPass<'_> {
                                 nearby |= u16::from(change & owns_branchless(i, vi, j, vj, iso)) << k;
                             }
                         } else {
-                            for k in 0..DIRECTIONS {
+                            let present = (0..DIRECTIONS).fold(0u16, |n, k| n | u16::from(neighbour(k).is_some()) << k);
+                            // On the border only the edges of the lattice's tetrahedra (a
+                            // crossing on any other would be a vertex no triangle uses).
+                            neighbours = topo.edges_in_tetrahedra(present);
+                            for k in (0..DIRECTIONS).filter(|&k| neighbours >> k & 1 == 1) {
                                 let Some(j) = neighbour(k) else { continue };
-                                neighbours |= 1 << k;
                                 let vj = values[j];
                                 if (vj < iso) != inside {
                                     changes |= 1 << k;

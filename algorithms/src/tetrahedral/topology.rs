@@ -137,4 +137,17 @@ impl TetTopology {
         }
         TetTopology { kind, directions, adjacency, templates, edge_directions }
     }
+
+    /// The neighbours among `present` (bit `k`: neighbour `k` exists) whose edge to the sample
+    /// lies in a tetrahedron of the lattice: those with two present neighbours joined to it and
+    /// to each other (a tetrahedron of the star). Inside the lattice that is every neighbour; on
+    /// the BCC lattice's border it is not, as the tetrahedra there need the cell centres beyond
+    /// it (a cube edge along an edge of the domain lies in none).
+    pub fn edges_in_tetrahedra(&self, present: u16) -> u16 {
+        (0..DIRECTIONS).filter(|&k| present >> k & 1 == 1).fold(0u16, |mask, k| {
+            let around = self.adjacency[k] & present;
+            let in_one = (0..DIRECTIONS).any(|j| around >> j & 1 == 1 && self.adjacency[j] & around != 0);
+            mask | u16::from(in_one) << k
+        })
+    }
 }

@@ -107,30 +107,24 @@ impl Ctx<'_> {
             }
             let min = self.grid.position(x, y, z);
             base[c] = tag | mesh.vertex_count() as u32;
+            if let Some(split) = self.boundary_split(entry, x, y, z) {
+                // A piece the domain boundary cuts into separate fans: a vertex per fan.
+                cases[c] = code | SPLIT;
+                for p in 0..split.count as usize {
+                    let local = self.place(split.placed_from[p], &v, min, &crossing);
+                    let normal = self.sweep_normals.then(|| trilinear_gradient(&v, local.clamp(Vec3::ZERO, Vec3::ONE)));
+                    mesh.push_vertex(min + local * self.grid.spacing, normal);
+                    if let Some(cell_min) = cell_min.as_deref_mut() {
+                        cell_min.push(min);
+                    }
+                }
+                return;
+            }
             for p in 0..entry.polygons as usize {
                 let local = match self.placement {
-                    Placement::Qef { tolerance, clamp } => {
-                        let mut pts = [Vec3::ZERO; 12];
-                        let mut nrm = [Vec3::ZERO; 12];
-                        let mut k = 0;
-                        for e in (0..12).filter(|&e| entry.edge_polygon[e] as usize == p) {
-                            let q = crossing(e);
-                            pts[k] = q;
-                            // The field's gradient where the samples carry it, else the
-                            // cell's trilinear interpolant's (Hermite data from samples).
-                            let g = match self.field {
-                                Some(field) => field.gradient(min + q * self.grid.spacing),
-                                None => trilinear_gradient(&v, q),
-                            };
-                            nrm[k] = g.normalize_or_zero();
-                            k += 1;
-                        }
-                        let x = qef::solve_qef(&pts[..k], &nrm[..k], tolerance);
-                        if clamp {
-                            x.clamp(Vec3::ZERO, Vec3::ONE)
-                        } else {
-                            x
-                        }
+                    Placement::Qef { .. } => {
+                        let edges = (0..12).filter(|&e| entry.edge_polygon[e] as usize == p).fold(0u16, |m, e| m | 1 << e);
+                        self.place(edges, &v, min, &crossing)
                     }
                     Placement::MassPoint => sums[p] / counts[p],
                 };
@@ -142,6 +136,64 @@ impl Ctx<'_> {
             }
         });
         crate::geometry::normalize_all(mesh.normals_from(first_normal));
+    }
+
+    /// Where the vertex of the piece whose crossings are the edges in mask `edges` goes, in the
+    /// cell's unit cube (`v`: its corner values, `min`: its lower corner, `crossing`: each edge's
+    /// crossing in the unit cube).
+    fn place(&self, edges: u16, v: &[f32; 8], min: Vec3, crossing: &impl Fn(usize) -> Vec3) -> Vec3 {
+        match self.placement {
+            Placement::Qef { tolerance, clamp } => {
+                let mut pts = [Vec3::ZERO; 12];
+                let mut nrm = [Vec3::ZERO; 12];
+                let mut k = 0;
+                for e in (0..12).filter(|&e| edges >> e & 1 == 1) {
+                    let q = crossing(e);
+                    pts[k] = q;
+                    // The field's gradient where the samples carry it, else the cell's
+                    // trilinear interpolant's (Hermite data from samples).
+                    let g = match self.field {
+                        Some(field) => field.gradient(min + q * self.grid.spacing),
+                        None => trilinear_gradient(v, q),
+                    };
+                    nrm[k] = g.normalize_or_zero();
+                    k += 1;
+                }
+                let x = qef::solve_qef(&pts[..k], &nrm[..k], tolerance);
+                if clamp {
+                    x.clamp(Vec3::ZERO, Vec3::ONE)
+                } else {
+                    x
+                }
+            }
+            Placement::MassPoint => {
+                let (sum, n) =
+                    (0..12).filter(|&e| edges >> e & 1 == 1).fold((Vec3::ZERO, 0.0f32), |(s, n), e| (s + crossing(e), n + 1.0));
+                sum / n
+            }
+        }
+    }
+
+    /// The cube edges of cell `(x, y, z)` that lie on the domain boundary (bit `e`): they have
+    /// no quad, as one of their four cells is missing. Zero for cells inside.
+    #[inline]
+    pub(super) fn boundary_edges(&self, x: usize, y: usize, z: usize) -> u16 {
+        let [nx, ny, nz] = self.grid.dims;
+        if x != 0 && y != 0 && z != 0 && x + 2 != nx && y + 2 != ny && z + 2 != nz {
+            return 0;
+        }
+        let at = [(z == 0), (z + 2 == nz), (y == 0), (y + 2 == ny), (x == 0), (x + 2 == nx)];
+        (0..6).filter(|&f| at[f]).fold(0u16, |mask, f| mask | self.tables.face_edges[f])
+    }
+
+    /// The split of `entry`'s pieces in cell `(x, y, z)` by the domain boundary, when it splits
+    /// one ([`boundary_split`]).
+    #[inline]
+    fn boundary_split(&self, entry: &Case, x: usize, y: usize, z: usize) -> Option<BoundaryPieces> {
+        match self.boundary_edges(x, y, z) {
+            0 => None,
+            edges => boundary_split(entry, edges),
+        }
     }
 
     /// Calls `visit(x, y, i, case)` for every cell of cell layer `z` whose corners disagree (`i`:
@@ -164,7 +216,11 @@ impl Ctx<'_> {
         let mut n = 0;
         self.for_each_surface_cell_of_layer(signs, z, |x, y, _, case| {
             let code = u16::from(case) << 6 | u16::from(self.joined_faces(case, x, y, z));
-            n += self.tables.entry(code).polygons as usize;
+            let entry = self.tables.entry(code);
+            n += match self.boundary_split(entry, x, y, z) {
+                Some(split) => split.count as usize,
+                None => entry.polygons as usize,
+            };
         });
         n
     }
@@ -185,16 +241,27 @@ impl Ctx<'_> {
         let cx = self.grid.dims[0] - 1;
         let tables = self.tables;
         // The vertex of the piece of surface that crosses local edge `e` of a cell.
-        let cell = |layer: (&[u32], &[u16]), x: usize, y: usize, e: usize| piece_vertex(tables, layer, x + cx * y, e);
+        // (`lz`: the layer's z, for the rare cells the domain boundary splits.)
+        let cell = |layer: (&[u32], &[u16]), lz: usize, x: usize, y: usize, e: usize| {
+            piece_vertex(tables, layer, x + cx * y, e, || self.boundary_edges(x, y, lz))
+        };
         let (positions, triangles) = mesh.positions_and_triangles();
         let at = |i: u32| if i & EXTERN == 0 { positions[i as usize] } else { ghost[(i & !EXTERN) as usize] };
         let mut links = links;
         let least_folded = matches!(self.placement, Placement::Qef { .. });
         self.for_each_quad(signs, z, |edge, x, y, flip| {
             let [c00, c10, c11, c01] = match edge {
-                QuadEdge::Z => [cell(cur, x - 1, y - 1, 10), cell(cur, x, y - 1, 11), cell(cur, x, y, 8), cell(cur, x - 1, y, 9)],
-                QuadEdge::X => [cell(prev, x, y - 1, 6), cell(prev, x, y, 4), cell(cur, x, y, 0), cell(cur, x, y - 1, 2)],
-                QuadEdge::Y => [cell(prev, x - 1, y, 5), cell(cur, x - 1, y, 1), cell(cur, x, y, 3), cell(prev, x, y, 7)],
+                QuadEdge::Z => {
+                    [cell(cur, z, x - 1, y - 1, 10), cell(cur, z, x, y - 1, 11), cell(cur, z, x, y, 8), cell(cur, z, x - 1, y, 9)]
+                }
+                QuadEdge::X => {
+                    let below = z - 1;
+                    [cell(prev, below, x, y - 1, 6), cell(prev, below, x, y, 4), cell(cur, z, x, y, 0), cell(cur, z, x, y - 1, 2)]
+                }
+                QuadEdge::Y => {
+                    let below = z - 1;
+                    [cell(prev, below, x - 1, y, 5), cell(cur, z, x - 1, y, 1), cell(cur, z, x, y, 3), cell(prev, below, x, y, 7)]
+                }
             };
             let along_00_11 = if least_folded {
                 let p = [c00, c10, c11, c01].map(at);
@@ -259,8 +326,99 @@ impl Ctx<'_> {
 /// vertex indices, cell codes). Inlined by force: called from one closure in four places, it was
 /// not, and the whole sweep took a sixth longer.
 #[inline(always)]
-fn piece_vertex(tables: Tables, layer: (&[u32], &[u16]), c: usize, e: usize) -> u32 {
-    layer.0[c] + u32::from(tables.entry(layer.1[c]).edge_polygon[e])
+fn piece_vertex(tables: Tables, layer: (&[u32], &[u16]), c: usize, e: usize, boundary_edges: impl FnOnce() -> u16) -> u32 {
+    let code = layer.1[c];
+    let entry = tables.entry(code);
+    let piece = if code & SPLIT == 0 {
+        entry.edge_polygon[e]
+    } else {
+        // Rare: a cell on the domain boundary whose piece the boundary splits.
+        boundary_split(entry, boundary_edges()).map_or(entry.edge_polygon[e], |split| split.edge_piece[e])
+    };
+    layer.0[c] + u32::from(piece)
+}
+
+/// Cell-code flag: the domain boundary splits one of the cell's pieces ([`boundary_split`]).
+pub(super) const SPLIT: u16 = 1 << 15;
+
+/// A boundary cell's pieces once the domain boundary has cut them into fans.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct BoundaryPieces {
+    /// Vertices the cell makes.
+    pub(super) count: u8,
+    /// The piece (vertex) of each crossing edge that has a quad; `u8::MAX` for the others.
+    pub(super) edge_piece: [u8; 12],
+    /// The crossings each piece's vertex is placed from: the edges of its fan and the boundary
+    /// edge at either end of it.
+    pub(super) placed_from: [u16; 12],
+}
+
+/// How the domain boundary splits the pieces of a cell with table entry `entry` whose edges in
+/// `boundary_edges` lie on the boundary (they get no quad). A piece is one polygon of crossing
+/// edges, its vertex shared by the quads of its edges; around the vertex those quads form one
+/// fan per run of consecutive quad-bearing edges in the polygon. Two runs would be two fans
+/// meeting only at the vertex (a bow-tie), so each run gets its own vertex, and a polygon with
+/// no quad at all gets none (it would be an unused vertex). `None` when no piece is split or
+/// dropped: the cell keeps the table's pieces.
+pub(super) fn boundary_split(entry: &Case, boundary_edges: u16) -> Option<BoundaryPieces> {
+    if entry.edge_mask & boundary_edges == 0 {
+        return None;
+    }
+    let on_boundary = |e: u8| boundary_edges >> e & 1 == 1;
+    let mut out = BoundaryPieces { count: 0, edge_piece: [u8::MAX; 12], placed_from: [0; 12] };
+    let mut changed = false;
+    for p in 0..entry.polygons {
+        // The polygon's cycle, from its lowest edge.
+        let start = (0..12u8).find(|&e| entry.edge_polygon[e as usize] == p)?;
+        let (mut cycle, mut len) = ([0u8; 12], 0);
+        let mut e = start;
+        loop {
+            cycle[len] = e;
+            len += 1;
+            e = entry.next[e as usize];
+            if e == start || len == 12 {
+                break;
+            }
+        }
+        let cycle = &cycle[..len];
+        let with_quads = cycle.iter().filter(|&&e| !on_boundary(e)).count();
+        if with_quads == 0 {
+            changed = true;
+            continue;
+        }
+        if with_quads == len {
+            let piece = out.count;
+            out.count += 1;
+            for &e in cycle {
+                out.edge_piece[e as usize] = piece;
+                out.placed_from[piece as usize] |= 1 << e;
+            }
+            continue;
+        }
+        // Walk the cycle from a quad-bearing edge that follows a boundary edge: the walk then
+        // ends on a boundary edge, and every run lies whole inside it.
+        let first = (0..len).find(|&k| !on_boundary(cycle[k]) && on_boundary(cycle[(k + len - 1) % len]))?;
+        let at = |k: usize| cycle[(first + k) % len];
+        let (mut k, mut runs) = (0, 0);
+        while k < len {
+            if on_boundary(at(k)) {
+                k += 1;
+                continue;
+            }
+            let piece = out.count;
+            out.count += 1;
+            runs += 1;
+            let mut mask = 1u16 << at(k + len - 1);
+            while !on_boundary(at(k)) {
+                out.edge_piece[at(k) as usize] = piece;
+                mask |= 1 << at(k);
+                k += 1;
+            }
+            out.placed_from[piece as usize] = mask | 1 << at(k);
+        }
+        changed |= runs > 1;
+    }
+    changed.then_some(out)
 }
 
 /// The lattice axis of a crossing edge whose quad the sweep makes.
@@ -484,6 +642,8 @@ pub(super) struct Tables {
     /// Each cube edge's first corner and the step to its second, in the unit cube.
     pub(super) edge_start: [Vec3; 12],
     pub(super) edge_step: [Vec3; 12],
+    /// The cube edges on each face (bit `e`).
+    pub(super) face_edges: [u16; 6],
 }
 
 impl Tables {
@@ -494,6 +654,7 @@ impl Tables {
             rings: &RING_FACES,
             edge_start: EDGES.map(|(a, _)| corner(a)),
             edge_step: EDGES.map(|(a, b)| corner(b) - corner(a)),
+            face_edges: std::array::from_fn(|f| face_edges(f).iter().fold(0u16, |m, &e| m | 1 << e)),
         }
     }
 
@@ -501,6 +662,7 @@ impl Tables {
     /// face is joined (rare: only at faces wrapped on both sides).
     #[inline]
     pub(super) fn entry(&self, code: u16) -> &'static Case {
+        let code = code & !SPLIT;
         if code & 63 == 0 {
             &self.default[(code >> 6) as usize]
         } else {

@@ -33,7 +33,9 @@ use crate::mesh::TriMesh;
 use crate::samples::Samples;
 use crate::sign_rows::{count_crossing_edges, for_each_bit, for_each_surface_cell, next_bits, span, LayerSigns};
 use crate::slabs::{for_each_slab, join_parts, mesh_pieces, slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN};
-use crate::tables::marching_cubes::{opposite_face, Case, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, RING_FACES, TABLE};
+use crate::tables::marching_cubes::{
+    face_edges, opposite_face, Case, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, RING_FACES, TABLE,
+};
 use glam::Vec3;
 use rayon::prelude::*;
 use smoothing::build_adjacency;

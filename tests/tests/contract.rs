@@ -44,17 +44,24 @@ fn random_blobs() -> impl Strategy<Value = Vec<(Vec3, f32)>> {
         .prop_map(|v| v.into_iter().map(|(x, y, z, r)| (Vec3::new(x, y, z), r)).collect())
 }
 
-/// A white-noise sign field from a seed (values in ±[0.1, 1], none at the iso-value).
-fn noise(bcc: bool, n: usize, seed: u64) -> Samples {
+/// White-noise values from a seed: in ±[0.1, 1], none at the iso-value, inside (negative) with
+/// probability 0.45.
+fn white_noise(seed: u64) -> impl FnMut() -> f32 {
     let mut random = isolab_algorithms::random::Random::new(seed);
-    field_samples(bcc, n, |_| {
+    move || {
         let v = 0.1 + 0.9 * random.unit() as f32;
         if random.unit() < 0.45 {
             -v
         } else {
             v
         }
-    })
+    }
+}
+
+/// A white-noise sign field from a seed, outside on the border ([`white_noise`]).
+fn noise(bcc: bool, n: usize, seed: u64) -> Samples {
+    let mut value = white_noise(seed);
+    field_samples(bcc, n, |_| value())
 }
 
 /// Random cases per property: 12, or `ISOLAB_CONTRACT_CASES` for a soak run.
@@ -226,15 +233,8 @@ fn boundary_edges_off_the_border(mesh: &isolab_algorithms::TriMesh, samples: &Sa
 /// everywhere, through every kind of boundary cell (faces, edges and corners of the domain, and
 /// ambiguous faces on the border).
 fn open_noise(bcc: bool, n: usize, seed: u64) -> Samples {
-    let mut random = isolab_algorithms::random::Random::new(seed);
-    lattice_samples(bcc, [n, n, n], |_| {
-        let v = 0.1 + 0.9 * random.unit() as f32;
-        if random.unit() < 0.45 {
-            -v
-        } else {
-            v
-        }
-    })
+    let mut value = white_noise(seed);
+    lattice_samples(bcc, [n, n, n], |_| value())
 }
 
 #[test]

@@ -28,8 +28,12 @@ pub fn unmerge_and_regenerate(samples: &Samples, scratch: &mut TetScratch, out: 
         let (vi, base) = (values[i], out.surface.positions.len() as u32);
         let mut packed = 0u64;
         let mut slot = 0u64;
-        for (k, d) in topo.directions.iter().enumerate() {
-            let Some(j) = at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]]) else { continue };
+        let neighbour = |d: &[i32; 3]| at.index([q[0] + d[0], q[1] + d[1], q[2] + d[2]]);
+        // The edges the vertex pass gives crossings: those in a tetrahedron of the lattice.
+        let present = topo.directions.iter().enumerate().fold(0u16, |n, (k, d)| n | u16::from(neighbour(d).is_some()) << k);
+        let in_tetrahedra = topo.edges_in_tetrahedra(present);
+        for (k, d) in topo.directions.iter().enumerate().filter(|&(k, _)| in_tetrahedra >> k & 1 == 1) {
+            let Some(j) = neighbour(d) else { continue };
             let vj = values[j];
             if (vj < iso) != (vi < iso) && owns(i, vi, j, vj, iso) {
                 let step = Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * (0.5 * at.corners.spacing);

@@ -90,11 +90,11 @@ fn all_256_cube_patterns_give_closed_manifold_outward_meshes() {
     }
     // Dual contouring does not promise freedom from self-intersections (its registry entry says
     // so): vertices placed in the 27 cells around one cube pattern fold quads over each other on
-    // some patterns. The count is a bound, measured (so a change that adds folds fails here; the
-    // "Hardening" issue's fix is to bring it down).
+    // some patterns. The count is exact, as measured, so a change that adds folds or removes
+    // some fails here until it is updated; `manifold-dual-contouring` has none on these cases
+    // (tests/tests/manifold_dual_contouring.rs).
     let pairs: usize = intersecting.iter().map(|c| c.2).sum();
-    // Measured when this test was written: 85 of the 768 cases, 1,211 pairs.
-    assert!(intersecting.len() <= 85 && pairs <= 1211, "{} cases, {pairs} pairs: {intersecting:?}", intersecting.len());
+    assert_eq!((intersecting.len(), pairs), (85, 1211), "{intersecting:?}");
 }
 
 /// Vertices at features fold quads: split along the shorter diagonal, dual contouring of the

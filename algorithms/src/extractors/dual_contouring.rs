@@ -26,8 +26,8 @@
 //! that does not fold removed these on the shipped models (a test holds them at none at 64) but
 //! not everywhere: noisy fields (the asteroid, the terrain) keep some, where vertices of
 //! neighbouring quads cross rather than one quad folding. The report counts self-intersections
-//! and non-manifold edges per field. Manifold dual contouring (Schaefer, Ju &
-//! Warren 2007) is not implemented.
+//! and non-manifold edges per field. [`crate::extractors::manifold_dual_contouring`] keeps these
+//! vertices and triangulates each quad inside its cells instead, which cannot cross.
 //!
 //! **Costs.** The surface nets passes, plus one gradient evaluation per edge crossing (for mesh
 //! fields without an analytic gradient that is six distance queries) and a 3x3 SVD per vertex.

@@ -9,6 +9,7 @@
 pub mod bcc_sculpt;
 pub mod dual;
 pub mod dual_contouring;
+pub mod manifold_dual_contouring;
 pub mod marching_cubes;
 pub mod marching_tetrahedra;
 pub mod regularised_marching_tetrahedra;
@@ -16,6 +17,7 @@ pub mod surface_nets;
 
 pub use bcc_sculpt::BccSculpt;
 pub use dual_contouring::DualContouring;
+pub use manifold_dual_contouring::ManifoldDualContouring;
 pub use marching_cubes::MarchingCubes;
 pub use marching_tetrahedra::MarchingTetrahedra;
 pub use regularised_marching_tetrahedra::RegularisedMarchingTetrahedra;
@@ -34,6 +36,7 @@ pub const INFOS: &[ExtractorInfo] = &[
     marching_cubes::DECIDER_INFO,
     surface_nets::INFO,
     dual_contouring::INFO,
+    manifold_dual_contouring::INFO,
     marching_tetrahedra::INFO,
     regularised_marching_tetrahedra::INFO,
     bcc_sculpt::INFO,

@@ -241,21 +241,43 @@ fn defect(r: &real_volumes::Row) -> String {
     d.join(", ")
 }
 
-/// Sharp CAD: the smallest worst-corner error on the `csg` shape at the finest resolution, among
-/// manifold meshes free of self-intersections; its self-intersections over the compared inputs
-/// are stated, since sharpness is bought with vertex placement.
+/// A corner the mesh comes within this many grid spacings of counts as kept (dual contouring's
+/// promise on `csg`).
+const CORNER_KEPT_H: f64 = 0.05;
+
+/// Sharp CAD: among manifold meshes free of self-intersections on the `csg` shape at the finest
+/// resolution, those that keep every corner ([`CORNER_KEPT_H`]); of these, the one with the
+/// smallest worst-corner error among those free of self-intersections on every compared input
+/// too, else the smallest error overall. The self-intersections of a pick that has some are
+/// stated, since sharpness is bought with vertex placement.
 fn sharp(data: &sharp_features::Data, compared: &compare_algorithms::Data) -> Result<Choice, ExperimentError> {
     let finest = data.rows.iter().map(|r| r.resolution).max().ok_or_else(|| missing("sharp-feature rows"))?;
     let mut at: Vec<&sharp_features::Row> =
         data.rows.iter().filter(|r| r.resolution == finest && r.manifold && r.self_intersections == 0).collect();
     at.sort_by(|a, b| a.worst_corner_h.total_cmp(&b.worst_corner_h));
-    let best = at.first().ok_or_else(|| missing("clean sharp-feature row"))?;
-    let mut why = format!(
-        "On the `csg` shape at {finest} samples, the smallest distance from a true corner to the mesh among clean \
-         meshes: {} h at the worst corner",
-        spacings(best.worst_corner_h)
-    );
-    if let Some(next) = at.iter().find(|r| r.worst_corner_h > best.worst_corner_h) {
+    let sharpest = *at.first().ok_or_else(|| missing("clean sharp-feature row"))?;
+    let clean_everywhere = |r: &&&sharp_features::Row| middle_intersections(&r.algorithm, compared).0 == 0;
+    let keeping: Vec<&sharp_features::Row> = at.iter().copied().filter(|r| r.worst_corner_h <= CORNER_KEPT_H).collect();
+    let best = keeping.iter().find(clean_everywhere).copied().unwrap_or(sharpest);
+    let mut why = if best.algorithm == sharpest.algorithm {
+        format!(
+            "On the `csg` shape at {finest} samples, the smallest distance from a true corner to the mesh among clean \
+             meshes: {} h at the worst corner",
+            spacings(best.worst_corner_h)
+        )
+    } else {
+        format!(
+            "On the `csg` shape at {finest} samples, of the clean meshes that come within {} h of every corner, the one \
+             free of self-intersections on every compared input too: {} h at the worst corner (`{}`, the sharpest, {} h, \
+             has {} self-intersecting pairs on the compared inputs at the middle resolution)",
+            spacings(CORNER_KEPT_H),
+            spacings(best.worst_corner_h),
+            sharpest.algorithm,
+            spacings(sharpest.worst_corner_h),
+            middle_intersections(&sharpest.algorithm, compared).0
+        )
+    };
+    if let Some(next) = at.iter().find(|r| r.worst_corner_h > CORNER_KEPT_H.max(best.worst_corner_h)) {
         why.push_str(&format!(", against {} h for the next best, `{}`.", spacings(next.worst_corner_h), next.algorithm));
     } else {
         why.push('.');
@@ -264,9 +286,9 @@ fn sharp(data: &sharp_features::Data, compared: &compare_algorithms::Data) -> Re
     Ok(Choice { pick: best.algorithm.clone(), why, pages: vec!["sharp_features", "compare_algorithms"] })
 }
 
-/// A sentence on `algorithm`'s self-intersecting pairs over the compared inputs at the middle
-/// resolution, or nothing when it has none.
-fn intersection_caveat(algorithm: &str, compared: &compare_algorithms::Data) -> String {
+/// `algorithm`'s self-intersecting pairs over the compared inputs at the middle resolution, the
+/// inputs that have any, and the inputs compared.
+fn middle_intersections(algorithm: &str, compared: &compare_algorithms::Data) -> (usize, usize, usize) {
     let level = compared.field_levels.get(1).copied().unwrap_or(0);
     let model_level = compared.model_levels.get(1).copied().unwrap_or(0);
     let middle: Vec<&super::Measured> = compared
@@ -276,13 +298,19 @@ fn intersection_caveat(algorithm: &str, compared: &compare_algorithms::Data) -> 
         .collect();
     let pairs: usize = middle.iter().map(|r| r.metrics.intersecting_pairs()).sum();
     let hit = middle.iter().filter(|r| r.metrics.intersecting_pairs() > 0).count();
+    (pairs, hit, middle.len())
+}
+
+/// A sentence on `algorithm`'s self-intersecting pairs over the compared inputs at the middle
+/// resolution, or nothing when it has none.
+fn intersection_caveat(algorithm: &str, compared: &compare_algorithms::Data) -> String {
+    let (pairs, hit, inputs) = middle_intersections(algorithm, compared);
     if pairs == 0 {
         return String::new();
     }
     format!(
-        " Its vertex placement costs self-intersections elsewhere: {pairs} pairs on {hit} of the {} compared inputs at the \
-         middle resolution.",
-        middle.len()
+        " Its vertex placement costs self-intersections elsewhere: {pairs} pairs on {hit} of the {inputs} compared inputs at \
+         the middle resolution."
     )
 }
 

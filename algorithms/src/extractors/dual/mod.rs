@@ -19,6 +19,7 @@
 //! The front ends' module docs give the papers, guarantees and costs.
 
 mod cells;
+mod intersection_free;
 pub mod qef;
 pub mod smoothing;
 
@@ -258,6 +259,38 @@ impl DualEngine {
 
     /// Extracts into `out`, cleared first (the [`crate::Extractor`] contract).
     pub fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
+        self.run(samples, out, None)
+    }
+
+    /// Extracts into `out` and then replaces each quad by triangles that each stay inside one
+    /// cell (the engine's `intersection_free` pass, after Ju and Udeshi 2006): the mesh cannot cross itself.
+    pub fn extract_intersection_free(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
+        let mut quads = intersection_free::Quads::default();
+        self.run(samples, out, Some(&mut quads))?;
+        let t = Instant::now();
+        let Lattice::Cubic(grid) = *samples.lattice() else { unreachable!("run refuses other lattices") };
+        let input = intersection_free::Input { values: samples.values(), grid, iso: samples.iso() };
+        let scratch = out.stats.buffer_bytes.saturating_sub(out.surface.capacity_bytes()) + quads.bytes();
+        let unresolved = intersection_free::triangulate(&input, &quads, &mut out.surface, self.name)?;
+        if unresolved > 0 {
+            out.stats.warnings.push(format!(
+                "{}: {unresolved} cells with two pieces of surface whose triangles cross (please report the input)",
+                self.name
+            ));
+        }
+        out.stats.times.geometry += t.elapsed();
+        out.finish_counts(scratch);
+        Ok(())
+    }
+
+    /// The sweep behind [`DualEngine::extract`]; with `quads`, it also keeps each quad's cycle
+    /// and each vertex's cell for [`intersection_free::triangulate`].
+    fn run(
+        &self,
+        samples: &Samples,
+        out: &mut Extraction,
+        quads: Option<&mut intersection_free::Quads>,
+    ) -> Result<(), ExtractError> {
         out.clear();
         out.stats.times.sampling = samples.sampling_time();
         let Lattice::Cubic(grid) = *samples.lattice() else {
@@ -272,6 +305,8 @@ impl DualEngine {
         let s = &mut held;
         let field = samples.field().map(|f| f.as_ref());
         let smoothing = self.options.smoothing != Smoothing::None && self.options.iterations > 0;
+        let keep_quads = quads.is_some();
+        let links = smoothing || keep_quads;
         let ctx = Ctx {
             values: samples.values(),
             grid,
@@ -280,7 +315,7 @@ impl DualEngine {
             field,
             tables: Tables::get(),
             sweep_normals: !smoothing,
-            keep_cell_min: smoothing || out.origins.wanted,
+            keep_cell_min: smoothing || out.origins.wanted || keep_quads,
         };
         let cell_layers = nz - 1;
         let tasks = crate::slabs::task_count(self.options.parallelism, grid.cell_count(), cell_layers);
@@ -301,13 +336,13 @@ impl DualEngine {
             std::mem::swap(&mut slabs[0].mesh, &mut out.surface);
             std::mem::swap(&mut slabs[0].cell_min, &mut s.cell_min);
             std::mem::swap(&mut slabs[0].links, &mut s.links);
-            ctx.slab(0, cell_layers, smoothing, &mut slabs[0]);
+            ctx.slab(0, cell_layers, links, &mut slabs[0]);
             std::mem::swap(&mut slabs[0].mesh, &mut out.surface);
             std::mem::swap(&mut slabs[0].cell_min, &mut s.cell_min);
             std::mem::swap(&mut slabs[0].links, &mut s.links);
         } else {
             for_each_slab(slabs, |t, slab| {
-                ctx.slab(t * cell_layers / tasks, (t + 1) * cell_layers / tasks, smoothing, slab);
+                ctx.slab(t * cell_layers / tasks, (t + 1) * cell_layers / tasks, links, slab);
             });
         }
         let slab_wall = t_slabs.elapsed();
@@ -386,6 +421,9 @@ impl DualEngine {
             out.origins.fill_from_owners(&grid, s.cell_min.iter().map(cell_of));
         }
         let scratch = s.bytes();
+        if let Some(quads) = quads {
+            quads.take_from(&mut s.links, &mut s.cell_min);
+        }
         self.scratch.give(held);
         out.finish_counts(scratch);
         Ok(())

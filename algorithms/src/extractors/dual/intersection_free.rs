@@ -1,0 +1,417 @@
+//! Intersection-free polygons for the dual engine, after T. Ju and T. Udeshi, "Intersection-free
+//! contouring on an octree grid", Pacific Graphics 2006: every triangle is kept inside the cell
+//! or the pair of face-neighbouring cells it belongs to, so triangles of different cells can meet
+//! only on the faces they share.
+//!
+//! The engine's quad of a crossing edge joins the vertices of its four cells; split along a
+//! diagonal, each of its two triangles spans three cells, and dual contouring's vertices, pulled
+//! to features, fold such triangles through their neighbours'. Here the quad becomes a fan of
+//! four triangles around the edge's crossing point (its *edge point*, kept a thin margin from
+//! either sample). Each triangle joins the vertices of two cells that share a face, and the edge
+//! point on that face. Both vertices lie strictly inside their cells and so project into the
+//! square the cells share; the segment between them pierces that square inside, and the
+//! triangle meets the face only in the segment from the edge point to the piercing point.
+//!
+//! Why it cannot cross: inside one cell the surface is then the cone from the cell's vertex over
+//! a closed path on the cell's boundary (edge points joined through piercing points across the
+//! faces). A ray from an interior point leaves a convex cell once, so a cone over a simple path
+//! does not cross itself, and two cells' cones meet only on their shared face, along the path
+//! they share. A cell with two or more pieces of surface (and the faces with four crossings,
+//! whose cells always have two pieces on one side or the other) has a cone per piece; there each
+//! side is broken at a *face point* instead, the middle of its chord across the face, kept in the
+//! half of the face at the corner the chord cuts off when the face has two chords, so the two
+//! chords' paths cannot meet and the cell's cones depend on its own vertices only. Those cones
+//! are tested against each other with the exact predicate; where they cross (not seen in the
+//! tests), the cell's vertices move to the centroids of their paths and are tested again, and a
+//! crossing left is returned.
+
+use crate::extract::ExtractError;
+use crate::geometry::trilinear_gradient;
+use crate::lattice::Grid;
+use crate::mesh::{Incidence, TriMesh};
+use crate::predicates::indexed_triangles_intersect;
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// How far inside its cell a cell vertex is kept, and inside its face region a piercing or face
+/// point, as a fraction of the spacing: room for rounding, so every strict inequality the proof
+/// needs holds in floating point.
+const MARGIN: f32 = 1e-3;
+
+/// What the sweep keeps for [`triangulate`]: each quad's four sides in order (as the engine's
+/// smoothing links) and each vertex's cell corner.
+#[derive(Default)]
+pub(super) struct Quads {
+    sides: Vec<(u32, u32)>,
+    cell_min: Vec<Vec3>,
+}
+
+impl Quads {
+    /// Takes the sweep's buffers.
+    pub(super) fn take_from(&mut self, sides: &mut Vec<(u32, u32)>, cell_min: &mut Vec<Vec3>) {
+        std::mem::swap(&mut self.sides, sides);
+        std::mem::swap(&mut self.cell_min, cell_min);
+    }
+
+    /// Bytes held.
+    pub(super) fn bytes(&self) -> usize {
+        8 * self.sides.capacity() + 12 * self.cell_min.capacity()
+    }
+}
+
+/// The samples [`triangulate`] reads.
+pub(super) struct Input<'a> {
+    pub(super) values: &'a [f32],
+    pub(super) grid: Grid,
+    pub(super) iso: f32,
+}
+
+/// A lattice edge: its lower sample and its axis.
+type Edge = ([usize; 3], usize);
+
+/// A quad with its cycle wound outward and the lattice edge it crosses.
+struct Quad {
+    cycle: [u32; 4],
+    edge: Edge,
+}
+
+impl Input<'_> {
+    fn inside(&self, s: [usize; 3]) -> bool {
+        self.values[self.grid.index(s[0], s[1], s[2])] < self.iso
+    }
+
+    fn crosses(&self, (s, axis): Edge) -> bool {
+        self.inside(s) != self.inside(step(s, axis))
+    }
+
+    /// Where the surface crosses `edge` (linear interpolation, kept [`MARGIN`] from either end),
+    /// with its other two coordinates exactly the lattice's.
+    fn edge_point(&self, (s, axis): Edge) -> Vec3 {
+        let g = &self.grid;
+        let (v0, v1) = (self.values[g.index(s[0], s[1], s[2])], {
+            let e = step(s, axis);
+            self.values[g.index(e[0], e[1], e[2])]
+        });
+        let mut p = g.position(s[0], s[1], s[2]);
+        // Strictly inside the edge: a sample at the iso-value would otherwise put the crossings
+        // of all its edges on one point, as separate vertices that touch.
+        p[axis] += ((self.iso - v0) / (v1 - v0)).clamp(MARGIN, 1.0 - MARGIN) * g.spacing;
+        p
+    }
+
+    /// The unit normal at `p`: the gradient of the trilinear interpolant of the cell holding `p`,
+    /// as the engine's vertex normals.
+    fn normal_at(&self, p: Vec3) -> Vec3 {
+        let g = &self.grid;
+        let local = (p - g.origin) / g.spacing;
+        let cell: [usize; 3] = std::array::from_fn(|k| (local[k].floor().max(0.0) as usize).min(g.dims[k] - 2));
+        let [nx, ny, _] = g.dims;
+        let i = g.index(cell[0], cell[1], cell[2]);
+        let (sx, sxy) = (nx, nx * ny);
+        let idx = [i, i + 1, i + 1 + sx, i + sx, i + sxy, i + 1 + sxy, i + 1 + sx + sxy, i + sx + sxy];
+        let corner = Vec3::new(cell[0] as f32, cell[1] as f32, cell[2] as f32);
+        trilinear_gradient(&crate::geometry::gather(self.values, &idx), local - corner).normalize_or_zero()
+    }
+}
+
+/// `s` one sample along `axis`.
+fn step(mut s: [usize; 3], axis: usize) -> [usize; 3] {
+    s[axis] += 1;
+    s
+}
+
+/// The cell whose lower corner is `min`.
+fn cell_of(grid: &Grid, min: Vec3) -> [usize; 3] {
+    let c = ((min - grid.origin) / grid.spacing).round();
+    [c.x as usize, c.y as usize, c.z as usize]
+}
+
+/// The face two face-neighbouring cells share: its lower corner sample and the two axes it spans.
+#[derive(Clone, Copy)]
+struct Face {
+    corner: [usize; 3],
+    span: [usize; 2],
+}
+
+impl Face {
+    fn between(a: [usize; 3], b: [usize; 3]) -> Option<Face> {
+        let differ: Vec<usize> = (0..3).filter(|&k| a[k] != b[k]).collect();
+        let &[normal] = differ.as_slice() else { return None };
+        if a[normal].abs_diff(b[normal]) != 1 {
+            return None;
+        }
+        let mut corner = a;
+        corner[normal] = a[normal].max(b[normal]);
+        let span = [(normal + 1) % 3, (normal + 2) % 3];
+        let span = [span[0].min(span[1]), span[0].max(span[1])];
+        Some(Face { corner, span })
+    }
+
+    /// The face's four edges.
+    fn edges(&self) -> [Edge; 4] {
+        let [c, d] = self.span;
+        [(self.corner, c), (step(self.corner, d), c), (self.corner, d), (step(self.corner, c), d)]
+    }
+
+    /// The face corners (in face coordinates, 0 or 1 along each spanned axis) that `edge` joins.
+    fn corners_of(&self, (s, axis): Edge) -> [(u8, u8); 2] {
+        let [c, d] = self.span;
+        let at = |k: usize| (s[k] - self.corner[k]) as u8;
+        if axis == c {
+            [(0, at(d)), (1, at(d))]
+        } else {
+            [(at(c), 0), (at(c), 1)]
+        }
+    }
+
+    /// `p` in face coordinates (units of the spacing from the face's lower corner).
+    fn local(&self, grid: &Grid, p: Vec3) -> (f32, f32) {
+        let o = grid.position(self.corner[0], self.corner[1], self.corner[2]);
+        let [c, d] = self.span;
+        ((p[c] - o[c]) / grid.spacing, (p[d] - o[d]) / grid.spacing)
+    }
+
+    /// The point at face coordinates `(s, t)`, exactly on the face's plane.
+    fn point(&self, grid: &Grid, (s, t): (f32, f32)) -> Vec3 {
+        let mut p = grid.position(self.corner[0], self.corner[1], self.corner[2]);
+        let [c, d] = self.span;
+        p[c] += s * grid.spacing;
+        p[d] += t * grid.spacing;
+        p
+    }
+}
+
+/// Where on a face one piece's path may run: the face, or the half of it at a corner (face
+/// coordinates) that the piece cuts off from the other three.
+#[derive(Clone, Copy)]
+struct Region {
+    corner: Option<(u8, u8)>,
+}
+
+impl Region {
+    fn contains(&self, (s, t): (f32, f32), margin: f32) -> bool {
+        let in_face = (margin..=1.0 - margin).contains(&s) && (margin..=1.0 - margin).contains(&t);
+        in_face && self.corner.is_none_or(|(kx, ky)| (s - f32::from(kx)).abs() + (t - f32::from(ky)).abs() <= 1.0 - margin)
+    }
+
+    /// A point well inside the region.
+    fn centre(&self) -> (f32, f32) {
+        let quarter = |k: u8| if k == 0 { 0.25 } else { 0.75 };
+        self.corner.map_or((0.5, 0.5), |(kx, ky)| (quarter(kx), quarter(ky)))
+    }
+
+    /// `p` if it lies inside with twice the margin, else the farthest point toward it from the
+    /// centre that does (the region is convex).
+    fn clamp(&self, p: (f32, f32)) -> (f32, f32) {
+        let margin = 2.0 * MARGIN;
+        if self.contains(p, margin) {
+            return p;
+        }
+        let c = self.centre();
+        let at = |l: f32| (c.0 + l * (p.0 - c.0), c.1 + l * (p.1 - c.1));
+        let (mut lo, mut hi) = (0.0f32, 1.0f32);
+        for _ in 0..24 {
+            let mid = 0.5 * (lo + hi);
+            if self.contains(at(mid), margin) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        at(lo)
+    }
+}
+
+/// No face point: the side is kept whole.
+const WHOLE: u32 = u32::MAX;
+
+/// Replaces the engine's quads in `mesh` (two triangles per quad, in the order of `quads`'
+/// sides) by fans that keep each triangle in its cells, adding an edge point per quad and a face
+/// point per side of a cell with several pieces. Returns the cells whose pieces' cones still
+/// cross after the fallback (none has been seen; the tests hold it at none).
+pub(super) fn triangulate(input: &Input, quads: &Quads, mesh: &mut TriMesh, name: &'static str) -> Result<usize, ExtractError> {
+    let grid = input.grid;
+    let h = grid.spacing;
+    let n = quads.sides.len() / 4;
+    debug_assert_eq!(mesh.triangles.len(), 2 * n, "two triangles per quad");
+    debug_assert_eq!(quads.cell_min.len(), mesh.positions.len(), "a cell per vertex");
+    let cells: Vec<[usize; 3]> = quads.cell_min.iter().map(|&m| cell_of(&grid, m)).collect();
+    // Every cell vertex strictly inside its cell.
+    for (p, &m) in mesh.positions.iter_mut().zip(&quads.cell_min) {
+        *p = p.clamp(m + Vec3::splat(MARGIN * h), m + Vec3::splat((1.0 - MARGIN) * h));
+    }
+    // A cell's vertices are consecutive: a vertex shares its cell when a neighbour in the list does.
+    let shares_cell = |v: usize| (v > 0 && cells[v - 1] == cells[v]) || (v + 1 < cells.len() && cells[v + 1] == cells[v]);
+    let quad_list: Vec<Quad> = (0..n)
+        .into_par_iter()
+        .map(|k| {
+            let c = [0, 1, 2, 3].map(|i| quads.sides[4 * k + i].0);
+            let t = mesh.triangles[2 * k];
+            let i = c.iter().position(|&v| v == t[0]).unwrap_or(0);
+            let cycle = if c[(i + 1) % 4] == t[1] { c } else { [c[0], c[3], c[2], c[1]] };
+            let cs = c.map(|v| cells[v as usize]);
+            let axis = (0..3).find(|&a| cs.iter().all(|x| x[a] == cs[0][a])).unwrap_or(0);
+            let start = std::array::from_fn(|b| cs.iter().map(|x| x[b]).max().unwrap_or(0));
+            Quad { cycle, edge: (start, axis) }
+        })
+        .collect();
+    let first_edge_point = mesh.positions.len();
+    // Vertex indices, and the side slots `4 * quad + side`, fit in 32 bits.
+    if first_edge_point + n >= u32::MAX as usize / 2 || 4 * n >= u32::MAX as usize {
+        return Err(ExtractError::TooLarge { algorithm: name, vertices: first_edge_point + n });
+    }
+    let edge_points: Vec<Vec3> = quad_list.par_iter().map(|q| input.edge_point(q.edge)).collect();
+
+    // Each side (u, w) with the quads that have it: one or two (two faces' chords never share
+    // both cells' pieces in the engine's manifold output; more would be broken at face points).
+    let mut sides: Vec<(u64, u32)> = (0..n)
+        .into_par_iter()
+        .flat_map_iter(|k| {
+            let c = quad_list[k].cycle;
+            (0..4).map(move |i| {
+                let (u, w) = (c[i], c[(i + 1) % 4]);
+                ((u64::from(u.min(w)) << 32) | u64::from(u.max(w)), (4 * k + i) as u32)
+            })
+        })
+        .collect();
+    sides.par_sort_unstable();
+    let groups: Vec<&[(u64, u32)]> = sides.chunk_by(|a, b| a.0 == b.0).collect();
+    let face_points: Vec<Option<Vec3>> = groups
+        .par_iter()
+        .map(|group| {
+            let slot = |e: &(u64, u32)| (e.1 as usize / 4, e.1 as usize % 4);
+            let (k1, i1) = slot(&group[0]);
+            let c = quad_list[k1].cycle;
+            let (u, w) = (c[i1] as usize, c[(i1 + 1) % 4] as usize);
+            // A side between two single-piece cells is kept whole: both vertices project into
+            // the square the cells share, so the segment pierces it inside.
+            if group.len() <= 2 && !shares_cell(u) && !shares_cell(w) {
+                return None;
+            }
+            let face = Face::between(cells[u], cells[w])?;
+            let e1 = quad_list[k1].edge;
+            let e2 = match *group {
+                [_, second] => Some(quad_list[slot(second).0].edge),
+                [_] => other_end(input, &face, e1),
+                _ => None,
+            };
+            let four_crossings = face.edges().iter().filter(|&&e| input.crosses(e)).count() == 4;
+            let corner = e2.filter(|_| four_crossings).and_then(|e2| {
+                let other = face.corners_of(e2);
+                face.corners_of(e1).into_iter().find(|k| other.contains(k))
+            });
+            let (p1, p2) = (edge_points[k1], e2.map_or(edge_points[k1], |e2| input.edge_point(e2)));
+            Some(face.point(&grid, Region { corner }.clamp(face.local(&grid, 0.5 * (p1 + p2)))))
+        })
+        .collect();
+
+    // New vertices: the edge points, then the face points.
+    let mut side_point = vec![WHOLE; 4 * n];
+    let first_face_point = first_edge_point + n;
+    let mut extra = 0u32;
+    for (group, point) in groups.iter().zip(&face_points) {
+        if point.is_some() {
+            for e in group.iter() {
+                side_point[e.1 as usize] = first_face_point as u32 + extra;
+            }
+            extra += 1;
+        }
+    }
+    drop(groups);
+    let has_normals = mesh.normals.len() == mesh.positions.len();
+    mesh.positions.extend_from_slice(&edge_points);
+    mesh.positions.extend(face_points.iter().flatten());
+    if has_normals {
+        let normals: Vec<Vec3> = mesh.positions[first_edge_point..].par_iter().map(|&p| input.normal_at(p)).collect();
+        mesh.normals.extend(normals);
+    }
+    mesh.triangles.clear();
+    for (k, q) in quad_list.iter().enumerate() {
+        let centre = (first_edge_point + k) as u32;
+        for i in 0..4 {
+            let (a, b) = (q.cycle[i], q.cycle[(i + 1) % 4]);
+            match side_point[4 * k + i] {
+                WHOLE => mesh.triangles.push([a, b, centre]),
+                f => mesh.triangles.extend([[a, f, centre], [f, b, centre]]),
+            }
+        }
+    }
+    Ok(separate_pieces(input, mesh, &cells, has_normals))
+}
+
+/// The other end of the chord from `e1` across `face` when no second quad names it: the face's
+/// other crossing edge, or on a face with four, the neighbouring one on the domain boundary
+/// (where an edge has no quad).
+fn other_end(input: &Input, face: &Face, e1: Edge) -> Option<Edge> {
+    let crossing: Vec<Edge> = face.edges().into_iter().filter(|&e| e != e1 && input.crosses(e)).collect();
+    if let [only] = crossing.as_slice() {
+        return Some(*only);
+    }
+    let corners = face.corners_of(e1);
+    let dims = input.grid.dims;
+    let on_boundary = |(s, axis): Edge| (0..3).any(|k| k != axis && (s[k] == 0 || s[k] + 1 == dims[k]));
+    crossing.iter().copied().filter(|&e| face.corners_of(e).iter().any(|k| corners.contains(k))).find(|&e| on_boundary(e))
+}
+
+/// Tests the cones of every cell with several pieces against each other with the exact
+/// predicate and moves the vertices of cells whose cones cross to the centroids of their paths;
+/// returns the cells still crossing.
+fn separate_pieces(input: &Input, mesh: &mut TriMesh, cells: &[[usize; 3]], has_normals: bool) -> usize {
+    let groups: Vec<std::ops::Range<usize>> = {
+        let mut out = Vec::new();
+        let mut start = 0;
+        for v in 1..=cells.len() {
+            if v == cells.len() || cells[v] != cells[start] {
+                if v - start > 1 {
+                    out.push(start..v);
+                }
+                start = v;
+            }
+        }
+        out
+    };
+    if groups.is_empty() {
+        return 0;
+    }
+    let incidence = Incidence::of(mesh.positions.len(), &mesh.triangles);
+    let crossing = |mesh: &TriMesh, group: &std::ops::Range<usize>| {
+        let at = |v: u32| mesh.positions[v as usize];
+        group.clone().any(|a| {
+            (a + 1..group.end).any(|b| {
+                incidence.of_vertex(a as u32).iter().any(|&ta| {
+                    incidence
+                        .of_vertex(b as u32)
+                        .iter()
+                        .any(|&tb| indexed_triangles_intersect(mesh.triangles[ta as usize], mesh.triangles[tb as usize], at))
+                })
+            })
+        })
+    };
+    let mut unresolved = 0;
+    for group in &groups {
+        if !crossing(mesh, group) {
+            continue;
+        }
+        let h = input.grid.spacing;
+        let min = input.grid.origin + Vec3::from(cells[group.start].map(|c| c as f32)) * h;
+        for v in group.clone() {
+            let ring = incidence.of_vertex(v as u32);
+            let (sum, count) = ring
+                .iter()
+                .flat_map(|&t| mesh.triangles[t as usize])
+                .filter(|&x| x as usize != v)
+                .fold((Vec3::ZERO, 0.0f32), |(s, c), x| (s + mesh.positions[x as usize], c + 1.0));
+            if count > 0.0 {
+                let p = (sum / count).clamp(min + Vec3::splat(MARGIN * h), min + Vec3::splat((1.0 - MARGIN) * h));
+                mesh.positions[v] = p;
+                if has_normals {
+                    mesh.normals[v] = input.normal_at(p);
+                }
+            }
+        }
+        if crossing(mesh, group) {
+            unresolved += 1;
+        }
+    }
+    unresolved
+}

@@ -31,6 +31,7 @@ fn steady_state_remeshing_allocates_nothing() {
         "marching-cubes-decider",
         "surface-nets",
         "dual-contouring",
+        "manifold-dual-contouring",
         "marching-tetrahedra",
         "regularised-marching-tetrahedra",
     ] {

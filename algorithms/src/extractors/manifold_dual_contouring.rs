@@ -23,8 +23,12 @@
 //!
 //! **Non-guarantees.** A cell with several pieces of surface tests its pieces' cones against
 //! each other and falls back to centroids where they cross; a crossing left after that is
-//! reported as a warning (none has been seen). Not chunked: its edge and face points have no
-//! lattice key in the chunk engine.
+//! reported as a warning (none has been seen).
+//!
+//! **Chunks.** Seam-exact like dual contouring, with one sample more of apron: the edge points
+//! are owned by their edge's lower sample and the face points by their face's lower corner
+//! ([`crate::Origins`]), so chunks weld every vertex by lattice key, and re-meshing a chunk
+//! allocates nothing once the pass's buffers have grown.
 //!
 //! **Costs.** Dual contouring's sweep, then per quad an edge point and four to eight triangles
 //! instead of two (about twice the triangles), a sort of the quad sides, and a face point where
@@ -123,8 +127,13 @@ impl Extractor for ManifoldDualContouring {
         DESCRIPTION
     }
 
+    /// Dual contouring's apron and one cell more: a kept triangle's sides need both of their
+    /// quads, and a cell's face points the quads around its faces.
     fn chunking(&self) -> Chunking {
-        Chunking::Unsupported
+        match self.engine.chunking() {
+            Chunking::Apron(a) => Chunking::Apron(a + 1),
+            other => other,
+        }
     }
 
     fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {

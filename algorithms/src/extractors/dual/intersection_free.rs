@@ -38,24 +38,44 @@ use rayon::prelude::*;
 /// needs holds in floating point.
 const MARGIN: f32 = 1e-3;
 
-/// What the sweep keeps for [`triangulate`]: each quad's four sides in order (as the engine's
-/// smoothing links) and each vertex's cell corner.
+/// What the sweep keeps for [`triangulate`] (each quad's four sides in order, as the engine's
+/// smoothing links, and each vertex's cell corner) and the pass's own buffers, kept between calls
+/// so that re-meshing a chunk allocates nothing once they have grown.
 #[derive(Default)]
-pub(super) struct Quads {
+pub(super) struct Scratch {
     sides: Vec<(u32, u32)>,
     cell_min: Vec<Vec3>,
+    cells: Vec<[usize; 3]>,
+    quads: Vec<Quad>,
+    edge_points: Vec<Vec3>,
+    /// Every quad side as (vertex pair key, `4 * quad + side`), sorted by key.
+    keyed: Vec<(u64, u32)>,
+    /// Runs of `keyed` with one key: the quads that share a side.
+    groups: Vec<(u32, u32)>,
+    face_points: Vec<Option<(Vec3, [u32; 4])>>,
+    side_point: Vec<u32>,
+    normals: Vec<Vec3>,
+    pieces: Vec<(u32, u32)>,
+    incidence: Incidence,
 }
 
-impl Quads {
-    /// Takes the sweep's buffers.
-    pub(super) fn take_from(&mut self, sides: &mut Vec<(u32, u32)>, cell_min: &mut Vec<Vec3>) {
+impl Scratch {
+    /// Takes the sweep's buffers (and gives it the ones it had before, to refill).
+    pub(super) fn swap_with(&mut self, sides: &mut Vec<(u32, u32)>, cell_min: &mut Vec<Vec3>) {
         std::mem::swap(&mut self.sides, sides);
         std::mem::swap(&mut self.cell_min, cell_min);
     }
 
     /// Bytes held.
     pub(super) fn bytes(&self) -> usize {
-        8 * self.sides.capacity() + 12 * self.cell_min.capacity()
+        8 * self.sides.capacity()
+            + 12 * (self.cell_min.capacity() + self.edge_points.capacity() + self.normals.capacity())
+            + 24 * self.cells.capacity()
+            + std::mem::size_of::<Quad>() * self.quads.capacity()
+            + 16 * self.keyed.capacity()
+            + 8 * (self.groups.capacity() + self.pieces.capacity())
+            + std::mem::size_of::<Option<(Vec3, [u32; 4])>>() * self.face_points.capacity()
+            + 4 * (self.side_point.capacity() + self.incidence.start.capacity() + self.incidence.items.capacity())
     }
 }
 
@@ -126,25 +146,26 @@ fn cell_of(grid: &Grid, min: Vec3) -> [usize; 3] {
     [c.x as usize, c.y as usize, c.z as usize]
 }
 
-/// The face two face-neighbouring cells share: its lower corner sample and the two axes it spans.
+/// The face two face-neighbouring cells share: its lower corner sample, its normal axis and the
+/// two axes it spans.
 #[derive(Clone, Copy)]
 struct Face {
     corner: [usize; 3],
+    normal: usize,
     span: [usize; 2],
 }
 
 impl Face {
     fn between(a: [usize; 3], b: [usize; 3]) -> Option<Face> {
-        let differ: Vec<usize> = (0..3).filter(|&k| a[k] != b[k]).collect();
-        let &[normal] = differ.as_slice() else { return None };
-        if a[normal].abs_diff(b[normal]) != 1 {
+        let normal = (0..3).find(|&k| a[k] != b[k])?;
+        if a[normal].abs_diff(b[normal]) != 1 || (0..3).any(|k| k != normal && a[k] != b[k]) {
             return None;
         }
         let mut corner = a;
         corner[normal] = a[normal].max(b[normal]);
         let span = [(normal + 1) % 3, (normal + 2) % 3];
         let span = [span[0].min(span[1]), span[0].max(span[1])];
-        Some(Face { corner, span })
+        Some(Face { corner, normal, span })
     }
 
     /// The face's four edges.
@@ -225,108 +246,156 @@ impl Region {
 /// No face point: the side is kept whole.
 const WHOLE: u32 = u32::MAX;
 
-/// Replaces the engine's quads in `mesh` (two triangles per quad, in the order of `quads`'
+/// Ordinals of the added vertices among their owner sample's vertices in [`crate::Origins`]
+/// (cell vertices count from 0, one per piece): an edge point is owned by its edge's lower
+/// sample, `EDGE_ORDINAL + axis`; a face point by its face's lower corner, `FACE_ORDINAL + 5 *
+/// normal axis + corner` (corner 0 for a face with one chord, else 1 + the corner its chord cuts
+/// off), so every added vertex has a lattice key and chunks weld them.
+const EDGE_ORDINAL: u32 = 16;
+const FACE_ORDINAL: u32 = 32;
+
+/// Replaces the engine's quads in `mesh` (two triangles per quad, in the order of the scratch's
 /// sides) by fans that keep each triangle in its cells, adding an edge point per quad and a face
-/// point per side of a cell with several pieces. Returns the cells whose pieces' cones still
-/// cross after the fallback (none has been seen; the tests hold it at none).
-pub(super) fn triangulate(input: &Input, quads: &Quads, mesh: &mut TriMesh, name: &'static str) -> Result<usize, ExtractError> {
+/// point per side of a cell with several pieces, and their origins when `origins` holds one per
+/// cell vertex. Returns the cells whose pieces' cones still cross after the fallback (none has
+/// been seen; the tests hold it at none).
+pub(super) fn triangulate(
+    input: &Input,
+    scratch: &mut Scratch,
+    mesh: &mut TriMesh,
+    origins: Option<&mut Vec<[u32; 4]>>,
+    name: &'static str,
+) -> Result<usize, ExtractError> {
     let grid = input.grid;
     let h = grid.spacing;
-    let n = quads.sides.len() / 4;
+    let Scratch {
+        sides,
+        cell_min,
+        cells,
+        quads,
+        edge_points,
+        keyed,
+        groups,
+        face_points,
+        side_point,
+        normals,
+        pieces,
+        incidence,
+    } = scratch;
+    let n = sides.len() / 4;
     debug_assert_eq!(mesh.triangles.len(), 2 * n, "two triangles per quad");
-    debug_assert_eq!(quads.cell_min.len(), mesh.positions.len(), "a cell per vertex");
-    let cells: Vec<[usize; 3]> = quads.cell_min.iter().map(|&m| cell_of(&grid, m)).collect();
+    debug_assert_eq!(cell_min.len(), mesh.positions.len(), "a cell per vertex");
+    // Vertex indices, and the side slots `4 * quad + side`, fit in 32 bits.
+    if mesh.positions.len() + 3 * n >= u32::MAX as usize / 2 || 4 * n >= u32::MAX as usize {
+        return Err(ExtractError::TooLarge { algorithm: name, vertices: mesh.positions.len() + 3 * n });
+    }
+    cells.clear();
+    cells.par_extend(cell_min.par_iter().map(|&m| cell_of(&grid, m)));
     // Every cell vertex strictly inside its cell.
-    for (p, &m) in mesh.positions.iter_mut().zip(&quads.cell_min) {
+    for (p, &m) in mesh.positions.iter_mut().zip(cell_min.iter()) {
         *p = p.clamp(m + Vec3::splat(MARGIN * h), m + Vec3::splat((1.0 - MARGIN) * h));
     }
+    let cells = &*cells;
     // A cell's vertices are consecutive: a vertex shares its cell when a neighbour in the list does.
     let shares_cell = |v: usize| (v > 0 && cells[v - 1] == cells[v]) || (v + 1 < cells.len() && cells[v + 1] == cells[v]);
-    let quad_list: Vec<Quad> = (0..n)
-        .into_par_iter()
-        .map(|k| {
-            let c = [0, 1, 2, 3].map(|i| quads.sides[4 * k + i].0);
-            let t = mesh.triangles[2 * k];
-            let i = c.iter().position(|&v| v == t[0]).unwrap_or(0);
-            let cycle = if c[(i + 1) % 4] == t[1] { c } else { [c[0], c[3], c[2], c[1]] };
-            let cs = c.map(|v| cells[v as usize]);
-            let axis = (0..3).find(|&a| cs.iter().all(|x| x[a] == cs[0][a])).unwrap_or(0);
-            let start = std::array::from_fn(|b| cs.iter().map(|x| x[b]).max().unwrap_or(0));
-            Quad { cycle, edge: (start, axis) }
-        })
-        .collect();
-    let first_edge_point = mesh.positions.len();
-    // Vertex indices, and the side slots `4 * quad + side`, fit in 32 bits.
-    if first_edge_point + n >= u32::MAX as usize / 2 || 4 * n >= u32::MAX as usize {
-        return Err(ExtractError::TooLarge { algorithm: name, vertices: first_edge_point + n });
-    }
-    let edge_points: Vec<Vec3> = quad_list.par_iter().map(|q| input.edge_point(q.edge)).collect();
+    let (sides, triangles) = (&*sides, &mesh.triangles);
+    quads.clear();
+    quads.par_extend((0..n).into_par_iter().map(|k| {
+        let c = [0, 1, 2, 3].map(|i| sides[4 * k + i].0);
+        let t = triangles[2 * k];
+        let i = c.iter().position(|&v| v == t[0]).unwrap_or(0);
+        let cycle = if c[(i + 1) % 4] == t[1] { c } else { [c[0], c[3], c[2], c[1]] };
+        let cs = c.map(|v| cells[v as usize]);
+        let axis = (0..3).find(|&a| cs.iter().all(|x| x[a] == cs[0][a])).unwrap_or(0);
+        let start = std::array::from_fn(|b| cs.iter().map(|x| x[b]).max().unwrap_or(0));
+        Quad { cycle, edge: (start, axis) }
+    }));
+    let quads = &*quads;
+    edge_points.clear();
+    edge_points.par_extend(quads.par_iter().map(|q| input.edge_point(q.edge)));
 
     // Each side (u, w) with the quads that have it: one or two (two faces' chords never share
     // both cells' pieces in the engine's manifold output; more would be broken at face points).
-    let mut sides: Vec<(u64, u32)> = (0..n)
-        .into_par_iter()
-        .flat_map_iter(|k| {
-            let c = quad_list[k].cycle;
-            (0..4).map(move |i| {
-                let (u, w) = (c[i], c[(i + 1) % 4]);
-                ((u64::from(u.min(w)) << 32) | u64::from(u.max(w)), (4 * k + i) as u32)
-            })
-        })
-        .collect();
-    sides.par_sort_unstable();
-    let groups: Vec<&[(u64, u32)]> = sides.chunk_by(|a, b| a.0 == b.0).collect();
-    let face_points: Vec<Option<Vec3>> = groups
-        .par_iter()
-        .map(|group| {
-            let slot = |e: &(u64, u32)| (e.1 as usize / 4, e.1 as usize % 4);
-            let (k1, i1) = slot(&group[0]);
-            let c = quad_list[k1].cycle;
-            let (u, w) = (c[i1] as usize, c[(i1 + 1) % 4] as usize);
-            // A side between two single-piece cells is kept whole: both vertices project into
-            // the square the cells share, so the segment pierces it inside.
-            if group.len() <= 2 && !shares_cell(u) && !shares_cell(w) {
-                return None;
-            }
-            let face = Face::between(cells[u], cells[w])?;
-            let e1 = quad_list[k1].edge;
-            let e2 = match *group {
-                [_, second] => Some(quad_list[slot(second).0].edge),
-                [_] => other_end(input, &face, e1),
-                _ => None,
-            };
-            let four_crossings = face.edges().iter().filter(|&&e| input.crosses(e)).count() == 4;
-            let corner = e2.filter(|_| four_crossings).and_then(|e2| {
-                let other = face.corners_of(e2);
-                face.corners_of(e1).into_iter().find(|k| other.contains(k))
-            });
-            let (p1, p2) = (edge_points[k1], e2.map_or(edge_points[k1], |e2| input.edge_point(e2)));
-            Some(face.point(&grid, Region { corner }.clamp(face.local(&grid, 0.5 * (p1 + p2)))))
-        })
-        .collect();
+    keyed.clear();
+    keyed.par_extend((0..4 * n).into_par_iter().map(|j| {
+        let c = quads[j / 4].cycle;
+        let (u, w) = (c[j % 4], c[(j % 4 + 1) % 4]);
+        ((u64::from(u.min(w)) << 32) | u64::from(u.max(w)), j as u32)
+    }));
+    keyed.par_sort_unstable();
+    groups.clear();
+    let mut start = 0;
+    for j in 1..=keyed.len() {
+        if j == keyed.len() || keyed[j].0 != keyed[start].0 {
+            groups.push((start as u32, j as u32));
+            start = j;
+        }
+    }
+    let (keyed, edge_points) = (&*keyed, &*edge_points);
+    face_points.clear();
+    face_points.par_extend(groups.par_iter().map(|&(lo, hi)| {
+        let group = &keyed[lo as usize..hi as usize];
+        let slot = |e: &(u64, u32)| (e.1 as usize / 4, e.1 as usize % 4);
+        let (k1, i1) = slot(&group[0]);
+        let c = quads[k1].cycle;
+        let (u, w) = (c[i1] as usize, c[(i1 + 1) % 4] as usize);
+        // A side between two single-piece cells is kept whole: both vertices project into the
+        // square the cells share, so the segment pierces it inside.
+        if group.len() <= 2 && !shares_cell(u) && !shares_cell(w) {
+            return None;
+        }
+        let face = Face::between(cells[u], cells[w])?;
+        let e1 = quads[k1].edge;
+        let e2 = match *group {
+            [_, second] => Some(quads[slot(&second).0].edge),
+            [_] => other_end(input, &face, e1),
+            _ => None,
+        };
+        let four_crossings = face.edges().iter().filter(|&&e| input.crosses(e)).count() == 4;
+        let corner = e2.filter(|_| four_crossings).and_then(|e2| {
+            let other = face.corners_of(e2);
+            face.corners_of(e1).into_iter().find(|k| other.contains(k))
+        });
+        let (p1, p2) = (edge_points[k1], e2.map_or(edge_points[k1], |e2| input.edge_point(e2)));
+        let point = face.point(&grid, Region { corner }.clamp(face.local(&grid, 0.5 * (p1 + p2))));
+        let ordinal = FACE_ORDINAL + 5 * face.normal as u32 + corner.map_or(0, |(kx, ky)| 1 + u32::from(kx + 2 * ky));
+        let [x, y, z] = face.corner.map(|c| c as u32);
+        Some((point, [x, y, z, ordinal]))
+    }));
 
     // New vertices: the edge points, then the face points.
-    let mut side_point = vec![WHOLE; 4 * n];
+    let first_edge_point = mesh.positions.len();
     let first_face_point = first_edge_point + n;
+    side_point.clear();
+    side_point.resize(4 * n, WHOLE);
     let mut extra = 0u32;
-    for (group, point) in groups.iter().zip(&face_points) {
+    for (&(lo, hi), point) in groups.iter().zip(face_points.iter()) {
         if point.is_some() {
-            for e in group.iter() {
+            for e in &keyed[lo as usize..hi as usize] {
                 side_point[e.1 as usize] = first_face_point as u32 + extra;
             }
             extra += 1;
         }
     }
-    drop(groups);
     let has_normals = mesh.normals.len() == mesh.positions.len();
-    mesh.positions.extend_from_slice(&edge_points);
-    mesh.positions.extend(face_points.iter().flatten());
+    mesh.positions.extend_from_slice(edge_points);
+    mesh.positions.extend(face_points.iter().flatten().map(|f| f.0));
     if has_normals {
-        let normals: Vec<Vec3> = mesh.positions[first_edge_point..].par_iter().map(|&p| input.normal_at(p)).collect();
-        mesh.normals.extend(normals);
+        normals.clear();
+        normals.par_extend(mesh.positions[first_edge_point..].par_iter().map(|&p| input.normal_at(p)));
+        mesh.normals.extend_from_slice(normals);
+    }
+    if let Some(origins) = origins {
+        if origins.len() == first_edge_point {
+            origins.extend(quads.iter().map(|q| {
+                let [x, y, z] = q.edge.0.map(|c| c as u32);
+                [x, y, z, EDGE_ORDINAL + q.edge.1 as u32]
+            }));
+            origins.extend(face_points.iter().flatten().map(|f| f.1));
+        }
     }
     mesh.triangles.clear();
-    for (k, q) in quad_list.iter().enumerate() {
+    for (k, q) in quads.iter().enumerate() {
         let centre = (first_edge_point + k) as u32;
         for i in 0..4 {
             let (a, b) = (q.cycle[i], q.cycle[(i + 1) % 4]);
@@ -336,51 +405,56 @@ pub(super) fn triangulate(input: &Input, quads: &Quads, mesh: &mut TriMesh, name
             }
         }
     }
-    Ok(separate_pieces(input, mesh, &cells, has_normals))
+    Ok(separate_pieces(input, mesh, cells, pieces, incidence, has_normals))
 }
 
 /// The other end of the chord from `e1` across `face` when no second quad names it: the face's
 /// other crossing edge, or on a face with four, the neighbouring one on the domain boundary
 /// (where an edge has no quad).
 fn other_end(input: &Input, face: &Face, e1: Edge) -> Option<Edge> {
-    let crossing: Vec<Edge> = face.edges().into_iter().filter(|&e| e != e1 && input.crosses(e)).collect();
-    if let [only] = crossing.as_slice() {
-        return Some(*only);
+    let crossing = face.edges().map(|e| (e != e1 && input.crosses(e)).then_some(e));
+    if crossing.iter().flatten().count() == 1 {
+        return crossing.into_iter().flatten().next();
     }
     let corners = face.corners_of(e1);
     let dims = input.grid.dims;
     let on_boundary = |(s, axis): Edge| (0..3).any(|k| k != axis && (s[k] == 0 || s[k] + 1 == dims[k]));
-    crossing.iter().copied().filter(|&e| face.corners_of(e).iter().any(|k| corners.contains(k))).find(|&e| on_boundary(e))
+    crossing.into_iter().flatten().filter(|&e| face.corners_of(e).iter().any(|k| corners.contains(k))).find(|&e| on_boundary(e))
 }
 
 /// Tests the cones of every cell with several pieces against each other with the exact
 /// predicate and moves the vertices of cells whose cones cross to the centroids of their paths;
 /// returns the cells still crossing.
-fn separate_pieces(input: &Input, mesh: &mut TriMesh, cells: &[[usize; 3]], has_normals: bool) -> usize {
-    let groups: Vec<std::ops::Range<usize>> = {
-        let mut out = Vec::new();
-        let mut start = 0;
-        for v in 1..=cells.len() {
-            if v == cells.len() || cells[v] != cells[start] {
-                if v - start > 1 {
-                    out.push(start..v);
-                }
-                start = v;
+fn separate_pieces(
+    input: &Input,
+    mesh: &mut TriMesh,
+    cells: &[[usize; 3]],
+    pieces: &mut Vec<(u32, u32)>,
+    incidence: &mut Incidence,
+    has_normals: bool,
+) -> usize {
+    pieces.clear();
+    let mut start = 0;
+    for v in 1..=cells.len() {
+        if v == cells.len() || cells[v] != cells[start] {
+            if v - start > 1 {
+                pieces.push((start as u32, v as u32));
             }
+            start = v;
         }
-        out
-    };
-    if groups.is_empty() {
+    }
+    if pieces.is_empty() {
         return 0;
     }
-    let incidence = Incidence::of(mesh.positions.len(), &mesh.triangles);
-    let crossing = |mesh: &TriMesh, group: &std::ops::Range<usize>| {
+    incidence.rebuild(mesh.positions.len(), &mesh.triangles);
+    let incidence = &*incidence;
+    let crossing = |mesh: &TriMesh, (lo, hi): (u32, u32)| {
         let at = |v: u32| mesh.positions[v as usize];
-        group.clone().any(|a| {
-            (a + 1..group.end).any(|b| {
-                incidence.of_vertex(a as u32).iter().any(|&ta| {
+        (lo..hi).any(|a| {
+            (a + 1..hi).any(|b| {
+                incidence.of_vertex(a).iter().any(|&ta| {
                     incidence
-                        .of_vertex(b as u32)
+                        .of_vertex(b)
                         .iter()
                         .any(|&tb| indexed_triangles_intersect(mesh.triangles[ta as usize], mesh.triangles[tb as usize], at))
                 })
@@ -388,28 +462,28 @@ fn separate_pieces(input: &Input, mesh: &mut TriMesh, cells: &[[usize; 3]], has_
         })
     };
     let mut unresolved = 0;
-    for group in &groups {
-        if !crossing(mesh, group) {
+    let h = input.grid.spacing;
+    for &(lo, hi) in pieces.iter() {
+        if !crossing(mesh, (lo, hi)) {
             continue;
         }
-        let h = input.grid.spacing;
-        let min = input.grid.origin + Vec3::from(cells[group.start].map(|c| c as f32)) * h;
-        for v in group.clone() {
-            let ring = incidence.of_vertex(v as u32);
+        let min = input.grid.origin + Vec3::from(cells[lo as usize].map(|c| c as f32)) * h;
+        for v in lo..hi {
+            let ring = incidence.of_vertex(v);
             let (sum, count) = ring
                 .iter()
                 .flat_map(|&t| mesh.triangles[t as usize])
-                .filter(|&x| x as usize != v)
+                .filter(|&x| x != v)
                 .fold((Vec3::ZERO, 0.0f32), |(s, c), x| (s + mesh.positions[x as usize], c + 1.0));
             if count > 0.0 {
                 let p = (sum / count).clamp(min + Vec3::splat(MARGIN * h), min + Vec3::splat((1.0 - MARGIN) * h));
-                mesh.positions[v] = p;
+                mesh.positions[v as usize] = p;
                 if has_normals {
-                    mesh.normals[v] = input.normal_at(p);
+                    mesh.normals[v as usize] = input.normal_at(p);
                 }
             }
         }
-        if crossing(mesh, group) {
+        if crossing(mesh, (lo, hi)) {
             unresolved += 1;
         }
     }

@@ -117,6 +117,8 @@ pub struct DualEngine {
     placement: Placement,
     name: &'static str,
     scratch: ScratchPool<Scratch>,
+    /// The intersection-free pass's buffers ([`DualEngine::extract_intersection_free`]).
+    free_scratch: ScratchPool<intersection_free::Scratch>,
 }
 
 #[derive(Default)]
@@ -180,7 +182,7 @@ impl Scratch {
 impl DualEngine {
     /// The engine with `options` and a vertex `placement`, reporting as `name` in stats and errors.
     pub fn new(options: DualOptions, placement: Placement, name: &'static str) -> Self {
-        Self { options, placement, name, scratch: ScratchPool::default() }
+        Self { options, placement, name, scratch: ScratchPool::default(), free_scratch: ScratchPool::default() }
     }
 }
 
@@ -265,21 +267,28 @@ impl DualEngine {
     /// Extracts into `out` and then replaces each quad by triangles that each stay inside one
     /// cell (the engine's `intersection_free` pass, after Ju and Udeshi 2006): the mesh cannot cross itself.
     pub fn extract_intersection_free(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
-        let mut quads = intersection_free::Quads::default();
-        self.run(samples, out, Some(&mut quads))?;
-        let t = Instant::now();
-        let Lattice::Cubic(grid) = *samples.lattice() else { unreachable!("run refuses other lattices") };
-        let input = intersection_free::Input { values: samples.values(), grid, iso: samples.iso() };
-        let scratch = out.stats.buffer_bytes.saturating_sub(out.surface.capacity_bytes()) + quads.bytes();
-        let unresolved = intersection_free::triangulate(&input, &quads, &mut out.surface, self.name)?;
-        if unresolved > 0 {
-            out.stats.warnings.push(format!(
-                "{}: {unresolved} cells with two pieces of surface whose triangles cross (please report the input)",
-                self.name
-            ));
-        }
-        out.stats.times.geometry += t.elapsed();
-        out.finish_counts(scratch);
+        let mut scratch = self.free_scratch.take();
+        let mut engine_bytes = 0;
+        let result = self.run(samples, out, Some(&mut scratch)).and_then(|()| {
+            engine_bytes = out.stats.buffer_bytes - out.surface.capacity_bytes() - out.volume.capacity_bytes();
+            let t = Instant::now();
+            let Lattice::Cubic(grid) = *samples.lattice() else { unreachable!("run refuses other lattices") };
+            let input = intersection_free::Input { values: samples.values(), grid, iso: samples.iso() };
+            let origins = out.origins.wanted.then_some(&mut out.origins.vertices);
+            let unresolved = intersection_free::triangulate(&input, &mut scratch, &mut out.surface, origins, self.name)?;
+            if unresolved > 0 {
+                out.stats.warnings.push(format!(
+                    "{}: {unresolved} cells with two pieces of surface whose triangles cross (please report the input)",
+                    self.name
+                ));
+            }
+            out.stats.times.geometry += t.elapsed();
+            Ok(())
+        });
+        let held = engine_bytes + scratch.bytes();
+        self.free_scratch.give(scratch);
+        result?;
+        out.finish_counts(held);
         Ok(())
     }
 
@@ -289,7 +298,7 @@ impl DualEngine {
         &self,
         samples: &Samples,
         out: &mut Extraction,
-        quads: Option<&mut intersection_free::Quads>,
+        quads: Option<&mut intersection_free::Scratch>,
     ) -> Result<(), ExtractError> {
         out.clear();
         out.stats.times.sampling = samples.sampling_time();
@@ -422,7 +431,7 @@ impl DualEngine {
         }
         let scratch = s.bytes();
         if let Some(quads) = quads {
-            quads.take_from(&mut s.links, &mut s.cell_min);
+            quads.swap_with(&mut s.links, &mut s.cell_min);
         }
         self.scratch.give(held);
         out.finish_counts(scratch);

@@ -169,3 +169,40 @@ pub fn embedded_case(case: u8, value: impl Fn(usize, bool) -> f32) -> Samples {
         value(corner, case >> corner & 1 == 1)
     })
 }
+
+/// The shipped models (`*.obj` file names), sorted.
+pub fn shipped_models() -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(model(""))
+        .expect("the shipped models folder")
+        .map(|e| e.expect("a directory entry").file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".obj"))
+        .collect();
+    names.sort();
+    names
+}
+
+/// [`embedded_case`] with one of three value sets per corner (`variant` 0: all 1; 1 and 2:
+/// varying per corner), so vertices are not all at cell centres and a quadric has something to
+/// solve.
+pub fn varied_case(case: u8, variant: usize) -> Samples {
+    embedded_case(case, |corner, inside| {
+        let m = [1.0, 0.1 + 0.13 * corner as f32, 7.0 - 0.5 * corner as f32][variant];
+        if inside {
+            -m
+        } else {
+            m
+        }
+    })
+}
+
+/// A value's distance from the iso-value: over six orders of magnitude (crossings crowding the
+/// corners at unequal rates), of order one, or exactly at the iso-value (one draw in sixteen).
+pub fn crowded_distance(random: &mut isolab_algorithms::random::Random) -> f32 {
+    let u = random.unit_f32();
+    match random.next_u64() % 16 {
+        0 => 0.0,
+        1..=7 => 10f32.powf(-6.0 * u),
+        8..=11 => 10f32.powf(-2.0 * u),
+        _ => 0.5 + u,
+    }
+}

@@ -59,26 +59,13 @@ fn raw_values_without_a_field_take_normals_from_the_samples() {
     assert!(b < 0.1, "raw-sample dual contouring within 0.1 h of the sphere, got {b}");
 }
 
-/// A 4x4x4 grid whose inner cube carries pattern `case`, values varying per corner (so vertices
-/// are not all at cell centres and the QEF has something to solve).
-fn embedded_case(case: u8, variant: usize) -> Samples {
-    isolab_tests::embedded_case(case, |corner, inside| {
-        let m = [1.0, 0.1 + 0.13 * corner as f32, 7.0 - 0.5 * corner as f32][variant];
-        if inside {
-            -m
-        } else {
-            m
-        }
-    })
-}
-
 #[test]
 fn all_256_cube_patterns_give_closed_manifold_outward_meshes() {
     let dc = extractors::by_name("dual-contouring").unwrap();
     let mut intersecting = Vec::new();
     for case in 0..=255u8 {
         for variant in 0..3 {
-            let s = embedded_case(case, variant);
+            let s = isolab_tests::varied_case(case, variant);
             let mut out = Extraction::default();
             dc.extract(&s, &mut out).unwrap();
             assert_closed_manifold_for(&s, &out.surface, &format!("case {case} variant {variant}"));
@@ -103,12 +90,7 @@ fn all_256_cube_patterns_give_closed_manifold_outward_meshes() {
 #[test]
 fn no_shipped_model_self_intersects_at_64() {
     let dc = extractors::by_name("dual-contouring").unwrap();
-    let mut names: Vec<String> = std::fs::read_dir(isolab_tests::model(""))
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".obj"))
-        .collect();
-    names.sort();
+    let names = isolab_tests::shipped_models();
     assert!(names.len() >= 6, "{names:?}");
     for name in &names {
         let field = isolab_tests::object_field(name);

@@ -52,10 +52,7 @@ fn safe_collapse_adds_no_self_intersection_on_the_shipped_models() {
     let refuse = build_post("edge-collapse-safe").unwrap().unwrap();
     let allow = build_post("edge-collapse-safe:intersections=allow").unwrap().unwrap();
     let mut made_without_the_test = Vec::new();
-    let models = std::fs::read_dir(isolab_tests::model("")).unwrap();
-    let mut names: Vec<String> =
-        models.map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| n.ends_with(".obj")).collect();
-    names.sort();
+    let names = isolab_tests::shipped_models();
     assert!(names.len() >= 6, "{names:?}");
     for name in &names {
         let field = isolab_tests::object_field(name);

@@ -17,32 +17,13 @@ fn extract(samples: &Samples) -> Extraction {
     out
 }
 
-/// A value's distance from the iso-value: over six orders of magnitude (crossings crowding the
-/// corners), of order one, or exactly at the iso-value (one draw in sixteen).
-fn distance(random: &mut Random) -> f32 {
-    let u = random.unit_f32();
-    match random.next_u64() % 16 {
-        0 => 0.0,
-        1..=7 => 10f32.powf(-6.0 * u),
-        8..=11 => 10f32.powf(-2.0 * u),
-        _ => 0.5 + u,
-    }
-}
-
 #[test]
 fn every_cube_pattern_is_closed_manifold_and_free_of_crossings() {
     let failures: Vec<String> = (0..=255u8)
         .into_par_iter()
         .flat_map_iter(|case| {
             (0..3).filter_map(move |variant| {
-                let s = isolab_tests::embedded_case(case, |corner, inside| {
-                    let m = [1.0, 0.1 + 0.13 * corner as f32, 7.0 - 0.5 * corner as f32][variant];
-                    if inside {
-                        -m
-                    } else {
-                        m
-                    }
-                });
+                let s = isolab_tests::varied_case(case, variant);
                 let out = extract(&s);
                 assert_closed_manifold_for(&s, &out.surface, &format!("case {case} variant {variant}"));
                 let found = self_intersections(&out.surface);
@@ -55,7 +36,7 @@ fn every_cube_pattern_is_closed_manifold_and_free_of_crossings() {
 }
 
 /// Random grids of 3 to 6 samples a side, the border outside, every inner value drawn by
-/// [`distance`] with a random sign: every kind of cell and neighbourhood, with vertices pulled to
+/// [`isolab_tests::crowded_distance`] with a random sign: every kind of cell and neighbourhood, with vertices pulled to
 /// corners and faces by the quadric error.
 #[test]
 fn random_grids_with_crowded_crossings_never_cross() {
@@ -70,7 +51,7 @@ fn random_grids_with_crowded_crossings_never_cross() {
                 if [x, y, z].iter().any(|&c| c == 0 || c == n - 1) {
                     return 1.0;
                 }
-                let d = distance(&mut random);
+                let d = isolab_tests::crowded_distance(&mut random);
                 if random.unit_f32() < inside {
                     -d.max(f32::MIN_POSITIVE)
                 } else {
@@ -109,12 +90,7 @@ fn csg_corners_stay_within_five_hundredths_of_the_spacing() {
 #[test]
 fn noise_and_the_shipped_models_have_no_crossing_pair() {
     let dc = extractors::by_name("dual-contouring").unwrap();
-    let mut names: Vec<String> = std::fs::read_dir(isolab_tests::model(""))
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".obj"))
-        .collect();
-    names.sort();
+    let names = isolab_tests::shipped_models();
     let mut dc_pairs = 0;
     for name in names.iter().map(String::as_str).chain(["asteroid", "terrain", "gyroid"]) {
         let field = isolab_tests::object_field(name);

@@ -24,13 +24,7 @@ const BOUNDS: &[(&str, &str, usize)] = &[("dual-contouring", "teapot.obj", 4)];
 
 fn inputs() -> Vec<String> {
     let mut names: Vec<String> = fields::registry().iter().map(|f| f.name.to_owned()).collect();
-    let mut models: Vec<String> = std::fs::read_dir(isolab_tests::model(""))
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".obj"))
-        .collect();
-    models.sort();
-    names.extend(models);
+    names.extend(isolab_tests::shipped_models());
     names
 }
 
@@ -68,21 +62,8 @@ fn no_extractor_self_intersects_more_than_measured() {
     }
 }
 
-/// A corner's distance from the iso-value: over six orders of magnitude (crossings crowding the
-/// corners at unequal rates, where a fan of a skew polygon folds over itself), of order one, or
-/// exactly at the iso-value (one draw in sixteen).
-fn corner_distance(random: &mut Random) -> f32 {
-    let u = random.unit_f32();
-    match random.next_u64() % 16 {
-        0 => 0.0,
-        1..=7 => 10f32.powf(-6.0 * u),
-        8..=11 => 10f32.powf(-2.0 * u),
-        _ => 0.5 + u,
-    }
-}
-
 /// Every corner pattern of one cell, meshed by each extractor that reads the marching cubes
-/// tables, with corner values drawn by [`corner_distance`]: no two triangles cross (the exact
+/// tables, with corner values drawn by [`isolab_tests::crowded_distance`]: no two triangles cross (the exact
 /// predicate). Triangles of different cells lie in different cubes and meet only on the segments
 /// of their shared face, so one cell free of crossings is the whole mesh free of them.
 #[test]
@@ -99,7 +80,7 @@ fn no_marching_cubes_cell_folds_over_itself() {
                 let mut out = Extraction::default();
                 for draw in 0..DRAWS {
                     let v: [f32; 8] = std::array::from_fn(|c| {
-                        let d = corner_distance(&mut random);
+                        let d = isolab_tests::crowded_distance(&mut random);
                         if case >> c & 1 == 1 {
                             -d.max(f32::MIN_POSITIVE)
                         } else {

@@ -54,7 +54,6 @@ pub(super) struct Scratch {
     groups: Vec<(u32, u32)>,
     face_points: Vec<Option<(Vec3, [u32; 4])>>,
     side_point: Vec<u32>,
-    normals: Vec<Vec3>,
     pieces: Vec<(u32, u32)>,
     incidence: Incidence,
 }
@@ -69,7 +68,7 @@ impl Scratch {
     /// Bytes held.
     pub(super) fn bytes(&self) -> usize {
         8 * self.sides.capacity()
-            + 12 * (self.cell_min.capacity() + self.edge_points.capacity() + self.normals.capacity())
+            + 12 * (self.cell_min.capacity() + self.edge_points.capacity())
             + 24 * self.cells.capacity()
             + std::mem::size_of::<Quad>() * self.quads.capacity()
             + 16 * self.keyed.capacity()
@@ -268,20 +267,8 @@ pub(super) fn triangulate(
 ) -> Result<usize, ExtractError> {
     let grid = input.grid;
     let h = grid.spacing;
-    let Scratch {
-        sides,
-        cell_min,
-        cells,
-        quads,
-        edge_points,
-        keyed,
-        groups,
-        face_points,
-        side_point,
-        normals,
-        pieces,
-        incidence,
-    } = scratch;
+    let Scratch { sides, cell_min, cells, quads, edge_points, keyed, groups, face_points, side_point, pieces, incidence } =
+        scratch;
     let n = sides.len() / 4;
     debug_assert_eq!(mesh.triangles.len(), 2 * n, "two triangles per quad");
     debug_assert_eq!(cell_min.len(), mesh.positions.len(), "a cell per vertex");
@@ -381,9 +368,8 @@ pub(super) fn triangulate(
     mesh.positions.extend_from_slice(edge_points);
     mesh.positions.extend(face_points.iter().flatten().map(|f| f.0));
     if has_normals {
-        normals.clear();
-        normals.par_extend(mesh.positions[first_edge_point..].par_iter().map(|&p| input.normal_at(p)));
-        mesh.normals.extend_from_slice(normals);
+        let (positions, normals) = (&mesh.positions, &mut mesh.normals);
+        normals.par_extend(positions[first_edge_point..].par_iter().map(|&p| input.normal_at(p)));
     }
     if let Some(origins) = origins {
         if origins.len() == first_edge_point {

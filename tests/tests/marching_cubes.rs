@@ -89,7 +89,7 @@ fn parallel_slabs_join_without_cracks_on_white_noise() {
     // The slabs count first and write straight into their pieces of the output: the very same
     // mesh as one sweep, vertex for vertex, for both face rules and with sample normals.
     assert_eq!(parallel.surface, single.surface);
-    for faces in [FaceResolution::SeparateInside, FaceResolution::AsymptoticDecider] {
+    for faces in [FaceResolution::SeparateInside, FaceResolution::AsymptoticDecider, FaceResolution::Trilinear] {
         let options = |parallelism| McOptions { faces, parallelism, normals: NormalSource::SampleGradient, ..Default::default() };
         let a = extract(&MarchingCubes::new(options(Parallelism::Rayon)), &s);
         let b = extract(&MarchingCubes::new(options(Parallelism::Serial)), &s);

@@ -36,7 +36,7 @@ fn all_256_cube_patterns_among_random_neighbours_are_closed_and_manifold() {
                     magnitude
                 }
             });
-            for faces in [FaceResolution::SeparateInside, FaceResolution::AsymptoticDecider] {
+            for faces in [FaceResolution::SeparateInside, FaceResolution::AsymptoticDecider, FaceResolution::Trilinear] {
                 let out = extract(&mc(faces), &s);
                 assert_closed_manifold(&out.surface, &format!("case {case} trial {trial} {faces:?}"));
             }

@@ -34,6 +34,7 @@ use crate::post::edge_collapse;
 pub const INFOS: &[ExtractorInfo] = &[
     marching_cubes::INFO,
     marching_cubes::DECIDER_INFO,
+    marching_cubes::MC33_INFO,
     surface_nets::INFO,
     dual_contouring::INFO,
     manifold_dual_contouring::INFO,

@@ -235,8 +235,10 @@ pub fn face_segments(case: u8, face: usize, rule: FaceRule) -> Vec<(u8, u8)> {
         .collect()
 }
 
-/// Builds one table entry; `rule(case, face)` resolves each ambiguous face.
-pub fn generate_case(case: u8, rule: impl Fn(u8, usize) -> FaceRule) -> Case {
+/// The polygons of a case: its crossing edges' mask, each crossing edge's successor around its
+/// polygon, and the polygons as cycles of edge numbers (in edge order of their first edge);
+/// `rule(case, face)` resolves each ambiguous face.
+pub fn chain_polygons(case: u8, rule: impl Fn(u8, usize) -> FaceRule) -> (u16, [u8; 12], Vec<Vec<u8>>) {
     let mut next = [u8::MAX; 12];
     let mut edge_mask = 0u16;
     for face in 0..6 {
@@ -246,12 +248,8 @@ pub fn generate_case(case: u8, rule: impl Fn(u8, usize) -> FaceRule) -> Case {
             edge_mask |= 1 << a | 1 << b;
         }
     }
-    let mut triangles = [[0u8; 3]; MAX_TRIANGLES];
-    let mut count = 0;
     let mut visited = 0u16;
-    let mut polygons = 0u8;
-    let mut edge_polygon = [u8::MAX; 12];
-    let mut interior = 0u8;
+    let mut polygons = Vec::new();
     for start in 0..12u8 {
         if edge_mask >> start & 1 == 0 || visited >> start & 1 == 1 {
             continue;
@@ -261,26 +259,43 @@ pub fn generate_case(case: u8, rule: impl Fn(u8, usize) -> FaceRule) -> Case {
         while visited >> e & 1 == 0 {
             visited |= 1 << e;
             polygon.push(e);
-            edge_polygon[e as usize] = polygons;
             e = next[e as usize];
         }
-        let piece = polygons;
-        polygons += 1;
-        let triangulation = triangulate(&polygon).unwrap_or_else(|| {
+        polygons.push(polygon);
+    }
+    (edge_mask, next, polygons)
+}
+
+/// The triangles fanning `polygon` around the interior vertex `centre` (`12 + piece`).
+pub fn fan_around(polygon: &[u8], centre: u8) -> impl Iterator<Item = [u8; 3]> + '_ {
+    (0..polygon.len()).map(move |k| [polygon[k], polygon[(k + 1) % polygon.len()], centre])
+}
+
+/// Builds one table entry; `rule(case, face)` resolves each ambiguous face.
+pub fn generate_case(case: u8, rule: impl Fn(u8, usize) -> FaceRule) -> Case {
+    let (edge_mask, next, polygons) = chain_polygons(case, rule);
+    let mut triangles = [[0u8; 3]; MAX_TRIANGLES];
+    let mut count = 0;
+    let mut edge_polygon = [u8::MAX; 12];
+    let mut interior = 0u8;
+    for (piece, polygon) in polygons.iter().enumerate() {
+        for &e in polygon {
+            edge_polygon[e as usize] = piece as u8;
+        }
+        let triangulation = triangulate(polygon).unwrap_or_else(|| {
             interior |= 1 << piece;
-            let centre = 12 + piece;
-            (0..polygon.len()).map(|k| [polygon[k], polygon[(k + 1) % polygon.len()], centre]).collect()
+            fan_around(polygon, 12 + piece as u8).collect()
         });
         for t in triangulation {
             triangles[count] = t;
             count += 1;
         }
     }
-    Case { edge_mask, count: count as u8, triangles, polygons, edge_polygon, next, interior }
+    Case { edge_mask, count: count as u8, triangles, polygons: polygons.len() as u8, edge_polygon, next, interior }
 }
 
 /// The face cube edges `a` and `b` both lie on, if any (two edges share at most one face).
-fn common_face(a: u8, b: u8) -> Option<usize> {
+pub(crate) fn common_face(a: u8, b: u8) -> Option<usize> {
     FACES.iter().position(|(cyc, _)| {
         let on = |e: u8| {
             let (p, q) = EDGES[e as usize];
@@ -291,7 +306,7 @@ fn common_face(a: u8, b: u8) -> Option<usize> {
 }
 
 /// Whether cube edges `a` and `b` lie on a common face.
-fn share_face(a: u8, b: u8) -> bool {
+pub(crate) fn share_face(a: u8, b: u8) -> bool {
     common_face(a, b).is_some()
 }
 
@@ -300,7 +315,7 @@ fn share_face(a: u8, b: u8) -> bool {
 /// place its own edge between the same two vertices: the edge would then have four triangles.
 /// Among the valid triangulations, the first found trying fans early that never folds onto
 /// itself ([`never_crosses`]) is taken.
-fn triangulate(polygon: &[u8]) -> Option<Vec<[u8; 3]>> {
+pub(crate) fn triangulate(polygon: &[u8]) -> Option<Vec<[u8; 3]>> {
     /// Each polygon's triangulation, once chosen (the face-choice tables meet the same polygons
     /// many times).
     type Chosen = std::collections::HashMap<Vec<u8>, Option<Vec<[u8; 3]>>>;
@@ -376,7 +391,7 @@ fn triangulate_with(
 /// each crossing at `a / (a + b)` of its edge for corner distances `a` and `b` from the
 /// iso-value drawn over six orders of magnitude, so that crossings crowd corners at unequal
 /// rates (where a fan of a skew polygon can fold over itself), seeded by the polygon.
-fn crowded_draws(polygon: &[u8]) -> Vec<[glam::Vec3; 12]> {
+pub(crate) fn crowded_draws(polygon: &[u8]) -> Vec<[glam::Vec3; 12]> {
     if polygon.len() < 5 {
         return Vec::new();
     }
@@ -408,7 +423,7 @@ const CROWDED_DRAWS: usize = 96;
 
 /// Whether no two triangles of `t` (cube edge numbers) cross in any of `draws`: only triangles
 /// that share at most a vertex can, so pairs sharing a side are skipped.
-fn never_crosses(t: &[[u8; 3]], draws: &[[glam::Vec3; 12]]) -> bool {
+pub(crate) fn never_crosses(t: &[[u8; 3]], draws: &[[glam::Vec3; 12]]) -> bool {
     draws.iter().all(|at| {
         (0..t.len()).all(|i| {
             (i + 1..t.len()).all(|j| {

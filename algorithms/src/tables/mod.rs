@@ -1,3 +1,4 @@
 //! Lookup tables shared by extractors, each with its origin stated in its module.
 
 pub mod marching_cubes;
+pub mod marching_cubes_33;

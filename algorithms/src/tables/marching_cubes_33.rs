@@ -134,15 +134,18 @@ fn saddle_joins(
     let at = |line: (f64, f64), z: f64| line.0 + line.1 * z;
     let q = |z: f64| at(a, z) * at(c, z) - at(b, z) * at(d, z);
     // Split [z0, z1] where m or n changes sign.
-    let mut cuts = vec![z0, z1];
+    // (On the hot path: a fixed array, no allocation per cell.)
+    let (mut cuts, mut len) = ([z0, z1, z1, z1], 2);
     for line in [b, d] {
         if line.1 != 0.0 {
             let t = -line.0 / line.1;
             if t > z0 && t < z1 {
-                cuts.push(t);
+                cuts[len] = t;
+                len += 1;
             }
         }
     }
+    let cuts = &mut cuts[..len];
     cuts.sort_by(f64::total_cmp);
     let qa = a.1 * c.1 - b.1 * d.1;
     let qb = a.0 * c.1 + a.1 * c.0 - b.0 * d.1 - b.1 * d.0;
@@ -234,8 +237,8 @@ static TABLES: LazyLock<Tables> = LazyLock::new(|| {
     let candidates: Vec<Vec<Candidate>> = (0..256 * 64)
         .map(|i| {
             let (case, joins) = ((i / 64) as u8, (i % 64) as u8 & AMBIGUOUS_FACES[i / 64]);
-            let mut c = candidates(case, joins);
-            c.truncate(MAX_CANDIDATES);
+            let c = candidates(case, joins);
+            assert!(c.len() <= MAX_CANDIDATES, "case {case} joins {joins}: {} possible tunnels", c.len());
             c
         })
         .collect();

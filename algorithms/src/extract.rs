@@ -218,6 +218,10 @@ pub struct Guarantees {
     pub outward: bool,
     /// No two triangles meet except at the vertices and edges they share.
     pub intersection_free: bool,
+    /// On a cubic grid, the surface in every cell has the topology (components and Euler
+    /// characteristic) of the level set of the cell's trilinear interpolant: ambiguous faces and
+    /// tunnels through the cell as the interpolant has them (marching cubes 33).
+    pub trilinear_topology: bool,
 }
 
 impl Guarantees {

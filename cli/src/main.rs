@@ -207,6 +207,7 @@ fn guarantees(g: &isolab_algorithms::Guarantees) -> String {
         ("manifold", g.manifold),
         ("outward", g.outward),
         ("free of self-intersections", g.intersection_free),
+        ("the trilinear interpolant's topology in every cell", g.trilinear_topology),
     ];
     format!("lattices: {}; guarantees: {}", g.lattices().join(", "), promised(&flags, "none"))
 }

@@ -61,6 +61,7 @@ fn algorithms(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
         g.set_item("manifold", e.guarantees.manifold)?;
         g.set_item("outward", e.guarantees.outward)?;
         g.set_item("intersection_free", e.guarantees.intersection_free)?;
+        g.set_item("trilinear_topology", e.guarantees.trilinear_topology)?;
         d.set_item("guarantees", g)?;
         // How it meshes in blocks (isolab.dask, chunk=) with its default options.
         let chunking = extractors::build(e.name, &Options::new()).ok().flatten().map(|x| x.chunking());

@@ -81,10 +81,16 @@ pub fn affine_rows(a: &DAffine3) -> [[f64; 4]; 4] {
 }
 
 /// The cell of `grid` (sample index of its lowest corner) a marching cubes triangle lies in:
-/// its vertices lie on the cell's edges, so its centroid is in the cell.
+/// its vertices lie on the cell's edges or inside it, so its centroid is in the cell. A centroid
+/// on a lattice plane is a triangle lying in a face of its cell, and isolab's tables draw those
+/// only on a cell's upper faces (`isolab_algorithms::tables::marching_cubes`): its cell is the
+/// one below the plane.
 fn triangle_cell(mesh: &TriMesh, t: [u32; 3], grid: &Grid) -> [usize; 3] {
     let c = (mesh.positions[t[0] as usize] + mesh.positions[t[1] as usize] + mesh.positions[t[2] as usize]) / 3.0;
-    let at = |v: f32, n: usize| (v.floor().max(0.0) as usize).min(n.saturating_sub(2));
+    let at = |v: f32, n: usize| {
+        let below = if v.fract() == 0.0 { v - 1.0 } else { v.floor() };
+        (below.max(0.0) as usize).min(n.saturating_sub(2))
+    };
     [at(c.x, grid.dims[0]), at(c.y, grid.dims[1]), at(c.z, grid.dims[2])]
 }
 

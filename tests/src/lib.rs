@@ -206,3 +206,74 @@ pub fn crowded_distance(random: &mut isolab_algorithms::random::Random) -> f32 {
         _ => 0.5 + u,
     }
 }
+
+/// The trilinear interpolant of corner values `g` (corner `c` at
+/// `isolab_algorithms::tables::marching_cubes::CORNERS[c]`) at `(x, y, z)` in the unit cell.
+pub fn trilinear(g: &[f32; 8], [x, y, z]: [f32; 3]) -> f32 {
+    use isolab_algorithms::tables::marching_cubes::CORNERS;
+    CORNERS
+        .iter()
+        .zip(g)
+        .map(|(c, v)| {
+            let w = |i: usize, t: f32| if c[i] == 1 { t } else { 1.0 - t };
+            w(0, x) * w(1, y) * w(2, z) * v
+        })
+        .sum()
+}
+
+/// One cell (2 x 2 x 2 samples) with corner values `g`.
+pub fn cell_samples(g: &[f32; 8]) -> Samples {
+    use isolab_algorithms::tables::marching_cubes::CORNERS;
+    grid_samples([2, 2, 2], |x, y, z| {
+        let c = CORNERS.iter().position(|c| c.map(usize::from) == [x, y, z]).expect("a corner");
+        g[c]
+    })
+}
+
+/// Components and Euler characteristic of a mesh (of one cell's surface, with its boundary on the
+/// cell's faces).
+pub fn cell_shape(mesh: &TriMesh) -> (usize, i64) {
+    let t = topology(mesh);
+    (t.components, t.euler)
+}
+
+/// Samples per cell side for [`interpolant_shape`].
+pub const INTERPOLANT_SAMPLES: usize = 32;
+
+/// The components and Euler characteristic of the trilinear interpolant's level set at `shift`
+/// above the iso-value in the cell with corner values `g`: the interpolant sampled
+/// [`INTERPOLANT_SAMPLES`] times per side and meshed by `marching-cubes-decider` (which is
+/// faithful on every face; the fine cells are too small to hold a tunnel except within a hair
+/// of a critical value).
+pub fn interpolant_shape(g: &[f32; 8], shift: f32) -> (usize, i64) {
+    use isolab_algorithms::extractors::marching_cubes::{FaceResolution, MarchingCubes, McOptions};
+    let n = INTERPOLANT_SAMPLES;
+    let s = grid_samples([n + 1; 3], |x, y, z| trilinear(g, [x, y, z].map(|i| i as f32 / n as f32)) - shift);
+    let decider = MarchingCubes::new(McOptions {
+        faces: FaceResolution::AsymptoticDecider,
+        parallelism: isolab_algorithms::slabs::Parallelism::Serial,
+        ..Default::default()
+    });
+    cell_shape(&extract(&decider, &s).surface)
+}
+
+/// Whether a shift of the iso-value by a small fraction of the corner values, either way, changes
+/// the interpolant's topology in the cell: a draw the fine sampling cannot judge.
+pub fn near_critical(g: &[f32; 8]) -> bool {
+    let delta = 2e-3 * g.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+    let at = interpolant_shape(g, 0.0);
+    interpolant_shape(g, -delta) != at || interpolant_shape(g, delta) != at
+}
+
+/// A draw of corner values for sign pattern `case` (bit `c`: corner `c` inside, negative):
+/// magnitudes over two orders of magnitude, so thin passages (tunnels) open and close.
+pub fn tunnel_corner_values(case: u8, random: &mut isolab_algorithms::random::Random) -> [f32; 8] {
+    std::array::from_fn(|c| {
+        let m = 10f32.powf(-2.0 * random.unit_f32());
+        if case >> c & 1 == 1 {
+            -m
+        } else {
+            m
+        }
+    })
+}

@@ -6,7 +6,9 @@
 //! - a lattice it does not declare is refused with `ExtractError::UnsupportedLattice`;
 //! - where the field changes sign inside the lattice the surface is not empty, and where it does
 //!   not the surface is empty (and no error);
-//! - closed, manifold, outward and free of self-intersections wherever it declares so; where the
+//! - closed, manifold, outward and free of self-intersections wherever it declares so; the
+//!   trilinear interpolant's topology in every cell where it declares so (every sign pattern of
+//!   one cell, random corner values, against a fine sampling of the interpolant); where the
 //!   surface leaves the lattice (inside samples on its border: white noise, a tilted plane, a
 //!   saddle), closed means open only along the lattice's border (every boundary edge within one
 //!   cell of it), and outward means consistently wound;
@@ -25,7 +27,10 @@ use glam::Vec3;
 use isolab_algorithms::extractors::{self, ExtractorInfo};
 use isolab_algorithms::{ExtractError, Extraction, Extractor, Options, Samples};
 use isolab_metrics::{self_intersections, topology};
-use isolab_tests::{lattice_blobs, lattice_samples, unit_cube_samples};
+use isolab_tests::{
+    cell_samples, cell_shape, interpolant_shape, lattice_blobs, lattice_samples, near_critical, tunnel_corner_values,
+    unit_cube_samples,
+};
 use proptest::prelude::*;
 
 /// [`isolab_tests::unit_cube_samples`] under the name the tests here use.
@@ -265,6 +270,46 @@ fn surfaces_that_leave_the_lattice() {
             }
         }
     }
+}
+
+/// Every extractor that declares `trilinear_topology`: on every sign pattern of one cell, with
+/// random corner values that open and close tunnels, the cell's mesh has the components and Euler
+/// characteristic of its trilinear interpolant's level set (a fine sampling of it; draws within a
+/// hair of a critical value, which the sampling cannot judge, are counted and bounded).
+#[test]
+fn the_trilinear_interpolants_topology_where_declared() {
+    let declared: Vec<&ExtractorInfo> = extractors::INFOS.iter().filter(|i| i.guarantees.trilinear_topology).collect();
+    let draws = 2 + soak_cases() as u64 / 4;
+    for info in declared {
+        let e = build(info);
+        let (mut tunnels, mut critical) = (0usize, 0usize);
+        for case in 1..=254u8 {
+            let mut random = isolab_algorithms::random::Random::new(0xc0 + u64::from(case));
+            for draw in 0..draws {
+                let g = tunnel_corner_values(case, &mut random);
+                let ours = cell_shape(&extract_on_cell(e.as_ref(), &g));
+                let reference = interpolant_shape(&g, 0.0);
+                if ours != reference {
+                    assert!(
+                        near_critical(&g),
+                        "{}: case {case} draw {draw}: {ours:?}, the interpolant's {reference:?}; {g:?}",
+                        info.name
+                    );
+                    critical += 1;
+                }
+                tunnels += usize::from(reference.0 as i64 > reference.1);
+            }
+        }
+        let total = 254 * draws as usize;
+        assert!(critical * 20 < total, "{}: {critical} of {total} draws near a critical value", info.name);
+        assert!(tunnels > 0, "{}: no draw with a tunnel", info.name);
+    }
+}
+
+fn extract_on_cell(e: &dyn Extractor, g: &[f32; 8]) -> isolab_algorithms::TriMesh {
+    let mut out = Extraction::default();
+    e.extract(&cell_samples(g), &mut out).unwrap_or_else(|err| panic!("{g:?}: {err}"));
+    out.surface
 }
 
 /// Random values in {-1, 0, 1} (a third of them exactly at the iso-value), outside on the border.

@@ -79,7 +79,15 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
     description: DESCRIPTION,
     options: OPTION_NAMES,
     make: from_options,
-    guarantees: Guarantees { cubic: true, bcc: false, closed: true, manifold: true, outward: true, intersection_free: false },
+    guarantees: Guarantees {
+        cubic: true,
+        bcc: false,
+        closed: true,
+        manifold: true,
+        outward: true,
+        intersection_free: false,
+        trilinear_topology: false,
+    },
 };
 
 /// Builds dual contouring from named options.

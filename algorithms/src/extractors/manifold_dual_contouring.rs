@@ -64,7 +64,15 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
     description: DESCRIPTION,
     options: OPTION_NAMES,
     make: from_options,
-    guarantees: Guarantees { cubic: true, bcc: false, closed: true, manifold: true, outward: true, intersection_free: true },
+    guarantees: Guarantees {
+        cubic: true,
+        bcc: false,
+        closed: true,
+        manifold: true,
+        outward: true,
+        intersection_free: true,
+        trilinear_topology: false,
+    },
 };
 
 /// Options for [`ManifoldDualContouring`].

@@ -44,10 +44,9 @@
 //! one tube. The interior test is exact, not Lewiner's one-slice test
 //! ([`crate::tables::marching_cubes_33`]). Every cell's mesh then has the components and Euler
 //! characteristic of the interpolant's level set in the cell (tested on all 256 patterns against
-//! a fine sampling of the interpolant), except for a rare tunnel whose two loops have no band
-//! kept off the cell's lower faces, which stays two discs
-//! ([`crate::tables::marching_cubes_33::unbanded_tunnel`]; the test counts them). Polygons of eight or more vertices are fanned around a
-//! vertex inside the cell at Lewiner's weighted centre, as their tables do. Its tubes have not
+//! a fine sampling of the interpolant). Polygons of eight or more vertices, and the tubes whose
+//! band would need a side on a cube face, are fanned around a vertex inside the cell at
+//! Lewiner's weighted centre, as their tables do. Its tubes have not
 //! been checked for self-intersections, so it promises none.
 //!
 //! **Non-guarantees.** By default the topology is that of the table's face rule, not of the
@@ -171,7 +170,15 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
     description: DESCRIPTION,
     options: OPTION_NAMES,
     make: from_options,
-    guarantees: Guarantees { cubic: true, bcc: false, closed: true, manifold: true, outward: true, intersection_free: true },
+    guarantees: Guarantees {
+        cubic: true,
+        bcc: false,
+        closed: true,
+        manifold: true,
+        outward: true,
+        intersection_free: true,
+        trilinear_topology: false,
+    },
 };
 
 /// Nielson & Hamann 1991: marching cubes whose ambiguous faces follow the trilinear interpolant.
@@ -180,7 +187,15 @@ pub const DECIDER_INFO: ExtractorInfo = ExtractorInfo {
     description: DECIDER_DESCRIPTION,
     options: OPTION_NAMES,
     make: decider_from_options,
-    guarantees: Guarantees { cubic: true, bcc: false, closed: true, manifold: true, outward: true, intersection_free: true },
+    guarantees: Guarantees {
+        cubic: true,
+        bcc: false,
+        closed: true,
+        manifold: true,
+        outward: true,
+        intersection_free: true,
+        trilinear_topology: false,
+    },
 };
 
 /// Chernyaev 1995 (marching cubes 33): every cell meshed with the topology of the trilinear
@@ -190,7 +205,15 @@ pub const MC33_INFO: ExtractorInfo = ExtractorInfo {
     description: MC33_DESCRIPTION,
     options: OPTION_NAMES,
     make: mc33_from_options,
-    guarantees: Guarantees { cubic: true, bcc: false, closed: true, manifold: true, outward: true, intersection_free: false },
+    guarantees: Guarantees {
+        cubic: true,
+        bcc: false,
+        closed: true,
+        manifold: true,
+        outward: true,
+        intersection_free: false,
+        trilinear_topology: true,
+    },
 };
 
 /// One line for listings of marching cubes 33.

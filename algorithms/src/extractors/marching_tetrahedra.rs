@@ -63,7 +63,15 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
     description: DESCRIPTION,
     options: OPTION_NAMES,
     make: from_options,
-    guarantees: Guarantees { cubic: true, bcc: true, closed: true, manifold: true, outward: true, intersection_free: true },
+    guarantees: Guarantees {
+        cubic: true,
+        bcc: true,
+        closed: true,
+        manifold: true,
+        outward: true,
+        intersection_free: true,
+        trilinear_topology: false,
+    },
 };
 
 /// Builds it from options.

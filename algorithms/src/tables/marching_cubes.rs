@@ -48,8 +48,9 @@ pub const FACES: [([u8; 4], [i8; 3]); 6] = [
     ([1, 2, 6, 5], [1, 0, 0]),
 ];
 
-/// Most triangles any case produces.
-pub const MAX_TRIANGLES: usize = 12;
+/// Most triangles any case produces (marching cubes 33's tubes fanned around the centre make up
+/// to fourteen).
+pub const MAX_TRIANGLES: usize = 16;
 
 /// How an ambiguous face (diagonal corners inside) is resolved.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

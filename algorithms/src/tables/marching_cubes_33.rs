@@ -24,9 +24,11 @@
 //! A tunnel turns the two loops that bound the joined regions into one tube: a band of
 //! triangles between the two loops, with every triangle side between the loops off the cube
 //! faces (as the polygon triangulations are), chosen so that it never crosses itself on seeded
-//! corner-crowding draws. Where a polygon has eight or more vertices it is fanned around one
-//! vertex inside the cell, as Lewiner et al.'s tables do (their cases 7.3, 10.2, 12.2, 13.3 and
-//! 13.4), at their centre: the corners' mean weighted by the inverse distance of each corner's
+//! corner-crowding draws. Where no band keeps its sides off the faces (a tunnel of the outside
+//! between corners that joined faces separate), the run of band triangles holding the sides on
+//! faces is fanned around one vertex inside the cell instead, as Lewiner et al.'s case 6.1.2 is.
+//! Where a polygon has eight or more vertices it is fanned around that vertex too, as their
+//! tables do (their cases 7.3, 10.2, 12.2, 13.3 and 13.4). The vertex is at their centre: the corners' mean weighted by the inverse distance of each corner's
 //! value from the iso-value. Everything else is the face-choice table's.
 //!
 //! Tables are built per (pattern, face choices, tunnel) the first time a cell needs them.
@@ -229,7 +231,11 @@ pub fn candidates(case: u8, joins: u8) -> Vec<Candidate> {
 /// Each (pattern, face choices)'s candidates, and the tables for each choice of tunnel (slot 0:
 /// none; slot `1 + k`: candidate `k`), built when first used.
 struct Tables {
+    /// The possible tunnels of each (pattern, face choices).
     candidates: Vec<Vec<Candidate>>,
+    /// Whether the face-choice table's entry has a polygon of [`CENTRE_FAN_VERTICES`] or more.
+    fanned: Vec<bool>,
+    /// Entries, per (pattern, face choices, tunnel slot), generated when first needed.
     cases: Vec<OnceLock<Case>>,
 }
 
@@ -242,8 +248,12 @@ static TABLES: LazyLock<Tables> = LazyLock::new(|| {
             c
         })
         .collect();
+    let fanned = FACE_CHOICE_TABLE
+        .iter()
+        .map(|plain| (0..plain.polygons).any(|p| plain.edge_polygon.iter().filter(|&&q| q == p).count() >= CENTRE_FAN_VERTICES))
+        .collect();
     let cases = (0..256 * 64 * (MAX_CANDIDATES + 1)).map(|_| OnceLock::new()).collect();
-    Tables { candidates, cases }
+    Tables { candidates, fanned, cases }
 });
 
 /// Whether a cell of pattern `case` with no ambiguous face may still tunnel (Chernyaev's case 4
@@ -275,7 +285,10 @@ pub fn entry(case: u8, joins: u8, g: &[f64; 8]) -> &'static Case {
     let tables = &*TABLES;
     let candidates = &tables.candidates[key];
     if candidates.is_empty() {
-        return &FACE_CHOICE_TABLE[key];
+        if !tables.fanned[key] {
+            return &FACE_CHOICE_TABLE[key];
+        }
+        return tables.cases[key * (MAX_CANDIDATES + 1)].get_or_init(|| generate(case, joins, None));
     }
     let components = interior_components(*g);
     let slot =
@@ -284,34 +297,13 @@ pub fn entry(case: u8, joins: u8, g: &[f64; 8]) -> &'static Case {
         .get_or_init(|| generate(case, joins, slot.checked_sub(1).map(|k| candidates[k].polygons)))
 }
 
-/// Whether a cell with corner values `g` (minus the iso-value) has a tunnel that its tables
-/// leave as two discs, because no band between the two loops keeps its sides off the cell's
-/// lower faces (a side on a lower face can meet a neighbour's and leave an edge in four
-/// triangles). This is the one known way marching cubes 33 here misses the interpolant's
-/// topology; the exhaustive test counts it.
-pub fn unbanded_tunnel(g: &[f64; 8]) -> bool {
-    let case = (0..8).fold(0u8, |c, k| c | u8::from(g[k] < 0.0) << k);
-    let joins = (0..6).fold(0u8, |j, f| {
-        let ambiguous = AMBIGUOUS_FACES[case as usize] >> f & 1 == 1;
-        j | u8::from(ambiguous && super::marching_cubes::decider_joins_inside(FACES[f].0.map(|k| g[k as usize]))) << f
-    });
-    let components = interior_components(*g);
-    let Some(c) =
-        candidates(case, joins).into_iter().find(|c| components[c.corners.0 as usize] == components[c.corners.1 as usize])
-    else {
-        return false;
-    };
-    let (_, _, polygons) = chain_polygons(case, face_rule(joins));
-    tube(&polygons[c.polygons.0 as usize], &polygons[c.polygons.1 as usize]).is_none()
-}
-
 /// The entry for `case` with face choices `joins` and, if any, a tube joining `tunnel`'s two
 /// polygons.
 pub fn generate(case: u8, joins: u8, tunnel: Option<(u8, u8)>) -> Case {
     let (edge_mask, next, polygons) = chain_polygons(case, face_rule(joins));
-    // A pair of loops with no band whose sides avoid the faces (a tunnel the trilinear
-    // interpolant cannot make there, such as one in Chernyaev's case 7.2) keeps its discs.
-    let tunnel = tunnel.and_then(|(p, q)| Some(((p, q), tube(&polygons[p as usize], &polygons[q as usize])?)));
+    // A pair of loops with no tube (a tunnel the trilinear interpolant cannot make there, such as
+    // one in Chernyaev's case 7.2) keeps its discs.
+    let tunnel = tunnel.and_then(|(p, q)| Some(((p, q), tube(&polygons[p as usize], &polygons[q as usize], 12 + p)?)));
     let mut triangles = Vec::with_capacity(MAX_TRIANGLES);
     let mut edge_polygon = [u8::MAX; 12];
     let mut interior = 0u8;
@@ -321,7 +313,12 @@ pub fn generate(case: u8, joins: u8, tunnel: Option<(u8, u8)>) -> Case {
         }
         let piece = piece as u8;
         match &tunnel {
-            Some(((p, _), band)) if piece == *p => triangles.extend(band.iter().copied()),
+            Some(((p, _), band)) if piece == *p => {
+                if band.iter().flatten().any(|&v| v == 12 + piece) {
+                    interior |= 1 << piece;
+                }
+                triangles.extend(band.iter().copied());
+            }
             Some(((_, q), _)) if piece == *q => {}
             _ if polygon.len() >= CENTRE_FAN_VERTICES => {
                 interior |= 1 << piece;
@@ -354,17 +351,84 @@ pub fn generate(case: u8, joins: u8, tunnel: Option<(u8, u8)>) -> Case {
 /// is taken.
 const BAND_TRIES: usize = 400;
 
-/// The tube between directed loops `a` and `b`: a band of `a.len() + b.len()` triangles, each
-/// using one loop side in its loop's direction (so the tube is wound as the two discs it replaces
-/// were), the first that never crosses itself on seeded corner-crowding draws (else the first
-/// valid one). Sides between the loops keep off the cube faces where they can; failing that, as
-/// the polygon triangulations do, they may lie on the cell's upper faces (a neighbour meets those
-/// as lower faces, where it draws none). Failing both (seen for a tunnel of the outside between
-/// two corners that joined faces separate), there is no tube: see [`unbanded_tunnel`].
-fn tube(a: &[u8], b: &[u8]) -> Option<Vec<[u8; 3]>> {
+/// The tube between directed loops `a` and `b`, wound as the two discs it replaces were (each
+/// loop side used once, in its loop's direction). First a band of `a.len() + b.len()` triangles
+/// whose sides between the loops keep off the cube faces, the first that never crosses itself on
+/// seeded corner-crowding draws (else the first valid one); failing that, as the polygon
+/// triangulations do, sides on the cell's upper faces only (a neighbour meets those as lower
+/// faces, where it draws none). Failing both (a tunnel of the outside between two corners that
+/// joined faces separate), a band whose sides on faces all lie in one run of its triangles, that
+/// run fanned around the cell's interior vertex `centre` instead (as Lewiner et al.'s case 6.1.2
+/// is): no side of the tube then lies on a face. Failing all three, no tube.
+fn tube(a: &[u8], b: &[u8], centre: u8) -> Option<Vec<[u8; 3]>> {
     let off_faces = |p: u8, q: u8| !share_face(p, q);
     let off_lower_faces = |p: u8, q: u8| common_face(p, q).is_none_or(|f| f % 2 == 1);
-    band_with(a, b, &off_faces).or_else(|| band_with(a, b, &off_lower_faces))
+    band_with(a, b, &off_faces).or_else(|| band_with(a, b, &off_lower_faces)).or_else(|| centred_band(a, b, centre))
+}
+
+/// A band between loops `a` and `b` with its sides on cube faces replaced by a fan around
+/// `centre` (those on lower faces: sides on upper faces are allowed as above) over the shortest
+/// run of band triangles that holds them all inside it (the run's
+/// outline a simple polygon, so `centre` has one ring of neighbours).
+fn centred_band(a: &[u8], b: &[u8], centre: u8) -> Option<Vec<[u8; 3]>> {
+    let mut found = None;
+    let mut band = Vec::with_capacity(a.len() + b.len());
+    let anywhere = |_: u8, _: u8| true;
+    let (m, n) = (a.len(), b.len());
+    'start: for i0 in 0..m {
+        for j0 in 0..n {
+            if walk((a, b), (i0, j0 + n), (m, n), 1 << (i0 * n + j0), &anywhere, &mut band, &mut |t| {
+                found = fan_run(t, centre);
+                found.is_some()
+            }) {
+                break 'start;
+            }
+        }
+    }
+    found
+}
+
+/// `band` (triangles in order around the tube; triangle `k`'s sides `(t[1], t[2])` and the
+/// previous triangle's are its two sides between the loops) with the shortest run of triangles
+/// that holds every side on a lower cube face strictly inside it fanned around `centre`; `None` when no
+/// such run leaves its outline a simple polygon.
+fn fan_run(band: &[[u8; 3]], centre: u8) -> Option<Vec<[u8; 3]>> {
+    let n = band.len();
+    let side = |k: usize| {
+        let t = band[k % n];
+        (t[1], t[2])
+    };
+    // Sides on the cell's upper faces are allowed, as in the bands above.
+    let on_face = |k: usize| {
+        let (p, q) = side(k);
+        common_face(p, q).is_some_and(|f| f % 2 == 0)
+    };
+    for len in 1..n {
+        for start in 0..n {
+            // The run is triangles start..start+len; its inner sides are start..start+len-1
+            // (side k between triangles k and k+1), its outer ones start-1 and start+len-1.
+            let inner_ok = (0..n).filter(|&k| on_face(k)).all(|k| (0..len - 1).any(|d| (start + d) % n == k));
+            if !inner_ok || on_face(start + n - 1) || on_face(start + len - 1) {
+                continue;
+            }
+            let run: Vec<[u8; 3]> = (0..len).map(|d| band[(start + d) % n]).collect();
+            let mut outline: Vec<(u8, u8)> = run
+                .iter()
+                .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+                .filter(|&(p, q)| !run.iter().flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]).any(|e| e == (q, p)))
+                .collect();
+            let mut corners: Vec<u8> = outline.iter().map(|e| e.0).collect();
+            corners.sort_unstable();
+            corners.dedup();
+            if corners.len() != outline.len() {
+                continue;
+            }
+            let mut out: Vec<[u8; 3]> = (len..n).map(|d| band[(start + d) % n]).collect();
+            out.extend(outline.drain(..).map(|(p, q)| [p, q, centre]));
+            return Some(out);
+        }
+    }
+    None
 }
 
 fn band_with(a: &[u8], b: &[u8], allowed: &dyn Fn(u8, u8) -> bool) -> Option<Vec<[u8; 3]>> {

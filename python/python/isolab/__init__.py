@@ -85,12 +85,15 @@ def marching_cubes(volume: np.ndarray, level: Optional[float] = None, *, spacing
         every crossing edge, within float32 rounding) and triangle count: isolab's
         ``marching-cubes`` table makes as many triangles as scikit-image's classic table in each of
         the 254 corner patterns that have a surface (tested), though it may cut a polygon along
-        other diagonals. 'lewiner' is isolab's ``marching-cubes-decider``: every ambiguous face follows the
-        trilinear interpolant (the asymptotic decider), the mesh is closed wherever it does not
-        reach the volume's boundary and manifold, and no triangle has zero area (a crossing
-        within 1e-4 of a sample is kept that far from it). It differs from scikit-image's
-        Lewiner (Marching Cubes 33) in the cell interiors: scikit-image adds a vertex inside a
-        cell whose interior is ambiguous (tunnels), isolab does not resolve the interior.
+        other diagonals. 'lewiner' is isolab's ``marching-cubes-33`` (Chernyaev's marching cubes
+        33, as scikit-image's is): every cell's mesh has the topology of the trilinear
+        interpolant's level set, the ambiguous faces by the asymptotic decider and the tunnels
+        through a cell's interior by an exact test (scikit-image's Lewiner tests one slice of the
+        cell, which errs on some cells; tested against a fine sampling of the interpolant). Like
+        scikit-image it adds a vertex inside some cells, at the same weighted centre; it meshes
+        some tunnels as a band without that vertex, where scikit-image fans one around it. The
+        mesh is closed wherever it does not reach the volume's boundary and manifold, and no
+        triangle has zero area (a crossing within 1e-4 of a sample is kept that far from it).
     mask : (M, N, P) bool array, optional
         Only the cells whose highest corner (the largest index along every axis) is True are
         meshed, the corner scikit-image reads the mask at.
@@ -130,7 +133,7 @@ def marching_cubes(volume: np.ndarray, level: Optional[float] = None, *, spacing
     if gradient_direction not in ("descent", "ascent"):
         raise ValueError(f"Incorrect input {gradient_direction} in `gradient_direction`, see docstring.")
     if method == "lewiner":
-        faces_rule, on_iso = "decider", "separate"
+        faces_rule, on_iso = "trilinear", "separate"
     elif method == "lorensen":
         faces_rule, on_iso = "separate", "exact"
     else:

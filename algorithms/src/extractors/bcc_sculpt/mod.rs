@@ -197,7 +197,15 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
     description: DESCRIPTION,
     options: OPTION_NAMES,
     make: from_options,
-    guarantees: Guarantees { cubic: true, bcc: true, closed: true, manifold: true, outward: true, intersection_free: false },
+    guarantees: Guarantees {
+        cubic: true,
+        bcc: true,
+        closed: true,
+        manifold: true,
+        outward: true,
+        intersection_free: false,
+        trilinear_topology: false,
+    },
 };
 
 /// Builds `bcc-sculpt` from named options.

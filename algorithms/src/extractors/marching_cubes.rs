@@ -46,8 +46,10 @@
 //! characteristic of the interpolant's level set in the cell (tested on all 256 patterns against
 //! a fine sampling of the interpolant). Polygons of eight or more vertices, and the tubes whose
 //! band would need a side on a cube face, are fanned around a vertex inside the cell at
-//! Lewiner's weighted centre, as their tables do. Its tubes have not
-//! been checked for self-intersections, so it promises none.
+//! Lewiner's weighted centre, as their tables do. A tube is the first of
+//! several triangulations that does not cross itself at the cell's own vertices; where none
+//! avoids it the first is kept, so it promises no freedom from self-intersections (the
+//! `real_volumes` page counts them).
 //!
 //! **Non-guarantees.** By default the topology is that of the table's face rule, not of the
 //! trilinear interpolant (use the decider variant for that); triangles may be arbitrarily thin. Samples
@@ -585,26 +587,31 @@ impl Ctx<'_> {
             if entry.interior >> piece & 1 == 0 {
                 continue;
             }
-            let (mut sum, mut n) = (Vec3::ZERO, 0.0f32);
-            for (edge, &(a, b)) in EDGES.iter().enumerate() {
-                if entry.edge_polygon[edge] == piece {
-                    let (va, vb) = (values[a as usize], values[b as usize]);
-                    let t = ((self.iso - va) / (vb - va)).clamp(self.t_min, 1.0 - self.t_min);
-                    let pa = Vec3::from(CORNERS[a as usize].map(f32::from));
-                    let pb = Vec3::from(CORNERS[b as usize].map(f32::from));
-                    sum += pa + (pb - pa) * t;
-                    n += 1.0;
-                }
-            }
             let local = if self.faces == FaceResolution::Trilinear {
                 marching_cubes_33::lewiner_centre(values.map(|v| v - self.iso))
             } else {
-                sum / n
+                self.crossings_mean(entry, piece, &values)
             };
             let normal = self.sample_normals.then(|| trilinear_gradient(&values, local));
             ids[12 + piece as usize] =
                 sink.vertex(self.grid.position(cell[0], cell[1], cell[2]) + local * self.grid.spacing, normal);
         }
+    }
+
+    /// The mean of the edge crossings of polygon `piece` of `entry`, in cell-local coordinates.
+    fn crossings_mean(&self, entry: &Case, piece: u8, values: &[f32; 8]) -> Vec3 {
+        let (mut sum, mut n) = (Vec3::ZERO, 0.0f32);
+        for (edge, &(a, b)) in EDGES.iter().enumerate() {
+            if entry.edge_polygon[edge] == piece {
+                let (va, vb) = (values[a as usize], values[b as usize]);
+                let t = ((self.iso - va) / (vb - va)).clamp(self.t_min, 1.0 - self.t_min);
+                let pa = Vec3::from(CORNERS[a as usize].map(f32::from));
+                let pb = Vec3::from(CORNERS[b as usize].map(f32::from));
+                sum += pa + (pb - pa) * t;
+                n += 1.0;
+            }
+        }
+        sum / n
     }
 
     /// Interior vertices a cell's entry makes ([`Ctx::interior_vertices`]).

@@ -31,7 +31,10 @@
 //! tables do (their cases 7.3, 10.2, 12.2, 13.3 and 13.4). The vertex is at their centre: the corners' mean weighted by the inverse distance of each corner's
 //! value from the iso-value. Everything else is the face-choice table's.
 //!
-//! Tables are built per (pattern, face choices, tunnel) the first time a cell needs them.
+//! A tunnel keeps several tube triangulations (other bands, and bands with a run fanned around
+//! the centre vertex); each cell takes the first that does not cross itself at its own vertex
+//! positions (the exact predicate, on the crossings and centre the cell's values give), else the
+//! first. Tables are built per (pattern, face choices, tunnel) the first time a cell needs them.
 
 use super::marching_cubes::{
     chain_polygons, common_face, crowded_draws, fan_around, never_crosses, share_face, triangulate, Case, FaceRule,
@@ -235,8 +238,9 @@ struct Tables {
     candidates: Vec<Vec<Candidate>>,
     /// Whether the face-choice table's entry has a polygon of [`CENTRE_FAN_VERTICES`] or more.
     fanned: Vec<bool>,
-    /// Entries, per (pattern, face choices, tunnel slot), generated when first needed.
-    cases: Vec<OnceLock<Case>>,
+    /// Entries, per (pattern, face choices, tunnel slot), generated when first needed: one, or
+    /// one per tube triangulation ([`variants`]).
+    cases: Vec<OnceLock<Vec<Case>>>,
 }
 
 static TABLES: LazyLock<Tables> = LazyLock::new(|| {
@@ -288,22 +292,76 @@ pub fn entry(case: u8, joins: u8, g: &[f64; 8]) -> &'static Case {
         if !tables.fanned[key] {
             return &FACE_CHOICE_TABLE[key];
         }
-        return tables.cases[key * (MAX_CANDIDATES + 1)].get_or_init(|| generate(case, joins, None));
+        return &tables.cases[key * (MAX_CANDIDATES + 1)].get_or_init(|| variants(case, joins, None))[0];
     }
     let components = interior_components(*g);
     let slot =
         candidates.iter().position(|c| components[c.corners.0 as usize] == components[c.corners.1 as usize]).map_or(0, |k| k + 1);
-    tables.cases[key * (MAX_CANDIDATES + 1) + slot]
-        .get_or_init(|| generate(case, joins, slot.checked_sub(1).map(|k| candidates[k].polygons)))
+    let choices = tables.cases[key * (MAX_CANDIDATES + 1) + slot]
+        .get_or_init(|| variants(case, joins, slot.checked_sub(1).map(|k| candidates[k].polygons)));
+    if choices.len() == 1 {
+        return &choices[0];
+    }
+    // A tube: the first triangulation that does not cross itself at this cell's own vertices.
+    let at = cell_points(g);
+    choices.iter().find(|c| !crosses_at(c.triangles(), &at)).unwrap_or(&choices[0])
+}
+
+/// A cell's vertex positions in cell-local coordinates for corner values `g` (minus the
+/// iso-value): the crossing of each edge that changes sign (linear, kept 1e-4 from the edge's
+/// ends as the engine keeps them by default), then the centre vertex ([`lewiner_centre`]) in
+/// the four interior slots.
+fn cell_points(g: &[f64; 8]) -> [glam::Vec3; 16] {
+    let corner = |c: u8| glam::Vec3::from(super::marching_cubes::CORNERS[c as usize].map(f32::from));
+    let centre = lewiner_centre(g.map(|v| v as f32));
+    std::array::from_fn(|i| match EDGES.get(i) {
+        Some(&(a, b)) => {
+            let (ga, gb) = (g[a as usize], g[b as usize]);
+            let t = if (ga < 0.0) != (gb < 0.0) { (ga / (ga - gb)).clamp(1e-4, 1.0 - 1e-4) as f32 } else { 0.5 };
+            corner(a) + (corner(b) - corner(a)) * t
+        }
+        None => centre,
+    })
+}
+
+/// Whether two triangles of `t` (vertex slots of [`cell_points`]) that share at most a vertex
+/// cross at `at`.
+fn crosses_at(t: &[[u8; 3]], at: &[glam::Vec3; 16]) -> bool {
+    (0..t.len()).any(|i| {
+        (i + 1..t.len()).any(|j| {
+            let shared = t[i].iter().filter(|v| t[j].contains(v)).count();
+            shared < 2
+                && crate::predicates::indexed_triangles_intersect(t[i].map(u32::from), t[j].map(u32::from), |v| at[v as usize])
+        })
+    })
 }
 
 /// The entry for `case` with face choices `joins` and, if any, a tube joining `tunnel`'s two
-/// polygons.
+/// polygons: the first of [`variants`].
 pub fn generate(case: u8, joins: u8, tunnel: Option<(u8, u8)>) -> Case {
+    variants(case, joins, tunnel).swap_remove(0)
+}
+
+/// The entries for `case` with face choices `joins` and, if any, a tube joining `tunnel`'s two
+/// polygons, one per tube triangulation of [`tubes`] (in its order); one entry with no tunnel,
+/// or where the two loops have no tube (a tunnel the trilinear interpolant cannot make there,
+/// such as one in Chernyaev's case 7.2: the discs stay).
+pub fn variants(case: u8, joins: u8, tunnel: Option<(u8, u8)>) -> Vec<Case> {
     let (edge_mask, next, polygons) = chain_polygons(case, face_rule(joins));
-    // A pair of loops with no tube (a tunnel the trilinear interpolant cannot make there, such as
-    // one in Chernyaev's case 7.2) keeps its discs.
-    let tunnel = tunnel.and_then(|(p, q)| Some(((p, q), tube(&polygons[p as usize], &polygons[q as usize], 12 + p)?)));
+    let tubes = tunnel.map_or_else(Vec::new, |(p, q)| tubes(&polygons[p as usize], &polygons[q as usize], 12 + p));
+    if tubes.is_empty() {
+        return vec![assemble(case, (edge_mask, next, &polygons), None)];
+    }
+    let (p, q) = tunnel.expect("tubes only for a tunnel");
+    tubes.iter().map(|t| assemble(case, (edge_mask, next, &polygons), Some(((p, q), t.as_slice())))).collect()
+}
+
+/// A tube in a table entry: the two polygons it joins and its triangles.
+type Tube<'a> = ((u8, u8), &'a [[u8; 3]]);
+
+/// A table entry from the chained polygons: the tube, if any, in place of its two polygons, the
+/// others triangulated (or fanned around their centre).
+fn assemble(case: u8, (edge_mask, next, polygons): (u16, [u8; 12], &[Vec<u8>]), tunnel: Option<Tube<'_>>) -> Case {
     let mut triangles = Vec::with_capacity(MAX_TRIANGLES);
     let mut edge_polygon = [u8::MAX; 12];
     let mut interior = 0u8;
@@ -312,14 +370,14 @@ pub fn generate(case: u8, joins: u8, tunnel: Option<(u8, u8)>) -> Case {
             edge_polygon[e as usize] = piece as u8;
         }
         let piece = piece as u8;
-        match &tunnel {
-            Some(((p, _), band)) if piece == *p => {
+        match tunnel {
+            Some(((p, _), band)) if piece == p => {
                 if band.iter().flatten().any(|&v| v == 12 + piece) {
                     interior |= 1 << piece;
                 }
                 triangles.extend(band.iter().copied());
             }
-            Some(((_, q), _)) if piece == *q => {}
+            Some(((_, q), _)) if piece == q => {}
             _ if polygon.len() >= CENTRE_FAN_VERTICES => {
                 interior |= 1 << piece;
                 triangles.extend(fan_around(polygon, 12 + piece));
@@ -366,6 +424,69 @@ fn tube(a: &[u8], b: &[u8], centre: u8) -> Option<Vec<[u8; 3]>> {
     band_with(a, b, &off_faces).or_else(|| band_with(a, b, &off_lower_faces)).or_else(|| centred_band(a, b, centre))
 }
 
+/// Most tube triangulations kept for one tunnel, and most bands they are made from.
+const TUBE_VARIANTS: usize = 48;
+const TUBE_BANDS: usize = 8;
+
+/// The tube triangulations between loops `a` and `b` a cell chooses from, its own vertex positions
+/// deciding ([`entry`]): [`tube`]'s first, then other valid bands (sides off the faces, failing
+/// that off the lower faces), then those bands with a run of their triangles fanned around the
+/// centre vertex `centre` (Lewiner et al.'s case 6.1.2 tube has that vertex); where only a
+/// centred tube exists, its runs. Empty when there is no tube.
+fn tubes(a: &[u8], b: &[u8], centre: u8) -> Vec<Vec<[u8; 3]>> {
+    let Some(first) = tube(a, b, centre) else {
+        return Vec::new();
+    };
+    let off_faces = |p: u8, q: u8| !share_face(p, q);
+    let off_lower_faces = |p: u8, q: u8| common_face(p, q).is_none_or(|f| f % 2 == 1);
+    let anywhere = |_: u8, _: u8| true;
+    let mut bands = band_list(a, b, &off_faces);
+    if bands.is_empty() {
+        bands = band_list(a, b, &off_lower_faces);
+    }
+    let plain = !bands.is_empty();
+    if !plain {
+        bands = band_list(a, b, &anywhere);
+    }
+    let mut out = vec![first];
+    if plain {
+        out.extend(bands.iter().cloned());
+    }
+    for band in &bands {
+        out.extend(fan_runs(band, centre));
+    }
+    let mut seen = std::collections::HashSet::new();
+    out.retain(|t| {
+        let mut key = t.clone();
+        key.sort_unstable();
+        seen.insert(key)
+    });
+    out.truncate(TUBE_VARIANTS);
+    out
+}
+
+/// Up to [`TUBE_BANDS`] bands between loops `a` and `b` whose sides between the loops are all
+/// `allowed`.
+fn band_list(a: &[u8], b: &[u8], allowed: &dyn Fn(u8, u8) -> bool) -> Vec<Vec<[u8; 3]>> {
+    let (m, n) = (a.len(), b.len());
+    let mut out = Vec::new();
+    let mut band = Vec::with_capacity(m + n);
+    for i0 in 0..m {
+        for j0 in 0..n {
+            if allowed(a[i0], b[j0]) {
+                walk((a, b), (i0, j0 + n), (m, n), 1 << (i0 * n + j0), allowed, &mut band, &mut |t| {
+                    out.push(t.to_vec());
+                    out.len() >= TUBE_BANDS
+                });
+            }
+            if out.len() >= TUBE_BANDS {
+                return out;
+            }
+        }
+    }
+    out
+}
+
 /// A band between loops `a` and `b` with its sides on cube faces replaced by a fan around
 /// `centre` (those on lower faces: sides on upper faces are allowed as above) over the shortest
 /// run of band triangles that holds them all inside it (the run's
@@ -393,6 +514,12 @@ fn centred_band(a: &[u8], b: &[u8], centre: u8) -> Option<Vec<[u8; 3]>> {
 /// that holds every side on a lower cube face strictly inside it fanned around `centre`; `None` when no
 /// such run leaves its outline a simple polygon.
 fn fan_run(band: &[[u8; 3]], centre: u8) -> Option<Vec<[u8; 3]>> {
+    fan_runs(band, centre).into_iter().next()
+}
+
+/// Every way [`fan_run`] allows of fanning a run of `band` around `centre`, shortest run first.
+fn fan_runs(band: &[[u8; 3]], centre: u8) -> Vec<Vec<[u8; 3]>> {
+    let mut runs = Vec::new();
     let n = band.len();
     let side = |k: usize| {
         let t = band[k % n];
@@ -425,10 +552,10 @@ fn fan_run(band: &[[u8; 3]], centre: u8) -> Option<Vec<[u8; 3]>> {
             }
             let mut out: Vec<[u8; 3]> = (len..n).map(|d| band[(start + d) % n]).collect();
             out.extend(outline.drain(..).map(|(p, q)| [p, q, centre]));
-            return Some(out);
+            runs.push(out);
         }
     }
-    None
+    runs
 }
 
 fn band_with(a: &[u8], b: &[u8], allowed: &dyn Fn(u8, u8) -> bool) -> Option<Vec<[u8; 3]>> {
@@ -528,27 +655,28 @@ mod tests {
     }
 
     #[test]
-    fn every_tunnel_table_is_a_band_wound_as_its_loops() {
+    fn every_tunnel_table_is_a_tube_wound_as_its_loops() {
         for case in 0..=255u8 {
             for joins in 0..64u8 {
                 if joins & !AMBIGUOUS_FACES[case as usize] != 0 {
                     continue;
                 }
                 for (k, c) in candidates(case, joins).iter().enumerate() {
-                    let t = generate(case, joins, Some(c.polygons));
-                    let plain = &FACE_CHOICE_TABLE[case as usize * 64 + joins as usize];
-                    // Every directed loop side is used once, as in the discs.
-                    let sides = |tri: &[[u8; 3]]| {
-                        let mut s: Vec<(u8, u8)> = tri
-                            .iter()
-                            .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-                            .filter(|&(p, q)| p < 12 && plain.next[p as usize] == q)
-                            .collect();
-                        s.sort_unstable();
-                        s
-                    };
-                    let disc_sides = sides(plain.triangles());
-                    assert_eq!(sides(t.triangles()), disc_sides, "case {case} joins {joins} tunnel {k}");
+                    for t in variants(case, joins, Some(c.polygons)) {
+                        let plain = &FACE_CHOICE_TABLE[case as usize * 64 + joins as usize];
+                        // Every directed loop side is used once, as in the discs.
+                        let sides = |tri: &[[u8; 3]]| {
+                            let mut s: Vec<(u8, u8)> = tri
+                                .iter()
+                                .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+                                .filter(|&(p, q)| p < 12 && plain.next[p as usize] == q)
+                                .collect();
+                            s.sort_unstable();
+                            s
+                        };
+                        let disc_sides = sides(plain.triangles());
+                        assert_eq!(sides(t.triangles()), disc_sides, "case {case} joins {joins} tunnel {k}");
+                    }
                 }
             }
         }

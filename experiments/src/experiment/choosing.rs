@@ -174,6 +174,18 @@ fn scans(data: &real_volumes::Data) -> Result<Choice, ExperimentError> {
             ));
         }
     }
+    // Topology inside the cells: whether the pick follows the trilinear interpolant's (each
+    // extractor's registered guarantee), and the fastest clean one that does if it does not.
+    let trilinear =
+        |name: &str| isolab_algorithms::extractors::INFOS.iter().any(|i| i.name == name && i.guarantees.trilinear_topology);
+    if trilinear(pick) {
+        why.push_str(" Every cell of it has the topology of the trilinear interpolant's level set.");
+    } else if let Some(faithful) = good.iter().filter(|n| trilinear(n)).min_by(|a, b| total_ms(a).total_cmp(&total_ms(b))) {
+        why.push_str(&format!(
+            " Where every cell must have the topology of the trilinear interpolant's level set (its tunnels included),              `{faithful}`, clean at every level too: {:.1} ms.",
+            total_ms(faithful)
+        ));
+    }
     let failed: Vec<String> = ours
         .iter()
         .filter(|n| !good.contains(n))

@@ -343,7 +343,7 @@ pub fn generate(case: u8, joins: u8, tunnel: Option<(u8, u8)>) -> Case {
 }
 
 /// The entries for `case` with face choices `joins` and, if any, a tube joining `tunnel`'s two
-/// polygons, one per tube triangulation of [`tubes`] (in its order); one entry with no tunnel,
+/// polygons, one per tube triangulation of `tubes` (in its order); one entry with no tunnel,
 /// or where the two loops have no tube (a tunnel the trilinear interpolant cannot make there,
 /// such as one in Chernyaev's case 7.2: the discs stay).
 pub fn variants(case: u8, joins: u8, tunnel: Option<(u8, u8)>) -> Vec<Case> {

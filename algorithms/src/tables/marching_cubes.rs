@@ -425,15 +425,17 @@ const CROWDED_DRAWS: usize = 96;
 /// Whether no two triangles of `t` (cube edge numbers) cross in any of `draws`: only triangles
 /// that share at most a vertex can, so pairs sharing a side are skipped.
 pub(crate) fn never_crosses(t: &[[u8; 3]], draws: &[[glam::Vec3; 12]]) -> bool {
-    draws.iter().all(|at| {
-        (0..t.len()).all(|i| {
-            (i + 1..t.len()).all(|j| {
-                let shared = t[i].iter().filter(|v| t[j].contains(v)).count();
-                shared >= 2
-                    || !crate::predicates::indexed_triangles_intersect(t[i].map(u32::from), t[j].map(u32::from), |v| {
-                        at[v as usize]
-                    })
-            })
+    draws.iter().all(|at| !crosses_at(t, at))
+}
+
+/// Whether two triangles of `t` (vertex slots into `at`) that share at most a vertex cross at
+/// positions `at`.
+pub(crate) fn crosses_at(t: &[[u8; 3]], at: &[glam::Vec3]) -> bool {
+    (0..t.len()).any(|i| {
+        (i + 1..t.len()).any(|j| {
+            let shared = t[i].iter().filter(|v| t[j].contains(v)).count();
+            shared < 2
+                && crate::predicates::indexed_triangles_intersect(t[i].map(u32::from), t[j].map(u32::from), |v| at[v as usize])
         })
     })
 }

@@ -28,8 +28,9 @@
 //! between corners that joined faces separate), the run of band triangles holding the sides on
 //! faces is fanned around one vertex inside the cell instead, as Lewiner et al.'s case 6.1.2 is.
 //! Where a polygon has eight or more vertices it is fanned around that vertex too, as their
-//! tables do (their cases 7.3, 10.2, 12.2, 13.3 and 13.4). The vertex is at their centre: the corners' mean weighted by the inverse distance of each corner's
-//! value from the iso-value. Everything else is the face-choice table's.
+//! tables do (their cases 7.3, 10.2, 12.2, 13.3 and 13.4). The vertex is at their centre: the
+//! corners' mean weighted by the inverse distance of each corner's value from the iso-value.
+//! Everything else is the face-choice table's.
 //!
 //! A tunnel keeps several tube triangulations (other bands, and bands with a run fanned around
 //! the centre vertex); each cell takes the first that does not cross itself at its own vertex
@@ -37,7 +38,7 @@
 //! first. Tables are built per (pattern, face choices, tunnel) the first time a cell needs them.
 
 use super::marching_cubes::{
-    chain_polygons, common_face, crowded_draws, fan_around, never_crosses, share_face, triangulate, Case, FaceRule,
+    chain_polygons, common_face, crosses_at, crowded_draws, fan_around, never_crosses, share_face, triangulate, Case, FaceRule,
     AMBIGUOUS_FACES, EDGES, FACES, FACE_CHOICE_TABLE, MAX_TRIANGLES,
 };
 use std::sync::{LazyLock, OnceLock};
@@ -310,7 +311,7 @@ pub fn entry(case: u8, joins: u8, g: &[f64; 8]) -> &'static Case {
 /// A cell's vertex positions in cell-local coordinates for corner values `g` (minus the
 /// iso-value): the crossing of each edge that changes sign (linear, kept 1e-4 from the edge's
 /// ends as the engine keeps them by default), then the centre vertex ([`lewiner_centre`]) in
-/// the four interior slots.
+/// the four interior slots (vertex slots as [`crosses_at`] reads them).
 fn cell_points(g: &[f64; 8]) -> [glam::Vec3; 16] {
     let corner = |c: u8| glam::Vec3::from(super::marching_cubes::CORNERS[c as usize].map(f32::from));
     let centre = lewiner_centre(g.map(|v| v as f32));
@@ -322,24 +323,6 @@ fn cell_points(g: &[f64; 8]) -> [glam::Vec3; 16] {
         }
         None => centre,
     })
-}
-
-/// Whether two triangles of `t` (vertex slots of [`cell_points`]) that share at most a vertex
-/// cross at `at`.
-fn crosses_at(t: &[[u8; 3]], at: &[glam::Vec3; 16]) -> bool {
-    (0..t.len()).any(|i| {
-        (i + 1..t.len()).any(|j| {
-            let shared = t[i].iter().filter(|v| t[j].contains(v)).count();
-            shared < 2
-                && crate::predicates::indexed_triangles_intersect(t[i].map(u32::from), t[j].map(u32::from), |v| at[v as usize])
-        })
-    })
-}
-
-/// The entry for `case` with face choices `joins` and, if any, a tube joining `tunnel`'s two
-/// polygons: the first of [`variants`].
-pub fn generate(case: u8, joins: u8, tunnel: Option<(u8, u8)>) -> Case {
-    variants(case, joins, tunnel).swap_remove(0)
 }
 
 /// The entries for `case` with face choices `joins` and, if any, a tube joining `tunnel`'s two
@@ -419,9 +402,22 @@ const BAND_TRIES: usize = 400;
 /// run fanned around the cell's interior vertex `centre` instead (as Lewiner et al.'s case 6.1.2
 /// is): no side of the tube then lies on a face. Failing all three, no tube.
 fn tube(a: &[u8], b: &[u8], centre: u8) -> Option<Vec<[u8; 3]>> {
-    let off_faces = |p: u8, q: u8| !share_face(p, q);
-    let off_lower_faces = |p: u8, q: u8| common_face(p, q).is_none_or(|f| f % 2 == 1);
     band_with(a, b, &off_faces).or_else(|| band_with(a, b, &off_lower_faces)).or_else(|| centred_band(a, b, centre))
+}
+
+/// A side between two loops that lies on no cube face.
+fn off_faces(p: u8, q: u8) -> bool {
+    !share_face(p, q)
+}
+
+/// A side between two loops that lies on no lower cube face (`z = 0`, `y = 0`, `x = 0`).
+fn off_lower_faces(p: u8, q: u8) -> bool {
+    common_face(p, q).is_none_or(|f| f % 2 == 1)
+}
+
+/// Any side.
+fn anywhere(_: u8, _: u8) -> bool {
+    true
 }
 
 /// Most tube triangulations kept for one tunnel, and most bands they are made from.
@@ -437,9 +433,6 @@ fn tubes(a: &[u8], b: &[u8], centre: u8) -> Vec<Vec<[u8; 3]>> {
     let Some(first) = tube(a, b, centre) else {
         return Vec::new();
     };
-    let off_faces = |p: u8, q: u8| !share_face(p, q);
-    let off_lower_faces = |p: u8, q: u8| common_face(p, q).is_none_or(|f| f % 2 == 1);
-    let anywhere = |_: u8, _: u8| true;
     let mut bands = band_list(a, b, &off_faces);
     if bands.is_empty() {
         bands = band_list(a, b, &off_lower_faces);
@@ -489,12 +482,11 @@ fn band_list(a: &[u8], b: &[u8], allowed: &dyn Fn(u8, u8) -> bool) -> Vec<Vec<[u
 
 /// A band between loops `a` and `b` with its sides on cube faces replaced by a fan around
 /// `centre` (those on lower faces: sides on upper faces are allowed as above) over the shortest
-/// run of band triangles that holds them all inside it (the run's
-/// outline a simple polygon, so `centre` has one ring of neighbours).
+/// run of band triangles that holds them all inside it (the run's outline a simple polygon, so
+/// `centre` has one ring of neighbours).
 fn centred_band(a: &[u8], b: &[u8], centre: u8) -> Option<Vec<[u8; 3]>> {
     let mut found = None;
     let mut band = Vec::with_capacity(a.len() + b.len());
-    let anywhere = |_: u8, _: u8| true;
     let (m, n) = (a.len(), b.len());
     'start: for i0 in 0..m {
         for j0 in 0..n {
@@ -511,8 +503,8 @@ fn centred_band(a: &[u8], b: &[u8], centre: u8) -> Option<Vec<[u8; 3]>> {
 
 /// `band` (triangles in order around the tube; triangle `k`'s sides `(t[1], t[2])` and the
 /// previous triangle's are its two sides between the loops) with the shortest run of triangles
-/// that holds every side on a lower cube face strictly inside it fanned around `centre`; `None` when no
-/// such run leaves its outline a simple polygon.
+/// that holds every side on a lower cube face strictly inside it fanned around `centre`; `None`
+/// when no such run leaves its outline a simple polygon.
 fn fan_run(band: &[[u8; 3]], centre: u8) -> Option<Vec<[u8; 3]>> {
     fan_runs(band, centre).into_iter().next()
 }
@@ -528,7 +520,7 @@ fn fan_runs(band: &[[u8; 3]], centre: u8) -> Vec<Vec<[u8; 3]>> {
     // Sides on the cell's upper faces are allowed, as in the bands above.
     let on_face = |k: usize| {
         let (p, q) = side(k);
-        common_face(p, q).is_some_and(|f| f % 2 == 0)
+        !off_lower_faces(p, q)
     };
     for len in 1..n {
         for start in 0..n {

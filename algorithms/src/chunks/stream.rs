@@ -1,5 +1,6 @@
-//! Streaming a world larger than memory: chunks meshed slab by slab straight from the field, each
-//! slab welded only against the previous slab's top face, and handed to a [`MeshSink`].
+//! Streaming a world or a volume larger than memory: chunks meshed slab by slab, straight from
+//! the field ([`stream_chunked`]) or from a volume read z-slice by z-slice ([`stream_blocks`]),
+//! each slab welded only against the previous slab's top face, and handed to a [`MeshSink`].
 
 use super::*;
 
@@ -47,6 +48,9 @@ pub enum StreamError {
     /// The sink failed.
     #[error("writing the mesh: {0}")]
     Io(#[from] std::io::Error),
+    /// The samples could not be read.
+    #[error("{0}")]
+    Read(String),
 }
 
 /// The index-coordinate z of a weld key (position bits or lattice key).
@@ -84,8 +88,7 @@ pub fn stream_chunked(
     }
     let counts = chunk_counts(&grid, chunk, extractor.name())?;
     let mut stats = StreamStats { chunks: counts, ..Default::default() };
-    let mut index: HashMap<u128, u32> = HashMap::new();
-    let (mut batch_v, mut batch_t, mut remap) = (Vec::new(), Vec::new(), Vec::new());
+    let mut seams = SeamWeld::new(extractor.name());
     let proven = std::sync::atomic::AtomicUsize::new(0);
     for z in 0..counts[2] {
         let ids: Vec<[usize; 3]> = (0..counts[0] * counts[1]).map(|k| [k % counts[0], k / counts[0], z]).collect();
@@ -109,42 +112,162 @@ pub fn stream_chunked(
         stats.peak_slab_bytes =
             stats.peak_slab_bytes.max(meshed.iter().map(|m| m.1.surface.capacity_bytes() + 16 * m.2.capacity()).sum());
         for (state, mesh, keys) in &meshed {
-            match state {
-                ChunkState::Empty => stats.empty += 1,
-                ChunkState::Full => stats.full += 1,
-                ChunkState::Meshed => stats.meshed += 1,
-            }
-            batch_v.clear();
-            remap.clear();
-            for (i, &p) in mesh.surface.positions.iter().enumerate() {
-                let next = u32::try_from(stats.vertices + batch_v.len() as u64).map_err(|_| ExtractError::TooLarge {
-                    algorithm: extractor.name(),
-                    vertices: (stats.vertices + batch_v.len() as u64) as usize,
-                })?;
-                let id = match keys[i] {
-                    Some(key) => *index.entry(key).or_insert(next),
-                    None => next,
-                };
-                if id == next {
-                    batch_v.push(p);
-                } else {
-                    stats.welded += 1;
-                }
-                remap.push(id);
-            }
-            batch_t.clear();
-            batch_t.extend(mesh.surface.triangles.iter().map(|t| t.map(|v| remap[v as usize])));
-            sink.vertices(&batch_v)?;
-            sink.triangles(&batch_t)?;
-            stats.vertices += batch_v.len() as u64;
-            stats.triangles += batch_t.len() as u64;
+            seams.push(*state, &mesh.surface, keys, &|p| p, false, &mut stats, sink)?;
         }
-        stats.peak_keys = stats.peak_keys.max(index.len());
         // Only the next slab shares vertices, on this slab's top face.
-        let top = ((z + 1) * chunk) as f32;
-        index.retain(|&key, _| key_z(key) == top);
+        seams.end_layer(((z + 1) * chunk) as f32, &mut stats);
         progress(z + 1, counts[2]);
     }
     stats.proven = proven.into_inner();
+    Ok(stats)
+}
+
+/// The weld of a stream: the seam keys of the layer of blocks just written, each block's new
+/// vertices and its triangles in global indices sent to the sink as they come.
+struct SeamWeld {
+    algorithm: &'static str,
+    index: HashMap<u128, u32>,
+    vertices: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+    remap: Vec<u32>,
+}
+
+impl SeamWeld {
+    fn new(algorithm: &'static str) -> Self {
+        Self { algorithm, index: HashMap::new(), vertices: Vec::new(), triangles: Vec::new(), remap: Vec::new() }
+    }
+
+    /// Welds one block's mesh (its vertices mapped by `map`, its triangles reversed when
+    /// `mirror`) onto what was written, and writes its new vertices and its triangles.
+    #[allow(clippy::too_many_arguments)]
+    fn push(
+        &mut self,
+        state: ChunkState,
+        surface: &crate::mesh::TriMesh,
+        keys: &[Option<u128>],
+        map: &dyn Fn(Vec3) -> Vec3,
+        mirror: bool,
+        stats: &mut StreamStats,
+        sink: &mut dyn MeshSink,
+    ) -> Result<(), StreamError> {
+        match state {
+            ChunkState::Empty => stats.empty += 1,
+            ChunkState::Full => stats.full += 1,
+            ChunkState::Meshed => stats.meshed += 1,
+        }
+        self.vertices.clear();
+        self.remap.clear();
+        for (i, &p) in surface.positions.iter().enumerate() {
+            let count = stats.vertices + self.vertices.len() as u64;
+            let next = u32::try_from(count)
+                .map_err(|_| ExtractError::TooLarge { algorithm: self.algorithm, vertices: count as usize })?;
+            let id = match keys[i] {
+                Some(key) => *self.index.entry(key).or_insert(next),
+                None => next,
+            };
+            if id == next {
+                self.vertices.push(map(p));
+            } else {
+                stats.welded += 1;
+            }
+            self.remap.push(id);
+        }
+        self.triangles.clear();
+        let remap = &self.remap;
+        self.triangles.extend(surface.triangles.iter().map(|t| {
+            let t = t.map(|v| remap[v as usize]);
+            if mirror {
+                [t[0], t[2], t[1]]
+            } else {
+                t
+            }
+        }));
+        sink.vertices(&self.vertices)?;
+        sink.triangles(&self.triangles)?;
+        stats.vertices += self.vertices.len() as u64;
+        stats.triangles += self.triangles.len() as u64;
+        Ok(())
+    }
+
+    /// After a layer of blocks: keeps only the keys a later layer can make (index z at least
+    /// `top`, the layer's upper face: every vertex of a later layer lies there or above).
+    fn end_layer(&mut self, top: f32, stats: &mut StreamStats) {
+        stats.peak_keys = stats.peak_keys.max(self.index.len());
+        self.index.retain(|&key, _| key_z(key) >= top);
+    }
+}
+
+/// Appends the next `count` z-slices of a volume to `out`, or says why it cannot.
+pub type SliceReader<'a> = dyn FnMut(usize, &mut Vec<f32>) -> Result<(), String> + 'a;
+
+/// Meshes a volume of `plan.dims` samples read z-slice by z-slice, block by block, straight
+/// into `sink`: `read(count, out)` appends the next `count` slices (x fastest, inside where a
+/// value is below `iso`) and is asked for each slice once, in order. Each layer of blocks along z
+/// is meshed in parallel ([`mesh_block`], the extractor's apron included) and welded onto the
+/// previous layer's top face by the fragments' keys, in the plan's order: the mesh written is
+/// [`weld_fragments`] of every block's fragment (same vertices in the same order, same
+/// triangles; tested), with `map` applied to each vertex (index coordinates to the world) and
+/// the winding reversed when `mirror`. Memory: the slices one layer of blocks reads, one copy of
+/// them in blocks, one layer's meshes and one face of seam keys. `progress(done, total)` is
+/// called after each layer.
+#[allow(clippy::too_many_arguments)]
+pub fn stream_blocks(
+    extractor: &dyn Extractor,
+    plan: &BlockPlan,
+    iso: f32,
+    read: &mut SliceReader<'_>,
+    map: &dyn Fn(Vec3) -> Vec3,
+    mirror: bool,
+    sink: &mut dyn MeshSink,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<StreamStats, StreamError> {
+    let [nx, ny, nz] = plan.dims;
+    let slice = nx * ny;
+    let mut stats = StreamStats { chunks: plan.counts, ..Default::default() };
+    let mut seams = SeamWeld::new(extractor.name());
+    // Slices `first..first + window.len() / slice` of the volume.
+    let (mut window, mut first, mut read_to) = (Vec::<f32>::new(), 0usize, 0usize);
+    for z in 0..plan.counts[2] {
+        let ids: Vec<[usize; 3]> =
+            (0..plan.counts[0] * plan.counts[1]).map(|k| [k % plan.counts[0], k / plan.counts[0], z]).collect();
+        let bounds: Vec<BlockBounds> = ids.iter().filter_map(|&id| plan.block(id)).collect();
+        let (lo, hi) = (bounds[0].lo[2], bounds[0].lo[2] + bounds[0].dims[2]);
+        if lo > first {
+            window.drain(..(lo - first).min(window.len() / slice) * slice);
+            first = lo;
+        }
+        if hi > read_to {
+            read(hi - read_to, &mut window).map_err(StreamError::Read)?;
+            read_to = hi;
+        }
+        if window.len() != (read_to - first) * slice || read_to > nz {
+            return Err(StreamError::Read(format!(
+                "the reader gave {} values for slices {first}..{read_to} of {nx}x{ny}",
+                window.len()
+            )));
+        }
+        let window = &window;
+        let fragments: Vec<Fragment> = bounds
+            .par_iter()
+            .map(|b| {
+                let mut values = Vec::with_capacity(b.dims.iter().product());
+                for k in 0..b.dims[2] {
+                    for j in 0..b.dims[1] {
+                        let row = ((b.lo[2] + k - first) * ny + b.lo[1] + j) * nx + b.lo[0];
+                        values.extend_from_slice(&window[row..row + b.dims[0]]);
+                    }
+                }
+                mesh_block(extractor, plan, b.id, values, iso)
+            })
+            .collect::<Result<_, ExtractError>>()?;
+        stats.peak_slab_bytes = stats
+            .peak_slab_bytes
+            .max(window.len() * 4 + fragments.iter().map(|f| f.surface.capacity_bytes() + 16 * f.keys.capacity()).sum::<usize>());
+        for f in &fragments {
+            seams.push(f.state, &f.surface, &f.keys, map, mirror, &mut stats, sink)?;
+        }
+        seams.end_layer(((z + 1) * plan.chunk) as f32, &mut stats);
+        progress(z + 1, plan.counts[2]);
+    }
     Ok(stats)
 }

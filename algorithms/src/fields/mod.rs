@@ -16,7 +16,7 @@ pub use analytic::{Csg, Gyroid, Sphere, Thin, Torus};
 pub use complement::Complement;
 pub use mesh_sdf::{MeshField, CAP_WINDING_BOUND, CROSSING_TOLERANCE, DEFAULT_BAND_CELLS};
 pub use noise::{Asteroid, Terrain};
-pub use volume::{Volume, VolumeField};
+pub use volume::{otsu_threshold, OtsuHistogram, Volume, VolumeField};
 
 use crate::field::{Field, FieldError};
 use std::sync::Arc;

@@ -161,35 +161,65 @@ fn first_non_finite(values: &[f32]) -> Option<usize> {
 /// Otsu's threshold of `values` (256 bins between their extremes): the bin boundary that
 /// maximises the between-class variance. `None` for fewer than two distinct values.
 pub fn otsu_threshold(values: &[f32]) -> Option<f32> {
-    const BINS: usize = 256;
     let (lo, hi) = values.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-    if hi <= lo || !hi.is_finite() || !lo.is_finite() {
-        return None;
-    }
-    let width = (hi as f64 - lo as f64) / BINS as f64;
-    let mut histogram = [0u64; BINS];
-    for &v in values {
-        let bin = (((v as f64 - lo as f64) / width) as usize).min(BINS - 1);
-        histogram[bin] += 1;
-    }
-    let total = values.len() as f64;
-    let sum_all: f64 = histogram.iter().enumerate().map(|(b, &n)| b as f64 * n as f64).sum();
-    let (mut below, mut sum_below, mut best, mut best_bin) = (0.0f64, 0.0f64, -1.0f64, 0usize);
-    for (b, &n) in histogram.iter().enumerate().take(BINS - 1) {
-        below += n as f64;
-        sum_below += b as f64 * n as f64;
-        let above = total - below;
-        if below == 0.0 || above == 0.0 {
-            continue;
+    let mut histogram = OtsuHistogram::new(lo, hi)?;
+    histogram.add(values);
+    Some(histogram.threshold())
+}
+
+/// The histogram [`otsu_threshold`] reads, filled a run of values at a time: for a volume read in
+/// slabs, one pass for the extremes, then one to fill it (the same threshold as the whole).
+#[derive(Clone, Debug)]
+pub struct OtsuHistogram {
+    lo: f32,
+    width: f64,
+    counts: [u64; OtsuHistogram::BINS],
+    total: u64,
+}
+
+impl OtsuHistogram {
+    const BINS: usize = 256;
+
+    /// An empty histogram of 256 bins between the values' extremes; `None` unless `lo < hi`, both
+    /// finite.
+    pub fn new(lo: f32, hi: f32) -> Option<Self> {
+        if hi <= lo || !hi.is_finite() || !lo.is_finite() {
+            return None;
         }
-        let (mean_below, mean_above) = (sum_below / below, (sum_all - sum_below) / above);
-        let between = below * above * (mean_below - mean_above).powi(2);
-        if between > best {
-            best = between;
-            best_bin = b;
-        }
+        let width = (hi as f64 - lo as f64) / Self::BINS as f64;
+        Some(Self { lo, width, counts: [0; Self::BINS], total: 0 })
     }
-    Some((lo as f64 + (best_bin + 1) as f64 * width) as f32)
+
+    /// Counts `values` (each within the extremes given).
+    pub fn add(&mut self, values: &[f32]) {
+        for &v in values {
+            let bin = (((v as f64 - self.lo as f64) / self.width) as usize).min(Self::BINS - 1);
+            self.counts[bin] += 1;
+        }
+        self.total += values.len() as u64;
+    }
+
+    /// The bin boundary that maximises the between-class variance.
+    pub fn threshold(&self) -> f32 {
+        let total = self.total as f64;
+        let sum_all: f64 = self.counts.iter().enumerate().map(|(b, &n)| b as f64 * n as f64).sum();
+        let (mut below, mut sum_below, mut best, mut best_bin) = (0.0f64, 0.0f64, -1.0f64, 0usize);
+        for (b, &n) in self.counts.iter().enumerate().take(Self::BINS - 1) {
+            below += n as f64;
+            sum_below += b as f64 * n as f64;
+            let above = total - below;
+            if below == 0.0 || above == 0.0 {
+                continue;
+            }
+            let (mean_below, mean_above) = (sum_below / below, (sum_all - sum_below) / above);
+            let between = below * above * (mean_below - mean_above).powi(2);
+            if between > best {
+                best = between;
+                best_bin = b;
+            }
+        }
+        (self.lo as f64 + (best_bin + 1) as f64 * self.width) as f32
+    }
 }
 
 fn check_affine(a: &DAffine3) -> Result<(), String> {

@@ -11,8 +11,8 @@
 //! it is converted to RAS.
 
 use super::{
-    check_size, data_path, decode, decode_text, inflate, pick_volume, volume, Compression, DataType, Inside, Space, VolumeFile,
-    VolumeOptions,
+    check_size, data_path, decode, decode_text, inflate, pick_volume, volume, Compression, DataLayout, DataType, Inside, Space,
+    VolumeFile, VolumeHeader, VolumeOptions,
 };
 use crate::IoError;
 use glam::{DAffine3, DMat3, DVec3};
@@ -35,13 +35,28 @@ fn data_type(name: &str) -> Option<DataType> {
     })
 }
 
-/// Parses MetaImage bytes; `sibling` reads a data file named in the header.
-pub fn parse_metaimage(
-    bytes: &[u8],
-    path: &Path,
-    options: VolumeOptions,
-    sibling: &dyn Fn(&str) -> Result<Vec<u8>, IoError>,
-) -> Result<VolumeFile, IoError> {
+/// What a MetaImage header says, read before any data.
+struct Header {
+    ty: DataType,
+    sizes: Vec<usize>,
+    shape: String,
+    channels: usize,
+    affine: DAffine3,
+    big_endian: bool,
+    compressed: bool,
+    binary: bool,
+    notes: Vec<String>,
+    pick: usize,
+    voxels: usize,
+    total: usize,
+    data_file: String,
+    data_line: usize,
+    data_start: usize,
+    header_size: i64,
+}
+
+/// The header of MetaImage `bytes` (the whole file or its start, up to `ElementDataFile`).
+fn header(bytes: &[u8], path: &Path, options: VolumeOptions) -> Result<Header, IoError> {
     let malformed = |line: usize, reason: String| IoError::Malformed { path: path.into(), line, reason };
     let bad = |reason: String| IoError::Invalid { path: path.into(), reason };
     let mut fields: HashMap<String, (String, usize)> = HashMap::new();
@@ -141,6 +156,57 @@ pub fn parse_metaimage(
     let voxels =
         sizes[..3].iter().try_fold(1usize, |a, &s| a.checked_mul(s)).ok_or_else(|| bad(format!("shape {shape} is too large")))?;
     let total = voxels.checked_mul(extra).ok_or_else(|| bad(format!("shape {shape} is too large")))?;
+    let header_size: i64 = match get(&["HeaderSize"]) {
+        Some((h, l)) => h.parse().map_err(|_| malformed(l, format!("HeaderSize '{h}'")))?,
+        None => 0,
+    };
+    Ok(Header {
+        ty,
+        sizes,
+        shape,
+        channels,
+        affine,
+        big_endian,
+        compressed,
+        binary,
+        notes,
+        pick,
+        voxels,
+        total,
+        data_file,
+        data_line,
+        data_start,
+        header_size,
+    })
+}
+
+/// Parses MetaImage bytes; `sibling` reads a data file named in the header.
+pub fn parse_metaimage(
+    bytes: &[u8],
+    path: &Path,
+    options: VolumeOptions,
+    sibling: &dyn Fn(&str) -> Result<Vec<u8>, IoError>,
+) -> Result<VolumeFile, IoError> {
+    let malformed = |line: usize, reason: String| IoError::Malformed { path: path.into(), line, reason };
+    let bad = |reason: String| IoError::Invalid { path: path.into(), reason };
+    let Header {
+        ty,
+        sizes,
+        shape,
+        channels,
+        affine,
+        big_endian,
+        compressed,
+        binary,
+        notes,
+        pick,
+        voxels,
+        total,
+        data_file,
+        data_line,
+        data_start,
+        header_size,
+    } = header(bytes, path, options)?;
     let owned;
     let data: &[u8] = if data_file.eq_ignore_ascii_case("LOCAL") {
         &bytes[data_start..]
@@ -152,10 +218,6 @@ pub fn parse_metaimage(
             e => e,
         })?;
         &owned
-    };
-    let header_size: i64 = match get(&["HeaderSize"]) {
-        Some((h, l)) => h.parse().map_err(|_| malformed(l, format!("HeaderSize '{h}'")))?,
-        None => 0,
     };
     let nbytes = total.checked_mul(ty.size()).ok_or_else(|| bad(format!("shape {shape} is too large")))?;
     let decoded = if !binary {
@@ -191,6 +253,58 @@ pub fn parse_metaimage(
         iso: None,
         centres: None,
         notes,
+    })
+}
+
+/// What the header of the MetaImage file at `path` says (from its first bytes, `prefix`), and
+/// where the picked volume's data lies, for reading it slab by slab; the layout is an error
+/// saying why when the data cannot be read that way (text data, interleaved channels).
+pub fn header_layout(prefix: &[u8], path: &Path, options: VolumeOptions) -> Result<VolumeHeader, IoError> {
+    let h = header(prefix, path, options)?;
+    let layout = (|| {
+        if !h.binary {
+            return Err("its data is text (BinaryData = False), read whole only".to_string());
+        }
+        if h.channels > 1 {
+            return Err(format!("its {} channels are interleaved, read whole only", h.channels));
+        }
+        let local = h.data_file.eq_ignore_ascii_case("LOCAL");
+        if !local && (h.data_file.starts_with("LIST") || h.data_file.contains('%')) {
+            return Err(format!("ElementDataFile '{}': multi-file data is not supported", h.data_file));
+        }
+        let file = if local { path.to_path_buf() } else { data_path(path, &h.data_file) };
+        let mut start = if local { h.data_start as u64 } else { 0 };
+        let bytes = (h.total * h.ty.size()) as u64;
+        match (h.compressed, h.header_size) {
+            (false, -1) => {
+                let len = std::fs::metadata(&file).map_err(|e| format!("{}: {e}", file.display()))?.len();
+                start = len.checked_sub(bytes).ok_or("the data file is shorter than its shape")?;
+            }
+            (false, s) if s >= 0 => start += s as u64,
+            (false, s) => return Err(format!("HeaderSize {s}")),
+            (true, _) => {}
+        }
+        Ok(DataLayout {
+            file,
+            start,
+            compression: h.compressed.then_some(Compression::Zlib),
+            offset: (h.pick * h.voxels * h.ty.size()) as u64,
+            ty: h.ty,
+            big_endian: h.big_endian,
+            slope: 1.0,
+            inter: 0.0,
+        })
+    })();
+    Ok(VolumeHeader {
+        dims: [h.sizes[0], h.sizes[1], h.sizes[2]],
+        affine: h.affine,
+        format: "MetaImage",
+        data_type: h.ty.name(),
+        space: Space::Ras,
+        inside: Inside::Above,
+        iso: None,
+        notes: h.notes,
+        layout,
     })
 }
 

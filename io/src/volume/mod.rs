@@ -17,6 +17,7 @@ pub mod metaimage;
 pub mod nifti;
 pub mod nrrd;
 pub mod samples;
+pub mod slabs;
 
 use super::IoError;
 use glam::DAffine3;
@@ -64,6 +65,80 @@ pub struct VolumeFile {
     /// Things the user should know (a guessed offset, a unit conversion, a picked volume).
     pub notes: Vec<String>,
 }
+
+/// Where a volume file keeps the voxels of the volume asked for, and how: what reading them
+/// slab by slab needs ([`slabs::VolumeSlabs`]). The values are x fastest, then y, then z, so a
+/// z-slab is a contiguous run of the (decompressed) stream.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DataLayout {
+    /// The file holding the data (the header's own, or the data file it names).
+    pub file: PathBuf,
+    /// The byte of `file` where the stored data (compressed or not) begins.
+    pub start: u64,
+    /// How the stored data is compressed.
+    pub compression: Option<Compression>,
+    /// Bytes of the decompressed stream before the picked volume's first value.
+    pub offset: u64,
+    /// The stored type.
+    pub ty: DataType,
+    /// Byte order.
+    pub big_endian: bool,
+    /// Value scaling: `slope * v + inter`.
+    pub slope: f64,
+    /// Value offset.
+    pub inter: f64,
+}
+
+/// What a volume file's header says, read without its data.
+#[derive(Clone, Debug)]
+pub struct VolumeHeader {
+    /// Samples per axis.
+    pub dims: [usize; 3],
+    /// Index-to-world (RAS for anatomical files).
+    pub affine: DAffine3,
+    /// Format name.
+    pub format: &'static str,
+    /// The stored data type.
+    pub data_type: &'static str,
+    /// The world's coordinate system.
+    pub space: Space,
+    /// Which side is inside unless the user says.
+    pub inside: Inside,
+    /// The iso-value the file carries (isolab's grids), if any.
+    pub iso: Option<f32>,
+    /// Things the user should know.
+    pub notes: Vec<String>,
+    /// Where the data lies, or why it cannot be read slab by slab.
+    pub layout: Result<DataLayout, String>,
+}
+
+/// Reads the header of the volume file at `path` (its first bytes only) and where its data lies.
+pub fn read_header(path: &Path, options: VolumeOptions) -> Result<VolumeHeader, IoError> {
+    let read_err = |source| IoError::Read { path: path.into(), source };
+    let mut prefix = Vec::new();
+    std::fs::File::open(path).map_err(read_err)?.take(HEADER_PREFIX).read_to_end(&mut prefix).map_err(read_err)?;
+    let format = detect(path, &prefix).ok_or_else(|| IoError::Invalid {
+        path: path.into(),
+        reason: "not a volume file we read (NIfTI, NRRD, MetaImage)".into(),
+    })?;
+    let text_header_ends = |end: &[u8]| prefix.len() < HEADER_PREFIX as usize || prefix.windows(end.len()).any(|w| w == end);
+    let too_long = || IoError::Invalid {
+        path: path.into(),
+        reason: format!("its header is longer than {} KiB; it is read whole only", HEADER_PREFIX >> 10),
+    };
+    match format {
+        VolumeFormat::Nifti => nifti::header_layout(&prefix, path, options),
+        VolumeFormat::Nrrd if text_header_ends(b"\n\n") || text_header_ends(b"\r\n\r\n") => {
+            nrrd::header_layout(&prefix, path, options)
+        }
+        VolumeFormat::MetaImage if text_header_ends(b"ElementDataFile") => metaimage::header_layout(&prefix, path, options),
+        VolumeFormat::Nrrd | VolumeFormat::MetaImage => Err(too_long()),
+        VolumeFormat::Samples => samples::header_layout(path),
+    }
+}
+
+/// How much of a file [`read_header`] reads.
+const HEADER_PREFIX: u64 = 1 << 20;
 
 /// The stored data types.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -10,10 +10,12 @@
 //! converted to millimetres.
 
 use super::{
-    check_size, decode, inflate, is_gzip, pick_volume, volume, Compression, DataType, Inside, Space, VolumeFile, VolumeOptions,
+    check_size, decode, inflate, is_gzip, pick_volume, volume, Compression, DataLayout, DataType, Inside, Space, VolumeFile,
+    VolumeHeader, VolumeOptions,
 };
 use crate::IoError;
 use glam::{DAffine3, DMat3, DVec3};
+use std::io::Read;
 use std::path::Path;
 
 /// The header fields isolab uses, from either version.
@@ -229,17 +231,26 @@ pub fn quaternion_matrix([b, c, d]: [f64; 3]) -> DMat3 {
     )
 }
 
-/// Parses NIfTI bytes (gzip or not); `sibling` reads the `.img` of a header/image pair.
-pub fn parse_nifti(
-    bytes: &[u8],
-    path: &Path,
-    options: VolumeOptions,
-    sibling: &dyn Fn(&str) -> Result<Vec<u8>, IoError>,
-) -> Result<VolumeFile, IoError> {
+/// What a NIfTI header says about the volume `options` picks, before any data is read.
+struct Plan {
+    h: Header,
+    ty: DataType,
+    grid: [usize; 3],
+    voxels: usize,
+    shape: String,
+    notes: Vec<String>,
+    pick: usize,
+    affine: DAffine3,
+    total: usize,
+    nbytes: usize,
+    slope: f64,
+    inter: f64,
+}
+
+/// Reads the header (from `head`, decompressed) and works out the volume's shape, pick and affine.
+fn plan(head: &[u8], path: &Path, options: VolumeOptions) -> Result<Plan, IoError> {
     let bad = |reason: String| IoError::Invalid { path: path.into(), reason };
-    let gz = is_gzip(bytes);
-    let head = if gz { super::gunzip_prefix(bytes, 544, path)? } else { bytes[..bytes.len().min(544)].to_vec() };
-    let h = parse_header(&head, path)?;
+    let h = parse_header(head, path)?;
     let ty = data_type(h.datatype).map_err(bad)?;
     let rank = h.dim[0];
     if !(1..=7).contains(&rank) {
@@ -260,25 +271,54 @@ pub fn parse_nifti(
     let mut notes = Vec::new();
     let pick = pick_volume(path, &shape, size(3), options.index, &mut notes)?;
     let affine = affine(&h, &mut notes).map_err(bad)?;
-    let header_len = if h.version == 1 { 348 } else { 540 };
     let total = voxels.checked_mul(size(3)).ok_or_else(|| bad(format!("shape {shape} is too large")))?;
     let nbytes = total.checked_mul(ty.size()).ok_or_else(|| bad(format!("shape {shape} is too large")))?;
+    let (slope, inter) = if h.scl_slope.is_finite() && h.scl_slope != 0.0 {
+        (h.scl_slope, if h.scl_inter.is_finite() { h.scl_inter } else { 0.0 })
+    } else {
+        (1.0, 0.0)
+    };
+    Ok(Plan { h, ty, grid, voxels, shape, notes, pick, affine, total, nbytes, slope, inter })
+}
+
+/// Where a single-file NIfTI's data starts: `vox_offset`, or just past the header (with a note)
+/// when the offset points inside it.
+fn single_file_offset(h: &Header, path: &Path, notes: &mut Vec<String>) -> Result<usize, IoError> {
+    let header_len = if h.version == 1 { 348 } else { 540 };
+    if !(h.vox_offset.is_finite() && h.vox_offset >= 0.0 && h.vox_offset < 1e15) {
+        return Err(IoError::Invalid { path: path.into(), reason: format!("vox_offset {} is not a byte offset", h.vox_offset) });
+    }
+    Ok(if (h.vox_offset as usize) < header_len + 4 {
+        notes.push(format!("vox_offset {} is inside the header; the data is read from byte {}", h.vox_offset, header_len + 4));
+        header_len + 4
+    } else {
+        h.vox_offset as usize
+    })
+}
+
+/// The image file of a header-only NIfTI pair (`.hdr` beside `.img` or `.img.gz`).
+fn image_names(path: &Path) -> [String; 2] {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+    let stem = name.strip_suffix(".gz").unwrap_or(name);
+    let stem = stem.strip_suffix(".hdr").or_else(|| stem.strip_suffix(".HDR")).unwrap_or(stem);
+    [format!("{stem}.img"), format!("{stem}.img.gz")]
+}
+
+/// Parses NIfTI bytes (gzip or not); `sibling` reads the `.img` of a header/image pair.
+pub fn parse_nifti(
+    bytes: &[u8],
+    path: &Path,
+    options: VolumeOptions,
+    sibling: &dyn Fn(&str) -> Result<Vec<u8>, IoError>,
+) -> Result<VolumeFile, IoError> {
+    let bad = |reason: String| IoError::Invalid { path: path.into(), reason };
+    let gz = is_gzip(bytes);
+    let head = if gz { super::gunzip_prefix(bytes, 544, path)? } else { bytes[..bytes.len().min(544)].to_vec() };
+    let Plan { h, ty, grid, voxels, shape, mut notes, pick, affine, total, nbytes, slope, inter } = plan(&head, path, options)?;
     let data: std::borrow::Cow<[u8]>;
     let offset;
     if h.single_file {
-        if !(h.vox_offset.is_finite() && h.vox_offset >= 0.0 && h.vox_offset < 1e15) {
-            return Err(bad(format!("vox_offset {} is not a byte offset", h.vox_offset)));
-        }
-        offset = if (h.vox_offset as usize) < header_len + 4 {
-            notes.push(format!(
-                "vox_offset {} is inside the header; the data is read from byte {}",
-                h.vox_offset,
-                header_len + 4
-            ));
-            header_len + 4
-        } else {
-            h.vox_offset as usize
-        };
+        offset = single_file_offset(&h, path, &mut notes)?;
         data = if gz {
             let need = offset.checked_add(nbytes).ok_or_else(|| bad("the data size overflows".into()))?;
             inflate(bytes, Compression::Gzip, need, path).map(std::borrow::Cow::Owned).map_err(|e| match e {
@@ -292,11 +332,9 @@ pub fn parse_nifti(
             std::borrow::Cow::Borrowed(bytes)
         };
     } else {
-        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
-        let stem = name.strip_suffix(".gz").unwrap_or(name);
-        let stem = stem.strip_suffix(".hdr").or_else(|| stem.strip_suffix(".HDR")).unwrap_or(stem);
-        let img = sibling(&format!("{stem}.img")).or_else(|_| sibling(&format!("{stem}.img.gz"))).map_err(|_| {
-            bad(format!("a header-only NIfTI (magic ni{}) needs its image file {stem}.img or {stem}.img.gz beside it", h.version))
+        let [img, img_gz] = image_names(path);
+        let img = sibling(&img).or_else(|_| sibling(&img_gz)).map_err(|_| {
+            bad(format!("a header-only NIfTI (magic ni{}) needs its image file {img} or {img_gz} beside it", h.version))
         })?;
         offset = h.vox_offset.max(0.0) as usize;
         data = if is_gzip(&img) {
@@ -306,11 +344,6 @@ pub fn parse_nifti(
         };
     }
     check_size(path, total, ty, offset, data.len())?;
-    let (slope, inter) = if h.scl_slope.is_finite() && h.scl_slope != 0.0 {
-        (h.scl_slope, if h.scl_inter.is_finite() { h.scl_inter } else { 0.0 })
-    } else {
-        (1.0, 0.0)
-    };
     let start = offset + pick * voxels * ty.size();
     let values = decode(&data[start..], ty, h.big_endian, voxels, slope, inter);
     Ok(VolumeFile {
@@ -322,6 +355,45 @@ pub fn parse_nifti(
         iso: None,
         centres: None,
         notes,
+    })
+}
+
+/// What the header of the NIfTI file at `path` says (from its first bytes, `prefix`, gzip or
+/// not), and where the picked volume's data lies, for reading it slab by slab.
+pub fn header_layout(prefix: &[u8], path: &Path, options: VolumeOptions) -> Result<VolumeHeader, IoError> {
+    let gz = is_gzip(prefix);
+    let head = if gz { super::gunzip_prefix(prefix, 544, path)? } else { prefix[..prefix.len().min(544)].to_vec() };
+    let Plan { h, ty, grid, voxels, mut notes, pick, affine, slope, inter, .. } = plan(&head, path, options)?;
+    let (file, offset, compression) = if h.single_file {
+        (path.to_path_buf(), single_file_offset(&h, path, &mut notes)?, gz.then_some(Compression::Gzip))
+    } else {
+        let dir = path.parent().unwrap_or(Path::new(""));
+        let [img, img_gz] = image_names(path).map(|n| dir.join(n));
+        let file = if img.is_file() { img } else { img_gz };
+        let mut magic = [0u8; 2];
+        let gz = std::fs::File::open(&file).and_then(|mut f| f.read_exact(&mut magic)).is_ok() && is_gzip(&magic);
+        (file, h.vox_offset.max(0.0) as usize, gz.then_some(Compression::Gzip))
+    };
+    let layout = DataLayout {
+        file,
+        start: 0,
+        compression,
+        offset: (offset + pick * voxels * ty.size()) as u64,
+        ty,
+        big_endian: h.big_endian,
+        slope,
+        inter,
+    };
+    Ok(VolumeHeader {
+        dims: grid,
+        affine,
+        format: if h.version == 1 { "NIfTI-1" } else { "NIfTI-2" },
+        data_type: ty.name(),
+        space: Space::Ras,
+        inside: Inside::Above,
+        iso: None,
+        notes,
+        layout: Ok(layout),
     })
 }
 

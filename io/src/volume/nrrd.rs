@@ -12,8 +12,8 @@
 //! Reference: <https://teem.sourceforge.net/nrrd/format.html>.
 
 use super::{
-    check_size, data_path, decode, decode_text, inflate, pick_volume, volume, Compression, DataType, Inside, Space, VolumeFile,
-    VolumeOptions,
+    check_size, data_path, decode, decode_text, inflate, pick_volume, volume, Compression, DataLayout, DataType, Inside, Space,
+    VolumeFile, VolumeHeader, VolumeOptions,
 };
 use crate::IoError;
 use glam::{DAffine3, DMat3, DVec3};
@@ -69,6 +69,33 @@ fn vector(text: &str) -> Result<Option<Vec<f64>>, String> {
         .map(Some)
 }
 
+/// What an NRRD header says, read before any data.
+struct Header {
+    ty: DataType,
+    big_endian: bool,
+    sizes: Vec<usize>,
+    shape: String,
+    encoding: String,
+    enc_line: usize,
+    space: Space,
+    notes: Vec<String>,
+    affine: DAffine3,
+    /// The three spatial axes, in order.
+    spatial: Vec<usize>,
+    /// The non-spatial axis (a 4-D file's fourth), if any.
+    extra_axis: Option<usize>,
+    /// The volume picked along it.
+    pick: usize,
+    /// Values in the file.
+    total: usize,
+    /// Where attached data starts (after the header's blank line).
+    data_start: usize,
+    /// The detached data file and its header line.
+    detached: Option<(String, usize)>,
+    line_skip: Option<(String, usize)>,
+    byte_skip: i64,
+}
+
 /// Parses NRRD bytes; `sibling` reads a detached data file named in the header.
 pub fn parse_nrrd(
     bytes: &[u8],
@@ -76,6 +103,119 @@ pub fn parse_nrrd(
     options: VolumeOptions,
     sibling: &dyn Fn(&str) -> Result<Vec<u8>, IoError>,
 ) -> Result<VolumeFile, IoError> {
+    let malformed = |line: usize, reason: String| IoError::Malformed { path: path.into(), line, reason };
+    let bad = |reason: String| IoError::Invalid { path: path.into(), reason };
+    let Header {
+        ty,
+        big_endian,
+        sizes,
+        shape,
+        encoding,
+        enc_line,
+        space,
+        notes,
+        affine,
+        spatial,
+        extra_axis,
+        pick,
+        total,
+        data_start,
+        detached,
+        line_skip,
+        byte_skip,
+    } = header(bytes, path, options)?;
+    // The data: attached after the blank line, or in a detached file.
+    let owned;
+    let mut data: &[u8] = match &detached {
+        Some((name, _)) => {
+            owned = sibling(name).map_err(|e| match e {
+                IoError::Read { source, .. } => IoError::Read { path: data_path(path, name), source },
+                e => e,
+            })?;
+            &owned
+        }
+        None => &bytes[data_start..],
+    };
+    if let Some((skip, l)) = line_skip {
+        let n: usize = skip.parse().map_err(|_| malformed(l, format!("line skip '{skip}'")))?;
+        for _ in 0..n {
+            let p = data
+                .iter()
+                .position(|&b| b == b'\n')
+                .ok_or_else(|| malformed(l, format!("line skip {n}: the data has fewer lines")))?;
+            data = &data[p + 1..];
+        }
+    }
+    let values_all: Vec<f32>;
+    let decoded: &[f32] = match encoding.as_str() {
+        "raw" | "gzip" | "gz" => {
+            let nbytes = total.checked_mul(ty.size()).ok_or_else(|| bad(format!("shape {shape} is too large")))?;
+            let raw_owned;
+            let raw: &[u8] = if encoding == "raw" {
+                if byte_skip == -1 {
+                    let from = data.len().checked_sub(nbytes).ok_or_else(|| {
+                        bad(format!(
+                            "header and data disagree: shape {shape} of {} needs {nbytes} bytes, the data has {}",
+                            ty.name(),
+                            data.len()
+                        ))
+                    })?;
+                    &data[from..]
+                } else {
+                    let skip = usize::try_from(byte_skip).map_err(|_| bad(format!("byte skip {byte_skip}")))?;
+                    check_size(path, total, ty, skip, data.len())?;
+                    &data[skip..]
+                }
+            } else {
+                if byte_skip < 0 {
+                    return Err(bad("byte skip -1 is only allowed with raw encoding".into()));
+                }
+                let skip = (byte_skip as usize).min(data.len());
+                raw_owned = inflate(&data[skip..], Compression::Gzip, nbytes, path).map_err(|e| match e {
+                    IoError::Invalid { reason, .. } if reason.contains("decompresses to only") => {
+                        bad(format!("header and data disagree: shape {shape} of {}: {reason}", ty.name()))
+                    }
+                    e => e,
+                })?;
+                &raw_owned
+            };
+            values_all = decode(raw, ty, big_endian, total, 1.0, 0.0);
+            &values_all
+        }
+        "ascii" | "text" | "txt" => {
+            values_all = decode_text(data, ty, total, path)?;
+            &values_all
+        }
+        "bzip2" | "bz2" => return Err(malformed(enc_line, "bzip2 encoding is not supported: re-save as gzip or raw".into())),
+        "hex" => return Err(malformed(enc_line, "hex encoding is not supported: re-save as gzip or raw".into())),
+        e => return Err(malformed(enc_line, format!("encoding '{e}' is not an NRRD encoding"))),
+    };
+    // Gather the picked volume in x-fastest order of the spatial axes.
+    let dims = [sizes[spatial[0]], sizes[spatial[1]], sizes[spatial[2]]];
+    let strides: Vec<usize> = (0..sizes.len()).map(|a| sizes[..a].iter().product()).collect();
+    let base = extra_axis.map_or(0, |a| pick * strides[a]);
+    let mut values = Vec::with_capacity(dims.iter().product());
+    let [s0, s1, s2] = [strides[spatial[0]], strides[spatial[1]], strides[spatial[2]]];
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            let row = base + j * s1 + k * s2;
+            values.extend((0..dims[0]).map(|i| decoded[row + i * s0]));
+        }
+    }
+    Ok(VolumeFile {
+        volume: std::sync::Arc::new(volume(path, dims, values, affine)?),
+        format: "NRRD",
+        data_type: ty.name(),
+        space,
+        inside: Inside::Above,
+        iso: None,
+        centres: None,
+        notes,
+    })
+}
+
+/// The header of NRRD `bytes` (the whole file or its start, up to the blank line).
+fn header(bytes: &[u8], path: &Path, options: VolumeOptions) -> Result<Header, IoError> {
     let malformed = |line: usize, reason: String| IoError::Malformed { path: path.into(), line, reason };
     let bad = |reason: String| IoError::Invalid { path: path.into(), reason };
     if !bytes.starts_with(b"NRRD000") {
@@ -210,101 +350,92 @@ pub fn parse_nrrd(
     let affine = DAffine3 { matrix3: DMat3::from_cols(cols[0], cols[1], cols[2]), translation: origin };
     let total =
         sizes.iter().try_fold(1usize, |a, &s| a.checked_mul(s)).ok_or_else(|| bad(format!("shape {shape} is too large")))?;
-    // The data: attached after the blank line, or in a detached file.
-    let detached = get("datafile").or_else(|| get("data_file"));
-    let owned;
-    let mut data: &[u8] = match detached {
-        Some((name, l)) => {
-            if name.starts_with("LIST") || name.contains('%') || name.split_whitespace().count() > 1 {
-                return Err(malformed(l, format!("data file '{name}': multi-file data is not supported")));
-            }
-            owned = sibling(name).map_err(|e| match e {
-                IoError::Read { source, .. } => IoError::Read { path: data_path(path, name), source },
-                e => e,
-            })?;
-            &owned
-        }
-        None => &bytes[data_start..],
-    };
-    if let Some((skip, l)) = get("lineskip") {
-        let n: usize = skip.parse().map_err(|_| malformed(l, format!("line skip '{skip}'")))?;
-        for _ in 0..n {
-            let p = data
-                .iter()
-                .position(|&b| b == b'\n')
-                .ok_or_else(|| malformed(l, format!("line skip {n}: the data has fewer lines")))?;
-            data = &data[p + 1..];
+    let detached = get("datafile").or_else(|| get("data_file")).map(|(name, l)| (name.to_owned(), l));
+    if let Some((name, l)) = &detached {
+        if name.starts_with("LIST") || name.contains('%') || name.split_whitespace().count() > 1 {
+            return Err(malformed(*l, format!("data file '{name}': multi-file data is not supported")));
         }
     }
     let byte_skip: i64 = match get("byteskip") {
         Some((s, l)) => s.parse().map_err(|_| malformed(l, format!("byte skip '{s}'")))?,
         None => 0,
     };
-    let values_all: Vec<f32>;
-    let decoded: &[f32] = match encoding.as_str() {
-        "raw" | "gzip" | "gz" => {
-            let nbytes = total.checked_mul(ty.size()).ok_or_else(|| bad(format!("shape {shape} is too large")))?;
-            let raw_owned;
-            let raw: &[u8] = if encoding == "raw" {
-                if byte_skip == -1 {
-                    let from = data.len().checked_sub(nbytes).ok_or_else(|| {
-                        bad(format!(
-                            "header and data disagree: shape {shape} of {} needs {nbytes} bytes, the data has {}",
-                            ty.name(),
-                            data.len()
-                        ))
-                    })?;
-                    &data[from..]
-                } else {
-                    let skip = usize::try_from(byte_skip).map_err(|_| bad(format!("byte skip {byte_skip}")))?;
-                    check_size(path, total, ty, skip, data.len())?;
-                    &data[skip..]
-                }
-            } else {
-                if byte_skip < 0 {
-                    return Err(bad("byte skip -1 is only allowed with raw encoding".into()));
-                }
-                let skip = (byte_skip as usize).min(data.len());
-                raw_owned = inflate(&data[skip..], Compression::Gzip, nbytes, path).map_err(|e| match e {
-                    IoError::Invalid { reason, .. } if reason.contains("decompresses to only") => {
-                        bad(format!("header and data disagree: shape {shape} of {}: {reason}", ty.name()))
-                    }
-                    e => e,
-                })?;
-                &raw_owned
-            };
-            values_all = decode(raw, ty, big_endian, total, 1.0, 0.0);
-            &values_all
-        }
-        "ascii" | "text" | "txt" => {
-            values_all = decode_text(data, ty, total, path)?;
-            &values_all
-        }
-        "bzip2" | "bz2" => return Err(malformed(enc_line, "bzip2 encoding is not supported: re-save as gzip or raw".into())),
-        "hex" => return Err(malformed(enc_line, "hex encoding is not supported: re-save as gzip or raw".into())),
-        e => return Err(malformed(enc_line, format!("encoding '{e}' is not an NRRD encoding"))),
-    };
-    // Gather the picked volume in x-fastest order of the spatial axes.
-    let dims = [sizes[spatial[0]], sizes[spatial[1]], sizes[spatial[2]]];
-    let strides: Vec<usize> = (0..rank).map(|a| sizes[..a].iter().product()).collect();
-    let base = extra_axis.map_or(0, |a| pick * strides[a]);
-    let mut values = Vec::with_capacity(dims.iter().product());
-    let [s0, s1, s2] = [strides[spatial[0]], strides[spatial[1]], strides[spatial[2]]];
-    for k in 0..dims[2] {
-        for j in 0..dims[1] {
-            let row = base + j * s1 + k * s2;
-            values.extend((0..dims[0]).map(|i| decoded[row + i * s0]));
-        }
-    }
-    Ok(VolumeFile {
-        volume: std::sync::Arc::new(volume(path, dims, values, affine)?),
-        format: "NRRD",
-        data_type: ty.name(),
+    let line_skip = get("lineskip").map(|(s, l)| (s.to_owned(), l));
+    Ok(Header {
+        ty,
+        big_endian,
+        sizes,
+        shape,
+        encoding,
+        enc_line,
         space,
+        notes,
+        affine,
+        spatial,
+        extra_axis,
+        pick,
+        total,
+        data_start,
+        detached,
+        line_skip,
+        byte_skip,
+    })
+}
+
+/// What the header of the NRRD file at `path` says (from its first bytes, `prefix`), and where
+/// the data of the volume `options` picks lies, for reading it slab by slab; the layout is an
+/// error saying why when the data cannot be read that way (text encodings, line skips, axes
+/// that are not x, y, z first).
+pub fn header_layout(prefix: &[u8], path: &Path, options: VolumeOptions) -> Result<VolumeHeader, IoError> {
+    let h = header(prefix, path, options)?;
+    let dims = [h.sizes[h.spatial[0]], h.sizes[h.spatial[1]], h.sizes[h.spatial[2]]];
+    let layout = (|| {
+        let compression = match h.encoding.as_str() {
+            "raw" => None,
+            "gzip" | "gz" => Some(Compression::Gzip),
+            e => return Err(format!("its '{e}' encoding is read whole only: re-save it as raw or gzip")),
+        };
+        if h.line_skip.is_some() {
+            return Err("its 'line skip' is read whole only".into());
+        }
+        if h.spatial != [0, 1, 2] {
+            return Err(format!("its axes ({}) do not start with the three spatial ones", h.shape));
+        }
+        let file = match &h.detached {
+            Some((name, _)) => data_path(path, name),
+            None => path.to_path_buf(),
+        };
+        let mut start = if h.detached.is_some() { 0 } else { h.data_start as u64 };
+        let volume_bytes = (dims.iter().product::<usize>() * h.ty.size()) as u64;
+        match (h.byte_skip, compression) {
+            (-1, None) => {
+                let len = std::fs::metadata(&file).map_err(|e| format!("{}: {e}", file.display()))?.len();
+                start = len.checked_sub((h.total * h.ty.size()) as u64).ok_or("the data file is shorter than its shape")?;
+            }
+            (s, _) if s >= 0 => start += s as u64,
+            (s, _) => return Err(format!("byte skip {s} is only allowed with raw encoding")),
+        }
+        Ok(DataLayout {
+            file,
+            start,
+            compression,
+            offset: h.pick as u64 * volume_bytes,
+            ty: h.ty,
+            big_endian: h.big_endian,
+            slope: 1.0,
+            inter: 0.0,
+        })
+    })();
+    Ok(VolumeHeader {
+        dims,
+        affine: h.affine,
+        format: "NRRD",
+        data_type: h.ty.name(),
+        space: h.space,
         inside: Inside::Above,
         iso: None,
-        centres: None,
-        notes,
+        notes: h.notes,
+        layout,
     })
 }
 

@@ -47,15 +47,57 @@ pub fn write_samples(
     write_atomic(&header_path(path), |w| serde_json::to_writer_pretty(&mut *w, &header).map_err(std::io::Error::other))
 }
 
-/// Reads a grid `--samples-out` wrote.
-pub fn read_samples(path: &Path) -> Result<VolumeFile, IoError> {
+/// What a grid `--samples-out` wrote says of itself, and where its values lie (a cubic grid's
+/// values are the whole file; a BCC lattice's centres follow its corners, read whole only).
+pub fn header_layout(path: &Path) -> Result<super::VolumeHeader, IoError> {
+    let h = header(path)?;
+    let layout = if h.lattice == "cubic" {
+        Ok(super::DataLayout {
+            file: path.to_path_buf(),
+            start: 0,
+            compression: None,
+            offset: 0,
+            ty: super::DataType::F32,
+            big_endian: false,
+            slope: 1.0,
+            inter: 0.0,
+        })
+    } else {
+        Err(format!("it holds a {} lattice, read whole only", h.lattice))
+    };
+    Ok(super::VolumeHeader {
+        dims: h.dims,
+        affine: h.affine,
+        format: "isolab grid",
+        data_type: "float32",
+        space: Space::Unknown,
+        inside: h.inside,
+        iso: h.iso,
+        notes: Vec::new(),
+        layout,
+    })
+}
+
+/// A grid header, read.
+struct Header {
+    dims: [usize; 3],
+    lattice: String,
+    iso: Option<f32>,
+    inside: Inside,
+    affine: DAffine3,
+}
+
+fn header(path: &Path) -> Result<Header, IoError> {
     let json_path = header_path(path);
     let text = crate::read_bytes(&json_path)?;
     let bad = |reason: String| IoError::Invalid { path: json_path.clone(), reason };
     let header: serde_json::Value = serde_json::from_slice(&text).map_err(|e| bad(format!("not JSON: {e}")))?;
     let dims: [usize; 3] =
         serde_json::from_value(header["dims"].clone()).map_err(|_| bad("'dims' is not three counts".into()))?;
-    let lattice = header["lattice"].as_str().unwrap_or("cubic");
+    let lattice = header["lattice"].as_str().unwrap_or("cubic").to_owned();
+    if lattice != "cubic" && lattice != "bcc" {
+        return Err(bad(format!("lattice '{lattice}' is not cubic or bcc")));
+    }
     let iso = header["iso"].as_f64().map(|v| v as f32);
     let inside = match header["inside"].as_str() {
         Some("above") => Inside::Above,
@@ -75,6 +117,15 @@ pub fn read_samples(path: &Path) -> Result<VolumeFile, IoError> {
             DAffine3 { matrix3: DMat3::from_diagonal(DVec3::splat(spacing)), translation: DVec3::from(origin) }
         }
     };
+    Ok(Header { dims, lattice, iso, inside, affine })
+}
+
+/// Reads a grid `--samples-out` wrote.
+pub fn read_samples(path: &Path) -> Result<VolumeFile, IoError> {
+    let json_path = header_path(path);
+    let bad = |reason: String| IoError::Invalid { path: json_path.clone(), reason };
+    let Header { dims, lattice, iso, inside, affine } = header(path)?;
+    let lattice = lattice.as_str();
     let corners =
         dims.iter().try_fold(1usize, |a, &d| a.checked_mul(d)).ok_or_else(|| bad(format!("dims {dims:?} are too large")))?;
     let centres = match lattice {

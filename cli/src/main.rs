@@ -88,6 +88,12 @@ enum Command {
         /// welded mesh; N must divide the cells along every axis (use --dims k*N+1).
         #[arg(long)]
         chunk: Option<usize>,
+        /// Mesh a volume file block by block as its slices are read, writing the mesh as it goes
+        /// (binary .ply output): memory holds one layer of blocks, never the volume (blocks of
+        /// --chunk cells, 64 by default, any volume size). The same mesh as --chunk in memory. A
+        /// volume too large for memory streams without it when its output is a .ply.
+        #[arg(long)]
+        stream: bool,
         /// Give every vertex the field's material (the inside sample of its lattice edge): counts
         /// per material in the metrics JSON, vertex colours in the written mesh.
         #[arg(long)]
@@ -314,6 +320,7 @@ fn main() -> ExitCode {
             offset_ratio,
             perturbations,
             chunk,
+            stream,
             materials,
             set,
             output,
@@ -356,7 +363,7 @@ fn main() -> ExitCode {
                     (false, None) => Measure::Counts,
                 },
             };
-            extract(&config, output, metrics, samples_out).map_err(|e| (e.exit_code(), e.to_string()))
+            extract(&config, stream, output, metrics, samples_out).map_err(|e| (e.exit_code(), e.to_string()))
         }
         Command::Labels { field, algorithm, labels: select, volume, space, set, output, format, metrics } => {
             let mut options = isolab_algorithms::Options::new();
@@ -420,8 +427,36 @@ fn render(
     result.map_err(|e| (1, e.to_string()))
 }
 
+/// `--stream`: the volume file meshed block by block into `output`, the run's JSON to `metrics`
+/// or stdout, a progress line on a terminal's stderr.
+fn stream_volume(config: &RunConfig, output: &std::path::Path, metrics: Option<&std::path::Path>) -> Result<(), RunError> {
+    use std::io::IsTerminal;
+    let terminal = std::io::stderr().is_terminal();
+    let mut progress = |done: usize, total: usize| {
+        if terminal {
+            eprint!("\rstreaming: layer {done} of {total} of blocks");
+            if done == total {
+                eprintln!();
+            }
+        }
+    };
+    let report = isolab_pipeline::stream::stream_volume_file(config, output, &mut progress)?;
+    for note in &report.notes {
+        eprintln!("note: {note}");
+    }
+    for warning in &report.warnings {
+        eprintln!("warning: {warning}");
+    }
+    match metrics {
+        Some(path) => write_json(path, &report)?,
+        None => println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default()),
+    }
+    Ok(())
+}
+
 fn extract(
     config: &RunConfig,
+    stream: bool,
     output: Option<PathBuf>,
     metrics: Option<PathBuf>,
     samples_out: Option<PathBuf>,
@@ -443,7 +478,30 @@ fn extract(
             return Err(io::IoError::UnknownFormat { path: path.clone() }.into());
         }
     }
-    let outcome = run(config)?;
+    if stream {
+        let Some(path) = &output else {
+            return Err(RunError::Stream { path: config.field.clone(), reason: "a streamed mesh needs -o NAME.ply".into() });
+        };
+        if samples_out.is_some() {
+            let reason = "a streamed run does not take --samples-out (it never holds the samples)".into();
+            return Err(RunError::Stream { path: config.field.clone(), reason });
+        }
+        return stream_volume(config, path, metrics.as_deref());
+    }
+    let outcome = match run(config) {
+        Err(RunError::OutOfMemory { need_mib, available_mib, .. })
+            if samples_out.is_none()
+                && output.as_ref().is_some_and(|o| isolab_pipeline::stream::check_streamable(config, o).is_ok()) =>
+        {
+            eprintln!(
+                "note: {} needs about {need_mib} MiB in memory ({available_mib} MiB available): streaming it block by \
+                 block instead (--stream)",
+                config.field
+            );
+            return stream_volume(config, output.as_deref().unwrap_or(std::path::Path::new("")), metrics.as_deref());
+        }
+        other => other?,
+    };
     for note in &outcome.notes {
         eprintln!("note: {note}");
     }

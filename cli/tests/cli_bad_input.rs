@@ -131,10 +131,15 @@ fn a_volume_too_large_for_memory_is_refused_before_its_data_is_read() {
     std::fs::write(&nrrd, b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4096 4096 4096\nencoding: raw\n\n01234567").unwrap();
     let mhd = dir.join("huge.mhd");
     std::fs::write(&mhd, b"NDims = 3\nDimSize = 4096 4096 4096\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n0123").unwrap();
-    let out = dir.join("out.ply");
-    for file in [&nrrd, &mhd] {
-        let args = ["extract", "-a", "marching-cubes", "-f", file.to_str().unwrap(), "-o", out.to_str().unwrap()];
-        refused(&args, 1, &["[4096, 4096, 4096] cubic lattice needs about", "isolab.dask.mesh_volume"], &out);
+    let (obj, ply) = (dir.join("out.obj"), dir.join("out.ply"));
+    for (file, bytes) in [(&nrrd, "8"), (&mhd, "4")] {
+        let args = ["extract", "-a", "marching-cubes", "-f", file.to_str().unwrap(), "-o", obj.to_str().unwrap()];
+        refused(&args, 1, &["[4096, 4096, 4096] cubic lattice needs about", "--stream", "isolab.dask.mesh_volume"], &obj);
+        // A PLY output streams instead, and the streaming refuses the data the header promises
+        // but the file lacks, before reading it.
+        let args = ["extract", "-a", "marching-cubes", "-f", file.to_str().unwrap(), "-o", ply.to_str().unwrap()];
+        let holds = format!("holds {bytes} bytes of voxel data after its header");
+        refused(&args, 1, &["streaming it block by block instead", &holds], &ply);
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -17,6 +17,7 @@ pub struct PlyStream {
     vertices: BufWriter<File>,
     faces: BufWriter<File>,
     counts: [u64; 2],
+    space: Option<&'static str>,
 }
 
 impl PlyStream {
@@ -33,7 +34,14 @@ impl PlyStream {
         let faces = open(&parts[1]).inspect_err(|_| {
             let _ = std::fs::remove_file(&parts[0]);
         })?;
-        Ok(Self { path: path.into(), parts, vertices, faces, counts: [0, 0] })
+        Ok(Self { path: path.into(), parts, vertices, faces, counts: [0, 0], space: None })
+    }
+
+    /// Names the coordinate system in the header (`comment SPACE=RAS`, which 3D Slicer reads), as
+    /// [`crate::write_mesh_with`] does for anatomical volumes.
+    pub fn with_space(mut self, space: Option<&'static str>) -> Self {
+        self.space = space;
+        self
     }
 
     /// Writes the PLY (header, vertices, faces) to the target and returns its size in bytes.
@@ -41,9 +49,12 @@ impl PlyStream {
         let err = |source: std::io::Error| IoError::Write { path: self.path.clone(), source };
         self.vertices.flush().map_err(err)?;
         self.faces.flush().map_err(err)?;
-        let (counts, parts) = (self.counts, self.parts.clone());
+        let (counts, parts, space) = (self.counts, self.parts.clone(), self.space);
         write_atomic(&self.path, |w| {
-            writeln!(w, "ply\nformat binary_little_endian 1.0\ncomment isolab streamed world")?;
+            writeln!(w, "ply\nformat binary_little_endian 1.0\ncomment isolab streamed mesh")?;
+            if let Some(space) = space {
+                writeln!(w, "comment SPACE={space}")?;
+            }
             writeln!(w, "element vertex {}\nproperty float x\nproperty float y\nproperty float z", counts[0])?;
             writeln!(w, "element face {}\nproperty list uchar int vertex_indices\nend_header", counts[1])?;
             for part in &parts {

@@ -47,8 +47,8 @@ pub enum RunError {
     /// Not enough memory for the lattice.
     #[error(
         "a {dims:?} {lattice} lattice needs about {need_mib} MiB, but only {available_mib} MiB of memory is available; lower \
-         --resolution (a volume file is then resampled), or mesh it block by block in bounded memory with \
-         isolab.dask.mesh_volume (Python)"
+         --resolution (a volume file is then resampled), or mesh it block by block in bounded memory: \
+         --stream with a .ply output, or isolab.dask.mesh_volume (Python)"
     )]
     OutOfMemory {
         /// Samples per axis.
@@ -59,6 +59,15 @@ pub enum RunError {
         need_mib: u64,
         /// Available.
         available_mib: u64,
+    },
+    /// A volume file cannot be meshed block by block as asked (`--stream`); nothing was read
+    /// beyond its header.
+    #[error("cannot stream '{path}': {reason}")]
+    Stream {
+        /// The volume file.
+        path: String,
+        /// Why, and what to do instead.
+        reason: String,
     },
 }
 

@@ -12,6 +12,7 @@
 pub mod error;
 pub mod input;
 pub mod labels;
+pub mod stream;
 
 pub use crate::input::load_field;
 pub use crate::input::Input;
@@ -170,8 +171,13 @@ impl RunConfig {
     }
 }
 
-/// Memory available to this process, from `/proc/meminfo` (None where unknown).
+/// Memory available to this process, from `/proc/meminfo` (None where unknown), or the
+/// `ISOLAB_MEMORY_MIB` environment variable when it is set (to try the memory checks as a
+/// smaller machine would see them).
 pub fn available_memory() -> Option<u64> {
+    if let Some(mib) = std::env::var("ISOLAB_MEMORY_MIB").ok().and_then(|v| v.trim().parse::<u64>().ok()) {
+        return Some(mib << 20);
+    }
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
@@ -186,7 +192,13 @@ pub fn check_memory(lattice: &Lattice) -> Result<(), RunError> {
 
 /// [`check_memory`] against a given number of available bytes (`None`: unknown, accept).
 pub fn check_memory_against(lattice: &Lattice, available: Option<u64>) -> Result<(), RunError> {
-    let need = lattice.sample_count() as u64 * 4 * 5;
+    check_memory_plus(lattice, 0, available)
+}
+
+/// [`check_memory_against`] with `extra` bytes held beside the lattice (a volume file's data and
+/// values while its samples are made).
+fn check_memory_plus(lattice: &Lattice, extra: u64, available: Option<u64>) -> Result<(), RunError> {
+    let need = lattice.sample_count() as u64 * 4 * 5 + extra;
     match available {
         Some(available) if need > available => Err(RunError::OutOfMemory {
             dims: lattice.grid().dims,
@@ -301,16 +313,27 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
 
 /// Refuses a volume file meshed on its own grid that cannot fit in memory, from its header,
 /// before its data is read (a file whose header does not say plainly is left to the reader).
+/// Besides the lattice and its output, a run holds the file's data and its values as f32 while
+/// the samples are made.
 fn check_volume_size(config: &RunConfig) -> Result<(), RunError> {
     if config.volume_grid != VolumeGrid::Native || !input::is_file_spec(&config.field) {
         return Ok(());
     }
-    let Some(dims) = isolab_io::volume::peek_dims(std::path::Path::new(&config.field)) else { return Ok(()) };
+    let path = std::path::Path::new(&config.field);
+    let (dims, data_bytes) = match isolab_io::volume::read_header(path, config.volume) {
+        Ok(h) => (h.dims, h.layout.as_ref().map_or(4, |l| l.ty.size()) as u64),
+        Err(_) => match isolab_io::volume::peek_dims(path) {
+            Some(dims) => (dims, 4),
+            None => return Ok(()),
+        },
+    };
     let grid = Grid { origin: glam::Vec3::ZERO, spacing: 1.0, dims };
-    check_memory(&match config.lattice {
+    let lattice = match config.lattice {
         LatticeKind::Cubic => Lattice::Cubic(grid),
         LatticeKind::Bcc => Lattice::Bcc(grid),
-    })
+    };
+    let reading = grid.len() as u64 * (4 + data_bytes);
+    check_memory_plus(&lattice, reading, available_memory())
 }
 
 /// Refuses an unknown algorithm, option or post-process before anything is read.

@@ -85,7 +85,8 @@ enum Command {
         #[arg(long, allow_negative_numbers = true)]
         perturbations: Option<String>,
         /// Mesh in chunks of N cells per side (sharing boundary samples, in parallel) and write the
-        /// welded mesh; N must divide the cells along every axis (use --dims k*N+1).
+        /// welded mesh; in memory N must divide the cells along every axis (use --dims k*N+1),
+        /// with --stream it need not (the last block on an axis takes what remains).
         #[arg(long)]
         chunk: Option<usize>,
         /// Mesh a volume file block by block as its slices are read, writing the mesh as it goes

@@ -10,12 +10,18 @@
 //! about half an hour on two cores) is kept in its own data file beside the default run's, and the
 //! section shows both.
 //!
+//! A second part streams a volume file (issue 34): a 1024³ `uint8` NRRD (1 GiB, more than an
+//! in-memory run's header check lets this machine hold) meshed by
+//! [`isolab_pipeline::stream::stream_volume_file`] (what `isolab extract --stream` runs), with its
+//! time and peak memory, and a 513³ one meshed in memory (`--chunk`) and streamed, alternating, in
+//! one process, both one-shot and both writing a PLY.
+//!
 //! The terrain samples its height field once per column and proves chunks wholly above the
 //! ground, or below it and the cave floor, from their column heights and the noise bound; those
 //! chunks are skipped unsampled ([`isolab_algorithms::field::Field::block_side`]).
 
 use super::context::{Context, Experiment, ExperimentError};
-use crate::report::markdown_table;
+use crate::report::{markdown_table, Spread};
 use isolab_algorithms::chunks::stream_chunked;
 use isolab_algorithms::{extractors, fields, Grid};
 use isolab_io::PlyStream;
@@ -137,7 +143,8 @@ impl Experiment for LargeWorld {
             peak_slab_mib: stats.peak_slab_bytes as f64 / (1u64 << 20) as f64,
         };
         let is_issue_world = ISSUE_WORLD_CELLS.iter().zip(&dims).all(|(c, d)| c + 1 == *d);
-        ctx.write_data(if is_issue_world { ISSUE_DATA } else { NAME }, &data)
+        ctx.write_data(if is_issue_world { ISSUE_DATA } else { NAME }, &data)?;
+        run_volume(ctx)
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
@@ -209,6 +216,251 @@ impl Experiment for LargeWorld {
             ));
         }
         md.push('\n');
+        md.push_str(&volume_section(ctx)?);
         Ok(md)
     }
+}
+
+/// The data file of the streamed volume file.
+const VOLUME_DATA: &str = "large_world_volume";
+/// The streamed volume: 1024³ one-byte voxels (1 GiB), the case a native grid refuses.
+const VOLUME_SIDE: usize = 1024;
+/// The volume meshed both in memory and streamed, to compare like with like.
+const COMPARE_SIDE: usize = 513;
+/// Alternating runs of each in the comparison.
+const COMPARE_RUNS: usize = 3;
+/// Blocks of the streamed runs, and chunks of the in-memory one.
+const VOLUME_CHUNK: usize = 64;
+/// The iso-value of the comparison (the streamed 1024³ run takes Otsu's, as a user's would).
+const COMPARE_ISO: f32 = 100.0;
+
+/// One streamed run of a volume file (`isolab extract --stream`), in this process.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct StreamedRun {
+    seconds: f64,
+    threshold_seconds: f64,
+    peak_rss_mib: Option<f64>,
+    peak_reset: bool,
+    vertices: u64,
+    triangles: u64,
+    output_mib: f64,
+    iso: f32,
+    iso_from: Option<String>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct VolumeData {
+    side: usize,
+    file_gib: f64,
+    /// What the in-memory run's header check asks for this volume, MiB.
+    in_memory_need_mib: u64,
+    available_mib: Option<u64>,
+    chunk: usize,
+    algorithm: String,
+    streamed: StreamedRun,
+    compare_side: usize,
+    compare_iso: f32,
+    memory_seconds: Spread,
+    memory_peak_mib: Spread,
+    stream_seconds: Spread,
+    stream_peak_mib: Spread,
+    /// Triangles of the in-memory and streamed meshes of the compared volume.
+    compare_triangles: [usize; 2],
+}
+
+/// A uint8 NRRD of `side`³ voxels: a rippled ball, brighter than its background.
+fn write_volume_file(path: &std::path::Path, side: usize) -> Result<u64, ExperimentError> {
+    use std::io::Write;
+    let err = |source| isolab_io::IoError::Write { path: path.into(), source };
+    let mut f = std::io::BufWriter::new(std::fs::File::create(path).map_err(err)?);
+    write!(f, "NRRD0004\ntype: uint8\ndimension: 3\nsizes: {side} {side} {side}\nspacings: 0.5 0.5 0.5\nencoding: raw\n\n")
+        .map_err(err)?;
+    let axis: Vec<f32> = (0..side).map(|i| i as f32 / side as f32 - 0.5).collect();
+    let (wx, wy): (Vec<f32>, Vec<f32>) = axis.iter().map(|&c| ((40.0 * c).sin(), (30.0 * c).sin())).unzip();
+    let mut slice = vec![0u8; side * side];
+    for &z in &axis {
+        for (j, &y) in axis.iter().enumerate() {
+            for (i, &x) in axis.iter().enumerate() {
+                let r = (x * x + y * y + z * z).sqrt();
+                slice[j * side + i] = (128.0 + 300.0 * (0.35 - r) + 20.0 * wx[i] * wy[j]).clamp(0.0, 255.0) as u8;
+            }
+        }
+        f.write_all(&slice).map_err(err)?;
+    }
+    f.flush().map_err(err)?;
+    Ok(std::fs::metadata(path).map_err(err)?.len())
+}
+
+fn volume_config(path: &std::path::Path, iso: Option<f32>) -> isolab_pipeline::RunConfig {
+    let mut config = isolab_pipeline::RunConfig::new("marching-cubes", &path.to_string_lossy(), 64);
+    config.iso = iso;
+    config.chunk = Some(VOLUME_CHUNK);
+    config.measure = isolab_pipeline::Measure::Counts;
+    config
+}
+
+/// `path` streamed into `out`, with the peak resident memory of the run alone where the OS lets
+/// it be reset.
+fn streamed_run(path: &std::path::Path, out: &std::path::Path, iso: Option<f32>) -> Result<StreamedRun, ExperimentError> {
+    let peak_reset = crate::memory::reset_peak_rss();
+    let start = Instant::now();
+    let report = isolab_pipeline::stream::stream_volume_file(&volume_config(path, iso), out, &mut |_, _| {})
+        .map_err(|e| ExperimentError::Figure(format!("streaming {}: {e}", path.display())))?;
+    Ok(StreamedRun {
+        seconds: start.elapsed().as_secs_f64(),
+        threshold_seconds: report.times_ms.threshold / 1e3,
+        peak_rss_mib: crate::memory::peak_rss_mib(),
+        peak_reset,
+        vertices: report.vertices,
+        triangles: report.triangles,
+        output_mib: report.output_bytes as f64 / (1u64 << 20) as f64,
+        iso: report.iso,
+        iso_from: report.iso_from.map(str::to_owned),
+    })
+}
+
+/// `path` read whole and meshed in chunks in memory, written to `out`: seconds, peak MiB,
+/// triangles.
+fn in_memory_run(path: &std::path::Path, out: &std::path::Path) -> Result<(f64, Option<f64>, usize), ExperimentError> {
+    crate::memory::reset_peak_rss();
+    let start = Instant::now();
+    let outcome = isolab_pipeline::run(&volume_config(path, Some(COMPARE_ISO)))
+        .map_err(|e| ExperimentError::Figure(format!("meshing {} in memory: {e}", path.display())))?;
+    isolab_io::write_mesh_with(out, &outcome.extraction.surface, isolab_io::MeshExtras::default())?;
+    Ok((start.elapsed().as_secs_f64(), crate::memory::peak_rss_mib(), outcome.extraction.surface.triangles.len()))
+}
+
+/// A directory in the system's temporary one, removed with what it holds when dropped.
+struct ScratchDir(std::path::PathBuf);
+
+impl ScratchDir {
+    fn new() -> Result<Self, ExperimentError> {
+        let path = std::env::temp_dir().join(format!("isolab-large-volume-{}", std::process::id()));
+        std::fs::create_dir_all(&path).map_err(|source| isolab_io::IoError::Write { path: path.clone(), source })?;
+        Ok(ScratchDir(path))
+    }
+}
+
+impl Drop for ScratchDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// The volume-file runs: a 1 GiB volume streamed, and a smaller one meshed both ways, alternating.
+fn run_volume(ctx: &Context) -> Result<(), ExperimentError> {
+    let dir = ScratchDir::new()?;
+    let (big, small) = (dir.0.join("volume.nrrd"), dir.0.join("compare.nrrd"));
+    let out = dir.0.join("mesh.ply");
+    let bar = ctx.bar("large_world volume", 2 + 2 * COMPARE_RUNS as u64);
+    let file_bytes = write_volume_file(&big, VOLUME_SIDE)?;
+    let voxels = (VOLUME_SIDE as u64).pow(3);
+    let streamed = streamed_run(&big, &out, None)?;
+    std::fs::remove_file(&big).map_err(|source| isolab_io::IoError::Write { path: big.clone(), source })?;
+    bar.inc(1);
+    write_volume_file(&small, COMPARE_SIDE)?;
+    bar.inc(1);
+    let (mut memory_seconds, mut memory_peak, mut stream_seconds, mut stream_peak) = (vec![], vec![], vec![], vec![]);
+    let mut compare_triangles = [0, 0];
+    for _ in 0..COMPARE_RUNS {
+        let (seconds, peak, triangles) = in_memory_run(&small, &out)?;
+        memory_seconds.push(seconds);
+        memory_peak.extend(peak);
+        compare_triangles[0] = triangles;
+        bar.inc(1);
+        let run = streamed_run(&small, &out, Some(COMPARE_ISO))?;
+        stream_seconds.push(run.seconds);
+        stream_peak.extend(run.peak_rss_mib);
+        compare_triangles[1] = run.triangles as usize;
+        bar.inc(1);
+    }
+    bar.finish();
+    let data = VolumeData {
+        side: VOLUME_SIDE,
+        file_gib: file_bytes as f64 / (1u64 << 30) as f64,
+        // The header check of a cubic run: lattice and output (20 bytes a sample), the file's values as
+        // f32 (4) and its one-byte data.
+        in_memory_need_mib: (voxels * (4 * 5 + 4 + 1)) >> 20,
+        available_mib: isolab_pipeline::available_memory().map(|b| b >> 20),
+        chunk: VOLUME_CHUNK,
+        algorithm: "marching-cubes".into(),
+        streamed,
+        compare_side: COMPARE_SIDE,
+        compare_iso: COMPARE_ISO,
+        memory_seconds: Spread::of(memory_seconds),
+        memory_peak_mib: Spread::of(memory_peak),
+        stream_seconds: Spread::of(stream_seconds),
+        stream_peak_mib: Spread::of(stream_peak),
+        compare_triangles,
+    };
+    ctx.write_data(VOLUME_DATA, &data)
+}
+
+/// The section's part on volume files.
+fn volume_section(ctx: &Context) -> Result<String, ExperimentError> {
+    if !ctx.data_path(VOLUME_DATA).exists() {
+        return Ok(String::new());
+    }
+    let d: VolumeData = ctx.read_data(VOLUME_DATA)?;
+    let s = &d.streamed;
+    let mut md = format!(
+        "\n### A volume file larger than memory, streamed block by block (`isolab extract --stream`)\n\n\
+         A {side}³ `uint8` NRRD ({gib:.2} GiB, a rippled ball) written to the temporary directory, meshed by {alg} with \
+         `--stream`: read z-slice by z-slice, meshed in {c}³-cell blocks one layer at a time, welded by lattice keys and \
+         written to a PLY as it goes, in this process (`stream_volume_file`, what the CLI runs). An in-memory run of it \
+         would ask for {need} MiB by the header check{avail}; the CLI streams such a volume on its own when the output is \
+         a PLY. No iso-value was given: {iso} ({from}), from two extra passes over the file.\n\n",
+        side = d.side,
+        gib = d.file_gib,
+        alg = d.algorithm,
+        c = d.chunk,
+        need = d.in_memory_need_mib,
+        avail = d.available_mib.map_or(String::new(), |a| format!(" ({a} MiB were available when it ran)")),
+        iso = s.iso,
+        from = s.iso_from.as_deref().unwrap_or("given"),
+    );
+    let peak = |p: Option<f64>, reset: bool| {
+        p.map_or("not reported by the OS".into(), |m| {
+            format!("{m:.0} MiB{}", if reset { "" } else { " (the process's peak so far: not resettable here)" })
+        })
+    };
+    let rows = vec![
+        vec!["wall time".into(), format!("{:.1} s, of which {:.1} s the threshold passes", s.seconds, s.threshold_seconds)],
+        vec!["peak resident memory".into(), peak(s.peak_rss_mib, s.peak_reset)],
+        vec!["output".into(), format!("{} vertices, {} triangles, {:.0} MiB PLY", s.vertices, s.triangles, s.output_mib)],
+    ];
+    md.push_str(&markdown_table(&["measure", &format!("{}³ streamed", d.side)], &rows));
+    let spread = |x: &Spread, unit: &str, digits: usize| {
+        format!("{:.*} {unit} ({:.*}-{:.*})", digits, x.median, digits, x.min, digits, x.max)
+    };
+    md.push_str(&format!(
+        "\nLike with like, in one process, one-shot, alternating ({n} runs each, median and range): a {side}³ volume \
+         of the same kind at iso-value {iso}, read whole and meshed in {c}³ chunks in memory (`--chunk`), then \
+         streamed (`--stream`); both write a PLY. Peak memory is each run's own where the OS lets it be reset.\n\n",
+        n = d.memory_seconds.runs.len(),
+        side = d.compare_side,
+        iso = d.compare_iso,
+        c = d.chunk,
+    ));
+    let rows = vec![
+        vec![
+            "in memory (`--chunk`)".into(),
+            spread(&d.memory_seconds, "s", 2),
+            spread(&d.memory_peak_mib, "MiB", 0),
+            d.compare_triangles[0].to_string(),
+        ],
+        vec![
+            "streamed (`--stream`)".into(),
+            spread(&d.stream_seconds, "s", 2),
+            spread(&d.stream_peak_mib, "MiB", 0),
+            d.compare_triangles[1].to_string(),
+        ],
+    ];
+    md.push_str(&markdown_table(&["run", "wall time", "peak resident memory", "triangles"], &rows));
+    md.push_str(&format!(
+        "\nStreamed against in memory: {:.2}x the time, {:.2}x the peak memory (medians).\n",
+        d.stream_seconds.median / d.memory_seconds.median,
+        d.stream_peak_mib.median / d.memory_peak_mib.median
+    ));
+    Ok(md)
 }

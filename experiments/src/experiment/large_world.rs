@@ -231,6 +231,8 @@ const COMPARE_SIDE: usize = 513;
 const COMPARE_RUNS: usize = 3;
 /// Blocks of the streamed runs, and chunks of the in-memory one.
 const VOLUME_CHUNK: usize = 64;
+/// Voxel size of the volume files.
+const VOXEL_SPACING: f32 = 0.5;
 /// The iso-value of the comparison (the streamed 1024³ run takes Otsu's, as a user's would).
 const COMPARE_ISO: f32 = 100.0;
 
@@ -273,8 +275,12 @@ fn write_volume_file(path: &std::path::Path, side: usize) -> Result<u64, Experim
     use std::io::Write;
     let err = |source| isolab_io::IoError::Write { path: path.into(), source };
     let mut f = std::io::BufWriter::new(std::fs::File::create(path).map_err(err)?);
-    write!(f, "NRRD0004\ntype: uint8\ndimension: 3\nsizes: {side} {side} {side}\nspacings: 0.5 0.5 0.5\nencoding: raw\n\n")
-        .map_err(err)?;
+    let (dimension, h) = (3, VOXEL_SPACING);
+    write!(
+        f,
+        "NRRD0004\ntype: uint8\ndimension: {dimension}\nsizes: {side} {side} {side}\nspacings: {h} {h} {h}\nencoding: raw\n\n"
+    )
+    .map_err(err)?;
     let axis: Vec<f32> = (0..side).map(|i| i as f32 / side as f32 - 0.5).collect();
     let (wx, wy): (Vec<f32>, Vec<f32>) = axis.iter().map(|&c| ((40.0 * c).sin(), (30.0 * c).sin())).unzip();
     let mut slice = vec![0u8; side * side];

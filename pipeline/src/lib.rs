@@ -171,6 +171,14 @@ impl RunConfig {
     }
 }
 
+/// Where a volume's iso-value came from when none was given: the grid's own, Otsu's threshold,
+/// or the one value of a constant volume (the in-memory and the streamed run say it alike).
+pub(crate) const ISO_FROM_GRID: &str = "the grid's own iso-value";
+/// See [`ISO_FROM_GRID`].
+pub(crate) const ISO_FROM_OTSU: &str = "Otsu's threshold of the volume's values";
+/// See [`ISO_FROM_GRID`].
+pub(crate) const ISO_FROM_CONSTANT: &str = "every voxel has this value";
+
 /// Memory available to this process, from `/proc/meminfo` (None where unknown), or the
 /// `ISOLAB_MEMORY_MIB` environment variable when it is set (to try the memory checks as a
 /// smaller machine would see them).
@@ -332,8 +340,20 @@ fn check_volume_size(config: &RunConfig) -> Result<(), RunError> {
         LatticeKind::Cubic => Lattice::Cubic(grid),
         LatticeKind::Bcc => Lattice::Bcc(grid),
     };
-    let reading = grid.len() as u64 * (4 + data_bytes);
-    check_memory_plus(&lattice, reading, available_memory())
+    check_memory_plus(&lattice, volume_reading_bytes(dims, data_bytes), available_memory())
+}
+
+/// Bytes a run holds while it reads a volume file of `dims` voxels of `data_bytes` each (the
+/// file's data and its values as f32), besides the lattice.
+fn volume_reading_bytes(dims: [usize; 3], data_bytes: u64) -> u64 {
+    dims.iter().map(|&n| n as u64).product::<u64>() * (4 + data_bytes)
+}
+
+/// What the in-memory run's header check asks for to mesh a volume file of `dims` voxels of
+/// `data_bytes` each on its own cubic grid, bytes.
+pub fn volume_file_need(dims: [usize; 3], data_bytes: u64) -> u64 {
+    let lattice = Lattice::Cubic(Grid { origin: glam::Vec3::ZERO, spacing: 1.0, dims });
+    lattice.sample_count() as u64 * 4 * 5 + volume_reading_bytes(dims, data_bytes)
 }
 
 /// Refuses an unknown algorithm, option or post-process before anything is read.
@@ -555,10 +575,10 @@ fn choose_iso(input: &Input, given: Option<f32>) -> (f32, Option<&'static str>) 
     }
     match &input.volume {
         Some(v) => match v.iso {
-            Some(iso) => (iso, Some("the grid's own iso-value")),
+            Some(iso) => (iso, Some(ISO_FROM_GRID)),
             None => match v.volume.otsu_threshold() {
-                Some(t) => (t, Some("Otsu's threshold of the volume's values")),
-                None => (v.volume.values[0], Some("every voxel has this value")),
+                Some(t) => (t, Some(ISO_FROM_OTSU)),
+                None => (v.volume.values[0], Some(ISO_FROM_CONSTANT)),
             },
         },
         None => (0.0, None),
@@ -570,16 +590,22 @@ fn choose_iso(input: &Input, given: Option<f32>) -> (f32, Option<&'static str>) 
 fn no_inside_warning(samples: &Samples, name: &str, iso: f32, inside: Inside) -> Option<String> {
     let internal = samples.iso();
     let inside_count = samples.values().par_iter().filter(|&&v| v < internal).count();
+    empty_mesh_warning(name, iso, inside, inside_count == 0, inside_count == samples.values().len())
+}
+
+/// The warning of an empty mesh: no sample inside (`none`), or every one (`all`); shared with
+/// the streamed run, which knows it from its skipped blocks.
+pub(crate) fn empty_mesh_warning(name: &str, iso: f32, inside: Inside, none: bool, all: bool) -> Option<String> {
     let side = match inside {
         Inside::Above => "above",
         Inside::Below => "below",
     };
-    if inside_count == 0 {
+    if none {
         Some(format!(
             "no sample of '{name}' is inside at iso-value {iso} (inside is {side} it, and no value is): the mesh is empty; \
              try another --iso or --inside"
         ))
-    } else if inside_count == samples.values().len() {
+    } else if all {
         Some(format!(
             "every sample of '{name}' is inside at iso-value {iso} (inside is {side} it): the surface is outside the sampled \
              domain and the mesh is empty; try another --iso or --inside"

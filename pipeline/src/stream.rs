@@ -16,9 +16,12 @@
 //! file, Otsu's threshold is computed in two extra passes over the data (extremes, then the
 //! histogram), as [`isolab_algorithms::fields::otsu_threshold`] computes it on the whole volume.
 
-use crate::{available_memory, check_names, LatticeKind, Measure, OutputSpace, RunConfig, RunError, VolumeGrid};
+use crate::{
+    available_memory, check_names, empty_mesh_warning, LatticeKind, Measure, OutputSpace, RunConfig, RunError, VolumeGrid,
+    ISO_FROM_CONSTANT, ISO_FROM_GRID, ISO_FROM_OTSU,
+};
 use glam::Vec3;
-use isolab_algorithms::chunks::{stream_blocks, BlockPlan, StreamError, StreamStats};
+use isolab_algorithms::chunks::{stream_blocks, BlockPlan, StreamError};
 use isolab_algorithms::extractors;
 use isolab_algorithms::fields::OtsuHistogram;
 use isolab_io::stream::PlyStream;
@@ -140,7 +143,7 @@ pub fn stream_volume_file(
     let threshold_start = Instant::now();
     let (iso, iso_from) = match (config.iso, header.iso) {
         (Some(iso), _) => (iso, None),
-        (None, Some(iso)) => (iso, Some("the grid's own iso-value")),
+        (None, Some(iso)) => (iso, Some(ISO_FROM_GRID)),
         (None, None) => streamed_otsu(&mut slabs)?,
     };
     let threshold_ms = threshold_start.elapsed().as_secs_f64() * 1e3;
@@ -228,7 +231,9 @@ pub fn stream_volume_file(
         },
         peak_rss_mib: peak_rss_mib(),
         notes,
-        warnings: empty_mesh_warning(&config.field, iso, inside, &stats, plan.len()).into_iter().collect(),
+        warnings: empty_mesh_warning(&config.field, iso, inside, stats.empty == plan.len(), stats.full == plan.len())
+            .into_iter()
+            .collect(),
     })
 }
 
@@ -324,33 +329,12 @@ fn streamed_otsu(slabs: &mut VolumeSlabs) -> Result<(f32, Option<&'static str>),
     let result = match OtsuHistogram::new(lo, hi) {
         Some(mut histogram) => {
             pass(slabs, &mut |values| histogram.add(values))?;
-            (histogram.threshold(), Some("Otsu's threshold of the volume's values"))
+            (histogram.threshold(), Some(ISO_FROM_OTSU))
         }
-        None => (lo, Some("every voxel has this value")),
+        None => (lo, Some(ISO_FROM_CONSTANT)),
     };
     slabs.rewind()?;
     Ok(result)
-}
-
-/// A warning when every block was skipped as all outside or all inside: the mesh is empty.
-fn empty_mesh_warning(name: &str, iso: f32, inside: Inside, stats: &StreamStats, blocks: usize) -> Option<String> {
-    let side = match inside {
-        Inside::Above => "above",
-        Inside::Below => "below",
-    };
-    if stats.empty == blocks {
-        Some(format!(
-            "no sample of '{name}' is inside at iso-value {iso} (inside is {side} it, and no value is): the mesh is empty; \
-             try another --iso or --inside"
-        ))
-    } else if stats.full == blocks {
-        Some(format!(
-            "every sample of '{name}' is inside at iso-value {iso} (inside is {side} it): the mesh is empty; try another \
-             --iso or --inside"
-        ))
-    } else {
-        None
-    }
 }
 
 /// The process's peak resident memory (`VmHWM`), MiB.

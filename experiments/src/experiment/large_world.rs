@@ -360,7 +360,6 @@ fn run_volume(ctx: &Context) -> Result<(), ExperimentError> {
     let out = dir.0.join("mesh.ply");
     let bar = ctx.bar("large_world volume", 2 + 2 * COMPARE_RUNS as u64);
     let file_bytes = write_volume_file(&big, VOLUME_SIDE)?;
-    let voxels = (VOLUME_SIDE as u64).pow(3);
     let streamed = streamed_run(&big, &out, None)?;
     std::fs::remove_file(&big).map_err(|source| isolab_io::IoError::Write { path: big.clone(), source })?;
     bar.inc(1);
@@ -384,9 +383,7 @@ fn run_volume(ctx: &Context) -> Result<(), ExperimentError> {
     let data = VolumeData {
         side: VOLUME_SIDE,
         file_gib: file_bytes as f64 / (1u64 << 30) as f64,
-        // The header check of a cubic run: lattice and output (20 bytes a sample), the file's values as
-        // f32 (4) and its one-byte data.
-        in_memory_need_mib: (voxels * (4 * 5 + 4 + 1)) >> 20,
+        in_memory_need_mib: isolab_pipeline::volume_file_need([VOLUME_SIDE; 3], 1) >> 20,
         available_mib: isolab_pipeline::available_memory().map(|b| b >> 20),
         chunk: VOLUME_CHUNK,
         algorithm: "marching-cubes".into(),

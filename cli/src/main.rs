@@ -35,7 +35,8 @@ enum Command {
         #[arg(long, short)]
         algorithm: String,
         /// Built-in field name, a mesh file (.obj, .ply, .stl, .glb, .gltf: its signed distance) or
-        /// a volume file (.nii, .nii.gz, .nrrd, .nhdr, .mhd, .mha, or a grid --samples-out wrote).
+        /// a volume file (.nii, .nii.gz, .nrrd, .nhdr, .mhd, .mha, a zarr store's folder: its last axis
+        /// is x, or a grid --samples-out wrote).
         #[arg(long, short)]
         field: String,
         /// Samples along the longest side of the domain (at least 2; default 64). A volume file is
@@ -123,7 +124,7 @@ enum Command {
     /// Mesh a label map (a segmentation): one closed surface per label; neighbouring labels
     /// share their interface triangles.
     Labels {
-        /// The label map: a volume file (.nii, .nii.gz, .nrrd, .nhdr, .mhd, .mha) of whole-number
+        /// The label map: a volume file (.nii, .nii.gz, .nrrd, .nhdr, .mhd, .mha, zarr) of whole-number
         /// labels, 0 the background.
         #[arg(long, short)]
         field: PathBuf,
@@ -251,7 +252,7 @@ fn list() {
         println!("  {:<34} every label's mesh: {}", "", promised(&flags, "nothing promised"));
     }
     println!(
-        "fields (or a path to a mesh file: .obj .ply .stl .glb .gltf; or a volume file: .nii .nii.gz .nrrd .nhdr .mhd .mha):"
+        "fields (or a path to a mesh file: .obj .ply .stl .glb .gltf; or a volume file: .nii .nii.gz .nrrd .nhdr .mhd .mha .zarr):"
     );
     for f in fields::registry() {
         println!("  {:<34} {}", f.name, f.description);

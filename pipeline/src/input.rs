@@ -1,5 +1,6 @@
 //! What `-f SPEC` names, loaded: a built-in field, a mesh file (OBJ, PLY, STL, glTF) as a
-//! signed-distance field, or a volume file (NIfTI, NRRD, MetaImage, isolab's raw grid), with
+//! signed-distance field, or a volume file (NIfTI, NRRD, MetaImage, isolab's raw grid, a zarr
+//! store), with
 //! the warnings a user should see about it.
 //!
 //! Mesh inputs are checked as they come in: a mesh wound inward as a whole is flipped
@@ -91,8 +92,11 @@ pub enum MeshChecks {
 /// Whether `spec` names a file rather than a built-in field.
 pub fn is_file_spec(spec: &str) -> bool {
     let lower = spec.to_ascii_lowercase();
-    let known = [".obj", ".ply", ".stl", ".glb", ".gltf", ".nii", ".nii.gz", ".nrrd", ".nhdr", ".mhd", ".mha", ".raw"];
-    known.iter().any(|e| lower.ends_with(e)) || spec.contains('/') || Path::new(spec).is_file()
+    let known = [".obj", ".ply", ".stl", ".glb", ".gltf", ".nii", ".nii.gz", ".nrrd", ".nhdr", ".mhd", ".mha", ".raw", ".zarr"];
+    known.iter().any(|e| lower.trim_end_matches('/').ends_with(e))
+        || spec.contains('/')
+        || Path::new(spec).is_file()
+        || volume::zarr::is_zarr(Path::new(spec))
 }
 
 /// Loads a built-in field by name, or a mesh or volume file.
@@ -110,9 +114,14 @@ pub fn load_input(spec: &str, seed: i32, volume_options: VolumeOptions, checks: 
         });
     }
     let path = Path::new(spec);
-    let bytes = io::read_bytes(path)?;
-    if volume::detect(path, &bytes).is_some() {
-        let file = Arc::new(volume::read_volume_bytes(&bytes, path, volume_options)?);
+    let zarr = volume::zarr::is_zarr(path);
+    let bytes = if zarr { Vec::new() } else { io::read_bytes(path)? };
+    if zarr || volume::detect(path, &bytes).is_some() {
+        let file = Arc::new(if zarr {
+            volume::read_volume(path, volume_options)?
+        } else {
+            volume::read_volume_bytes(&bytes, path, volume_options)?
+        });
         let field: Arc<dyn Field> = Arc::new(VolumeField::new(file.volume.clone()));
         return Ok(Input {
             field,

@@ -329,7 +329,7 @@ fn check_volume_size(config: &RunConfig) -> Result<(), RunError> {
     }
     let path = std::path::Path::new(&config.field);
     let (dims, data_bytes) = match isolab_io::volume::read_header(path, config.volume) {
-        Ok(h) => (h.dims, h.layout.as_ref().map_or(4, |l| l.ty.size()) as u64),
+        Ok(h) => (h.dims, h.layout.as_ref().map_or(4, |l| l.data_type().size()) as u64),
         Err(_) => match isolab_io::volume::peek_dims(path) {
             Some(dims) => (dims, 4),
             None => return Ok(()),

@@ -26,7 +26,7 @@ use isolab_algorithms::extractors;
 use isolab_algorithms::fields::OtsuHistogram;
 use isolab_io::stream::PlyStream;
 use isolab_io::volume::slabs::VolumeSlabs;
-use isolab_io::volume::{Inside, Space};
+use isolab_io::volume::{Inside, Space, StoredData};
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -280,7 +280,7 @@ pub fn check_streamable(config: &RunConfig, output: &Path) -> Result<(), String>
 
 /// Refuses an uncompressed file shorter than its header says, before its data is read.
 fn check_data_length(slabs: &VolumeSlabs) -> Result<(), String> {
-    let Ok(layout) = &slabs.header.layout else { return Ok(()) };
+    let Ok(StoredData::File(layout)) = &slabs.header.layout else { return Ok(()) };
     if layout.compression.is_some() {
         return Ok(());
     }

@@ -304,7 +304,7 @@ pub fn header_layout(prefix: &[u8], path: &Path, options: VolumeOptions) -> Resu
         inside: Inside::Above,
         iso: None,
         notes: h.notes,
-        layout,
+        layout: layout.map(super::StoredData::File),
     })
 }
 

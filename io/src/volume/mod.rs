@@ -18,6 +18,7 @@ pub mod nifti;
 pub mod nrrd;
 pub mod samples;
 pub mod slabs;
+pub mod zarr;
 
 use super::IoError;
 use glam::DAffine3;
@@ -89,6 +90,25 @@ pub struct DataLayout {
     pub inter: f64,
 }
 
+/// Where a volume's values lie, for reading them a run of z-slices at a time.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StoredData {
+    /// A run of (raw or compressed) bytes in a file.
+    File(DataLayout),
+    /// A zarr array, read by its storage chunks.
+    Zarr(zarr::ZarrLayout),
+}
+
+impl StoredData {
+    /// The stored type.
+    pub fn data_type(&self) -> DataType {
+        match self {
+            StoredData::File(l) => l.ty,
+            StoredData::Zarr(l) => l.ty,
+        }
+    }
+}
+
 /// What a volume file's header says, read without its data.
 #[derive(Clone, Debug)]
 pub struct VolumeHeader {
@@ -109,11 +129,15 @@ pub struct VolumeHeader {
     /// Things the user should know.
     pub notes: Vec<String>,
     /// Where the data lies, or why it cannot be read slab by slab.
-    pub layout: Result<DataLayout, String>,
+    pub layout: Result<StoredData, String>,
 }
 
-/// Reads the header of the volume file at `path` (its first bytes only) and where its data lies.
+/// Reads the header of the volume file at `path` (its first bytes only; a zarr store's
+/// metadata) and where its data lies.
 pub fn read_header(path: &Path, options: VolumeOptions) -> Result<VolumeHeader, IoError> {
+    if zarr::is_zarr(path) {
+        return zarr::header_layout(path, options);
+    }
     let read_err = |source| IoError::Read { path: path.into(), source };
     let mut prefix = Vec::new();
     std::fs::File::open(path).map_err(read_err)?.take(HEADER_PREFIX).read_to_end(&mut prefix).map_err(read_err)?;
@@ -371,8 +395,11 @@ pub struct VolumeOptions {
     pub index: Option<usize>,
 }
 
-/// Reads a volume file of any format we read.
+/// Reads a volume file (or zarr store) of any format we read.
 pub fn read_volume(path: &Path, options: VolumeOptions) -> Result<VolumeFile, IoError> {
+    if zarr::is_zarr(path) {
+        return zarr::read_zarr(path, options);
+    }
     read_volume_bytes(&super::read_bytes(path)?, path, options)
 }
 

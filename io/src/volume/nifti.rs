@@ -393,7 +393,7 @@ pub fn header_layout(prefix: &[u8], path: &Path, options: VolumeOptions) -> Resu
         inside: Inside::Above,
         iso: None,
         notes,
-        layout: Ok(layout),
+        layout: Ok(super::StoredData::File(layout)),
     })
 }
 

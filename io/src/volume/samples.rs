@@ -74,7 +74,7 @@ pub fn header_layout(path: &Path) -> Result<super::VolumeHeader, IoError> {
         inside: h.inside,
         iso: h.iso,
         notes: Vec::new(),
-        layout,
+        layout: layout.map(super::StoredData::File),
     })
 }
 

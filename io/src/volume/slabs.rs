@@ -3,9 +3,11 @@
 //! meshed block by block (`isolab extract --stream`). Raw and compressed (gzip, zlib) data both
 //! stream: the data of one volume is a contiguous run of the (decompressed) stream, x fastest.
 //! What cannot stream (text encodings, interleaved channels, a BCC grid, an NRRD whose spatial
-//! axes are not its first three) is refused when the file is opened, with the reason.
+//! axes are not its first three) is refused when the file is opened, with the reason. A zarr
+//! store is read by its storage chunks, a run of them along z at a time ([`super::zarr`]).
 
-use super::{decode, read_header, Compression, DataLayout, VolumeHeader, VolumeOptions};
+use super::zarr::ZarrSlices;
+use super::{decode, read_header, Compression, DataLayout, StoredData, VolumeHeader, VolumeOptions};
 use crate::IoError;
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
@@ -15,11 +17,17 @@ pub struct VolumeSlabs {
     /// What the header says (its layout is the one being read).
     pub header: VolumeHeader,
     path: PathBuf,
-    layout: DataLayout,
-    reader: Box<dyn Read + Send>,
+    source: Source,
     /// Slices read so far.
     next: usize,
-    bytes: Vec<u8>,
+}
+
+/// Where the slices come from.
+enum Source {
+    /// A file's byte stream, decoded through `bytes`.
+    File { layout: DataLayout, reader: Box<dyn Read + Send>, bytes: Vec<u8> },
+    /// A zarr array.
+    Zarr(Box<ZarrSlices>),
 }
 
 impl VolumeSlabs {
@@ -31,8 +39,11 @@ impl VolumeSlabs {
             .layout
             .clone()
             .map_err(|why| IoError::Invalid { path: path.into(), reason: format!("cannot be read slab by slab: {why}") })?;
-        let reader = open_data(path, &layout)?;
-        Ok(VolumeSlabs { header, path: path.into(), layout, reader, next: 0, bytes: Vec::new() })
+        let source = match layout {
+            StoredData::File(layout) => Source::File { reader: open_data(path, &layout)?, layout, bytes: Vec::new() },
+            StoredData::Zarr(layout) => Source::Zarr(Box::new(ZarrSlices::open(&layout)?)),
+        };
+        Ok(VolumeSlabs { header, path: path.into(), source, next: 0 })
     }
 
     /// Samples per axis.
@@ -56,22 +67,31 @@ impl VolumeSlabs {
                 reason: format!("slices {}..{} asked for; the volume has {nz}", self.next, self.next + count),
             });
         }
-        let values = nx * ny * count;
-        let size = self.layout.ty.size();
-        self.bytes.resize(values * size, 0);
-        self.reader.read_exact(&mut self.bytes).map_err(|e| IoError::Invalid {
-            path: self.layout.file.clone(),
-            reason: format!("the data ends or is corrupt within z-slices {}..{} of {nz} ({e})", self.next, self.next + count),
-        })?;
-        let l = &self.layout;
-        out.extend(decode(&self.bytes, l.ty, l.big_endian, values, l.slope, l.inter));
+        match &mut self.source {
+            Source::File { layout: l, reader, bytes } => {
+                let values = nx * ny * count;
+                bytes.resize(values * l.ty.size(), 0);
+                reader.read_exact(bytes).map_err(|e| IoError::Invalid {
+                    path: l.file.clone(),
+                    reason: format!(
+                        "the data ends or is corrupt within z-slices {}..{} of {nz} ({e})",
+                        self.next,
+                        self.next + count
+                    ),
+                })?;
+                out.extend(decode(bytes, l.ty, l.big_endian, values, l.slope, l.inter));
+            }
+            Source::Zarr(zarr) => zarr.read(self.next, self.header.dims, count, out)?,
+        }
         self.next += count;
         Ok(())
     }
 
     /// Starts again from the first slice (a second pass over the data).
     pub fn rewind(&mut self) -> Result<(), IoError> {
-        self.reader = open_data(&self.path, &self.layout)?;
+        if let Source::File { layout, reader, .. } = &mut self.source {
+            *reader = open_data(&self.path, layout)?;
+        }
         self.next = 0;
         Ok(())
     }

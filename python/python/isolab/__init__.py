@@ -264,7 +264,7 @@ def extract(data: Union[np.ndarray, str, os.PathLike], level: Optional[float] = 
         copied once more into the extractor's samples), a built-in field name (``"sphere"``,
         ``"torus"``, ``"gyroid"``, ... ``isolab.fields()``) sampled at ``resolution``, or a path
         to any file the CLI reads (a mesh: .obj .ply .stl .glb .gltf, meshed as its signed
-        distance; a volume: .nii .nii.gz .nrrd .nhdr .mhd .mha).
+        distance; a volume: .nii .nii.gz .nrrd .nhdr .mhd .mha, a zarr store's folder).
     level : float, optional
         The iso-value; default 0 for fields and arrays, Otsu's threshold for a scan file.
     algorithm : str

@@ -13,8 +13,9 @@
 //! A second part streams a volume file (issue 34): a 1024³ `uint8` NRRD (1 GiB, more than an
 //! in-memory run's header check lets this machine hold) meshed by
 //! [`isolab_pipeline::stream::stream_volume_file`] (what `isolab extract --stream` runs), with its
-//! time and peak memory, and a 513³ one meshed in memory (`--chunk`) and streamed, alternating, in
-//! one process, both one-shot and both writing a PLY.
+//! time and peak memory, the same voxels as a zarr store (zstd, 64³ chunks) streamed the same way,
+//! and a 513³ one meshed in memory (`--chunk`) and streamed, alternating, in one process, both
+//! one-shot and both writing a PLY.
 //!
 //! The terrain samples its height field once per column and proves chunks wholly above the
 //! ground, or below it and the cave floor, from their column heights and the noise bound; those
@@ -233,6 +234,8 @@ const COMPARE_RUNS: usize = 3;
 const VOLUME_CHUNK: usize = 64;
 /// Voxel size of the volume files.
 const VOXEL_SPACING: f32 = 0.5;
+/// zstd's level for the zarr store (zarr-python's default, 0, is zstd's default level 3).
+const ZARR_ZSTD_LEVEL: i32 = 3;
 /// The iso-value of the comparison (the streamed 1024³ run takes Otsu's, as a user's would).
 const COMPARE_ISO: f32 = 100.0;
 
@@ -260,6 +263,10 @@ struct VolumeData {
     chunk: usize,
     algorithm: String,
     streamed: StreamedRun,
+    /// The same volume as a zarr store (zstd, [`VOLUME_CHUNK`]³ chunks), streamed; its bytes on
+    /// disk.
+    #[serde(default)]
+    zarr: Option<(StreamedRun, u64)>,
     compare_side: usize,
     compare_iso: f32,
     memory_seconds: Spread,
@@ -270,17 +277,9 @@ struct VolumeData {
     compare_triangles: [usize; 2],
 }
 
-/// A uint8 NRRD of `side`³ voxels: a rippled ball, brighter than its background.
-fn write_volume_file(path: &std::path::Path, side: usize) -> Result<u64, ExperimentError> {
-    use std::io::Write;
-    let err = |source| isolab_io::IoError::Write { path: path.into(), source };
-    let mut f = std::io::BufWriter::new(std::fs::File::create(path).map_err(err)?);
-    let (dimension, h) = (3, VOXEL_SPACING);
-    write!(
-        f,
-        "NRRD0004\ntype: uint8\ndimension: {dimension}\nsizes: {side} {side} {side}\nspacings: {h} {h} {h}\nencoding: raw\n\n"
-    )
-    .map_err(err)?;
+/// The z-slices of a `side`³ rippled ball, brighter than its background, one `side * side`
+/// slice of `uint8` at a time (x fastest).
+fn for_each_volume_slice(side: usize, mut each: impl FnMut(&[u8]) -> Result<(), ExperimentError>) -> Result<(), ExperimentError> {
     let axis: Vec<f32> = (0..side).map(|i| i as f32 / side as f32 - 0.5).collect();
     let (wx, wy): (Vec<f32>, Vec<f32>) = axis.iter().map(|&c| ((40.0 * c).sin(), (30.0 * c).sin())).unzip();
     let mut slice = vec![0u8; side * side];
@@ -291,10 +290,67 @@ fn write_volume_file(path: &std::path::Path, side: usize) -> Result<u64, Experim
                 slice[j * side + i] = (128.0 + 300.0 * (0.35 - r) + 20.0 * wx[i] * wy[j]).clamp(0.0, 255.0) as u8;
             }
         }
-        f.write_all(&slice).map_err(err)?;
+        each(&slice)?;
     }
+    Ok(())
+}
+
+/// A uint8 NRRD of the rippled ball of `side`³ voxels: its size in bytes.
+fn write_volume_file(path: &std::path::Path, side: usize) -> Result<u64, ExperimentError> {
+    use std::io::Write;
+    let err = |source| isolab_io::IoError::Write { path: path.into(), source };
+    let mut f = std::io::BufWriter::new(std::fs::File::create(path).map_err(err)?);
+    let (dimension, h) = (3, VOXEL_SPACING);
+    write!(
+        f,
+        "NRRD0004\ntype: uint8\ndimension: {dimension}\nsizes: {side} {side} {side}\nspacings: {h} {h} {h}\nencoding: raw\n\n"
+    )
+    .map_err(err)?;
+    for_each_volume_slice(side, |slice| f.write_all(slice).map_err(|e| err(e).into()))?;
     f.flush().map_err(err)?;
     Ok(std::fs::metadata(path).map_err(err)?.len())
+}
+
+/// The same rippled ball as a zarr v3 array (plain: unit spacing) in [`VOLUME_CHUNK`]³ chunks,
+/// zstd-compressed (zarr-python's default codec), written a layer of chunks at a time: its size
+/// on disk in bytes.
+fn write_zarr_store(path: &std::path::Path, side: usize) -> Result<u64, ExperimentError> {
+    use zarrs::array::{codec::ZstdCodec, ArrayBuilder, DataType};
+    let fail = |e: &dyn std::fmt::Display| ExperimentError::Figure(format!("writing {}: {e}", path.display()));
+    let store = std::sync::Arc::new(zarrs::filesystem::FilesystemStore::new(path).map_err(|e| fail(&e))?);
+    let (n, c) = (side as u64, VOLUME_CHUNK as u64);
+    let array = ArrayBuilder::new(vec![n, n, n], vec![c, c, c], DataType::UInt8, 0u8)
+        .bytes_to_bytes_codecs(vec![std::sync::Arc::new(ZstdCodec::new(ZARR_ZSTD_LEVEL, false))])
+        .build(store, "/")
+        .map_err(|e| fail(&e))?;
+    array.store_metadata().map_err(|e| fail(&e))?;
+    let mut layer = Vec::with_capacity(side * side * VOLUME_CHUNK);
+    let mut z = 0u64;
+    for_each_volume_slice(side, |slice| {
+        layer.extend_from_slice(slice);
+        if layer.len() == side * side * VOLUME_CHUNK || z + (layer.len() / (side * side)) as u64 == n {
+            let count = (layer.len() / (side * side)) as u64;
+            let subset = zarrs::array_subset::ArraySubset::new_with_ranges(&[z..z + count, 0..n, 0..n]);
+            array.store_array_subset_elements::<u8>(&subset, &layer).map_err(|e| fail(&e))?;
+            z += count;
+            layer.clear();
+        }
+        Ok(())
+    })?;
+    Ok(dir_bytes(path))
+}
+
+/// Bytes of the files under `path`.
+fn dir_bytes(path: &std::path::Path) -> u64 {
+    std::fs::read_dir(path)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| match e.file_type() {
+            Ok(t) if t.is_dir() => dir_bytes(&e.path()),
+            _ => e.metadata().map_or(0, |m| m.len()),
+        })
+        .sum()
 }
 
 fn volume_config(path: &std::path::Path, iso: Option<f32>) -> isolab_pipeline::RunConfig {
@@ -356,12 +412,16 @@ impl Drop for ScratchDir {
 /// The volume-file runs: a 1 GiB volume streamed, and a smaller one meshed both ways, alternating.
 fn run_volume(ctx: &Context) -> Result<(), ExperimentError> {
     let dir = ScratchDir::new()?;
-    let (big, small) = (dir.0.join("volume.nrrd"), dir.0.join("compare.nrrd"));
+    let (big, small, store) = (dir.0.join("volume.nrrd"), dir.0.join("compare.nrrd"), dir.0.join("volume.zarr"));
     let out = dir.0.join("mesh.ply");
-    let bar = ctx.bar("large_world volume", 2 + 2 * COMPARE_RUNS as u64);
+    let bar = ctx.bar("large_world volume", 3 + 2 * COMPARE_RUNS as u64);
     let file_bytes = write_volume_file(&big, VOLUME_SIDE)?;
     let streamed = streamed_run(&big, &out, None)?;
     std::fs::remove_file(&big).map_err(|source| isolab_io::IoError::Write { path: big.clone(), source })?;
+    bar.inc(1);
+    let store_bytes = write_zarr_store(&store, VOLUME_SIDE)?;
+    let zarr = streamed_run(&store, &out, None)?;
+    std::fs::remove_dir_all(&store).map_err(|source| isolab_io::IoError::Write { path: store.clone(), source })?;
     bar.inc(1);
     write_volume_file(&small, COMPARE_SIDE)?;
     bar.inc(1);
@@ -388,6 +448,7 @@ fn run_volume(ctx: &Context) -> Result<(), ExperimentError> {
         chunk: VOLUME_CHUNK,
         algorithm: "marching-cubes".into(),
         streamed,
+        zarr: Some((zarr, store_bytes)),
         compare_side: COMPARE_SIDE,
         compare_iso: COMPARE_ISO,
         memory_seconds: Spread::of(memory_seconds),
@@ -427,12 +488,37 @@ fn volume_section(ctx: &Context) -> Result<String, ExperimentError> {
             format!("{m:.0} MiB{}", if reset { "" } else { " (the process's peak so far: not resettable here)" })
         })
     };
+    let runs: Vec<(&StreamedRun, String)> = std::iter::once((s, format!("{:.2} GiB raw", d.file_gib)))
+        .chain(d.zarr.as_ref().map(|(z, bytes)| (z, format!("{:.0} MiB in chunk files", *bytes as f64 / (1u64 << 20) as f64))))
+        .collect();
+    let row = |name: &str, cell: &dyn Fn(&StreamedRun, &str) -> String| {
+        std::iter::once(name.to_owned()).chain(runs.iter().map(|(r, disk)| cell(r, disk))).collect::<Vec<String>>()
+    };
     let rows = vec![
-        vec!["wall time".into(), format!("{:.1} s, of which {:.1} s the threshold passes", s.seconds, s.threshold_seconds)],
-        vec!["peak resident memory".into(), peak(s.peak_rss_mib, s.peak_reset)],
-        vec!["output".into(), format!("{} vertices, {} triangles, {:.0} MiB PLY", s.vertices, s.triangles, s.output_mib)],
+        row("on disk", &|_, disk| disk.to_owned()),
+        row("wall time", &|r, _| format!("{:.1} s, of which {:.1} s the threshold passes", r.seconds, r.threshold_seconds)),
+        row("peak resident memory", &|r, _| peak(r.peak_rss_mib, r.peak_reset)),
+        row("output", &|r, _| format!("{} vertices, {} triangles, {:.0} MiB PLY", r.vertices, r.triangles, r.output_mib)),
     ];
-    md.push_str(&markdown_table(&["measure", &format!("{}³ streamed", d.side)], &rows));
+    let mut header = vec!["measure".to_owned(), format!("{}³ NRRD streamed", d.side)];
+    if let Some((z, _)) = &d.zarr {
+        header.push(format!("{}³ zarr streamed", d.side));
+        let same = z.vertices == s.vertices && z.triangles == s.triangles && z.iso == s.iso;
+        md.push_str(&format!(
+            "The same voxels as a zarr v3 store ({c}³ chunks, zstd level {level}, zarr-python's default codec; a plain \
+             array, so unit spacing), streamed the same way (`-f volume.zarr --stream`: a layer of storage chunks read \
+             and decoded at a time): {verdict}.\n\n",
+            c = d.chunk,
+            level = ZARR_ZSTD_LEVEL,
+            verdict = if same {
+                "the same iso-value, vertex and triangle counts as the NRRD".to_owned()
+            } else {
+                format!("iso-value {}, {} vertices, {} triangles: not the NRRD's", z.iso, z.vertices, z.triangles)
+            },
+        ));
+    }
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    md.push_str(&markdown_table(&header, &rows));
     let spread = |x: &Spread, unit: &str, digits: usize| {
         format!("{:.*} {unit} ({:.*}-{:.*})", digits, x.median, digits, x.min, digits, x.max)
     };

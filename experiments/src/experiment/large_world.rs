@@ -93,7 +93,7 @@ impl Experiment for LargeWorld {
     }
 
     fn question(&self) -> &'static str {
-        "Can a world of billions of samples be meshed chunk by chunk, at what throughput and memory?"
+        "Can a world of billions of samples, or a volume file or zarr store larger than memory, be meshed block by block, at what throughput and memory?"
     }
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
@@ -152,7 +152,7 @@ impl Experiment for LargeWorld {
         let d: Data = ctx.read_data(NAME)?;
         let issue: Option<Data> = ctx.data_path(ISSUE_DATA).exists().then(|| ctx.read_data(ISSUE_DATA)).transpose()?;
         let runs: Vec<&Data> = std::iter::once(&d).chain(issue.as_ref()).collect();
-        let mut md = String::from("## A world of billions of samples, streamed chunk by chunk (`large_world`)\n\n");
+        let mut md = String::from("## Larger than memory on one machine: a world of billions of samples and volumes streamed block by block (`large_world`)\n\n");
         md.push_str(&format!(
             "The `terrain` field continued over a world of samples, meshed by {} in {}³-cell chunks, one slab of chunks along \
              z at a time: each chunk samples the field itself, slabs are meshed in parallel, welded to the previous slab's top \

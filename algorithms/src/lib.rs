@@ -35,6 +35,7 @@ pub mod fields;
 pub mod geometry;
 pub mod labels;
 pub mod lattice;
+pub mod liquids;
 pub mod lod;
 pub mod materials;
 pub mod mesh;

@@ -274,6 +274,31 @@ impl Phases {
     }
 }
 
+/// A terrain scene of `n` x `n` x `n / 2` samples (unit spacing, from the origin): rolling ground
+/// with a basin holding a lake, a ball-shaped cave under the ground with its lower half flooded,
+/// and air on every border sample (so both layers close). `max` is 1.
+pub fn lake_and_cave(n: usize) -> Phases {
+    let grid = Grid { origin: Vec3::ZERO, spacing: 1.0, dims: [n, n, n / 2] };
+    let mut phases = Phases::empty(grid, 1.0);
+    let (c, h, side) = (n as f32 / 2.0, (n / 2) as f32, n as f32);
+    let ramp = |d: f32| (0.5 + d / 1.5).clamp(0.0, 1.0);
+    let cave = Vec3::new(0.3 * side, 0.65 * side, 0.3 * h);
+    let cave_r = 0.14 * side;
+    phases.fill(|p| {
+        if p.min_element() < 0.5 || p.x > side - 1.5 || p.y > side - 1.5 || p.z > h - 1.5 {
+            return (0.0, 0.0);
+        }
+        let r = ((p.x - c).powi(2) + (p.y - c).powi(2)).sqrt();
+        let basin = 0.25 * h * (-(r / (0.3 * side)).powi(2)).exp();
+        let ground = 0.55 * h + 0.08 * h * (p.x * 0.31).sin() * (p.y * 0.23).cos() - basin;
+        let solid = ramp(ground - p.z).min(ramp(p.distance(cave) - cave_r));
+        let lake = ramp(0.52 * h - p.z) * ramp(0.4 * side - r);
+        let flood = ramp(cave.z - p.z) * ramp(cave_r + 1.0 - p.distance(cave));
+        (solid, lake.max(flood).min(1.0 - solid))
+    });
+    phases
+}
+
 /// Meshes the solid and the liquid of `phases` with `extractor` and moves every liquid vertex on
 /// a solid–liquid lattice edge onto the solid's vertex there (module doc); liquid vertices moved
 /// onto one solid vertex become one, and where every corner of a liquid triangle was moved, the

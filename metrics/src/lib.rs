@@ -10,6 +10,7 @@
 //! - [`accuracy`]: volume, area, distance of vertices to the true surface, Hausdorff distance,
 //!   normal deviation;
 //! - [`intersections`]: self-intersecting triangle pairs (BVH candidates, exact predicates);
+//! - [`layers`]: how a solid and a liquid layer meet (shared contact vertices, crossing pairs);
 //! - [`overdraw`]: quad overshading of a rasterised view;
 //! - [`histogram`]: fixed-bin histograms;
 //! - [`tet_quality`](mod@tet_quality): tetrahedra's dihedral angles, aspect and radius ratios, inverted count;
@@ -20,6 +21,7 @@
 pub mod accuracy;
 pub mod histogram;
 pub mod intersections;
+pub mod layers;
 pub mod overdraw;
 pub mod quality;
 pub mod tet_quality;

@@ -26,6 +26,7 @@ pub mod stuart_tables;
 pub mod surface_nets_smoothing;
 pub mod svoboda_timing;
 pub mod terrain_edit;
+pub mod terrain_liquids;
 pub mod terrain_lod;
 pub mod viewer;
 
@@ -54,6 +55,7 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(stuart_tables::StuartTables),
         Box::new(terrain_edit::TerrainEdit),
         Box::new(terrain_lod::TerrainLod),
+        Box::new(terrain_liquids::TerrainLiquids),
         Box::new(large_world::LargeWorld),
         Box::new(viewer::Viewer),
     ]

@@ -1,0 +1,382 @@
+//! `terrain_liquids`: the marching cubes terrain post's liquids (its "Viscosity" section,
+//! `../shared/papers/blog-marching-cubes-terrain-materials.txt`; issue 37), on a terrain with a
+//! lake and a half-flooded cave ([`isolab_algorithms::liquids::lake_and_cave`]). Each extractor
+//! the post's rule carries over to meshes the solid and the liquid density and shares the contact
+//! ([`isolab_algorithms::liquids::extract_layers`]); the post's "naive solution" (two independent
+//! meshes) is run beside it. Then a script of brushes digs, pours and drains, the two layers
+//! re-meshed after every edit (the whole domain, not chunked) and checked: both closed and
+//! manifold, every contact vertex shared, no crossing pair (exact), no liquid inside the solid,
+//! and the masses against the brushes' books. A GIF shows the edits.
+
+use super::context::{Context, Experiment, ExperimentError};
+use crate::report::markdown_table;
+use isolab_algorithms::liquids::{extract_layers, lake_and_cave, Layers, Phases};
+use isolab_algorithms::random::Random;
+use isolab_algorithms::{extractors, Extraction, Extractor, Lattice, Samples, TriMesh, Vec3};
+use isolab_cli::render::{self, RenderOptions, Shading};
+use isolab_metrics::layers::{layer_contact, LayerContact};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// The experiment.
+pub struct TerrainLiquids;
+
+const NAME: &str = "terrain_liquids";
+/// Samples along x and y of the compared scene (half as many along z).
+const SCENE: usize = 96;
+/// Samples along x and y of the edited scene.
+const EDIT_SCENE: usize = 64;
+/// Brushes in the edit script (dig, pour, drain in turn).
+const EDITS: usize = 200;
+/// A GIF frame every this many edits.
+const GIF_EVERY: usize = 10;
+/// Timed runs per extractor.
+const RUNS: usize = 3;
+/// The extractors with a vertex on every crossing lattice edge.
+const EXTRACTORS: [&str; 4] = ["marching-cubes", "marching-cubes-decider", "marching-cubes-33", "marching-tetrahedra"];
+/// The extractor of the edit script.
+const EDIT_EXTRACTOR: &str = "marching-cubes";
+const SEED: u64 = 37;
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Row {
+    method: String,
+    solid_triangles: usize,
+    liquid_triangles: usize,
+    solid_closed_manifold: bool,
+    liquid_closed_manifold: bool,
+    contact: LayerContact,
+    median_ms: f64,
+}
+
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct EditRun {
+    extractor: String,
+    edits: usize,
+    /// Edits after which a layer was not closed and manifold.
+    open_after: usize,
+    /// The most unshared contact vertices, crossing pairs and liquid vertices inside the solid
+    /// after any edit.
+    worst: LayerContact,
+    /// The fewest contact vertices after any edit (the check is not vacuous).
+    fewest_contact: usize,
+    poured: f64,
+    drained: f64,
+    dug: f64,
+    /// Largest relative difference between a mass and its books over the script.
+    mass_drift: f64,
+    solid_mass: [f64; 2],
+    liquid_mass: [f64; 2],
+    remesh_ms: Vec<f64>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Data {
+    scene: [usize; 3],
+    rows: Vec<Row>,
+    edit: EditRun,
+    edit_scene: [usize; 3],
+    picture: String,
+    gif: String,
+}
+
+fn build(name: &str) -> Result<Box<dyn Extractor>, ExperimentError> {
+    extractors::by_name(name).ok_or_else(|| ExperimentError::Figure(format!("no extractor {name}")))
+}
+
+fn closed_manifold(mesh: &TriMesh) -> bool {
+    isolab_metrics::topology(mesh).is_watertight_manifold()
+}
+
+fn row(method: &str, phases: &Phases, layers: &Layers, times: &mut [f64]) -> Row {
+    times.sort_by(f64::total_cmp);
+    Row {
+        method: method.into(),
+        solid_triangles: layers.solid.triangles.len(),
+        liquid_triangles: layers.liquid.triangles.len(),
+        solid_closed_manifold: closed_manifold(&layers.solid),
+        liquid_closed_manifold: closed_manifold(&layers.liquid),
+        contact: layer_contact(phases, &layers.solid, &layers.liquid),
+        median_ms: times[times.len() / 2],
+    }
+}
+
+/// The post's naive solution: the two densities meshed independently, nothing shared.
+fn independent_layers(extractor: &dyn Extractor, phases: &Phases) -> Result<Layers, ExperimentError> {
+    let mesh = |density: &[f32]| -> Result<TriMesh, ExperimentError> {
+        let values = density.iter().map(|&d| phases.max() / 2.0 - d).collect();
+        let samples = Samples::from_values(Lattice::Cubic(*phases.grid()), values, 0.0)?;
+        let mut out = Extraction::default();
+        extractor.extract(&samples, &mut out)?;
+        Ok(out.surface)
+    };
+    Ok(Layers { solid: mesh(phases.solid())?, liquid: mesh(phases.liquid())?, contact: 0 })
+}
+
+/// Both layers in one picture: the solid by height (brown below, green on top), the liquid blue.
+fn picture(layers: &Layers, opts: &RenderOptions) -> render::Image {
+    let mut mesh = layers.solid.clone();
+    let offset = mesh.positions.len() as u32;
+    mesh.positions.extend(&layers.liquid.positions);
+    mesh.triangles.extend(layers.liquid.triangles.iter().map(|t| t.map(|v| v + offset)));
+    let top = mesh.positions.iter().map(|p| p.z).fold(1.0f32, f32::max);
+    let mut colours: Vec<[u8; 3]> = layers
+        .solid
+        .positions
+        .iter()
+        .map(|p| {
+            let t = (p.z / top).clamp(0.0, 1.0);
+            [(150.0 - 80.0 * t) as u8, (95.0 + 55.0 * t) as u8, (55.0 - 10.0 * t) as u8]
+        })
+        .collect();
+    colours.extend(std::iter::repeat_n([40, 110, 220], layers.liquid.positions.len()));
+    // The scene's z is up; the renderer's up is y.
+    mesh.positions.iter_mut().for_each(|p| *p = Vec3::new(p.x, p.z, p.y));
+    mesh.triangles.iter_mut().for_each(|t| t.swap(1, 2));
+    render::render_coloured(&mesh, &colours, opts)
+}
+
+fn edit_run(ctx: &Context) -> Result<(EditRun, Vec<render::Image>, render::Image), ExperimentError> {
+    let mut phases = lake_and_cave(EDIT_SCENE);
+    let extractor = build(EDIT_EXTRACTOR)?;
+    let [nx, ny, nz] = phases.grid().dims;
+    let mut random = Random::new(SEED);
+    let mut range = |lo: f32, hi: f32| lo + (hi - lo) * random.unit_f32();
+    let opts = RenderOptions { width: 420, height: 300, shading: Shading::Smooth, ..Default::default() };
+    let start_masses = phases.masses();
+    let mut run = EditRun {
+        extractor: EDIT_EXTRACTOR.into(),
+        edits: EDITS,
+        fewest_contact: usize::MAX,
+        solid_mass: [start_masses.solid, 0.0],
+        liquid_mass: [start_masses.liquid, 0.0],
+        ..Default::default()
+    };
+    let mut frames = vec![picture(&extract_layers(extractor.as_ref(), &phases)?, &opts)];
+    let (mut books_solid, mut books_liquid) = (start_masses.solid, start_masses.liquid);
+    let bar = ctx.bar(NAME, EDITS as u64);
+    let mut last = Layers::default();
+    for edit in 0..EDITS {
+        let ground = nz as f32 * 0.5;
+        let centre = Vec3::new(range(4.0, nx as f32 - 5.0), range(4.0, ny as f32 - 5.0), range(ground - 6.0, ground + 3.0));
+        let radius = range(2.0, 5.0);
+        match edit % 3 {
+            0 => {
+                let dug = phases.dig(centre, radius, range(0.3, 1.0));
+                run.dug += dug;
+                books_solid -= dug;
+            }
+            1 => {
+                let poured = phases.pour(centre, radius, range(0.3, 1.0));
+                run.poured += poured;
+                books_liquid += poured;
+            }
+            _ => {
+                let drained = phases.drain(centre, radius, range(0.3, 1.0));
+                run.drained += drained;
+                books_liquid -= drained;
+            }
+        }
+        let start = Instant::now();
+        let layers = extract_layers(extractor.as_ref(), &phases)?;
+        run.remesh_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        if !(closed_manifold(&layers.solid) && closed_manifold(&layers.liquid)) {
+            run.open_after += 1;
+        }
+        let c = layer_contact(&phases, &layers.solid, &layers.liquid);
+        run.worst.unshared = run.worst.unshared.max(c.unshared);
+        run.worst.crossing_pairs = run.worst.crossing_pairs.max(c.crossing_pairs);
+        run.worst.liquid_inside_solid = run.worst.liquid_inside_solid.max(c.liquid_inside_solid);
+        run.worst.contact_vertices = run.worst.contact_vertices.max(c.contact_vertices);
+        run.fewest_contact = run.fewest_contact.min(c.contact_vertices);
+        let m = phases.masses();
+        let drift = |have: f64, books: f64| (have - books).abs() / books.abs().max(1.0);
+        run.mass_drift = run.mass_drift.max(drift(m.solid, books_solid)).max(drift(m.liquid, books_liquid));
+        if (edit + 1) % GIF_EVERY == 0 {
+            frames.push(picture(&layers, &opts));
+        }
+        last = layers;
+        bar.inc(1);
+    }
+    bar.finish();
+    let end = phases.masses();
+    run.solid_mass[1] = end.solid;
+    run.liquid_mass[1] = end.liquid;
+    let still = picture(&last, &RenderOptions { width: 720, height: 480, ..opts });
+    Ok((run, frames, still))
+}
+
+impl Experiment for TerrainLiquids {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn question(&self) -> &'static str {
+        "Do liquid and solid layers from one density and a viscosity meet without gaps or overlaps, and keep their mass under edits (the marching cubes terrain post)?"
+    }
+
+    fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
+        let phases = lake_and_cave(SCENE);
+        let mut rows = Vec::new();
+        for name in EXTRACTORS {
+            let extractor = build(name)?;
+            let mut times = Vec::new();
+            let mut layers = Layers::default();
+            for _ in 0..RUNS {
+                let start = Instant::now();
+                layers = extract_layers(extractor.as_ref(), &phases)?;
+                times.push(start.elapsed().as_secs_f64() * 1e3);
+            }
+            rows.push(row(name, &phases, &layers, &mut times));
+        }
+        let mc = build(EDIT_EXTRACTOR)?;
+        let start = Instant::now();
+        let naive = independent_layers(mc.as_ref(), &phases)?;
+        let mut times = vec![start.elapsed().as_secs_f64() * 1e3];
+        rows.push(row(
+            &format!("{EDIT_EXTRACTOR}, two independent meshes (the post's naive solution)"),
+            &phases,
+            &naive,
+            &mut times,
+        ));
+
+        let (edit, frames, still) = edit_run(ctx)?;
+        let dir = ctx.figure_dir(NAME)?;
+        let path = dir.join("after-edits.png");
+        render::save_png(&path, &still)?;
+        let picture = ctx.link(&path);
+        let path = dir.join("edits.gif");
+        render::save_gif(&path, &frames, 40)?;
+        let gif = ctx.link(&path);
+        let edit_scene = lake_and_cave(EDIT_SCENE).grid().dims;
+        ctx.write_data(NAME, &Data { scene: phases.grid().dims, rows, edit, edit_scene, picture, gif })
+    }
+
+    fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
+        let d: Data = ctx.read_data(NAME)?;
+        let [sx, sy, sz] = d.scene;
+        let mut md = format!(
+            "## Liquids beside solids: the marching cubes terrain post's viscosity (`{NAME}`)\n\n\
+             The post keeps one base density and a viscosity in the unit interval, \"the percentage of density that is solid\": the \
+             solid density is viscosity × base, the liquid density the rest, both meshed at half the maximum, and \"choosing \
+             the solid geometry to keep when two vertices coexist on an edge\" joins the two meshes. Here both densities of \
+             a {sx} × {sy} × {sz}-sample terrain with a lake and a half-flooded cave (`liquids::lake_and_cave`) are meshed by \
+             each extractor with a vertex on every crossing lattice edge (`liquids::extract_layers`: the liquid's vertex on a \
+             solid–liquid edge takes the solid's; where every corner of a liquid patch moved, the liquid takes the solid's \
+             triangles there, reversed, when the patches' boundaries agree). Checked with `metrics::layers`: contact vertices \
+             (liquid vertices on a solid–liquid lattice edge), those not bit-equal to a solid vertex, triangle pairs of the two \
+             meshes that cross (exact predicates), liquid vertices inside the solid. Median of {RUNS} runs; the naive row is \
+             one run.\n\n"
+        );
+        let yes = |b: bool| if b { "yes" } else { "**no**" }.to_owned();
+        let rows: Vec<Vec<String>> = d
+            .rows
+            .iter()
+            .map(|r| {
+                vec![
+                    r.method.clone(),
+                    format!("{} / {}", r.solid_triangles, r.liquid_triangles),
+                    format!("{} / {}", yes(r.solid_closed_manifold), yes(r.liquid_closed_manifold)),
+                    r.contact.contact_vertices.to_string(),
+                    r.contact.unshared.to_string(),
+                    r.contact.crossing_pairs.to_string(),
+                    r.contact.liquid_inside_solid.to_string(),
+                    format!("{:.1}", r.median_ms),
+                ]
+            })
+            .collect();
+        md.push_str(&markdown_table(
+            &[
+                "method",
+                "triangles (solid / liquid)",
+                "closed, manifold (solid / liquid)",
+                "contact vertices",
+                "unshared",
+                "crossing pairs",
+                "liquid inside solid",
+                "ms (both layers)",
+            ],
+            &rows,
+        ));
+        let shared: Vec<&Row> = d.rows.iter().take(EXTRACTORS.len()).collect();
+        let unshared: Vec<&str> = shared.iter().filter(|r| r.contact.unshared > 0).map(|r| r.method.as_str()).collect();
+        let crossing: Vec<&str> = shared.iter().filter(|r| r.contact.crossing_pairs > 0).map(|r| r.method.as_str()).collect();
+        let clean: Vec<&str> = shared
+            .iter()
+            .filter(|r| r.contact.unshared == 0 && r.contact.crossing_pairs == 0 && r.contact.liquid_inside_solid == 0)
+            .map(|r| r.method.as_str())
+            .collect();
+        let list = |names: &[&str]| if names.is_empty() { "none".to_owned() } else { names.join(", ") };
+        md.push_str(&format!(
+            "
+With the rule, contact vertices left unshared: {}; triangles of one layer crossing the other: {}; neither, and \
+             no liquid inside the solid: {}. Sharing the vertices does not keep marching cubes' layers apart: its pieces in \
+             a cell are not the convex hulls of their crossings, while marching tetrahedra's are, which is why no overlap \
+             is proved for it (the `liquids` module doc).\n",
+            list(&unshared),
+            list(&crossing),
+            list(&clean),
+        ));
+        if let Some(naive) = d.rows.get(EXTRACTORS.len()) {
+            md.push_str(&format!(
+                "\nWith two independent meshes, {} of {} contact vertices are not the solid's: where the base density is full \
+                 at both ends of an edge the two crossings coincide anyway (viscosity one half is both densities at half the \
+                 maximum), elsewhere the layers part or cross ({} crossing pairs, {} liquid vertices inside the solid).\n",
+                naive.contact.unshared,
+                naive.contact.contact_vertices,
+                naive.contact.crossing_pairs,
+                naive.contact.liquid_inside_solid,
+            ));
+        }
+        let e = &d.edit;
+        let [ex, ey, ez] = d.edit_scene;
+        let mut ms = e.remesh_ms.clone();
+        ms.sort_by(f64::total_cmp);
+        let pct = |q: f64| ms.get(((ms.len() as f64 - 1.0) * q).round() as usize).copied().unwrap_or(f64::NAN);
+        md.push_str(&format!(
+            "\n### Dig, pour, drain\n\n{n} brushes in turn dig solid, pour liquid and drain it on a {ex} × {ey} × {ez}-sample \
+             scene, both layers re-meshed by {alg} over the whole domain after every edit (not per chunk: chunked liquids are \
+             not built yet) and checked after every edit.\n\n",
+            n = e.edits,
+            alg = e.extractor,
+        ));
+        let rows = vec![
+            vec!["edits after which a layer was open or non-manifold".into(), e.open_after.to_string()],
+            vec![
+                "contact vertices (fewest and most after an edit)".into(),
+                format!("{}–{}", e.fewest_contact, e.worst.contact_vertices),
+            ],
+            vec!["most unshared contact vertices after an edit".into(), e.worst.unshared.to_string()],
+            vec!["most crossing pairs after an edit".into(), e.worst.crossing_pairs.to_string()],
+            vec!["most liquid vertices inside the solid after an edit".into(), e.worst.liquid_inside_solid.to_string()],
+            vec!["solid mass: start, dug, end".into(), format!("{:.1}, {:.1}, {:.1}", e.solid_mass[0], e.dug, e.solid_mass[1])],
+            vec![
+                "liquid mass: start, poured, drained, end".into(),
+                format!("{:.1}, {:.1}, {:.1}, {:.1}", e.liquid_mass[0], e.poured, e.drained, e.liquid_mass[1]),
+            ],
+            vec!["largest relative gap between a mass and its books".into(), format!("{:.1e}", e.mass_drift)],
+            vec![
+                "re-mesh of both layers, ms (median, p99, max)".into(),
+                format!("{:.1}, {:.1}, {:.1}", pct(0.5), pct(0.99), pct(1.0)),
+            ],
+        ];
+        md.push_str(&markdown_table(&["measure", "value"], &rows));
+        md.push_str(&format!("\n![both layers after the edits]({})\n\n![the edits]({})\n", d.picture, d.gif));
+        md.push_str(
+            "\n### The post's claims beside ours\n\n\
+             - *Layered meshes for liquids without overlap, connected where they meet*: the rows above (contact vertices \
+             shared, crossing pairs). On marching tetrahedra no overlap is proved (`liquids` module doc); on marching cubes \
+             the rule shares the vertices but leaves the crossings counted above.\n\
+             - *Solid and liquid mass conservation still works*: the brushes keep the books exactly (each changes one density; \
+             the table's gap is float summation).\n\
+             - *Both marches in parallel*: here the two layers are meshed one after the other, each by the extractor's own \
+             parallel pass; the time is for both.\n\
+             - *Duplicate vertices removed by keeping one corner's vertices and a later index pass*: isolab's extractors make \
+             one vertex per lattice edge as they go (the closed, manifold columns); not compared with the post's scheme.\n\
+             - Not built yet: the layers in chunks with levels of detail, the liquid's own material in the terrain editor, \
+             surface nets and dual contouring (their vertices are inside cells; `extract_layers` refuses them with that \
+             reason).\n",
+        );
+        Ok(md)
+    }
+}

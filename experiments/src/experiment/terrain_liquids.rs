@@ -34,8 +34,9 @@ const GIF_EVERY: usize = 10;
 const RUNS: usize = 3;
 /// The extractors with a vertex on every crossing lattice edge.
 const EXTRACTORS: [&str; 4] = ["marching-cubes", "marching-cubes-decider", "marching-cubes-33", "marching-tetrahedra"];
-/// The extractor of the edit script.
-const EDIT_EXTRACTOR: &str = "marching-cubes";
+/// The extractors of the edit script: marching cubes (the post's), and marching tetrahedra, whose
+/// layers provably do not overlap. The GIF shows the first.
+const EDIT_EXTRACTORS: [&str; 2] = ["marching-cubes", "marching-tetrahedra"];
 const SEED: u64 = 37;
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -74,7 +75,7 @@ struct EditRun {
 struct Data {
     scene: [usize; 3],
     rows: Vec<Row>,
-    edit: EditRun,
+    edits: Vec<EditRun>,
     edit_scene: [usize; 3],
     picture: String,
     gif: String,
@@ -136,16 +137,17 @@ fn picture(layers: &Layers, opts: &RenderOptions) -> render::Image {
     render::render_coloured(&mesh, &colours, opts)
 }
 
-fn edit_run(ctx: &Context) -> Result<(EditRun, Vec<render::Image>, render::Image), ExperimentError> {
+/// The brush script with `name`, checked after every edit; the GIF's frames and a last picture.
+fn edit_run(ctx: &Context, name: &str) -> Result<(EditRun, Vec<render::Image>, render::Image), ExperimentError> {
     let mut phases = lake_and_cave(EDIT_SCENE);
-    let extractor = build(EDIT_EXTRACTOR)?;
+    let extractor = build(name)?;
     let [nx, ny, nz] = phases.grid().dims;
     let mut random = Random::new(SEED);
     let mut range = |lo: f32, hi: f32| lo + (hi - lo) * random.unit_f32();
     let opts = RenderOptions { width: 420, height: 300, shading: Shading::Smooth, ..Default::default() };
     let start_masses = phases.masses();
     let mut run = EditRun {
-        extractor: EDIT_EXTRACTOR.into(),
+        extractor: name.into(),
         edits: EDITS,
         fewest_contact: usize::MAX,
         solid_mass: [start_masses.solid, 0.0],
@@ -154,7 +156,7 @@ fn edit_run(ctx: &Context) -> Result<(EditRun, Vec<render::Image>, render::Image
     };
     let mut frames = vec![picture(&extract_layers(extractor.as_ref(), &phases)?, &opts)];
     let (mut books_solid, mut books_liquid) = (start_masses.solid, start_masses.liquid);
-    let bar = ctx.bar(NAME, EDITS as u64);
+    let bar = ctx.bar(&format!("{NAME} {name}"), EDITS as u64);
     let mut last = Layers::default();
     for edit in 0..EDITS {
         let ground = nz as f32 * 0.5;
@@ -229,18 +231,21 @@ impl Experiment for TerrainLiquids {
             }
             rows.push(row(name, &phases, &layers, &mut times));
         }
-        let mc = build(EDIT_EXTRACTOR)?;
+        let naive_extractor = EXTRACTORS[0];
         let start = Instant::now();
-        let naive = independent_layers(mc.as_ref(), &phases)?;
+        let naive = independent_layers(build(naive_extractor)?.as_ref(), &phases)?;
         let mut times = vec![start.elapsed().as_secs_f64() * 1e3];
-        rows.push(row(
-            &format!("{EDIT_EXTRACTOR}, two independent meshes (the post's naive solution)"),
-            &phases,
-            &naive,
-            &mut times,
-        ));
+        let method = format!("{naive_extractor}, two independent meshes (the post's naive solution)");
+        rows.push(row(&method, &phases, &naive, &mut times));
 
-        let (edit, frames, still) = edit_run(ctx)?;
+        let mut edits = Vec::new();
+        let mut shown = None;
+        for name in EDIT_EXTRACTORS {
+            let (run, frames, still) = edit_run(ctx, name)?;
+            edits.push(run);
+            shown.get_or_insert((frames, still));
+        }
+        let Some((frames, still)) = shown else { return Err(ExperimentError::Figure("no edit run".into())) };
         let dir = ctx.figure_dir(NAME)?;
         let path = dir.join("after-edits.png");
         render::save_png(&path, &still)?;
@@ -249,7 +254,7 @@ impl Experiment for TerrainLiquids {
         render::save_gif(&path, &frames, 40)?;
         let gif = ctx.link(&path);
         let edit_scene = lake_and_cave(EDIT_SCENE).grid().dims;
-        ctx.write_data(NAME, &Data { scene: phases.grid().dims, rows, edit, edit_scene, picture, gif })
+        ctx.write_data(NAME, &Data { scene: phases.grid().dims, rows, edits, edit_scene, picture, gif })
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
@@ -328,39 +333,42 @@ With the rule, contact vertices left unshared: {}; triangles of one layer crossi
                 naive.contact.liquid_inside_solid,
             ));
         }
-        let e = &d.edit;
         let [ex, ey, ez] = d.edit_scene;
-        let mut ms = e.remesh_ms.clone();
-        ms.sort_by(f64::total_cmp);
-        let pct = |q: f64| ms.get(((ms.len() as f64 - 1.0) * q).round() as usize).copied().unwrap_or(f64::NAN);
+        let names: Vec<&str> = d.edits.iter().map(|e| e.extractor.as_str()).collect();
         md.push_str(&format!(
             "\n### Dig, pour, drain\n\n{n} brushes in turn dig solid, pour liquid and drain it on a {ex} × {ey} × {ez}-sample \
-             scene, both layers re-meshed by {alg} over the whole domain after every edit (not per chunk: chunked liquids are \
-             not built yet) and checked after every edit.\n\n",
-            n = e.edits,
-            alg = e.extractor,
+             scene, both layers re-meshed over the whole domain after every edit (not per chunk: chunked liquids are not \
+             built yet) and checked after every edit, by {alg}; the pictures show the first.\n\n",
+            n = d.edits.first().map_or(0, |e| e.edits),
+            alg = names.join(" and by "),
         ));
-        let rows = vec![
-            vec!["edits after which a layer was open or non-manifold".into(), e.open_after.to_string()],
-            vec![
-                "contact vertices (fewest and most after an edit)".into(),
-                format!("{}–{}", e.fewest_contact, e.worst.contact_vertices),
-            ],
-            vec!["most unshared contact vertices after an edit".into(), e.worst.unshared.to_string()],
-            vec!["most crossing pairs after an edit".into(), e.worst.crossing_pairs.to_string()],
-            vec!["most liquid vertices inside the solid after an edit".into(), e.worst.liquid_inside_solid.to_string()],
-            vec!["solid mass: start, dug, end".into(), format!("{:.1}, {:.1}, {:.1}", e.solid_mass[0], e.dug, e.solid_mass[1])],
-            vec![
-                "liquid mass: start, poured, drained, end".into(),
-                format!("{:.1}, {:.1}, {:.1}, {:.1}", e.liquid_mass[0], e.poured, e.drained, e.liquid_mass[1]),
-            ],
-            vec!["largest relative gap between a mass and its books".into(), format!("{:.1e}", e.mass_drift)],
-            vec![
-                "re-mesh of both layers, ms (median, p99, max)".into(),
-                format!("{:.1}, {:.1}, {:.1}", pct(0.5), pct(0.99), pct(1.0)),
-            ],
+        let percentiles = |e: &EditRun| {
+            let mut ms = e.remesh_ms.clone();
+            ms.sort_by(f64::total_cmp);
+            let pct = |q: f64| ms.get(((ms.len() as f64 - 1.0) * q).round() as usize).copied().unwrap_or(f64::NAN);
+            format!("{:.1}, {:.1}, {:.1}", pct(0.5), pct(0.99), pct(1.0))
+        };
+        let measures: [(&str, &dyn Fn(&EditRun) -> String); 9] = [
+            ("edits after which a layer was open or non-manifold", &|e| e.open_after.to_string()),
+            ("contact vertices (fewest and most after an edit)", &|e| {
+                format!("{}–{}", e.fewest_contact, e.worst.contact_vertices)
+            }),
+            ("most unshared contact vertices after an edit", &|e| e.worst.unshared.to_string()),
+            ("most crossing pairs after an edit", &|e| e.worst.crossing_pairs.to_string()),
+            ("most liquid vertices inside the solid after an edit", &|e| e.worst.liquid_inside_solid.to_string()),
+            ("solid mass: start, dug, end", &|e| format!("{:.1}, {:.1}, {:.1}", e.solid_mass[0], e.dug, e.solid_mass[1])),
+            ("liquid mass: start, poured, drained, end", &|e| {
+                format!("{:.1}, {:.1}, {:.1}, {:.1}", e.liquid_mass[0], e.poured, e.drained, e.liquid_mass[1])
+            }),
+            ("largest relative gap between a mass and its books", &|e| format!("{:.1e}", e.mass_drift)),
+            ("re-mesh of both layers, ms (median, p99, max)", &percentiles),
         ];
-        md.push_str(&markdown_table(&["measure", "value"], &rows));
+        let rows: Vec<Vec<String>> = measures
+            .iter()
+            .map(|(label, cell)| std::iter::once(label.to_string()).chain(d.edits.iter().map(|e| cell(e))).collect())
+            .collect();
+        let header: Vec<&str> = std::iter::once("measure").chain(names.iter().copied()).collect();
+        md.push_str(&markdown_table(&header, &rows));
         md.push_str(&format!("\n![both layers after the edits]({})\n\n![the edits]({})\n", d.picture, d.gif));
         md.push_str(
             "\n### The post's claims beside ours\n\n\

@@ -370,13 +370,26 @@ pub fn open_edges_off_bounds(mesh: &crate::mesh::TriMesh, bounds: &crate::geomet
     let (lo, hi) = (bounds.min, bounds.max);
     let eps = 1e-4 * (hi - lo).max_element();
     let on_face = |p: Vec3, a: usize| (p[a] - lo[a]).abs() < eps || (p[a] - hi[a]).abs() < eps;
+    open_edges_where(mesh, |p, q| !(0..3).any(|k| on_face(p, k) && on_face(q, k)))
+}
+
+/// Boundary edges with an end farther than `margin` from every face of `bounds` (a point at
+/// `margin` exactly is near). Dual extractors
+/// (surface nets, dual contouring) end their mesh inside the outermost cells, not on the box: a
+/// margin of one cell lets their open border at the world's box pass while a crack between chunks
+/// away from the box still counts.
+pub fn open_edges_away_from_bounds(mesh: &crate::mesh::TriMesh, bounds: &crate::geometry::Aabb, margin: f32) -> usize {
+    let reach = margin * (1.0 + 1e-4);
+    let near_box = |p: Vec3| (p - bounds.min).min_element() <= reach || (bounds.max - p).min_element() <= reach;
+    open_edges_where(mesh, |p, q| !(near_box(p) && near_box(q)))
+}
+
+/// Boundary edges (used by one triangle) whose ends `counts` selects.
+fn open_edges_where(mesh: &crate::mesh::TriMesh, counts: impl Fn(Vec3, Vec3) -> bool) -> usize {
     edge_uses(&mesh.triangles, |_, _| true)
         .iter()
         .filter(|(_, &n)| n == 1)
-        .filter(|((a, b), _)| {
-            let (p, q) = (mesh.positions[*a as usize], mesh.positions[*b as usize]);
-            !(0..3).any(|k| on_face(p, k) && on_face(q, k))
-        })
+        .filter(|((a, b), _)| counts(mesh.positions[*a as usize], mesh.positions[*b as usize]))
         .count()
 }
 

@@ -3,7 +3,7 @@
 //! world's boundary, every edge has at most two triangles, and no seam edge goes unmatched.
 
 use isolab_algorithms::fields::{self, FieldParams};
-use isolab_algorithms::lod::{extract_lod, open_edges_off_bounds};
+use isolab_algorithms::lod::{extract_lod, open_edges_away_from_bounds, open_edges_off_bounds};
 use isolab_algorithms::{extractors, Extraction, Grid, Lattice, Samples};
 use isolab_metrics::topology;
 use isolab_tests::blob_field;
@@ -83,4 +83,25 @@ proptest! {
         let t = topology(&out.surface);
         prop_assert!(t.closed && t.edge_manifold && t.oriented, "{:?} levels {:?}", (t.boundary_edges, t.non_manifold_edges, t.misoriented_edges), levels);
     }
+}
+
+#[test]
+fn a_dual_extractors_border_inside_the_outer_cells_is_not_a_crack_but_a_hole_is() {
+    // A tilted plane through the box: surface nets' mesh ends half a cell inside the box.
+    let samples = isolab_tests::grid_samples([17, 17, 17], |x, y, z| y as f32 - 8.3 + 0.2 * x as f32 - 0.1 * z as f32);
+    let sn = extractors::by_name("surface-nets").unwrap();
+    let mut out = Extraction::default();
+    sn.extract(&samples, &mut out).unwrap();
+    let (b, h) = (samples.grid().bounds(), samples.grid().spacing);
+    assert!(open_edges_off_bounds(&out.surface, &b) > 0, "the border is not on the box");
+    assert_eq!(open_edges_away_from_bounds(&out.surface, &b, h), 0, "the border is within a cell of the box");
+    // A triangle taken out in the middle: three open edges away from the box.
+    let middle = out.surface.triangles.iter().position(|t| {
+        t.iter().all(|&v| {
+            let p = out.surface.positions[v as usize];
+            (p - b.min).min_element() > 3.0 * h && (b.max - p).min_element() > 3.0 * h
+        })
+    });
+    out.surface.triangles.remove(middle.expect("a triangle away from the box"));
+    assert_eq!(open_edges_away_from_bounds(&out.surface, &b, h), 3);
 }

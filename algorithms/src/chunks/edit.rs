@@ -213,6 +213,28 @@ impl ChunkedVolume {
         Ok(count)
     }
 
+    /// Re-meshes the dirty chunks one after another on the calling thread (what a game's meshing
+    /// worker does, one chunk per task), returning each chunk's time; run it inside a one-thread
+    /// pool for the extractor's own parallelism to stay on that thread too.
+    pub fn remesh_dirty_each(&mut self, extractor: &dyn Extractor) -> Result<Vec<std::time::Duration>, ExtractError> {
+        if extractor.chunking() != self.chunking {
+            return Err(ExtractError::BadInput {
+                algorithm: extractor.name(),
+                reason: format!("chunks as {:?}, but the volume was split for {:?}", extractor.chunking(), self.chunking),
+            });
+        }
+        let (grid, values, chunking) = (self.grid, &self.values, self.chunking);
+        let mut times = Vec::new();
+        for (slot, dirty) in self.slots.iter_mut().zip(self.dirty.iter_mut()) {
+            if std::mem::take(dirty) {
+                let start = std::time::Instant::now();
+                slot.remesh(extractor, chunking, &grid, values)?;
+                times.push(start.elapsed());
+            }
+        }
+        Ok(times)
+    }
+
     /// The welded mesh of every chunk (normals as the extractor made them: after edits the field
     /// no longer describes the samples).
     pub fn welded(&self, out: &mut Extraction) -> ChunkStats {

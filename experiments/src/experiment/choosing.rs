@@ -33,10 +33,7 @@ struct UseCase {
 }
 
 const USE_CASES: [UseCase; 6] = [
-    UseCase {
-        title: "Deformable game terrain",
-        choose: |ctx| terrain(&ctx.read_data("terrain_edit")?, &ctx.read_data("compare_algorithms")?),
-    },
+    UseCase { title: "Deformable game terrain", choose: |ctx| terrain(&ctx.read_data("terrain_edit")?) },
     UseCase { title: "Scans (a real MRI)", choose: |ctx| scans(&ctx.read_data("real_volumes")?) },
     UseCase { title: "Segmentations (label maps)", choose: |ctx| label_maps(&ctx.read_data("segmentations")?) },
     UseCase {
@@ -79,59 +76,85 @@ fn missing(what: &str) -> ExperimentError {
     ExperimentError::Figure(format!("the data has no {what}"))
 }
 
-/// A game terrain: edits must keep every chunk seam manifold and fit a frame; among those, the
-/// best-shaped triangles on the terrain field (lowest mean aspect ratio), fewer triangles on a tie.
-fn terrain(edits: &terrain_edit::Data, compared: &compare_algorithms::Data) -> Result<Choice, ExperimentError> {
-    let level = *compared.field_levels.get(1).ok_or_else(|| missing("middle resolution"))?;
-    let on_terrain =
-        |name: &str| compared.rows.iter().find(|r| r.algorithm == name && r.field == "terrain" && r.resolution == level);
-    let candidates: Vec<_> = edits
-        .runs
+/// A game terrain: after every one of the scripted edits the chunk seams stay closed (no open
+/// seam edge) and the welded mesh manifold, and one chunk re-meshes within the per-chunk budget on
+/// one thread (p99) at some chunk size (the largest that fits is the one to use); among those, the
+/// best-shaped triangles on the chunked, edited mesh itself (lowest mean aspect ratio), fewer
+/// triangles on a tie. The pick's levels of detail and liquids are tried, not looked up.
+fn terrain(edits: &terrain_edit::Data) -> Result<Choice, ExperimentError> {
+    let fitting = |r: &terrain_edit::Run| {
+        r.chunk_runs.iter().filter(|c| c.chunk_ms[1] <= terrain_edit::CHUNK_BUDGET_MS).max_by_key(|c| c.chunk).cloned()
+    };
+    let closed = |r: &terrain_edit::Run| {
+        r.manifold_after && r.open_seam_edges_max == 0 && r.chunk_runs.iter().all(|c| c.open_seam_edges == 0)
+    };
+    let candidates: Vec<_> = edits.runs.iter().filter(|r| closed(r)).filter_map(|r| fitting(r).map(|c| (r, c))).collect();
+    let (run, chunk) = candidates
         .iter()
-        .filter(|r| r.manifold_after && r.median_ms <= terrain_edit::FRAME_MS)
-        .filter_map(|r| on_terrain(&r.algorithm).map(|m| (r, m)))
-        .collect();
-    let (run, shape) = candidates
-        .iter()
-        .min_by(|(_, a), (_, b)| {
-            let key = |m: &super::Measured| (m.metrics.quality.aspect_ratio.mean, m.metrics.triangles);
+        .min_by(|(a, _), (b, _)| {
+            let key = |r: &terrain_edit::Run| (r.quality_after[0], r.triangles[1]);
             key(a).partial_cmp(&key(b)).unwrap_or(std::cmp::Ordering::Equal)
         })
-        .ok_or_else(|| missing("extractor whose terrain edits stay manifold within a frame"))?;
-    let fastest = edits.runs.iter().min_by(|a, b| a.median_ms.total_cmp(&b.median_ms)).ok_or_else(|| missing("edit runs"))?;
-    let lightest = edits.runs.iter().min_by_key(|r| r.triangles[1]).ok_or_else(|| missing("edit runs"))?;
-    let fastest_shape = on_terrain(&fastest.algorithm).ok_or_else(|| missing("terrain row"))?;
+        .ok_or_else(|| missing("extractor whose edited terrain stays closed within the per-chunk budget"))?;
+    let sizes: Vec<String> = candidates.iter().map(|(r, c)| format!("`{}` {}³", r.algorithm, c.chunk)).collect();
     let mut why = format!(
-        "Of the {} extractors whose {} brush edits keep every chunk seam manifold and re-mesh within a {:.1} ms frame \
-         (median), it has the best-shaped triangles on the terrain field at {level} samples (mean aspect ratio {:.2}, \
-         smallest angle {:.1}°) and re-meshes an edit in {:.1} ms median ({:.1} ms p99).",
+        "Of the {} extractors whose chunk seams stay closed after each of {} brush edits (no open seam edge) and that \
+         re-mesh one chunk within {:.1} ms on one thread (p99) at some chunk size (the largest that fits: {}), it has the \
+         best-shaped triangles on the edited, chunked mesh (mean aspect ratio {:.2}, smallest angle {:.1}°); at {}³ cells \
+         one chunk takes {:.2} ms median, {:.2} ms p99 on one thread.",
         candidates.len(),
         run.edit_ms.len(),
-        terrain_edit::FRAME_MS,
-        shape.metrics.quality.aspect_ratio.mean,
-        shape.metrics.quality.min_angle_deg,
-        run.median_ms,
-        run.p99_ms,
+        terrain_edit::CHUNK_BUDGET_MS,
+        sizes.join(", "),
+        run.quality_after[0],
+        run.quality_after[1],
+        chunk.chunk,
+        chunk.chunk_ms[0],
+        chunk.chunk_ms[1],
     );
-    if fastest.algorithm != run.algorithm {
+    let lightest = edits.runs.iter().filter(|r| closed(r)).min_by_key(|r| r.triangles[1]);
+    if let Some(l) = lightest.filter(|l| l.algorithm != run.algorithm) {
         why.push_str(&format!(
-            " `{}` is the fastest ({:.1} ms), with mean aspect ratio {:.2} and smallest angle {:.1}°.",
-            fastest.algorithm,
-            fastest.median_ms,
-            fastest_shape.metrics.quality.aspect_ratio.mean,
-            fastest_shape.metrics.quality.min_angle_deg,
+            " `{}` makes the fewest triangles ({:.2}x as many; mean aspect ratio {:.2}).",
+            l.algorithm,
+            l.triangles[1] as f64 / run.triangles[1].max(1) as f64,
+            l.quality_after[0],
         ));
     }
-    if lightest.algorithm != run.algorithm {
-        why.push_str(&format!(
-            " `{}` makes the fewest triangles ({:.2}x as many) at {:.1} ms.",
-            lightest.algorithm,
-            lightest.triangles[1] as f64 / run.triangles[1].max(1) as f64,
-            lightest.median_ms,
-        ));
-    }
-    Ok(Choice { pick: run.algorithm.clone(), why, pages: vec!["terrain_edit", "compare_algorithms"] })
+    let pick = isolab_algorithms::extractors::by_name(&run.algorithm).ok_or_else(|| missing("the pick in the registry"))?;
+    let lod = lod_support(pick.as_ref());
+    let liquids =
+        isolab_algorithms::liquids::extract_layers(pick.as_ref(), &isolab_algorithms::liquids::lake_and_cave(LIQUID_PROBE))
+            .map_or("no (its vertices are inside cells)", |_| "yes (`terrain_liquids`)");
+    why.push_str(&format!(" Crack-free levels of detail (`terrain_lod`): {lod}. Liquids beside the solid: {liquids}."));
+    Ok(Choice { pick: run.algorithm.clone(), why, pages: vec!["terrain_edit", "terrain_lod", "terrain_liquids"] })
 }
+
+/// Samples along x and y of the scene the liquids probe meshes.
+const LIQUID_PROBE: usize = 12;
+
+/// Whether `lod::extract_lod` meshes `extractor` (tried on a small grid of two chunks).
+fn lod_support(extractor: &dyn isolab_algorithms::Extractor) -> String {
+    let chunk = LOD_PROBE_CHUNK;
+    let samples = isolab_algorithms::Samples::from_values(
+        isolab_algorithms::Lattice::Cubic(isolab_algorithms::Grid {
+            origin: isolab_algorithms::Vec3::ZERO,
+            spacing: 1.0,
+            dims: [2 * chunk + 1, chunk + 1, chunk + 1],
+        }),
+        vec![1.0; (2 * chunk + 1) * (chunk + 1) * (chunk + 1)],
+        0.0,
+    );
+    let Ok(samples) = samples else { return "not tried".into() };
+    let mut out = isolab_algorithms::Extraction::default();
+    match isolab_algorithms::lod::extract_lod(extractor, &samples, chunk, &[0, 1], &mut out, None) {
+        Ok(_) => "yes".into(),
+        Err(e) => format!("no ({e})"),
+    }
+}
+
+/// Cells per chunk of the levels-of-detail probe.
+const LOD_PROBE_CHUNK: usize = 4;
 
 /// A scan: the fastest of our extractors (one thread, every iso-level summed) whose meshes are
 /// closed, manifold, outward and free of self-intersections at every level; the best-shaped of

@@ -10,6 +10,7 @@ use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
 use crate::report::markdown_table;
 use isolab_algorithms::chunks::{Brush, ChunkedVolume};
+use isolab_algorithms::lod::open_edges_away_from_bounds;
 use isolab_algorithms::{extractors, fields, materials, Chunking, Extraction, Grid, Lattice, Samples};
 use isolab_cli::render::{self, RenderOptions, Shading};
 use serde::{Deserialize, Serialize};
@@ -21,7 +22,7 @@ pub struct TerrainEdit;
 const NAME: &str = "terrain_edit";
 /// Samples per axis: 256 x 128 x 256 cells.
 const DIMS: [usize; 3] = [257, 129, 257];
-const CHUNK: usize = 32;
+pub(crate) const CHUNK: usize = 32;
 const EDITS: usize = 200;
 const SEED: u64 = 2026;
 /// A game's frame rate, Hz.
@@ -34,6 +35,25 @@ const BRUSH_RADIUS: (f32, f32) = (3.0, 10.0);
 const BRUSH_FALLOFF: (f32, f32) = (0.0, 3.0);
 /// Every this many edits, a GIF frame.
 const GIF_EVERY: usize = 10;
+/// Chunk sizes of the one-thread runs (cells per side).
+const CHUNK_SIZES: [usize; 3] = [16, 32, 64];
+/// The per-chunk budget a game gives meshing on one worker thread, ms (p99 of one chunk's
+/// re-mesh on one thread at [`CHUNK`]³ cells); the front page's terrain pick keeps within it.
+pub(crate) const CHUNK_BUDGET_MS: f64 = 2.0;
+
+/// One extractor's edit sequence at one chunk size, each dirty chunk re-meshed on its own on one
+/// thread (what a game's meshing worker does).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ChunkRun {
+    /// Cells per chunk side.
+    pub chunk: usize,
+    /// Chunks re-meshed over the sequence.
+    pub chunks: usize,
+    /// One chunk's re-mesh on one thread, ms: median, 99th percentile, slowest.
+    pub chunk_ms: [f64; 3],
+    /// Boundary edges of the welded mesh off the world's boundary after the sequence (cracks).
+    pub open_seam_edges: usize,
+}
 
 /// One extractor's edit sequence.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -56,6 +76,16 @@ pub struct Run {
     pub triangles: [usize; 2],
     /// Welded mesh closed and manifold after the sequence.
     pub manifold_after: bool,
+    /// The most boundary edges off the world's boundary (cracks) in the welded mesh after any
+    /// edit of the sequence (checked after every edit).
+    #[serde(default)]
+    pub open_seam_edges_max: usize,
+    /// Mean aspect ratio and smallest angle (degrees) of the welded, edited mesh.
+    #[serde(default)]
+    pub quality_after: [f64; 2],
+    /// The one-thread runs, one per chunk size (16³, 32³ and 64³ cells in the report).
+    #[serde(default)]
+    pub chunk_runs: Vec<ChunkRun>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -98,6 +128,37 @@ fn script(grid: &Grid, values: &dyn Fn(usize, usize) -> Option<usize>) -> Vec<Br
         });
     }
     brushes
+}
+
+/// The edit sequence at `chunk` cells per chunk side, every dirty chunk re-meshed on its own on
+/// one thread (a one-thread pool, so the extractor's own parallelism stays on it too).
+fn one_thread_run(
+    e: &dyn isolab_algorithms::Extractor,
+    samples: &Samples,
+    sample_materials: &[u8],
+    brushes: &[Brush],
+    chunk: usize,
+) -> Result<ChunkRun, ExperimentError> {
+    let mut world = ChunkedVolume::new(e, samples.clone(), chunk)?.with_materials(sample_materials.to_vec())?;
+    world.remesh_dirty(e)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .map_err(|err| ExperimentError::Figure(format!("a one-thread pool: {err}")))?;
+    let mut times = Vec::new();
+    for (k, brush) in brushes.iter().enumerate() {
+        world.apply(brush).map_err(|err| ExperimentError::Figure(format!("edit {k}: {err}")))?;
+        times.extend(pool.install(|| world.remesh_dirty_each(e))?.iter().map(|d| d.as_secs_f64() * 1e3));
+    }
+    times.sort_by(f64::total_cmp);
+    let mut welded = Extraction::default();
+    world.welded(&mut welded);
+    Ok(ChunkRun {
+        chunk,
+        chunks: times.len(),
+        chunk_ms: [percentile(&times, 0.5), percentile(&times, 0.99), times.last().copied().unwrap_or(f64::NAN)],
+        open_seam_edges: open_edges_away_from_bounds(&welded.surface, &samples.grid().bounds(), samples.grid().spacing),
+    })
 }
 
 fn percentile(sorted: &[f64], q: f64) -> f64 {
@@ -163,12 +224,17 @@ impl Experiment for TerrainEdit {
                 frames.push(coloured(&world, &welded, &opts));
             }
             let (mut edit_ms, mut dirtied) = (Vec::with_capacity(EDITS), Vec::with_capacity(EDITS));
+            let bounds = grid.bounds();
+            let mut open_seam_edges_max = 0;
             for (k, brush) in brushes.iter().enumerate() {
                 let start = Instant::now();
                 world.apply(brush).map_err(|err| ExperimentError::Figure(format!("edit {k}: {err}")))?;
                 let n = world.remesh_dirty(e.as_ref())?;
                 edit_ms.push(start.elapsed().as_secs_f64() * 1e3);
                 dirtied.push(n);
+                world.welded(&mut welded);
+                open_seam_edges_max =
+                    open_seam_edges_max.max(open_edges_away_from_bounds(&welded.surface, &bounds, grid.spacing));
                 if record_pictures && (k + 1) % GIF_EVERY == 0 {
                     world.welded(&mut welded);
                     frames.push(coloured(&world, &welded, &opts));
@@ -177,6 +243,11 @@ impl Experiment for TerrainEdit {
             }
             world.welded(&mut welded);
             let t = isolab_metrics::topology(&welded.surface);
+            let q = isolab_metrics::triangle_quality(&welded.surface);
+            let chunk_runs = CHUNK_SIZES
+                .iter()
+                .map(|&chunk| one_thread_run(e.as_ref(), &samples, &sample_materials, &brushes, chunk))
+                .collect::<Result<Vec<_>, _>>()?;
             if record_pictures {
                 let path = dir.join("after.png");
                 render::save_png(&path, &coloured(&world, &welded, &RenderOptions { width: 640, height: 420, ..opts }))?;
@@ -197,6 +268,9 @@ impl Experiment for TerrainEdit {
                 dirtied,
                 triangles: [first_triangles, welded.surface.triangles.len()],
                 manifold_after: t.edge_manifold && t.vertex_manifold,
+                open_seam_edges_max,
+                quality_after: [q.aspect_ratio.mean, q.min_angle_deg],
+                chunk_runs,
             });
         }
         bar.finish();
@@ -263,6 +337,8 @@ impl Experiment for TerrainEdit {
                     format!("{:.1}", r.dirtied.iter().sum::<usize>() as f64 / r.dirtied.len().max(1) as f64),
                     format!("{} → {}", r.triangles[0], r.triangles[1]),
                     if r.manifold_after { "yes".into() } else { "**no**".into() },
+                    r.open_seam_edges_max.to_string(),
+                    format!("{:.2}, {:.1}°", r.quality_after[0], r.quality_after[1]),
                 ]
             })
             .collect();
@@ -277,9 +353,42 @@ impl Experiment for TerrainEdit {
                 "chunks per edit",
                 "triangles",
                 "manifold after",
+                "open seam edges (most after an edit)",
+                "edited mesh: mean aspect, smallest angle",
             ],
             &body,
         ));
+        md.push_str(&format!(
+            "\nOpen seam edges are boundary edges of the welded mesh more than one cell from the world's box (a crack between \
+             chunks is made of them, and an edge-manifold check passes it; the dual extractors' own open border lies inside \
+             the outermost cells), counted after every edit. The quality columns measure the \
+             chunked mesh after the {EDITS} edits, not a fresh whole-domain mesh.\n\n\
+             ### One chunk on one thread\n\n\
+             A game re-meshes dirty chunks on worker threads, one chunk per task, within a slice of a frame. The same {EDITS} \
+             edits, each dirty chunk re-meshed on its own on one thread (a one-thread pool), at three chunk sizes: one \
+             chunk's time, median, p99 and slowest (ms), and the open seam edges of the welded mesh after the sequence.\n\n"
+        ));
+        let sizes: Vec<usize> = data.runs.first().map(|r| r.chunk_runs.iter().map(|c| c.chunk).collect()).unwrap_or_default();
+        let header: Vec<String> = std::iter::once("extractor".to_owned())
+            .chain(sizes.iter().map(|c| format!("{c}³: median / p99 / max (chunks)")))
+            .chain(std::iter::once("open seam edges after".to_owned()))
+            .collect();
+        let rows: Vec<Vec<String>> =
+            data.runs
+                .iter()
+                .map(|r| {
+                    std::iter::once(r.algorithm.clone())
+                        .chain(r.chunk_runs.iter().map(|c| {
+                            format!("{:.2} / {:.2} / {:.2} ({})", c.chunk_ms[0], c.chunk_ms[1], c.chunk_ms[2], c.chunks)
+                        }))
+                        .chain(std::iter::once(
+                            r.chunk_runs.iter().map(|c| c.open_seam_edges.to_string()).collect::<Vec<_>>().join(", "),
+                        ))
+                        .collect()
+                })
+                .collect();
+        let header: Vec<&str> = header.iter().map(String::as_str).collect();
+        md.push_str(&markdown_table(&header, &rows));
         if !data.not_run.is_empty() {
             md.push_str(&format!(
                 "\n**Not run** (not chunk-capable yet: their cells or tetrahedra straddle chunk faces and need an apron and \

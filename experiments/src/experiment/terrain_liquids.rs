@@ -81,6 +81,9 @@ struct Data {
     gif: String,
 }
 
+/// One cell of the edit table: a measure of one extractor's run.
+type Cell = dyn Fn(&EditRun) -> String;
+
 fn build(name: &str) -> Result<Box<dyn Extractor>, ExperimentError> {
     extractors::by_name(name).ok_or_else(|| ExperimentError::Figure(format!("no extractor {name}")))
 }
@@ -348,7 +351,7 @@ With the rule, contact vertices left unshared: {}; triangles of one layer crossi
             let pct = |q: f64| ms.get(((ms.len() as f64 - 1.0) * q).round() as usize).copied().unwrap_or(f64::NAN);
             format!("{:.1}, {:.1}, {:.1}", pct(0.5), pct(0.99), pct(1.0))
         };
-        let measures: [(&str, &dyn Fn(&EditRun) -> String); 9] = [
+        let measures: [(&str, &Cell); 9] = [
             ("edits after which a layer was open or non-manifold", &|e| e.open_after.to_string()),
             ("contact vertices (fewest and most after an edit)", &|e| {
                 format!("{}–{}", e.fewest_contact, e.worst.contact_vertices)
@@ -365,7 +368,7 @@ With the rule, contact vertices left unshared: {}; triangles of one layer crossi
         ];
         let rows: Vec<Vec<String>> = measures
             .iter()
-            .map(|(label, cell)| std::iter::once(label.to_string()).chain(d.edits.iter().map(|e| cell(e))).collect())
+            .map(|(label, cell)| std::iter::once(label.to_string()).chain(d.edits.iter().map(cell)).collect())
             .collect();
         let header: Vec<&str> = std::iter::once("measure").chain(names.iter().copied()).collect();
         md.push_str(&markdown_table(&header, &rows));

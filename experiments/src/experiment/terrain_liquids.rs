@@ -32,8 +32,6 @@ const EDITS: usize = 200;
 const GIF_EVERY: usize = 10;
 /// Timed runs per extractor.
 const RUNS: usize = 3;
-/// The extractors with a vertex on every crossing lattice edge.
-const EXTRACTORS: [&str; 4] = ["marching-cubes", "marching-cubes-decider", "marching-cubes-33", "marching-tetrahedra"];
 /// The extractors of the edit script: marching cubes (the post's), and marching tetrahedra, whose
 /// layers provably do not overlap. The GIF shows the first.
 const EDIT_EXTRACTORS: [&str; 2] = ["marching-cubes", "marching-tetrahedra"];
@@ -74,7 +72,12 @@ struct EditRun {
 #[derive(Serialize, Deserialize)]
 struct Data {
     scene: [usize; 3],
+    /// The extractors that take the rule.
     rows: Vec<Row>,
+    /// The post's naive solution.
+    naive: Row,
+    /// Extractors `extract_layers` refuses (vertices off the lattice edges).
+    refused: Vec<String>,
     edits: Vec<EditRun>,
     edit_scene: [usize; 3],
     picture: String,
@@ -223,23 +226,36 @@ impl Experiment for TerrainLiquids {
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let phases = lake_and_cave(SCENE);
         let mut rows = Vec::new();
-        for name in EXTRACTORS {
-            let extractor = build(name)?;
+        let mut refused = Vec::new();
+        // Every registered surface extractor: those with edge vertices take the rule, the others
+        // are refused by extract_layers (listed with its reason).
+        for extractor in extractors::registry().into_iter().filter(|e| !e.produces_volume()) {
             let mut times = Vec::new();
             let mut layers = Layers::default();
             for _ in 0..RUNS {
                 let start = Instant::now();
-                layers = extract_layers(extractor.as_ref(), &phases)?;
+                match extract_layers(extractor.as_ref(), &phases) {
+                    Ok(l) => layers = l,
+                    Err(_) => {
+                        refused.push(format!("`{}`", extractor.name()));
+                        break;
+                    }
+                }
                 times.push(start.elapsed().as_secs_f64() * 1e3);
             }
-            rows.push(row(name, &phases, &layers, &mut times));
+            if times.len() == RUNS {
+                rows.push(row(extractor.name(), &phases, &layers, &mut times));
+            }
         }
-        let naive_extractor = EXTRACTORS[0];
+        let naive_extractor = rows
+            .first()
+            .map(|r| r.method.clone())
+            .ok_or_else(|| ExperimentError::Figure("no extractor takes the rule".into()))?;
         let start = Instant::now();
-        let naive = independent_layers(build(naive_extractor)?.as_ref(), &phases)?;
+        let naive_layers = independent_layers(build(&naive_extractor)?.as_ref(), &phases)?;
         let mut times = vec![start.elapsed().as_secs_f64() * 1e3];
         let method = format!("{naive_extractor}, two independent meshes (the post's naive solution)");
-        rows.push(row(&method, &phases, &naive, &mut times));
+        let naive = row(&method, &phases, &naive_layers, &mut times);
 
         let mut edits = Vec::new();
         let mut shown = None;
@@ -257,7 +273,7 @@ impl Experiment for TerrainLiquids {
         render::save_gif(&path, &frames, 40)?;
         let gif = ctx.link(&path);
         let edit_scene = lake_and_cave(EDIT_SCENE).grid().dims;
-        ctx.write_data(NAME, &Data { scene: phases.grid().dims, rows, edits, edit_scene, picture, gif })
+        ctx.write_data(NAME, &Data { scene: phases.grid().dims, rows, naive, refused, edits, edit_scene, picture, gif })
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
@@ -280,6 +296,7 @@ impl Experiment for TerrainLiquids {
         let rows: Vec<Vec<String>> = d
             .rows
             .iter()
+            .chain(std::iter::once(&d.naive))
             .map(|r| {
                 vec![
                     r.method.clone(),
@@ -306,7 +323,7 @@ impl Experiment for TerrainLiquids {
             ],
             &rows,
         ));
-        let shared: Vec<&Row> = d.rows.iter().take(EXTRACTORS.len()).collect();
+        let shared: Vec<&Row> = d.rows.iter().collect();
         let unshared: Vec<&str> = shared.iter().filter(|r| r.contact.unshared > 0).map(|r| r.method.as_str()).collect();
         let crossing: Vec<&str> = shared.iter().filter(|r| r.contact.crossing_pairs > 0).map(|r| r.method.as_str()).collect();
         let clean: Vec<&str> = shared
@@ -316,24 +333,36 @@ impl Experiment for TerrainLiquids {
             .collect();
         let list = |names: &[&str]| if names.is_empty() { "none".to_owned() } else { names.join(", ") };
         md.push_str(&format!(
-            "
-With the rule, contact vertices left unshared: {}; triangles of one layer crossing the other: {}; neither, and \
-             no liquid inside the solid: {}. Sharing the vertices does not keep marching cubes' layers apart: its pieces in \
-             a cell are not the convex hulls of their crossings, while marching tetrahedra's are, which is why no overlap \
-             is proved for it (the `liquids` module doc).\n",
+            "\nWith the rule, contact vertices left unshared: {}; triangles of one layer crossing the other: {}; neither, \
+             and no liquid inside the solid: {}.",
             list(&unshared),
             list(&crossing),
             list(&clean),
         ));
-        if let Some(naive) = d.rows.get(EXTRACTORS.len()) {
+        if !crossing.is_empty() {
             md.push_str(&format!(
-                "\nWith two independent meshes, {} of {} contact vertices are not the solid's: where the base density is full \
-                 at both ends of an edge the two crossings coincide anyway (viscosity one half is both densities at half the \
-                 maximum), elsewhere the layers part or cross ({} crossing pairs, {} liquid vertices inside the solid).\n",
-                naive.contact.unshared,
-                naive.contact.contact_vertices,
-                naive.contact.crossing_pairs,
-                naive.contact.liquid_inside_solid,
+                " Sharing the vertices does not keep the layers of {} apart: their pieces in a cell are not the convex hulls \
+                 of their crossings (marching tetrahedra's are, which is why no overlap is proved for it alone: the \
+                 `liquids` module doc).",
+                list(&crossing)
+            ));
+        }
+        md.push('\n');
+        let naive = &d.naive;
+        md.push_str(&format!(
+            "\nWith two independent meshes, {} of {} contact vertices are not the solid's: where the base density is full \
+             at both ends of an edge the two crossings coincide anyway (viscosity one half is both densities at half the \
+             maximum), elsewhere the layers part or cross ({} crossing pairs, {} liquid vertices inside the solid).\n",
+            naive.contact.unshared,
+            naive.contact.contact_vertices,
+            naive.contact.crossing_pairs,
+            naive.contact.liquid_inside_solid,
+        ));
+        if !d.refused.is_empty() {
+            md.push_str(&format!(
+                "\nRefused by `extract_layers`, their vertices being off the lattice edges (the rule has no edge vertex to \
+                 share): {}.\n",
+                d.refused.join(", ")
             ));
         }
         let [ex, ey, ez] = d.edit_scene;

@@ -53,6 +53,27 @@ pub enum LatticeError {
     },
 }
 
+/// Where a vertex lies on a grid's lattice ([`Grid::place`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LatticePlace {
+    /// On the edge between samples `lower` and `upper` (`upper` = `lower + {0,1}³`).
+    Edge(usize, usize),
+    /// On a sample (within rounding).
+    Sample(usize),
+    /// Inside a cell or a face, off every edge; or outside the grid.
+    Elsewhere,
+}
+
+/// `c` rounded to the nearest integer when within float rounding of it.
+fn snap_to_integer(c: f32) -> f32 {
+    let r = c.round();
+    if (c - r).abs() <= 1e-6 + 4.0 * f32::EPSILON * r.abs() {
+        r
+    } else {
+        c
+    }
+}
+
 impl Grid {
     /// The grid with `resolution` samples along the domain's longest side, the same spacing on the
     /// other sides (rounded up so the domain is covered), centred on the domain.
@@ -109,6 +130,38 @@ impl Grid {
     #[inline]
     pub fn index(&self, x: usize, y: usize, z: usize) -> usize {
         x + self.dims[0] * (y + self.dims[1] * z)
+    }
+
+    /// Index coordinates of the world point `p`, each snapped to the nearest integer when within
+    /// float rounding of it (positions come back from world space with a few ulps of error).
+    pub fn index_coords(&self, p: Vec3) -> [f32; 3] {
+        std::array::from_fn(|a| snap_to_integer((p[a] - self.origin[a]) / self.spacing))
+    }
+
+    /// Where a vertex at `p` (world space) lies on the grid's lattice: on a sample, on an edge
+    /// from a sample to a sample `+{0,1}³` (cube edges and the Kuhn split's diagonals: every
+    /// fractional index coordinate the same fraction), or elsewhere (inside a cell or a face, or
+    /// outside the grid).
+    pub fn place(&self, p: Vec3) -> LatticePlace {
+        self.place_of_index(self.index_coords(p))
+    }
+
+    /// [`Grid::place`] of a point given by its index coordinates `q`.
+    pub fn place_of_index(&self, q: [f32; 3]) -> LatticePlace {
+        if q.iter().enumerate().any(|(a, &c)| !(c >= 0.0 && c <= (self.dims[a] - 1) as f32)) {
+            return LatticePlace::Elsewhere;
+        }
+        let lo = q.map(|c| c.floor() as usize);
+        let hi = q.map(|c| c.ceil() as usize);
+        let fractions: Vec<f32> = (0..3).filter(|&a| lo[a] != hi[a]).map(|a| q[a] - lo[a] as f32).collect();
+        let (a, b) = (self.index(lo[0], lo[1], lo[2]), self.index(hi[0], hi[1], hi[2]));
+        if fractions.is_empty() {
+            LatticePlace::Sample(a)
+        } else if fractions.iter().all(|f| (f - fractions[0]).abs() < 1e-3) {
+            LatticePlace::Edge(a, b)
+        } else {
+            LatticePlace::Elsewhere
+        }
     }
 
     /// Position of sample `(x, y, z)`.

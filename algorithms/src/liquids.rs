@@ -58,7 +58,7 @@
 //! ```
 
 use crate::extract::{ExtractError, Extraction, Extractor};
-use crate::lattice::{Grid, Lattice};
+use crate::lattice::{Grid, Lattice, LatticePlace};
 use crate::mesh::TriMesh;
 use crate::samples::Samples;
 use glam::Vec3;
@@ -329,7 +329,7 @@ fn contact_targets(
     let grid = phases.grid();
     let (mut on_edges, mut on_samples) = (FxHashMap::default(), FxHashMap::default());
     for (v, &p) in solid.positions.iter().enumerate() {
-        match lattice_place(grid, p) {
+        match grid.place(p) {
             LatticePlace::Edge(a, b) => {
                 on_edges.insert((a, b), v as u32);
             }
@@ -352,7 +352,7 @@ fn contact_targets(
         .positions
         .iter()
         .map(|&p| {
-            let LatticePlace::Edge(a, b) = lattice_place(grid, p) else { return None };
+            let LatticePlace::Edge(a, b) = grid.place(p) else { return None };
             let solid_end = match (phases.phase(a), phases.phase(b)) {
                 (Phase::Solid, Phase::Liquid) => a,
                 (Phase::Liquid, Phase::Solid) => b,
@@ -435,45 +435,4 @@ fn matching_patches(vertices: usize, liquid_side: &[[u32; 3]], solid_side: &[[u3
     let roots: rustc_hash::FxHashSet<u32> = liquid_side.iter().chain(solid_side).map(|t| patches.find(t[0])).collect();
     let matching: rustc_hash::FxHashSet<u32> = roots.into_iter().filter(|r| liquid_edges.get(r) == solid_edges.get(r)).collect();
     (0..vertices as u32).map(|v| matching.contains(&patches.find(v))).collect()
-}
-
-/// Where a vertex lies on the lattice.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LatticePlace {
-    /// On the edge between samples `lower` and `upper` (`upper` = `lower + {0,1}³`: cube edges
-    /// and the Kuhn split's diagonals).
-    Edge(usize, usize),
-    /// On a sample (within rounding).
-    Sample(usize),
-    /// Inside a cell or a face, off every edge; or outside the grid.
-    Elsewhere,
-}
-
-/// Where a vertex at `p` lies on `grid`'s lattice.
-pub fn lattice_place(grid: &Grid, p: Vec3) -> LatticePlace {
-    let q: [f32; 3] = std::array::from_fn(|a| snap((p[a] - grid.origin[a]) / grid.spacing));
-    if q.iter().enumerate().any(|(a, &c)| !(c >= 0.0 && c <= (grid.dims[a] - 1) as f32)) {
-        return LatticePlace::Elsewhere;
-    }
-    let lo = q.map(|c| c.floor() as usize);
-    let hi = q.map(|c| c.ceil() as usize);
-    let fractions: Vec<f32> = (0..3).filter(|&a| lo[a] != hi[a]).map(|a| q[a] - lo[a] as f32).collect();
-    let (a, b) = (grid.index(lo[0], lo[1], lo[2]), grid.index(hi[0], hi[1], hi[2]));
-    if fractions.is_empty() {
-        LatticePlace::Sample(a)
-    } else if fractions.iter().all(|f| (f - fractions[0]).abs() < 1e-4) {
-        LatticePlace::Edge(a, b)
-    } else {
-        LatticePlace::Elsewhere
-    }
-}
-
-/// `c` rounded to the nearest integer when within float rounding of it.
-fn snap(c: f32) -> f32 {
-    let r = c.round();
-    if (c - r).abs() <= 1e-5 + 4.0 * f32::EPSILON * r.abs() {
-        r
-    } else {
-        c
-    }
 }

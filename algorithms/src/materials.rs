@@ -12,7 +12,7 @@
 //! surface, dirt below, rock deeper); brushes paint their own ([`crate::chunks::Brush`]).
 
 use crate::field::Field;
-use crate::lattice::Grid;
+use crate::lattice::{Grid, LatticePlace};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -57,30 +57,16 @@ pub fn sample(field: &dyn Field, grid: &Grid) -> Vec<u8> {
     out
 }
 
-/// Snaps `c` to the nearest integer when within rounding of it (positions come back from world
-/// space with a few ulps of error).
-fn snap(c: f32) -> f32 {
-    let r = c.round();
-    if (c - r).abs() <= 1e-6 + 4.0 * f32::EPSILON * r.abs() {
-        r
-    } else {
-        c
-    }
-}
-
 /// The material of a vertex at `p` (world space) on the samples `values` of `grid` with
 /// `materials`: the inside sample of its lattice edge, else the nearest inside sample around it,
 /// else the nearest sample's.
 pub fn vertex_material(grid: &Grid, values: &[f32], iso: f32, materials: &[u8], p: Vec3) -> u8 {
     let max = grid.dims.map(|d| d.saturating_sub(1) as f32);
-    let q: [f32; 3] = std::array::from_fn(|a| snap(((p[a] - grid.origin[a]) / grid.spacing).clamp(0.0, max[a])));
+    let snapped = grid.index_coords(p);
+    let q: [f32; 3] = std::array::from_fn(|a| snapped[a].clamp(0.0, max[a]));
     let index = |c: [usize; 3]| grid.index(c[0], c[1], c[2]);
     let lo = q.map(|c| c.floor() as usize);
-    let hi = q.map(|c| c.ceil() as usize);
-    // On a lattice edge from `lo` to `hi`: every fractional coordinate has the same fraction.
-    let fractions: Vec<f32> = (0..3).filter(|&a| lo[a] != hi[a]).map(|a| q[a] - q[a].floor()).collect();
-    if !fractions.is_empty() && fractions.iter().all(|f| (f - fractions[0]).abs() < 1e-3) {
-        let (a, b) = (index(lo), index(hi));
+    if let LatticePlace::Edge(a, b) = grid.place_of_index(q) {
         match (values[a] < iso, values[b] < iso) {
             (true, false) => return materials[a],
             (false, true) => return materials[b],

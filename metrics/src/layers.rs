@@ -6,7 +6,8 @@
 //! contact lies inside the solid (generalized winding number above one half).
 
 use isolab_algorithms::bvh::TriangleBvh;
-use isolab_algorithms::liquids::{lattice_place, LatticePlace, Phase, Phases};
+use isolab_algorithms::lattice::LatticePlace;
+use isolab_algorithms::liquids::{Phase, Phases};
 use isolab_algorithms::TriMesh;
 use serde::{Deserialize, Serialize};
 use std::collections::{HashMap, HashSet};
@@ -35,7 +36,7 @@ pub fn layer_contact(phases: &Phases, solid: &TriMesh, liquid: &TriMesh) -> Laye
     let solid_points: HashSet<PointKey> = solid.positions.iter().map(|&p| point_key(p)).collect();
     let mut contact = LayerContact::default();
     for &p in &liquid.positions {
-        if let LatticePlace::Edge(a, b) = lattice_place(phases.grid(), p) {
+        if let LatticePlace::Edge(a, b) = phases.grid().place(p) {
             let ends = [phases.phase(a), phases.phase(b)];
             if ends.contains(&Phase::Solid) && ends.contains(&Phase::Liquid) {
                 contact.contact_vertices += 1;

@@ -195,12 +195,7 @@ impl ChunkedVolume {
     /// Re-meshes the dirty chunks (in parallel) with `extractor` (which must chunk as the one
     /// the volume was made for) and returns how many.
     pub fn remesh_dirty(&mut self, extractor: &dyn Extractor) -> Result<usize, ExtractError> {
-        if extractor.chunking() != self.chunking {
-            return Err(ExtractError::BadInput {
-                algorithm: extractor.name(),
-                reason: format!("chunks as {:?}, but the volume was split for {:?}", extractor.chunking(), self.chunking),
-            });
-        }
+        self.check_chunking(extractor)?;
         let (grid, values, chunking) = (self.grid, &self.values, self.chunking);
         let dirty = &self.dirty;
         let count = dirty.iter().filter(|&&d| d).count();
@@ -213,16 +208,22 @@ impl ChunkedVolume {
         Ok(count)
     }
 
-    /// Re-meshes the dirty chunks one after another on the calling thread (what a game's meshing
-    /// worker does, one chunk per task), returning each chunk's time; run it inside a one-thread
-    /// pool for the extractor's own parallelism to stay on that thread too.
-    pub fn remesh_dirty_each(&mut self, extractor: &dyn Extractor) -> Result<Vec<std::time::Duration>, ExtractError> {
+    /// Refuses an extractor that chunks otherwise than the one the volume was split for.
+    fn check_chunking(&self, extractor: &dyn Extractor) -> Result<(), ExtractError> {
         if extractor.chunking() != self.chunking {
             return Err(ExtractError::BadInput {
                 algorithm: extractor.name(),
                 reason: format!("chunks as {:?}, but the volume was split for {:?}", extractor.chunking(), self.chunking),
             });
         }
+        Ok(())
+    }
+
+    /// Re-meshes the dirty chunks one after another on the calling thread (what a game's meshing
+    /// worker does, one chunk per task), returning each chunk's time; run it inside a one-thread
+    /// pool for the extractor's own parallelism to stay on that thread too.
+    pub fn remesh_dirty_each(&mut self, extractor: &dyn Extractor) -> Result<Vec<std::time::Duration>, ExtractError> {
+        self.check_chunking(extractor)?;
         let (grid, values, chunking) = (self.grid, &self.values, self.chunking);
         let mut times = Vec::new();
         for (slot, dirty) in self.slots.iter_mut().zip(self.dirty.iter_mut()) {

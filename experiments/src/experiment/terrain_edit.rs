@@ -236,12 +236,11 @@ impl Experiment for TerrainEdit {
                 open_seam_edges_max =
                     open_seam_edges_max.max(open_edges_away_from_bounds(&welded.surface, &bounds, grid.spacing));
                 if record_pictures && (k + 1) % GIF_EVERY == 0 {
-                    world.welded(&mut welded);
                     frames.push(coloured(&world, &welded, &opts));
                 }
                 bar.inc(1);
             }
-            world.welded(&mut welded);
+            // `welded` holds the mesh after the last edit.
             let t = isolab_metrics::topology(&welded.surface);
             let q = isolab_metrics::triangle_quality(&welded.surface);
             let chunk_runs = CHUNK_SIZES

@@ -402,21 +402,27 @@ impl Experiment for TerrainLiquids {
         let header: Vec<&str> = std::iter::once("measure").chain(names.iter().copied()).collect();
         md.push_str(&markdown_table(&header, &rows));
         md.push_str(&format!("\n![both layers after the edits]({})\n\n![the edits]({})\n", d.picture, d.gif));
-        md.push_str(
+        let drift = d.edits.iter().map(|e| e.mass_drift).fold(0.0, f64::max);
+        let books = if drift == 0.0 {
+            "the masses equal the brushes' books after every edit, for every extractor".to_owned()
+        } else {
+            format!("the masses differ from the brushes' books by at most {drift:.1e} (relative)")
+        };
+        md.push_str(&format!(
             "\n### The post's claims beside ours\n\n\
              - *Layered meshes for liquids without overlap, connected where they meet*: the rows above (contact vertices \
-             shared, crossing pairs). On marching tetrahedra no overlap is proved (`liquids` module doc); on marching cubes \
-             the rule shares the vertices but leaves the crossings counted above.\n\
-             - *Solid and liquid mass conservation still works*: the brushes keep the books exactly (each changes one density; \
-             the table's gap is float summation).\n\
+             shared, crossing pairs). No overlap is proved for marching tetrahedra alone (`liquids` module doc); crossing \
+             pairs with the rule: {}.\n\
+             - *Solid and liquid mass conservation still works*: each brush changes one density and returns what it moved; \
+             {books}.\n\
              - *Both marches in parallel*: here the two layers are meshed one after the other, each by the extractor's own \
              parallel pass; the time is for both.\n\
              - *Duplicate vertices removed by keeping one corner's vertices and a later index pass*: isolab's extractors make \
              one vertex per lattice edge as they go (the closed, manifold columns); not compared with the post's scheme.\n\
              - Not built yet: the layers in chunks with levels of detail, the liquid's own material in the terrain editor, \
-             surface nets and dual contouring (their vertices are inside cells; `extract_layers` refuses them with that \
-             reason).\n",
-        );
+             and the extractors `extract_layers` refuses (listed above).\n",
+            list(&crossing),
+        ));
         Ok(md)
     }
 }

@@ -181,8 +181,7 @@ impl ZarrSlices {
             .map_err(|e| read_err(e.to_string()))?
             .into_fixed()
             .map_err(|e| read_err(e.to_string()))?;
-        self.held.clear();
-        self.held.extend_from_slice(&bytes);
+        self.held = bytes.into_owned();
         self.held_from = from;
         self.held_count = count;
         Ok(())

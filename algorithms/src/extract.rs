@@ -106,6 +106,32 @@ pub enum Chunking {
     Apron(usize),
 }
 
+/// How chunks meshed at different levels of detail meet without cracks ([`crate::chunks::lod`]).
+#[derive(Clone, Copy)]
+pub enum LevelsOfDetail<'a> {
+    /// Not supported; the reason, for messages.
+    Unsupported(&'static str),
+    /// Restriction and stitching ([`crate::chunks::lod`]): vertices on lattice edges by linear
+    /// interpolation, kept off the samples, and ambiguous faces that keep their inside corners
+    /// apart (plain marching cubes).
+    Stitched,
+    /// Restriction and octree dual contouring's minimal edges
+    /// ([`crate::extractors::dual::lod`]): the dual engine's vertices and placement, a polygon
+    /// per minimal crossing edge (surface nets, dual contouring).
+    Dual(&'a crate::extractors::dual::DualEngine),
+}
+
+impl LevelsOfDetail<'_> {
+    /// The method's name, for listings.
+    pub fn method(&self) -> &'static str {
+        match self {
+            LevelsOfDetail::Unsupported(_) => "none",
+            LevelsOfDetail::Stitched => "restriction and stitching",
+            LevelsOfDetail::Dual(_) => "restriction and octree dual contouring's minimal edges",
+        }
+    }
+}
+
 /// Where each surface vertex comes from in the lattice, for chunked extraction: filled by
 /// extractors whose [`Extractor::chunking`] is [`Chunking::Apron`] when `wanted` is set.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -276,6 +302,18 @@ pub trait Extractor: Send + Sync {
     /// How [`crate::chunks`] can mesh a volume in chunks with it.
     fn chunking(&self) -> Chunking {
         Chunking::Unsupported
+    }
+
+    /// The options that shape its output as it was built (smoothing and its iterations, vertex
+    /// placement, the ambiguous-face rule), in words for the report's tables; empty when it has
+    /// none.
+    fn settings(&self) -> String {
+        String::new()
+    }
+
+    /// How [`crate::chunks::lod`] makes its chunks at different levels of detail meet.
+    fn levels_of_detail(&self) -> LevelsOfDetail<'_> {
+        LevelsOfDetail::Unsupported("its seams between levels of detail are not stitched")
     }
 
     /// Extracts from `samples` into `out`, which is cleared first (keeping capacity).

@@ -36,7 +36,6 @@ pub mod geometry;
 pub mod labels;
 pub mod lattice;
 pub mod liquids;
-pub mod lod;
 pub mod materials;
 pub mod mesh;
 pub mod options;
@@ -50,7 +49,8 @@ pub mod tables;
 pub mod tetrahedral;
 
 pub use extract::{
-    Chunking, ExtractError, Extraction, Extractor, Guarantees, Origins, PostGuarantees, PostProcess, StageTimes, Stats,
+    Chunking, ExtractError, Extraction, Extractor, Guarantees, LevelsOfDetail, Origins, PostGuarantees, PostProcess, StageTimes,
+    Stats,
 };
 pub use field::{Field, FieldError};
 pub use geometry::Aabb;

@@ -255,6 +255,7 @@ const REVIEWED: &[(&str, &str, &str)] = &[
         "the loopback address the cluster listens on: a setting, not a result",
     ),
     ("distributed/mod.rs", "tls://scheduler:8786", "distributed's default scheduler port in an example address"),
+    ("terrain_lod/mod.rs", "2.0.0", "the transvoxel crate's version the peer is built with (Cargo.toml's): a name, not a result"),
     (
         "scaling.rs",
         "A slope near 1 means",

@@ -31,7 +31,8 @@
 //! buffers), so editing with a [`Brush`] re-meshes only the chunks whose samples (apron included)
 //! changed, and re-meshing a chunk reuses its buffers.
 //!
-//! Files: this one (chunk counts, slots, [`extract_chunked`]); `weld` (joining chunk meshes);
+//! Files: this one (chunk counts, slots, [`extract_chunked`]); [`lod`] (chunks at several
+//! levels of detail, stitched); `weld` (joining chunk meshes);
 //! `stream` ([`stream_chunked`], [`MeshSink`]); `edit` ([`ChunkedVolume`], [`Brush`]); `blocks`
 //! (one block meshed on its own into a [`Fragment`], and [`weld_fragments`]: a distributed driver's
 //! two steps).
@@ -49,6 +50,7 @@ use std::time::Instant;
 
 mod blocks;
 mod edit;
+pub mod lod;
 mod stream;
 mod weld;
 

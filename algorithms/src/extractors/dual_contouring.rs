@@ -44,7 +44,7 @@
 //! assert!(nearest < 0.05 * samples.grid().spacing);
 //! ```
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees, LevelsOfDetail};
 use crate::extractors::dual::{DualEngine, DualOptions, Placement, Smoothing};
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
@@ -137,8 +137,16 @@ impl Extractor for DualContouring {
         DESCRIPTION
     }
 
+    fn settings(&self) -> String {
+        self.engine.settings()
+    }
+
     fn chunking(&self) -> Chunking {
         self.engine.chunking()
+    }
+
+    fn levels_of_detail(&self) -> LevelsOfDetail<'_> {
+        LevelsOfDetail::Dual(&self.engine)
     }
 
     fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {

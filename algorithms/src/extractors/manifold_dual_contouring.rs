@@ -46,7 +46,7 @@
 //! assert!(out.stats.warnings.is_empty());
 //! ```
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees, LevelsOfDetail};
 use crate::extractors::dual::{DualEngine, DualOptions, Placement, Smoothing};
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
@@ -137,6 +137,16 @@ impl Extractor for ManifoldDualContouring {
 
     /// Dual contouring's apron and one cell more: a kept triangle's sides need both of their
     /// quads, and a cell's face points the quads around its faces.
+    fn levels_of_detail(&self) -> LevelsOfDetail<'_> {
+        LevelsOfDetail::Unsupported(
+            "its triangles are fans around edge points kept inside cells, which a polygon on a seam between levels (spanning a fine and a coarse cell) is not",
+        )
+    }
+
+    fn settings(&self) -> String {
+        self.engine.settings()
+    }
+
     fn chunking(&self) -> Chunking {
         match self.engine.chunking() {
             Chunking::Apron(a) => Chunking::Apron(a + 1),

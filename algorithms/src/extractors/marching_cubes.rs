@@ -74,7 +74,7 @@
 //! assert!(out.surface.positions.iter().all(|p| (p.length() - 0.4).abs() < 2e-3));
 //! ```
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees, LevelsOfDetail};
 use crate::geometry::{normalize_all, trilinear_gradient};
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
@@ -744,6 +744,31 @@ impl Extractor for MarchingCubes {
 
     fn chunking(&self) -> Chunking {
         Chunking::CellLocal
+    }
+
+    fn settings(&self) -> String {
+        let faces = match self.options.faces {
+            FaceResolution::SeparateInside => "ambiguous faces keep their inside corners apart",
+            FaceResolution::AsymptoticDecider => "ambiguous faces by the asymptotic decider",
+            FaceResolution::Trilinear => "faces and cell interiors by the trilinear interpolant (marching cubes 33)",
+        };
+        let on_iso = match self.options.on_iso {
+            OnIsoSamples::Separate => "vertices kept off samples at the iso-value",
+            OnIsoSamples::Exact => "exact interpolation at samples on the iso-value",
+        };
+        format!("{faces}; {on_iso}")
+    }
+
+    fn levels_of_detail(&self) -> LevelsOfDetail<'_> {
+        match (self.options.faces, self.options.on_iso) {
+            (FaceResolution::SeparateInside, OnIsoSamples::Separate) => LevelsOfDetail::Stitched,
+            (FaceResolution::SeparateInside, OnIsoSamples::Exact) => {
+                LevelsOfDetail::Unsupported("on-iso=exact puts vertices on samples, where the stitching cannot tell levels apart")
+            }
+            _ => LevelsOfDetail::Unsupported(
+                "its ambiguous faces follow the interpolant, which the seam restriction (inside corners kept apart) does not reproduce",
+            ),
+        }
     }
 
     fn description(&self) -> &'static str {

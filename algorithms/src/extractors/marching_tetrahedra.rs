@@ -43,7 +43,7 @@
 //! assert_eq!(m.positions.len() as i64 - m.triangles.len() as i64 / 2, 0);
 //! ```
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees, LevelsOfDetail};
 use crate::lattice::Lattice;
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
@@ -94,6 +94,10 @@ impl Extractor for MarchingTetrahedra {
 
     fn description(&self) -> &'static str {
         DESCRIPTION
+    }
+
+    fn levels_of_detail(&self) -> LevelsOfDetail<'_> {
+        LevelsOfDetail::Unsupported("not built: its Kuhn cubes' face diagonals call for a restriction linear on each coarse face triangle, not the bilinear one the stitching assumes; on BCC the coarse lattice's centres are not samples of the finer one")
     }
 
     /// On a cubic grid the Kuhn split keeps every tetrahedron inside its cube and every vertex on

@@ -76,7 +76,7 @@
 //! assert!(manifold_defects(&rmt.surface).is_empty());
 //! ```
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees, LevelsOfDetail};
 use crate::field::Field;
 use crate::lattice::Lattice;
 use crate::mesh::ManifoldCheck;
@@ -324,6 +324,10 @@ impl Extractor for RegularisedMarchingTetrahedra {
 
     fn description(&self) -> &'static str {
         DESCRIPTION
+    }
+
+    fn levels_of_detail(&self) -> LevelsOfDetail<'_> {
+        LevelsOfDetail::Unsupported("its vertex clustering merges crossings across a sample's star and moves them off the lattice edges, so no coarse seam edge has a fine path of edge crossings to be stitched to, and its BCC centres are not samples of the finer lattice")
     }
 
     /// A vertex merges the crossings of its sample's star, and the guard's repairs reach the

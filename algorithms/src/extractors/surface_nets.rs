@@ -69,7 +69,7 @@
 //! assert!(out.surface.positions.iter().all(|p| (p.length() - 0.4).abs() < 1.8 * h));
 //! ```
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees, LevelsOfDetail};
 use crate::extractors::dual::{DualEngine, Placement};
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
@@ -163,8 +163,16 @@ impl Extractor for SurfaceNets {
         DESCRIPTION
     }
 
+    fn settings(&self) -> String {
+        self.engine.settings()
+    }
+
     fn chunking(&self) -> Chunking {
         self.engine.chunking()
+    }
+
+    fn levels_of_detail(&self) -> LevelsOfDetail<'_> {
+        LevelsOfDetail::Dual(&self.engine)
     }
 
     fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {

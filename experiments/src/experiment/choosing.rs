@@ -126,6 +126,9 @@ fn terrain(edits: &terrain_edit::Data) -> Result<Choice, ExperimentError> {
     let liquids =
         isolab_algorithms::liquids::extract_layers(pick.as_ref(), &isolab_algorithms::liquids::lake_and_cave(LIQUID_PROBE))
             .map_or("no (its vertices are inside cells)", |_| "yes (`terrain_liquids`)");
+    if !run.settings.is_empty() {
+        why.push_str(&format!(" It ran with {}.", run.settings));
+    }
     why.push_str(&format!(" Crack-free levels of detail (`terrain_lod`): {lod}. Liquids beside the solid: {liquids}."));
     Ok(Choice { pick: run.algorithm.clone(), why, pages: vec!["terrain_edit", "terrain_lod", "terrain_liquids"] })
 }
@@ -133,28 +136,14 @@ fn terrain(edits: &terrain_edit::Data) -> Result<Choice, ExperimentError> {
 /// Samples along x and y of the scene the liquids probe meshes.
 const LIQUID_PROBE: usize = 12;
 
-/// Whether `lod::extract_lod` meshes `extractor` (tried on a small grid of two chunks).
+/// Whether `chunks::lod` stitches `extractor`'s levels of detail, from its declared capability
+/// (which `tests/tests/lod.rs` checks against what `extract_lod` does).
 fn lod_support(extractor: &dyn isolab_algorithms::Extractor) -> String {
-    let chunk = LOD_PROBE_CHUNK;
-    let samples = isolab_algorithms::Samples::from_values(
-        isolab_algorithms::Lattice::Cubic(isolab_algorithms::Grid {
-            origin: isolab_algorithms::Vec3::ZERO,
-            spacing: 1.0,
-            dims: [2 * chunk + 1, chunk + 1, chunk + 1],
-        }),
-        vec![1.0; (2 * chunk + 1) * (chunk + 1) * (chunk + 1)],
-        0.0,
-    );
-    let Ok(samples) = samples else { return "not tried".into() };
-    let mut out = isolab_algorithms::Extraction::default();
-    match isolab_algorithms::lod::extract_lod(extractor, &samples, chunk, &[0, 1], &mut out, None) {
-        Ok(_) => "yes".into(),
-        Err(e) => format!("no ({e})"),
+    match extractor.levels_of_detail() {
+        isolab_algorithms::LevelsOfDetail::Unsupported(why) => format!("no ({why})"),
+        method => format!("yes ({})", method.method()),
     }
 }
-
-/// Cells per chunk of the levels-of-detail probe.
-const LOD_PROBE_CHUNK: usize = 4;
 
 /// A scan: the fastest of our extractors (one thread, every iso-level summed) whose meshes are
 /// closed, manifold, outward and free of self-intersections at every level; the best-shaped of

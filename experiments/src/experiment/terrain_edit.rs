@@ -9,8 +9,8 @@
 use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
 use crate::report::markdown_table;
+use isolab_algorithms::chunks::lod::open_edges_away_from_bounds;
 use isolab_algorithms::chunks::{Brush, ChunkedVolume};
-use isolab_algorithms::lod::open_edges_away_from_bounds;
 use isolab_algorithms::{extractors, fields, materials, Chunking, Extraction, Grid, Lattice, Samples};
 use isolab_cli::render::{self, RenderOptions, Shading};
 use serde::{Deserialize, Serialize};
@@ -86,6 +86,9 @@ pub struct Run {
     /// The one-thread runs, one per chunk size (16³, 32³ and 64³ cells in the report).
     #[serde(default)]
     pub chunk_runs: Vec<ChunkRun>,
+    /// The extractor's settings as it ran (`Extractor::settings`: smoothing, placement, faces).
+    #[serde(default)]
+    pub settings: String,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -270,6 +273,7 @@ impl Experiment for TerrainEdit {
                 open_seam_edges_max,
                 quality_after: [q.aspect_ratio.mean, q.min_angle_deg],
                 chunk_runs,
+                settings: e.settings(),
             });
         }
         bar.finish();
@@ -321,6 +325,13 @@ impl Experiment for TerrainEdit {
             BRUSH_FALLOFF.1,
             data.runs.iter().map(|r| format!("`{}` {}", r.algorithm, chunk_reads(&r.algorithm))).collect::<Vec<_>>().join("; "),
         ));
+        if data.runs.iter().any(|r| !r.settings.is_empty()) {
+            md.push_str("Options as run (each extractor's defaults):\n\n");
+            for r in data.runs.iter().filter(|r| !r.settings.is_empty()) {
+                md.push_str(&format!("- `{}`: {}\n", r.algorithm, r.settings));
+            }
+            md.push('\n');
+        }
         let body: Vec<Vec<String>> = data
             .runs
             .iter()

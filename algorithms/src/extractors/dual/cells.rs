@@ -142,36 +142,7 @@ impl Ctx<'_> {
     /// cell's unit cube (`v`: its corner values, `min`: its lower corner, `crossing`: each edge's
     /// crossing in the unit cube).
     fn place(&self, edges: u16, v: &[f32; 8], min: Vec3, crossing: &impl Fn(usize) -> Vec3) -> Vec3 {
-        match self.placement {
-            Placement::Qef { tolerance, clamp } => {
-                let mut pts = [Vec3::ZERO; 12];
-                let mut nrm = [Vec3::ZERO; 12];
-                let mut k = 0;
-                for e in (0..12).filter(|&e| edges >> e & 1 == 1) {
-                    let q = crossing(e);
-                    pts[k] = q;
-                    // The field's gradient where the samples carry it, else the cell's
-                    // trilinear interpolant's (Hermite data from samples).
-                    let g = match self.field {
-                        Some(field) => field.gradient(min + q * self.grid.spacing),
-                        None => trilinear_gradient(v, q),
-                    };
-                    nrm[k] = g.normalize_or_zero();
-                    k += 1;
-                }
-                let x = qef::solve_qef(&pts[..k], &nrm[..k], tolerance);
-                if clamp {
-                    x.clamp(Vec3::ZERO, Vec3::ONE)
-                } else {
-                    x
-                }
-            }
-            Placement::MassPoint => {
-                let (sum, n) =
-                    (0..12).filter(|&e| edges >> e & 1 == 1).fold((Vec3::ZERO, 0.0f32), |(s, n), e| (s + crossing(e), n + 1.0));
-                sum / n
-            }
-        }
+        place(self.placement, self.field, self.grid.spacing, edges, v, min, crossing)
     }
 
     /// The cube edges of cell `(x, y, z)` that lie on the domain boundary (bit `e`): they have
@@ -318,6 +289,51 @@ impl Ctx<'_> {
                     for_each_bit(lo.max(1), hi.min(nx - 2), |w| here[w] ^ next[w], |x| visit(QuadEdge::Y, x, y, !bit(here, x)));
                 }
             }
+        }
+    }
+}
+
+/// Where the vertex of the piece whose crossings are the edges in mask `edges` goes, in the unit
+/// cube of a cell of side `spacing` whose lower corner is `min` (world) and corner values `v`
+/// (`crossing`: each edge's crossing in the unit cube): the mass point of the crossings, or the
+/// minimum of their quadric error with the field's normals there ([`qef::solve_qef`]).
+pub(super) fn place(
+    placement: Placement,
+    field: Option<&dyn crate::field::Field>,
+    spacing: f32,
+    edges: u16,
+    v: &[f32; 8],
+    min: Vec3,
+    crossing: &impl Fn(usize) -> Vec3,
+) -> Vec3 {
+    match placement {
+        Placement::Qef { tolerance, clamp } => {
+            let mut pts = [Vec3::ZERO; 12];
+            let mut nrm = [Vec3::ZERO; 12];
+            let mut k = 0;
+            for e in (0..12).filter(|&e| edges >> e & 1 == 1) {
+                let q = crossing(e);
+                pts[k] = q;
+                // The field's gradient where the samples carry it, else the cell's trilinear
+                // interpolant's (Hermite data from samples).
+                let g = match field {
+                    Some(field) => field.gradient(min + q * spacing),
+                    None => trilinear_gradient(v, q),
+                };
+                nrm[k] = g.normalize_or_zero();
+                k += 1;
+            }
+            let x = qef::solve_qef(&pts[..k], &nrm[..k], tolerance);
+            if clamp {
+                x.clamp(Vec3::ZERO, Vec3::ONE)
+            } else {
+                x
+            }
+        }
+        Placement::MassPoint => {
+            let (sum, n) =
+                (0..12).filter(|&e| edges >> e & 1 == 1).fold((Vec3::ZERO, 0.0f32), |(s, n), e| (s + crossing(e), n + 1.0));
+            sum / n
         }
     }
 }

@@ -20,6 +20,7 @@
 
 mod cells;
 mod intersection_free;
+pub mod lod;
 pub mod qef;
 pub mod smoothing;
 
@@ -129,9 +130,7 @@ struct Scratch {
     links: Vec<(u32, u32)>,
     adjacency_start: Vec<u32>,
     adjacency: Vec<u32>,
-    work: Vec<Vec3>,
-    velocity: Vec<Vec3>,
-    velocity_next: Vec<Vec3>,
+    buffers: smoothing::SmoothBuffers,
     /// One per slab task.
     slabs: Vec<Slab>,
 }
@@ -173,7 +172,8 @@ impl Slab {
 impl Scratch {
     fn bytes(&self) -> usize {
         4 * (self.adjacency_start.capacity() + self.adjacency.capacity())
-            + 12 * (self.cell_min.capacity() + self.work.capacity() + self.velocity.capacity() + self.velocity_next.capacity())
+            + 12 * self.cell_min.capacity()
+            + self.buffers.bytes()
             + 8 * self.links.capacity()
             + self.slabs.iter().map(Slab::bytes).sum::<usize>()
     }
@@ -248,6 +248,30 @@ impl DualEngine {
     /// The name it reports as.
     pub fn name(&self) -> &'static str {
         self.name
+    }
+
+    /// Its placement and smoothing in words ([`crate::Extractor::settings`]).
+    pub fn settings(&self) -> String {
+        let placement = match self.placement {
+            Placement::MassPoint => "vertices at the mass point of their crossings".to_string(),
+            Placement::Qef { tolerance, clamp } => format!(
+                "vertices at the quadric error minimum (SVD cut-off {tolerance}{})",
+                if clamp { ", kept in the cell" } else { "" }
+            ),
+        };
+        let o = &self.options;
+        let smoothing = match o.smoothing {
+            _ if o.iterations == 0 => "no smoothing".to_string(),
+            Smoothing::None => "no smoothing".to_string(),
+            Smoothing::Elastic => {
+                format!("elastic smoothing, {} iterations (strength {}, decay {})", o.iterations, o.strength, o.decay)
+            }
+            Smoothing::Spring => {
+                format!("spring-damper smoothing, {} iterations (stiffness {}, damping {})", o.iterations, o.stiffness, o.damping)
+            }
+            Smoothing::Implicit => format!("implicit smoothing, {} steps of {}", o.iterations, o.time_step),
+        };
+        format!("{placement}; {smoothing}")
     }
 
     /// A quad needs its edge's four cells, a cell's pieces depend on its face neighbours (ring

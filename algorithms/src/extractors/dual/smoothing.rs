@@ -4,7 +4,7 @@
 //! post's explicit spring-damper, or backward Euler on the graph Laplacian solved by
 //! Jacobi-preconditioned conjugate gradients.
 
-use super::{DualEngine, Scratch, Smoothing};
+use super::{DualEngine, DualOptions, Scratch, Smoothing};
 use crate::slabs::MIN_VERTICES_PER_TASK;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -61,62 +61,89 @@ fn neighbour_mean(i: usize, x: &[Vec3], start: &[u32], adjacency: &[u32]) -> Opt
     (!nbrs.is_empty()).then(|| nbrs.iter().map(|&j| x[j as usize]).sum::<Vec3>() / nbrs.len() as f32)
 }
 
-fn clamp_to_cell(p: Vec3, min: Vec3, h: f32) -> Vec3 {
-    p.clamp(min, min + Vec3::splat(h))
+/// The buffers [`smooth_within`] works in, kept between calls.
+#[derive(Default)]
+pub(super) struct SmoothBuffers {
+    pub(super) work: Vec<Vec3>,
+    pub(super) velocity: Vec<Vec3>,
+    pub(super) velocity_next: Vec<Vec3>,
+}
+
+impl SmoothBuffers {
+    pub(super) fn bytes(&self) -> usize {
+        12 * (self.work.capacity() + self.velocity.capacity() + self.velocity_next.capacity())
+    }
 }
 
 impl DualEngine {
     pub(super) fn smooth(&self, s: &mut Scratch, positions: &mut [Vec3], h: f32) {
-        let o = &self.options;
-        let n = positions.len();
-        let (start, adjacency, cell_min) = (&s.adjacency_start, &s.adjacency, &s.cell_min);
-        match o.smoothing {
-            Smoothing::None => {}
-            Smoothing::Elastic => {
-                let mut strength = o.strength;
-                for _ in 0..o.iterations {
-                    s.work.clear();
-                    s.work.par_extend((0..n).into_par_iter().with_min_len(MIN_VERTICES_PER_TASK).map(|i| {
+        let cell_min = &s.cell_min;
+        let bound = |i: usize| (cell_min[i], cell_min[i] + Vec3::splat(h));
+        smooth_within(&self.options, positions, (&s.adjacency_start, &s.adjacency), &mut s.buffers, bound);
+    }
+}
+
+/// Moves each vertex toward its neighbours' mean (adjacency in CSR form: `start`, `adjacency`)
+/// by `o`'s method, never out of its box `bound(i)` (lower and upper corner): the constrained
+/// smoothing of the dual net, for cells of one size (the engine) or several (levels of detail).
+pub(super) fn smooth_within(
+    o: &DualOptions,
+    positions: &mut [Vec3],
+    (start, adjacency): (&[u32], &[u32]),
+    b: &mut SmoothBuffers,
+    bound: impl Fn(usize) -> (Vec3, Vec3) + Sync,
+) {
+    let n = positions.len();
+    let clamp = |p: Vec3, i: usize| {
+        let (lo, hi) = bound(i);
+        p.clamp(lo, hi)
+    };
+    match o.smoothing {
+        Smoothing::None => {}
+        Smoothing::Elastic => {
+            let mut strength = o.strength;
+            for _ in 0..o.iterations {
+                b.work.clear();
+                b.work.par_extend((0..n).into_par_iter().with_min_len(MIN_VERTICES_PER_TASK).map(|i| {
+                    let p = positions[i];
+                    let target = neighbour_mean(i, positions, start, adjacency).unwrap_or(p);
+                    clamp(p + (target - p) * strength, i)
+                }));
+                positions.copy_from_slice(&b.work);
+                strength *= o.decay;
+            }
+        }
+        Smoothing::Spring => {
+            b.velocity.clear();
+            b.velocity.resize(n, Vec3::ZERO);
+            for _ in 0..o.iterations {
+                b.work.resize(n, Vec3::ZERO);
+                b.velocity_next.resize(n, Vec3::ZERO);
+                let velocity = &b.velocity;
+                b.work
+                    .par_iter_mut()
+                    .zip(b.velocity_next.par_iter_mut())
+                    .enumerate()
+                    .with_min_len(MIN_VERTICES_PER_TASK)
+                    .for_each(|(i, (next_p, next_v))| {
                         let p = positions[i];
                         let target = neighbour_mean(i, positions, start, adjacency).unwrap_or(p);
-                        clamp_to_cell(p + (target - p) * strength, cell_min[i], h)
-                    }));
-                    positions.copy_from_slice(&s.work);
-                    strength *= o.decay;
-                }
+                        let v = velocity[i] * (1.0 - o.damping) + (target - p) * o.stiffness;
+                        let moved = p + v;
+                        let clamped = clamp(moved, i);
+                        // A wall stops motion into it (no bounce).
+                        *next_v = Vec3::select(moved.cmpne(clamped), Vec3::ZERO, v);
+                        *next_p = clamped;
+                    });
+                positions.copy_from_slice(&b.work);
+                std::mem::swap(&mut b.velocity, &mut b.velocity_next);
             }
-            Smoothing::Spring => {
-                s.velocity.clear();
-                s.velocity.resize(n, Vec3::ZERO);
-                for _ in 0..o.iterations {
-                    s.work.resize(n, Vec3::ZERO);
-                    s.velocity_next.resize(n, Vec3::ZERO);
-                    let velocity = &s.velocity;
-                    s.work
-                        .par_iter_mut()
-                        .zip(s.velocity_next.par_iter_mut())
-                        .enumerate()
-                        .with_min_len(MIN_VERTICES_PER_TASK)
-                        .for_each(|(i, (next_p, next_v))| {
-                            let p = positions[i];
-                            let target = neighbour_mean(i, positions, start, adjacency).unwrap_or(p);
-                            let v = velocity[i] * (1.0 - o.damping) + (target - p) * o.stiffness;
-                            let moved = p + v;
-                            let clamped = clamp_to_cell(moved, cell_min[i], h);
-                            // A wall stops motion into it (no bounce).
-                            *next_v = Vec3::select(moved.cmpne(clamped), Vec3::ZERO, v);
-                            *next_p = clamped;
-                        });
-                    positions.copy_from_slice(&s.work);
-                    std::mem::swap(&mut s.velocity, &mut s.velocity_next);
-                }
-            }
-            Smoothing::Implicit => {
-                for _ in 0..o.iterations {
-                    let solved = implicit_step(positions, start, adjacency, o.time_step);
-                    for (i, p) in solved.into_iter().enumerate() {
-                        positions[i] = clamp_to_cell(p, cell_min[i], h);
-                    }
+        }
+        Smoothing::Implicit => {
+            for _ in 0..o.iterations {
+                let solved = implicit_step(positions, start, adjacency, o.time_step);
+                for (i, p) in solved.into_iter().enumerate() {
+                    positions[i] = clamp(p, i);
                 }
             }
         }

@@ -1,0 +1,629 @@
+//! `terrain_lod`: levels of detail on the 256 x 128 x 256-cell `terrain` in 32³-cell chunks:
+//! chunks near a viewer at one corner are meshed at full resolution, farther ones at half and at a
+//! quarter, by every registered extractor that takes levels of detail
+//! ([`isolab_algorithms::chunks::lod`]: marching cubes by restriction and stitching, surface nets
+//! and dual contouring by restriction and octree dual contouring's minimal edges); the
+//! `transvoxel` crate meshes the same chunks, samples and levels with Lengyel's transition cells
+//! (`transvoxel_peer`). For each level pattern and each implementation: triangles, boundary edges
+//! left where they are cracks, non-manifold edges and vertices, self-intersecting pairs, the shape
+//! of the triangles along seams between levels, time, and the cost of switching one chunk's
+//! level; pictures coloured by level.
+
+mod transvoxel_peer;
+
+use super::context::{Context, Experiment, ExperimentError};
+use crate::report::{first_seen, markdown_table, Spread};
+use isolab_algorithms::chunks::lod::{balance_levels, extract_lod, open_edges_away_from_bounds, open_edges_off_bounds};
+use isolab_algorithms::{extractors, fields, Extraction, Extractor, Grid, Lattice, LevelsOfDetail, Samples, TriMesh, Vec3};
+use isolab_cli::render::{self, Image, RenderOptions, Shading};
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+use std::time::Instant;
+
+/// The experiment.
+pub struct TerrainLod;
+
+const NAME: &str = "terrain_lod";
+const DIMS: [usize; 3] = [257, 129, 257];
+const CHUNK: usize = 32;
+const COUNTS: [usize; 3] = [8, 4, 8];
+const RUNS: usize = 5;
+/// The viewer-distance pattern: full resolution within this many chunks of the viewer's corner,
+/// half resolution within twice as many, a quarter beyond.
+const NEAR_CHUNKS: f32 = 2.5;
+const CRATE: &str = "transvoxel crate (transition cells)";
+/// The version of the `transvoxel` crate the peer runs (Cargo.toml's).
+const TRANSVOXEL_VERSION: &str = "2.0.0";
+
+/// An implementation's name in the table: the extractor and its method.
+fn implementation_name(e: &dyn Extractor) -> String {
+    let method = match e.levels_of_detail() {
+        LevelsOfDetail::Dual(_) => "octree minimal edges",
+        LevelsOfDetail::Stitched => "restriction + stitching",
+        LevelsOfDetail::Unsupported(_) => "none",
+    };
+    format!("{} ({method})", e.name())
+}
+
+/// The registered extractors (default options) that take levels of detail.
+fn lod_extractors() -> Vec<Box<dyn Extractor>> {
+    extractors::registry().into_iter().filter(|e| !matches!(e.levels_of_detail(), LevelsOfDetail::Unsupported(_))).collect()
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Row {
+    implementation: String,
+    pattern: String,
+    /// Chunks at each level (0: full resolution).
+    per_level: Vec<usize>,
+    triangles: usize,
+    /// Ours only: seam edges stitched (marching cubes) or polygons on minimal edges between
+    /// levels (dual methods).
+    stitched: Option<usize>,
+    /// Ours only: vertices the dual methods split where two rings met on a seam.
+    #[serde(default)]
+    pinched: Option<usize>,
+    seam_boundary_edges: usize,
+    non_manifold_edges: usize,
+    #[serde(default)]
+    non_manifold_vertices: usize,
+    misoriented_edges: usize,
+    self_intersecting_pairs: usize,
+    /// Triangles along a face between chunks of different levels (module doc of `seam_triangles`).
+    seam_triangles: usize,
+    seam_aspect_mean: f64,
+    seam_aspect_max: f64,
+    /// `None` without seam triangles.
+    seam_min_angle_deg: Option<f64>,
+    /// Whole world, ms.
+    time_ms: Spread,
+}
+
+/// Switching one chunk's level in the viewer-distance pattern.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Switch {
+    chunk: [usize; 3],
+    from: u8,
+    to: u8,
+    /// Ours, per extractor: `extract_lod` on the chunks within one chunk of it (what its seams
+    /// can reach), ms.
+    ours: Vec<(String, Spread)>,
+    /// Chunks our re-run meshes.
+    ours_chunks: usize,
+    /// The crate: the chunk and the face neighbours whose transition faces change, ms.
+    crate_ms: Spread,
+    /// Chunks the crate re-meshes.
+    crate_chunks: usize,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Data {
+    rows: Vec<Row>,
+    switch: Option<Switch>,
+    picture: String,
+    crate_picture: String,
+    /// Surface nets' and dual contouring's close-ups.
+    #[serde(default)]
+    dual_picture: String,
+    /// Each of our extractors' settings as it ran.
+    #[serde(default)]
+    options: Vec<(String, String)>,
+}
+
+fn flat(id: [usize; 3]) -> usize {
+    id[0] + COUNTS[0] * (id[1] + COUNTS[1] * id[2])
+}
+
+fn id_of(k: usize) -> [usize; 3] {
+    [k % COUNTS[0], (k / COUNTS[0]) % COUNTS[1], k / (COUNTS[0] * COUNTS[1])]
+}
+
+/// The level patterns: uniform, viewer distance (three levels, balanced) and checkerboards that
+/// put a seam on every chunk face.
+fn patterns() -> Vec<(String, Vec<u8>)> {
+    let total = COUNTS.iter().product::<usize>();
+    let mut near: Vec<u8> = (0..total)
+        .map(|k| {
+            let id = id_of(k);
+            let d = ((id[0] as f32 + 0.5).powi(2) + (id[2] as f32 + 0.5).powi(2)).sqrt();
+            (d / NEAR_CHUNKS).floor().min(2.0) as u8
+        })
+        .collect();
+    balance_levels(COUNTS, &mut near);
+    let checker = |a: u8| -> Vec<u8> {
+        (0..total)
+            .map(|k| {
+                let id = id_of(k);
+                a + ((id[0] + id[1] + id[2]) % 2) as u8
+            })
+            .collect()
+    };
+    vec![
+        ("all full resolution".into(), vec![0; total]),
+        ("viewer distance (full, half, quarter)".into(), near),
+        ("checkerboard full / half (every seam)".into(), checker(0)),
+        ("checkerboard half / quarter (every seam)".into(), checker(1)),
+        ("all half resolution".into(), vec![1; total]),
+        ("all quarter resolution".into(), vec![2; total]),
+    ]
+}
+
+/// The shape of the seam triangles: those whose centroid lies within one cell of the coarser
+/// side (`2^level` samples) of a chunk face whose two chunks differ in level. Returns (count,
+/// mean and largest aspect ratio, smallest angle).
+fn seam_shape(mesh: &TriMesh, grid: &Grid, levels: &[u8]) -> (usize, f64, f64, Option<f64>) {
+    let (mut n, mut sum, mut worst, mut smallest) = (0usize, 0.0, 0.0f64, 180.0f64);
+    for t in &mesh.triangles {
+        let p = t.map(|v| mesh.positions[v as usize]);
+        let c = ((p[0] + p[1] + p[2]) / 3.0 - grid.origin) / grid.spacing;
+        let id = [0, 1, 2].map(|a| ((c[a] / CHUNK as f32).floor().max(0.0) as usize).min(COUNTS[a] - 1));
+        let level = levels[flat(id)];
+        let near_seam = (0..3).any(|a| {
+            let within = |plane: usize, other: usize| {
+                let reach = (1u32 << level.max(levels[other])) as f32;
+                (c[a] - plane as f32).abs() <= reach && levels[other] != level
+            };
+            let lo = id[a] * CHUNK;
+            let mut below = id;
+            let mut above = id;
+            (id[a] > 0 && {
+                below[a] -= 1;
+                within(lo, flat(below))
+            }) || (id[a] + 1 < COUNTS[a] && {
+                above[a] += 1;
+                within(lo + CHUNK, flat(above))
+            })
+        });
+        if !near_seam {
+            continue;
+        }
+        if let Some(s) = isolab_metrics::quality::triangle_shape(p[0], p[1], p[2]) {
+            n += 1;
+            sum += s.aspect_ratio;
+            worst = worst.max(s.aspect_ratio);
+            smallest = smallest.min(s.min_angle_deg);
+        }
+    }
+    (n, sum / n.max(1) as f64, worst, (n > 0).then_some(smallest))
+}
+
+/// One row: the mesh's seam checks and shape. `dual`: the mesh's own border lies inside the
+/// outer cells (a dual method's), so open edges within a coarsest cell of the world's box are not
+/// cracks. `stats`: ours, (stitched, pinched).
+#[allow(clippy::too_many_arguments)]
+fn row(
+    implementation: &str,
+    pattern: &str,
+    levels: &[u8],
+    mesh: &TriMesh,
+    grid: &Grid,
+    dual: bool,
+    stats: Option<(usize, usize)>,
+    times: Vec<f64>,
+) -> Row {
+    let t = isolab_metrics::topology(mesh);
+    let top = levels.iter().copied().max().unwrap_or(0);
+    let seam_boundary_edges = if dual {
+        open_edges_away_from_bounds(mesh, &grid.bounds(), grid.spacing * f32::from(1u8 << top))
+    } else {
+        open_edges_off_bounds(mesh, &grid.bounds())
+    };
+    let (seam_triangles, seam_aspect_mean, seam_aspect_max, seam_min_angle_deg) = seam_shape(mesh, grid, levels);
+    let mut per_level = vec![0; 1 + levels.iter().copied().max().unwrap_or(0) as usize];
+    for &l in levels {
+        per_level[l as usize] += 1;
+    }
+    Row {
+        implementation: implementation.into(),
+        pattern: pattern.into(),
+        per_level,
+        triangles: mesh.triangles.len(),
+        stitched: stats.map(|s| s.0),
+        pinched: stats.map(|s| s.1),
+        seam_boundary_edges,
+        non_manifold_edges: t.non_manifold_edges,
+        non_manifold_vertices: t.non_manifold_vertices,
+        misoriented_edges: t.misoriented_edges,
+        self_intersecting_pairs: isolab_metrics::self_intersections(mesh).count,
+        seam_triangles,
+        seam_aspect_mean,
+        seam_aspect_max,
+        seam_min_angle_deg,
+        time_ms: Spread::of(times),
+    }
+}
+
+/// Vertex colours by level: full resolution green, half blue, quarter purple.
+fn level_colours(mesh: &TriMesh, triangle_levels: &[u8]) -> Vec<[u8; 3]> {
+    const BY_LEVEL: [[u8; 3]; 3] = [[96, 160, 80], [80, 120, 190], [150, 90, 170]];
+    let mut colours = vec![[150u8, 150, 150]; mesh.positions.len()];
+    for (t, &l) in mesh.triangles.iter().zip(triangle_levels) {
+        for &v in t {
+            colours[v as usize] = BY_LEVEL[(l as usize).min(BY_LEVEL.len() - 1)];
+        }
+    }
+    colours
+}
+
+/// A wireframe close-up of the seams around the corner where full, half and quarter resolution
+/// meet along x at z near the viewer.
+fn close_up(mesh: &TriMesh, colours: &[[u8; 3]], grid: &Grid, opts: &RenderOptions) -> Image {
+    let h = grid.spacing;
+    let (x0, z1) = (grid.origin.x + (2 * CHUNK) as f32 * h, grid.origin.z + 40.0 * h);
+    let (mut crop, mut crop_colours, mut remap) = (TriMesh::default(), Vec::new(), HashMap::new());
+    for t in &mesh.triangles {
+        let c = t.iter().map(|&v| mesh.positions[v as usize]).sum::<Vec3>() / 3.0;
+        if (c.x - x0).abs() >= 40.0 * h || c.z >= z1 {
+            continue;
+        }
+        crop.triangles.push(t.map(|v| {
+            *remap.entry(v).or_insert_with(|| {
+                crop.positions.push(mesh.positions[v as usize]);
+                crop_colours.push(colours[v as usize]);
+                (crop.positions.len() - 1) as u32
+            })
+        }));
+    }
+    render::render_coloured(
+        &crop,
+        &crop_colours,
+        &RenderOptions { shading: Shading::Flat, wireframe: true, view: Vec3::new(0.2, 0.9, 1.0), ..*opts },
+    )
+}
+
+/// The first chunk of `levels` that can go one level finer and stay balanced with its
+/// neighbours, and that level.
+fn switchable(levels: &[u8]) -> Option<(usize, u8)> {
+    (0..levels.len()).filter(|&k| levels[k] >= 1).find_map(|k| {
+        let mut changed = levels.to_vec();
+        changed[k] -= 1;
+        let mut balanced = changed.clone();
+        balance_levels(COUNTS, &mut balanced);
+        // Lowering a level can only break balance toward coarser neighbours.
+        let ok = (0..levels.len()).all(|o| o == k || balanced[o] == levels[o])
+            && (0..levels.len()).any(|o| o != k && levels[o] == levels[k]);
+        ok.then_some((k, changed[k]))
+    })
+}
+
+/// Time to switch chunk `k` to `to`: ours re-runs `extract_lod` on the 3³ chunks around it, the
+/// crate re-meshes it and its face neighbours whose transition faces change.
+fn measure_switch(
+    samples: &Samples,
+    ours: &[Box<dyn Extractor>],
+    levels: &[u8],
+    k: usize,
+    to: u8,
+) -> Result<Switch, ExperimentError> {
+    let id = id_of(k);
+    let grid = *samples.grid();
+    let lo = id.map(|c| c.saturating_sub(1));
+    let hi = [0, 1, 2].map(|a| (id[a] + 1).min(COUNTS[a] - 1));
+    let sub_counts = [0, 1, 2].map(|a| hi[a] - lo[a] + 1);
+    let mut after = levels.to_vec();
+    after[k] = to;
+    let sub_levels: Vec<u8> = (0..sub_counts.iter().product::<usize>())
+        .map(|s| {
+            let c = [s % sub_counts[0], (s / sub_counts[0]) % sub_counts[1], s / (sub_counts[0] * sub_counts[1])];
+            after[flat([lo[0] + c[0], lo[1] + c[1], lo[2] + c[2]])]
+        })
+        .collect();
+    let dims = sub_counts.map(|c| c * CHUNK + 1);
+    let s0 = lo.map(|c| c * CHUNK);
+    let mut values = Vec::with_capacity(dims.iter().product());
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            for x in 0..dims[0] {
+                values.push(samples.values()[grid.index(s0[0] + x, s0[1] + y, s0[2] + z)]);
+            }
+        }
+    }
+    let sub_grid =
+        Grid { origin: grid.origin + Vec3::new(s0[0] as f32, s0[1] as f32, s0[2] as f32) * grid.spacing, dims, ..grid };
+    let sub = Samples::from_values(Lattice::Cubic(sub_grid), values, samples.iso())?;
+    let mut out = Extraction::default();
+    let mut ours_ms = vec![Vec::new(); ours.len()];
+    for _ in 0..RUNS {
+        for (e, times) in ours.iter().zip(&mut ours_ms) {
+            let start = Instant::now();
+            extract_lod(e.as_ref(), &sub, CHUNK, &sub_levels, &mut out, None)?;
+            times.push(start.elapsed().as_secs_f64() * 1e3);
+        }
+    }
+    // The crate: the chunk, and face neighbours one level coarser than the chunk's new level or
+    // its old one (their transition faces toward it appear or go).
+    let touched: Vec<usize> = std::iter::once(k)
+        .chain((0..6).filter_map(|f| {
+            let (axis, up) = (f / 2, f % 2 == 1);
+            let mut n = id;
+            if up {
+                n[axis] += 1;
+                (n[axis] < COUNTS[axis]).then_some(())?;
+            } else {
+                n[axis] = n[axis].checked_sub(1)?;
+            }
+            let o = flat(n);
+            (levels[o] == to + 1 || levels[o] == levels[k] + 1).then_some(o)
+        }))
+        .collect();
+    let mut crate_ms = Vec::new();
+    for _ in 0..RUNS {
+        let start = Instant::now();
+        for &c in &touched {
+            std::hint::black_box(transvoxel_peer::extract_one(&grid, samples.values(), samples.iso(), CHUNK, COUNTS, &after, c));
+        }
+        crate_ms.push(start.elapsed().as_secs_f64() * 1e3);
+    }
+    Ok(Switch {
+        chunk: id,
+        from: levels[k],
+        to,
+        ours: ours.iter().zip(ours_ms).map(|(e, t)| (implementation_name(e.as_ref()), Spread::of(t))).collect(),
+        ours_chunks: sub_levels.len(),
+        crate_ms: Spread::of(crate_ms),
+        crate_chunks: touched.len(),
+    })
+}
+
+impl Experiment for TerrainLod {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn question(&self) -> &'static str {
+        "Do three levels of detail meet without cracks, how do restriction and stitching compare with Transvoxel's transition cells, and how many triangles do they save?"
+    }
+
+    fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
+        let field = fields::builtin("terrain", Default::default())?;
+        let grid = Grid::with_dims(&field.domain(), DIMS)?;
+        let samples = Samples::sample(field, Lattice::Cubic(grid), 0.0)?;
+        let ours = lod_extractors();
+        let patterns = patterns();
+        let bar = ctx.bar(NAME, ((patterns.len() + 1) * RUNS * (ours.len() + 1)) as u64);
+        let mut rows = Vec::new();
+        let (mut picture, mut crate_picture, mut dual_picture) = (String::new(), String::new(), String::new());
+        let opts = RenderOptions { width: 560, height: 380, shading: Shading::Smooth, ..Default::default() };
+        let viewer = &patterns[1].1;
+        for (name, levels) in &patterns {
+            let mut outs: Vec<(Extraction, Vec<u8>)> = (0..ours.len()).map(|_| Default::default()).collect();
+            let mut ours_ms = vec![Vec::new(); ours.len()];
+            let mut stats = vec![None; ours.len()];
+            let mut crate_ms = Vec::new();
+            let mut peer = (TriMesh::default(), Vec::new());
+            // Alternating, one run of each per round.
+            for _ in 0..RUNS {
+                for (i, e) in ours.iter().enumerate() {
+                    let (out, tri_levels) = &mut outs[i];
+                    let start = Instant::now();
+                    stats[i] = Some(extract_lod(e.as_ref(), &samples, CHUNK, levels, out, Some(tri_levels))?);
+                    ours_ms[i].push(start.elapsed().as_secs_f64() * 1e3);
+                    bar.inc(1);
+                }
+                let start = Instant::now();
+                peer = transvoxel_peer::extract(&grid, samples.values(), samples.iso(), CHUNK, COUNTS, levels);
+                crate_ms.push(start.elapsed().as_secs_f64() * 1e3);
+                bar.inc(1);
+            }
+            for (i, e) in ours.iter().enumerate() {
+                let s = stats[i].expect("ran");
+                let dual = matches!(e.levels_of_detail(), LevelsOfDetail::Dual(_));
+                let times = std::mem::take(&mut ours_ms[i]);
+                let mesh = &outs[i].0.surface;
+                rows.push(row(
+                    &implementation_name(e.as_ref()),
+                    name,
+                    levels,
+                    mesh,
+                    &grid,
+                    dual,
+                    Some((s.stitched, s.pinched)),
+                    times,
+                ));
+            }
+            rows.push(row(CRATE, name, levels, &peer.0, &grid, false, None, crate_ms));
+            if levels == viewer {
+                let dir = ctx.figure_dir(NAME)?;
+                let close = |mesh: &TriMesh, tri_levels: &[u8]| close_up(mesh, &level_colours(mesh, tri_levels), &grid, &opts);
+                let mc = ours.iter().position(|e| e.name() == "marching-cubes").unwrap_or(0);
+                let (mc_out, mc_levels) = &outs[mc];
+                let whole = render::render_coloured(&mc_out.surface, &level_colours(&mc_out.surface, mc_levels), &opts);
+                let ours_close = close(&mc_out.surface, mc_levels);
+                let path = dir.join("levels.png");
+                render::save_png(&path, &render::side_by_side(&whole, &ours_close))?;
+                picture = ctx.link(&path);
+                let path = dir.join("transvoxel.png");
+                render::save_png(&path, &render::side_by_side(&ours_close, &close(&peer.0, &peer.1)))?;
+                crate_picture = ctx.link(&path);
+                let duals: Vec<usize> =
+                    (0..ours.len()).filter(|&i| matches!(ours[i].levels_of_detail(), LevelsOfDetail::Dual(_))).collect();
+                if let [a, b, ..] = duals[..] {
+                    let path = dir.join("dual.png");
+                    let (left, right) = (close(&outs[a].0.surface, &outs[a].1), close(&outs[b].0.surface, &outs[b].1));
+                    render::save_png(&path, &render::side_by_side(&left, &right))?;
+                    dual_picture = ctx.link(&path);
+                }
+            }
+        }
+        let switch = match switchable(viewer) {
+            Some((k, to)) => Some(measure_switch(&samples, &ours, viewer, k, to)?),
+            None => None,
+        };
+        bar.finish();
+        let options = ours.iter().map(|e| (e.name().to_string(), e.settings())).collect();
+        ctx.write_data(NAME, &Data { rows, switch, picture, crate_picture, dual_picture, options })
+    }
+
+    fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
+        let d: Data = ctx.read_data(NAME)?;
+        let mut md = String::from("## Levels of detail without cracks (`terrain_lod`)\n\n");
+        let ours: Vec<&str> =
+            first_seen(d.rows.iter().map(|r| r.implementation.as_str())).into_iter().filter(|&i| i != CRATE).collect();
+        md.push_str(&format!(
+            "The {}×{}×{}-cell `terrain` in {CHUNK}³-cell chunks, each meshed at full resolution, at half resolution (every \
+             other sample) or at a quarter; chunks that touch differ by one level at most. Every registered extractor that \
+             takes levels of detail runs ({}). For all of them the finer side's samples on a seam are first restricted to \
+             what the coarser side sees (linear on a coarse edge, bilinear on a coarse face, an ambiguous face's interior \
+             kept outside). *Restriction + stitching* (marching cubes) then fans each coarse seam triangle over the fine \
+             boundary path; *octree minimal edges* (surface nets, dual contouring; Ju et al. 2002's rule for octrees) gives \
+             every crossing edge of the finest cells around it a polygon joining the vertices of the cells around it, a \
+             triangle where one coarse cell spans two of them, and splits a vertex where a fine cell's ring meets a coarse \
+             cell's across a seam (*pinched*). **The `transvoxel` crate** ({TRANSVOXEL_VERSION}, Lengyel 2010's transition \
+             cells, on the same chunks, samples and levels): each chunk is a block whose faces toward a finer face neighbour \
+             are transition faces; blocks are welded by exact position (the crate keeps each transition cell's vertices \
+             apart from the regular cells' at the same places). The crate's own `extract_from_field` with \
+             `FieldCaching::CacheCentralBlockOnly` reads the coarse block where the finer neighbour's samples belong and \
+             leaves its transition faces open, so the harness builds the crate's block view with the finer neighbours \
+             itself, as its `CacheNothing` path does (a test keeps both facts). *Open seam edges* counts boundary edges \
+             that are cracks: for marching cubes and the crate any off the world's boundary; for the dual methods, whose \
+             own border lies inside the outer cells, any more than a coarsest cell from it. *Seam triangles* are those \
+             within one coarser-side cell of a chunk face between two levels. Times are medians of {RUNS} runs alternating \
+             all implementations (range in brackets), on the same thread pool, sampling excluded, welding included.\n\n",
+            DIMS[0] - 1,
+            DIMS[1] - 1,
+            DIMS[2] - 1,
+            ours.iter().map(|i| format!("`{i}`")).collect::<Vec<_>>().join(", "),
+        ));
+        if !d.options.is_empty() {
+            md.push_str("Options as run (each extractor's defaults):\n\n");
+            for (name, settings) in &d.options {
+                md.push_str(&format!("- `{name}`: {settings}\n"));
+            }
+            md.push('\n');
+        }
+        let count = |n: Option<usize>| n.map_or("-".to_string(), |n| n.to_string());
+        let body: Vec<Vec<String>> = d
+            .rows
+            .iter()
+            .map(|r| {
+                vec![
+                    r.pattern.clone(),
+                    r.implementation.clone(),
+                    r.per_level.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(" / "),
+                    r.triangles.to_string(),
+                    r.seam_boundary_edges.to_string(),
+                    format!("{} / {}", r.non_manifold_edges, r.non_manifold_vertices),
+                    r.misoriented_edges.to_string(),
+                    r.self_intersecting_pairs.to_string(),
+                    count(r.pinched),
+                    r.seam_triangles.to_string(),
+                    match r.seam_min_angle_deg {
+                        None => "-".into(),
+                        Some(angle) => format!("{:.2} / {:.1} / {angle:.1}°", r.seam_aspect_mean, r.seam_aspect_max),
+                    },
+                    format!("{:.1} [{:.1}-{:.1}]", r.time_ms.median, r.time_ms.min, r.time_ms.max),
+                ]
+            })
+            .collect();
+        md.push_str(&markdown_table(
+            &[
+                "levels",
+                "implementation",
+                "chunks per level",
+                "triangles",
+                "open seam edges",
+                "non-manifold edges / vertices",
+                "misoriented edges",
+                "self-intersecting pairs",
+                "pinched",
+                "seam triangles",
+                "seam aspect mean / max / smallest angle",
+                "ms",
+            ],
+            &body,
+        ));
+        md.push_str(&reading(&d));
+        if let Some(s) = &d.switch {
+            let ours_times: Vec<String> =
+                s.ours.iter().map(|(name, t)| format!("{name} {:.1} ms median [{:.1}-{:.1}]", t.median, t.min, t.max)).collect();
+            md.push_str(&format!(
+                "\n**Switching one chunk's level** (chunk {:?} of the viewer-distance pattern, level {} to {}): ours re-runs the \
+                 extraction on the {} chunks within one chunk of it: {}; the crate re-meshes the chunk and the face neighbours \
+                 whose transition faces change ({} chunks) in {:.1} ms [{:.1}-{:.1}].\n",
+                s.chunk,
+                s.from,
+                s.to,
+                s.ours_chunks,
+                ours_times.join(", "),
+                s.crate_chunks,
+                s.crate_ms.median,
+                s.crate_ms.min,
+                s.crate_ms.max
+            ));
+        }
+        if !d.picture.is_empty() {
+            md.push_str(&format!(
+                "\n![marching cubes, levels: full resolution green, half blue, quarter purple; right, a close-up of the seams]({})\n",
+                d.picture
+            ));
+        }
+        if !d.crate_picture.is_empty() {
+            md.push_str(&format!(
+                "\n![the same close-up: marching cubes' restriction and stitching left, the transvoxel crate right]({})\n",
+                d.crate_picture
+            ));
+        }
+        if !d.dual_picture.is_empty() {
+            md.push_str(&format!(
+                "\n![the same close-up: surface nets left, dual contouring right, by octree minimal edges]({})\n",
+                d.dual_picture
+            ));
+        }
+        Ok(md)
+    }
+}
+
+/// Lines read off the rows: cracks and manifoldness per implementation, triangles kept by the
+/// viewer pattern, and each of ours against the crate on the patterns with seams.
+fn reading(d: &Data) -> String {
+    let mut md = String::from("\n");
+    let implementations = first_seen(d.rows.iter().map(|r| r.implementation.as_str()));
+    for &implementation in &implementations {
+        let rows: Vec<&Row> = d.rows.iter().filter(|r| r.implementation == implementation).collect();
+        let open: usize = rows.iter().map(|r| r.seam_boundary_edges).sum();
+        let non_manifold: usize = rows.iter().map(|r| r.non_manifold_edges + r.non_manifold_vertices).sum();
+        let crossing: usize = rows.iter().map(|r| r.self_intersecting_pairs).sum();
+        let pinched: usize = rows.iter().filter_map(|r| r.pinched).sum();
+        md.push_str(&format!(
+            "- {implementation}: {}, {} over the {} patterns ({open} open seam edges, {non_manifold} non-manifold edges and \
+             vertices, {crossing} self-intersecting pairs in all{}).\n",
+            if open == 0 { "watertight" } else { "not watertight" },
+            if non_manifold == 0 { "manifold" } else { "not manifold everywhere" },
+            rows.len(),
+            if pinched > 0 { format!("; {pinched} vertices pinched") } else { String::new() },
+        ));
+    }
+    let find = |implementation: &str, pattern: usize| d.rows.iter().filter(|r| r.implementation == implementation).nth(pattern);
+    for &implementation in &implementations {
+        if let (Some(full), Some(near)) = (find(implementation, 0), find(implementation, 1)) {
+            md.push_str(&format!(
+                "- {implementation}: the viewer-distance pattern keeps {:.0} % of the full-resolution triangles.\n",
+                100.0 * near.triangles as f64 / full.triangles.max(1) as f64
+            ));
+        }
+    }
+    // Each of ours against the crate on the patterns with seams between levels.
+    let mixed: Vec<&str> =
+        first_seen(d.rows.iter().filter(|r| r.seam_triangles > 0).map(|r| r.pattern.as_str())).into_iter().collect();
+    for &implementation in implementations.iter().filter(|&&i| i != CRATE) {
+        let pairs: Vec<(&Row, &Row)> = mixed
+            .iter()
+            .filter_map(|p| {
+                let of = |i: &str| d.rows.iter().find(|r| r.implementation == i && r.pattern == *p);
+                Some((of(implementation)?, of(CRATE)?))
+            })
+            .collect();
+        if pairs.is_empty() {
+            continue;
+        }
+        let ratios: Vec<String> = pairs.iter().map(|(o, c)| format!("{:.2}", o.time_ms.median / c.time_ms.median)).collect();
+        let better_shaped = pairs.iter().filter(|(o, c)| o.seam_aspect_mean < c.seam_aspect_mean).count();
+        md.push_str(&format!(
+            "- {implementation} against the crate on the {} patterns with seams between levels: time ratio {} (ours over \
+             the crate's median); seam triangles better shaped (lower mean aspect ratio) on {better_shaped} of them.\n",
+            pairs.len(),
+            ratios.join(", "),
+        ));
+    }
+    md
+}

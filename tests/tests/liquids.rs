@@ -10,7 +10,7 @@
 //! the brushes' mass bookkeeping exact and the densities in range.
 
 use glam::Vec3;
-use isolab_algorithms::liquids::{extract_layers, lake_and_cave, Phase, Phases};
+use isolab_algorithms::liquids::{extract_layers, lake_and_cave, ChunkedLayers, Phase, Phases};
 use isolab_algorithms::random::Random;
 use isolab_algorithms::{extractors, Extraction, Grid, Options};
 use isolab_metrics::layers::layer_contact;
@@ -168,4 +168,61 @@ fn the_posts_base_and_viscosity_round_trip() {
     assert!(e.contains("sample 4"), "{e}");
     let e = Phases::from_base_viscosity(grid, 2.0, &base[..5], &viscosity).unwrap_err().to_string();
     assert!(e.contains("needs 27"), "{e}");
+}
+
+/// A mesh's triangles as position triples, each rotated to start at its smallest corner, sorted:
+/// two meshes with equal keys have the same triangles, whatever their vertex numbering.
+fn triangle_keys(mesh: &isolab_algorithms::TriMesh) -> Vec<[[u32; 3]; 3]> {
+    let mut keys: Vec<[[u32; 3]; 3]> = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let p = t.map(|v| mesh.positions[v as usize].to_array().map(f32::to_bits));
+            let first = (0..3).min_by_key(|&k| p[k]).expect("three corners");
+            [p[first], p[(first + 1) % 3], p[(first + 2) % 3]]
+        })
+        .collect();
+    keys.sort_unstable();
+    keys
+}
+
+#[test]
+fn chunked_layers_weld_into_the_whole_grids_and_follow_the_brushes() {
+    // 32 x 32 x 15 cells in chunks of 8: the last chunk along z holds 7 cells.
+    let mut phases = lake_and_cave(33);
+    for name in ["marching-cubes", OVERLAP_FREE] {
+        let e = build(name);
+        let mut chunked = ChunkedLayers::new(e.as_ref(), &phases, 8).unwrap();
+        assert_eq!(chunked.counts(), [4, 4, 2]);
+        let mut random = Random::new(5);
+        for edit in 0..=24 {
+            if edit > 0 {
+                let centre =
+                    Vec3::new(4.0 + 24.0 * random.unit_f32(), 4.0 + 24.0 * random.unit_f32(), 4.0 + 8.0 * random.unit_f32());
+                let radius = 2.0 + 3.0 * random.unit_f32();
+                match edit % 3 {
+                    0 => phases.dig(centre, radius, 0.8),
+                    1 => phases.pour(centre, radius, 0.8),
+                    _ => phases.drain(centre, radius, 0.8),
+                };
+                let touched = chunked.touching(centre, radius);
+                assert!(touched.len() < 32, "{name}: a brush touches a few chunks, not all");
+                chunked.remesh(e.as_ref(), &phases, &touched).unwrap();
+            }
+            let welded = chunked.welded();
+            let whole = extract_layers(e.as_ref(), &phases).unwrap();
+            let what = format!("{name} after {edit} edits");
+            assert_eq!(triangle_keys(&welded.solid), triangle_keys(&whole.solid), "{what}: solid");
+            assert_eq!(triangle_keys(&welded.liquid), triangle_keys(&whole.liquid), "{what}: liquid");
+            for (mesh, layer) in [(&welded.solid, "solid"), (&welded.liquid, "liquid")] {
+                assert!(topology::topology(mesh).is_watertight_manifold(), "{what}: {layer}");
+            }
+            let c = layer_contact(&phases, &welded.solid, &welded.liquid);
+            assert_eq!(c.unshared, 0, "{what}");
+        }
+    }
+    // Extractors whose chunks do not meet vertex for vertex are refused, naming them.
+    let sn = build("surface-nets");
+    let err = ChunkedLayers::new(sn.as_ref(), &phases, 8).err().expect("refused").to_string();
+    assert!(err.contains("surface-nets") && err.contains("vertex for vertex"), "{err}");
 }

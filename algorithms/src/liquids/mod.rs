@@ -38,7 +38,10 @@
 //! solid vertex there is still shared (found by its solid sample), but a liquid vertex rounded
 //! onto its liquid sample cannot be told from the other edges of that sample and keeps its
 //! place, leaving a sliver of air where the liquid density is within rounding of the iso-value.
-//! Chunked meshing and levels of detail for the two layers are not built yet.
+//! Levels of detail for the two layers are not built.
+//!
+//! **Chunks.** [`ChunkedLayers`] (`chunked`) meshes the layers chunk by chunk, re-meshes only the
+//! chunks a brush touched, and welds them into the whole grid's layers (tested equal).
 //!
 //! ```
 //! use isolab_algorithms::liquids::{extract_layers, Phases};
@@ -56,6 +59,10 @@
 //! let layers = extract_layers(mc.as_ref(), &phases).unwrap();
 //! assert!(layers.contact > 0 && !layers.liquid.triangles.is_empty());
 //! ```
+
+mod chunked;
+
+pub use chunked::ChunkedLayers;
 
 use crate::extract::{ExtractError, Extraction, Extractor};
 use crate::lattice::{Grid, Lattice, LatticePlace};
@@ -157,6 +164,23 @@ impl Phases {
                 }
             }
         }
+    }
+
+    /// The samples from `lo` (sample indices), `dims` per axis, on a grid in the whole grid's
+    /// index coordinates (origin `lo`, unit spacing), so that blocks mesh to bit-equal vertices
+    /// on the planes they share.
+    pub fn block(&self, lo: [usize; 3], dims: [usize; 3]) -> Phases {
+        let grid = Grid { origin: Vec3::new(lo[0] as f32, lo[1] as f32, lo[2] as f32), spacing: 1.0, dims };
+        let mut block = Phases::empty(grid, self.max);
+        for z in 0..dims[2] {
+            for y in 0..dims[1] {
+                for x in 0..dims[0] {
+                    let (i, j) = (self.grid.index(lo[0] + x, lo[1] + y, lo[2] + z), grid.index(x, y, z));
+                    (block.solid[j], block.liquid[j]) = (self.solid[i], self.liquid[i]);
+                }
+            }
+        }
+        block
     }
 
     /// The grid.

@@ -1,0 +1,178 @@
+//! The `terrain_lod` page: the method paragraph, the options as run, the table, the reading
+//! (generated from the rows), the switching cost and the pictures.
+
+use super::{Data, Row, CHUNK, CRATE, DIMS, RUNS, TRANSVOXEL_VERSION};
+use crate::report::{first_seen, markdown_table};
+
+/// The page's Markdown from the run's data.
+pub(super) fn page(d: &Data) -> String {
+    let mut md = String::from("## Levels of detail without cracks (`terrain_lod`)\n\n");
+    let ours: Vec<&str> =
+        first_seen(d.rows.iter().map(|r| r.implementation.as_str())).into_iter().filter(|&i| i != CRATE).collect();
+    md.push_str(&format!(
+        "The {}×{}×{}-cell `terrain` in {CHUNK}³-cell chunks, each meshed at full resolution, at half resolution (every \
+         other sample) or at a quarter; chunks that touch differ by one level at most. Every registered extractor that \
+         takes levels of detail runs ({}). For all of them the finer side's samples on a seam are first restricted to \
+         what the coarser side sees (linear on a coarse edge, bilinear on a coarse face, an ambiguous face's interior \
+         kept outside). *Restriction + stitching* (marching cubes) then fans each coarse seam triangle over the fine \
+         boundary path; *octree minimal edges* (surface nets, dual contouring; Ju et al. 2002's rule for octrees) gives \
+         every crossing edge of the finest cells around it a polygon joining the vertices of the cells around it, a \
+         triangle where one coarse cell spans two of them, and splits a vertex where a fine cell's ring meets a coarse \
+         cell's across a seam (*pinched*). **The `transvoxel` crate** ({TRANSVOXEL_VERSION}, Lengyel 2010's transition \
+         cells, on the same chunks, samples and levels): each chunk is a block whose faces toward a finer face neighbour \
+         are transition faces; blocks are welded by exact position (the crate keeps each transition cell's vertices \
+         apart from the regular cells' at the same places). The crate's own `extract_from_field` with \
+         `FieldCaching::CacheCentralBlockOnly` reads the coarse block where the finer neighbour's samples belong and \
+         leaves its transition faces open, so the harness builds the crate's block view with the finer neighbours \
+         itself, as its `CacheNothing` path does (a test keeps both facts). *Open seam edges* counts boundary edges \
+         that are cracks: for marching cubes and the crate any off the world's boundary; for the dual methods, whose \
+         own border lies inside the outer cells, any more than a coarsest cell from it. *Seam triangles* are those \
+         within one coarser-side cell of a chunk face between two levels. Times are medians of {RUNS} runs alternating \
+         all implementations (range in brackets), on the same thread pool, sampling excluded, welding included.\n\n",
+        DIMS[0] - 1,
+        DIMS[1] - 1,
+        DIMS[2] - 1,
+        ours.iter().map(|i| format!("`{i}`")).collect::<Vec<_>>().join(", "),
+    ));
+    if !d.options.is_empty() {
+        md.push_str("Options as run (each extractor's defaults):\n\n");
+        for (name, settings) in &d.options {
+            md.push_str(&format!("- `{name}`: {settings}\n"));
+        }
+        md.push('\n');
+    }
+    let count = |n: Option<usize>| n.map_or("-".to_string(), |n| n.to_string());
+    let body: Vec<Vec<String>> = d
+        .rows
+        .iter()
+        .map(|r| {
+            vec![
+                r.pattern.clone(),
+                r.implementation.clone(),
+                r.per_level.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(" / "),
+                r.triangles.to_string(),
+                r.seam_boundary_edges.to_string(),
+                format!("{} / {}", r.non_manifold_edges, r.non_manifold_vertices),
+                r.misoriented_edges.to_string(),
+                r.self_intersecting_pairs.to_string(),
+                count(r.pinched),
+                r.seam_triangles.to_string(),
+                match r.seam_min_angle_deg {
+                    None => "-".into(),
+                    Some(angle) => format!("{:.2} / {:.1} / {angle:.1}°", r.seam_aspect_mean, r.seam_aspect_max),
+                },
+                format!("{:.1} [{:.1}-{:.1}]", r.time_ms.median, r.time_ms.min, r.time_ms.max),
+            ]
+        })
+        .collect();
+    md.push_str(&markdown_table(
+        &[
+            "levels",
+            "implementation",
+            "chunks per level",
+            "triangles",
+            "open seam edges",
+            "non-manifold edges / vertices",
+            "misoriented edges",
+            "self-intersecting pairs",
+            "pinched",
+            "seam triangles",
+            "seam aspect mean / max / smallest angle",
+            "ms",
+        ],
+        &body,
+    ));
+    md.push_str(&reading(d));
+    if let Some(s) = &d.switch {
+        let ours_times: Vec<String> =
+            s.ours.iter().map(|(name, t)| format!("{name} {:.1} ms median [{:.1}-{:.1}]", t.median, t.min, t.max)).collect();
+        md.push_str(&format!(
+            "\n**Switching one chunk's level** (chunk {:?} of the viewer-distance pattern, level {} to {}): ours re-runs the \
+             extraction on the {} chunks within one chunk of it: {}; the crate re-meshes the chunk and the face neighbours \
+             whose transition faces change ({} chunks) in {:.1} ms [{:.1}-{:.1}].\n",
+            s.chunk,
+            s.from,
+            s.to,
+            s.ours_chunks,
+            ours_times.join(", "),
+            s.crate_chunks,
+            s.crate_ms.median,
+            s.crate_ms.min,
+            s.crate_ms.max
+        ));
+    }
+    if !d.picture.is_empty() {
+        md.push_str(&format!(
+            "\n![marching cubes, levels: full resolution green, half blue, quarter purple; right, a close-up of the seams]({})\n",
+            d.picture
+        ));
+    }
+    if !d.crate_picture.is_empty() {
+        md.push_str(&format!(
+            "\n![the same close-up: marching cubes' restriction and stitching left, the transvoxel crate right]({})\n",
+            d.crate_picture
+        ));
+    }
+    if !d.dual_picture.is_empty() {
+        md.push_str(&format!(
+            "\n![the same close-up: surface nets left, dual contouring right, by octree minimal edges]({})\n",
+            d.dual_picture
+        ));
+    }
+    md
+}
+
+/// Lines read off the rows: cracks and manifoldness per implementation, triangles kept by the
+/// viewer pattern, and each of ours against the crate on the patterns with seams.
+fn reading(d: &Data) -> String {
+    let mut md = String::from("\n");
+    let implementations = first_seen(d.rows.iter().map(|r| r.implementation.as_str()));
+    for &implementation in &implementations {
+        let rows: Vec<&Row> = d.rows.iter().filter(|r| r.implementation == implementation).collect();
+        let open: usize = rows.iter().map(|r| r.seam_boundary_edges).sum();
+        let non_manifold: usize = rows.iter().map(|r| r.non_manifold_edges + r.non_manifold_vertices).sum();
+        let crossing: usize = rows.iter().map(|r| r.self_intersecting_pairs).sum();
+        let pinched: usize = rows.iter().filter_map(|r| r.pinched).sum();
+        md.push_str(&format!(
+            "- {implementation}: {}, {} over the {} patterns ({open} open seam edges, {non_manifold} non-manifold edges and \
+             vertices, {crossing} self-intersecting pairs in all{}).\n",
+            if open == 0 { "watertight" } else { "not watertight" },
+            if non_manifold == 0 { "manifold" } else { "not manifold everywhere" },
+            rows.len(),
+            if pinched > 0 { format!("; {pinched} vertices pinched") } else { String::new() },
+        ));
+    }
+    let find = |implementation: &str, pattern: usize| d.rows.iter().filter(|r| r.implementation == implementation).nth(pattern);
+    for &implementation in &implementations {
+        if let (Some(full), Some(near)) = (find(implementation, 0), find(implementation, 1)) {
+            md.push_str(&format!(
+                "- {implementation}: the viewer-distance pattern keeps {:.0} % of the full-resolution triangles.\n",
+                100.0 * near.triangles as f64 / full.triangles.max(1) as f64
+            ));
+        }
+    }
+    // Each of ours against the crate on the patterns with seams between levels.
+    let mixed: Vec<&str> =
+        first_seen(d.rows.iter().filter(|r| r.seam_triangles > 0).map(|r| r.pattern.as_str())).into_iter().collect();
+    for &implementation in implementations.iter().filter(|&&i| i != CRATE) {
+        let pairs: Vec<(&Row, &Row)> = mixed
+            .iter()
+            .filter_map(|p| {
+                let of = |i: &str| d.rows.iter().find(|r| r.implementation == i && r.pattern == *p);
+                Some((of(implementation)?, of(CRATE)?))
+            })
+            .collect();
+        if pairs.is_empty() {
+            continue;
+        }
+        let ratios: Vec<String> = pairs.iter().map(|(o, c)| format!("{:.2}", o.time_ms.median / c.time_ms.median)).collect();
+        let better_shaped = pairs.iter().filter(|(o, c)| o.seam_aspect_mean < c.seam_aspect_mean).count();
+        md.push_str(&format!(
+            "- {implementation} against the crate on the {} patterns with seams between levels: time ratio {} (ours over \
+             the crate's median); seam triangles better shaped (lower mean aspect ratio) on {better_shaped} of them.\n",
+            pairs.len(),
+            ratios.join(", "),
+        ));
+    }
+    md
+}

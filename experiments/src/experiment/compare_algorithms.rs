@@ -2,7 +2,9 @@
 //! three resolutions: counts, quality, topology, accuracy, time and quad overshading; a table, a
 //! quality-against-cost scatter plot, aspect-ratio and angle histograms, and rendered images.
 
-use super::context::{measure, model_path, ms, Context, Experiment, ExperimentError, Measured};
+use super::context::{
+    compared_inputs as inputs, measure, ms, Context, Experiment, ExperimentError, Measured, FIELD_LEVELS, MODEL_LEVELS,
+};
 use crate::figures::color_of;
 use crate::figures::plot::{self, HistogramPlot, Scale, Series, Style, XyPlot};
 use crate::report::{first_seen, markdown_table};
@@ -16,12 +18,6 @@ use serde::{Deserialize, Serialize};
 pub struct CompareAlgorithms;
 
 const NAME: &str = "compare_algorithms";
-/// Samples along the longest side for built-in fields.
-pub const FIELD_LEVELS: [usize; 3] = [32, 64, 128];
-/// Samples along the longest side for shipped models.
-pub const MODEL_LEVELS: [usize; 3] = [48, 96, 144];
-/// Shipped models measured.
-pub const MODELS: [&str; 6] = ["stanford-bunny", "spot", "fandisk", "rocker-arm", "cheburashka", "teapot"];
 /// The field shown turning.
 const TURNTABLE_FIELD: &str = "asteroid";
 
@@ -40,14 +36,6 @@ pub(crate) struct Data {
     pub(crate) overshading: String,
     pub(crate) bars: String,
     pub(crate) histograms: Vec<String>,
-}
-
-/// Every compared input: (name, field spec, its three resolutions); built-in fields, then models.
-pub(crate) fn inputs() -> Vec<(String, String, [usize; 3])> {
-    let mut v: Vec<(String, String, [usize; 3])> =
-        fields::registry().iter().map(|f| (f.name.to_owned(), f.name.to_owned(), FIELD_LEVELS)).collect();
-    v.extend(MODELS.iter().map(|m| (m.to_string(), model_path(m), MODEL_LEVELS)));
-    v
 }
 
 impl Experiment for CompareAlgorithms {

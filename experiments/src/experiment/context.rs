@@ -209,3 +209,30 @@ pub fn measure(
 }
 
 pub use crate::report::ms;
+
+/// Samples along the longest side for built-in fields, in `compare_algorithms` (and the meshes of
+/// `viewer`, at the first).
+pub const FIELD_LEVELS: [usize; 3] = [32, 64, 128];
+/// Samples along the longest side for shipped models, likewise.
+pub const MODEL_LEVELS: [usize; 3] = [48, 96, 144];
+/// Shipped models measured.
+pub const MODELS: [&str; 6] = ["stanford-bunny", "spot", "fandisk", "rocker-arm", "cheburashka", "teapot"];
+
+/// Every compared input: (name, field spec, its three resolutions); built-in fields, then models
+/// (`compare_algorithms` measures them, `viewer` shows them).
+pub fn compared_inputs() -> Vec<(String, String, [usize; 3])> {
+    let mut v: Vec<(String, String, [usize; 3])> =
+        isolab_algorithms::fields::registry().iter().map(|f| (f.name.to_owned(), f.name.to_owned(), FIELD_LEVELS)).collect();
+    v.extend(MODELS.iter().map(|m| (m.to_string(), model_path(m), MODEL_LEVELS)));
+    v
+}
+
+/// The distance from each of the `csg` field's true sharp corners to the nearest mesh vertex, in
+/// grid spacings `h` (how far the mesh rounds the corner off): `sharp_features` and
+/// `surface_nets_smoothing` measure it.
+pub fn corner_distances_h(mesh: &isolab_algorithms::TriMesh, spacing: f32) -> Vec<f64> {
+    isolab_algorithms::fields::Csg::sharp_corners()
+        .iter()
+        .map(|c| f64::from(mesh.positions.iter().map(|p| p.distance(*c)).fold(f32::INFINITY, f32::min) / spacing))
+        .collect()
+}

@@ -91,7 +91,7 @@ pub fn assemble(ctx: &Context) -> Result<PathBuf, ExperimentError> {
 fn front_page(ctx: &Context, pages: &[(&str, String, &str)]) -> String {
     let extractors: Vec<String> = isolab_algorithms::extractors::registry().iter().map(|e| format!("`{}`", e.name())).collect();
     let fields: Vec<String> = isolab_algorithms::fields::registry().iter().map(|f| format!("`{}`", f.name)).collect();
-    let models: Vec<String> = compare_algorithms::MODELS.iter().map(|m| format!("`{m}`")).collect();
+    let models: Vec<String> = context::MODELS.iter().map(|m| format!("`{m}`")).collect();
     let mut md = String::from("# isolab report\n\n");
     md.push_str(&format!(
         "Which isosurface extractor for which job? This report compares isolab's {} extractors ({}) on {} built-in \

@@ -195,32 +195,6 @@ struct Entry {
     slow: bool,
 }
 
-/// The memory floor: one read of every sample (a sum the optimiser cannot drop) and one write of
-/// `bytes` (filling a buffer allocated beforehand).
-pub(crate) fn floor(values: &[f32], bytes: usize) -> (Duration, Duration) {
-    // Eight independent lanes so the sum is limited by memory, not by the adder's latency.
-    let t = Instant::now();
-    let mut lanes = [0.0f32; 8];
-    let chunks = values.chunks_exact(8);
-    let rest: f32 = chunks.remainder().iter().sum();
-    for c in chunks {
-        for (l, v) in lanes.iter_mut().zip(c) {
-            *l += v;
-        }
-    }
-    let read = t.elapsed();
-    std::hint::black_box((lanes, rest));
-    // The buffer is touched once first: page faults are an allocator's cost, not the floor's.
-    let mut buffer = vec![0u8; bytes];
-    buffer.iter_mut().for_each(|b| *b = 2);
-    std::hint::black_box(&buffer);
-    let t = Instant::now();
-    buffer.iter_mut().for_each(|b| *b = 1);
-    let write = t.elapsed();
-    std::hint::black_box(&buffer);
-    (read, write)
-}
-
 /// Every implementation the run alternates, Python peers when the server started.
 fn entries(python: Option<&std::rc::Rc<std::cell::RefCell<PythonServer>>>, root: &Path) -> Vec<Entry> {
     let entry = |name: &str, peer: Box<dyn Peer>, threads: usize, steady: bool, slow: bool| Entry {
@@ -354,7 +328,7 @@ impl Experiment for Peers {
                                 let slot = runs.entry((k, protocol)).or_insert_with(|| (Vec::new(), run.vertices, run.triangles));
                                 slot.0.push(run.time.as_secs_f64() * 1e3);
                                 if k == 0 && protocol == Protocol::OneShot {
-                                    let (r, w) = floor(samples.values(), run.vertices * 12 + run.triangles * 12);
+                                    let (r, w) = crate::memory::floor(samples.values(), run.vertices * 12 + run.triangles * 12);
                                     reads.push(r);
                                     writes.push(w);
                                 }

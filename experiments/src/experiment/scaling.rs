@@ -196,7 +196,7 @@ impl Experiment for Scaling {
                 let bytes = output_bytes(&out);
                 let floor: Vec<Duration> = (0..runs.max(2))
                     .map(|_| {
-                        let (r, w) = super::peers::floor(samples.values(), bytes);
+                        let (r, w) = crate::memory::floor(samples.values(), bytes);
                         r + w
                     })
                     .collect();

@@ -3,7 +3,7 @@
 //! picture of each extractor's csg at the lowest resolution. Dual contouring places vertices from
 //! the field's normals and should land on the corners; the others cut them.
 
-use super::context::{Context, Experiment, ExperimentError};
+use super::context::{corner_distances_h, Context, Experiment, ExperimentError};
 use crate::report::markdown_table;
 use isolab_algorithms::{extractors, fields, Extraction, Grid, Lattice, Samples, Vec3};
 use isolab_cli::render::{render, save_png, RenderOptions};
@@ -29,15 +29,6 @@ pub(crate) struct Row {
 pub(crate) struct Data {
     pub(crate) rows: Vec<Row>,
     pub(crate) images: Vec<(String, String)>,
-}
-
-/// The distance from each of the `csg` field's true sharp corners to the nearest mesh vertex, in
-/// grid spacings `h` (how far the mesh rounds the corner off).
-pub(crate) fn corner_distances_h(mesh: &isolab_algorithms::TriMesh, spacing: f32) -> Vec<f64> {
-    fields::Csg::sharp_corners()
-        .iter()
-        .map(|c| f64::from(mesh.positions.iter().map(|p| p.distance(*c)).fold(f32::INFINITY, f32::min) / spacing))
-        .collect()
 }
 
 impl Experiment for SharpFeatures {

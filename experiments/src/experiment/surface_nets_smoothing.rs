@@ -5,7 +5,7 @@
 //! distance to the true surface. The post measured about 17 ms (linear), 84 ms (explicit) and over
 //! 30 s (implicit) for its 32^3 chunk in Unity.
 
-use super::context::{ms, Context, Experiment, ExperimentError};
+use super::context::{corner_distances_h, ms, Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, BarChart, BarSeries};
 use crate::report::{markdown_table, median};
 use isolab_algorithms::extractors::surface_nets::{Smoothing, SnOptions, SurfaceNets};
@@ -195,7 +195,7 @@ impl Experiment for SurfaceNetsSmoothing {
                         },
                     });
                     if name == FEATURE_FIELD {
-                        let corners = super::sharp_features::corner_distances_h(&out.surface, grid.spacing);
+                        let corners = corner_distances_h(&out.surface, grid.spacing);
                         if let Some(row) = rows.last_mut() {
                             row.worst_corner_h = Some(corners.iter().copied().fold(0.0, f64::max));
                         }

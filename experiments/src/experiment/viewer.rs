@@ -50,7 +50,7 @@ pub struct Data {
 /// The inputs: (name, field spec, resolution), as `compare_algorithms` pictures them (its lowest
 /// resolution).
 fn inputs() -> Vec<(String, String, usize)> {
-    super::compare_algorithms::inputs().into_iter().map(|(name, spec, levels)| (name, spec, levels[0])).collect()
+    super::context::compared_inputs().into_iter().map(|(name, spec, levels)| (name, spec, levels[0])).collect()
 }
 
 /// Picks whole inputs, smallest total first, while the running total stays within `budget`:

@@ -1,6 +1,12 @@
 //! Our additions to the paper, measured: projecting merged vertices onto the level set.
 
-use super::*;
+use super::{num, OBJECTS};
+use crate::experiment::context::{load_object, ExperimentError};
+use crate::report::{markdown_table, median, millis};
+use isolab_algorithms::extractors::regularised_marching_tetrahedra::{RegularisedMarchingTetrahedra, RmtOptions};
+use isolab_algorithms::{Extraction, Extractor, Grid, Lattice, Samples};
+use isolab_metrics::MeshMetrics;
+use serde::{Deserialize, Serialize};
 
 /// RMT with merged vertices at the mean, and projected with Newton steps (`project=newton`).
 #[derive(Clone, Debug, Serialize, Deserialize)]

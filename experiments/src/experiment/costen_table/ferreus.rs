@@ -1,8 +1,14 @@
 //! The side-by-side run against the `ferreus_rmt` crate (an independent, surface-following RMT).
 
-use super::*;
+use super::{num, OBJECTS};
+use crate::experiment::context::{load_object, ExperimentError};
 use crate::peers::ferreus_rmt::FerreusRmt;
 use crate::peers::{Job, Peer, Protocol};
+use crate::report::{markdown_table, median, millis};
+use isolab_algorithms::extractors::regularised_marching_tetrahedra::RegularisedMarchingTetrahedra;
+use isolab_algorithms::{Extraction, Extractor, Grid, Lattice, Samples};
+use isolab_metrics::MeshMetrics;
+use serde::{Deserialize, Serialize};
 
 /// Our RMT against `ferreus_rmt` on one object (BCC, same spacing), medians of interleaved runs.
 #[derive(Clone, Debug, Serialize, Deserialize)]

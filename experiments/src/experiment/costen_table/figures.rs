@@ -1,6 +1,13 @@
 //! The section's pictures (the paper's objects, a defect close-up) and bar charts.
 
-use super::*;
+use super::{Picture, Row, PAPER};
+use crate::experiment::context::{load_object, Context, ExperimentError};
+use crate::figures::plot;
+use crate::figures::plot::{BarChart, BarSeries};
+use isolab_algorithms::extractors::regularised_marching_tetrahedra::RegularisedMarchingTetrahedra;
+use isolab_algorithms::mesh::manifold_defects;
+use isolab_algorithms::{Extraction, Extractor, Grid, Lattice, Samples, Vec3};
+use isolab_cli::render::{render, save_png, side_by_side, RenderOptions, Shading};
 
 /// The defect close-up's radius around the first faulty vertex, in grid spacings.
 const CLOSE_UP_H: f32 = 3.0;

@@ -9,7 +9,6 @@
 //! are medians.
 
 use super::context::{load_object, Context, Experiment, ExperimentError};
-use crate::figures::plot::{self, BarChart, BarSeries};
 use crate::report::{markdown_table, median, millis};
 use isolab_algorithms::extract::PostProcess;
 use isolab_algorithms::extractors::regularised_marching_tetrahedra::{RegularisedMarchingTetrahedra, RmtOptions};
@@ -17,8 +16,7 @@ use isolab_algorithms::extractors::MarchingTetrahedra;
 use isolab_algorithms::mesh::manifold_defects;
 use isolab_algorithms::post::EdgeCollapse;
 use isolab_algorithms::tetrahedral::tetrahedron_count;
-use isolab_algorithms::{Extraction, Extractor, Grid, Lattice, Samples, Vec3};
-use isolab_cli::render::{render, save_png, side_by_side, RenderOptions, Shading};
+use isolab_algorithms::{Extraction, Extractor, Grid, Lattice, Samples};
 use isolab_metrics::MeshMetrics;
 use serde::{Deserialize, Serialize};
 use std::time::Duration;
@@ -30,12 +28,12 @@ mod passes;
 mod questionnaire;
 mod sphere_match;
 
-use ablations::*;
-use ferreus::*;
-use figures::*;
-use passes::*;
-use questionnaire::*;
-use sphere_match::*;
+use ablations::{projection, projection_section, ProjectionRow};
+use ferreus::{against_ferreus, peer_section, PeerRow};
+use figures::{charts, defect_closeup, pictures};
+use passes::{pass_changes, passes_section, PassChange, PASS_RUNS};
+use questionnaire::questionnaire_section;
+use sphere_match::{matched_section, matched_sphere, sphere_radius, MatchedRow};
 
 /// The experiment.
 pub struct CostenTable;

@@ -7,7 +7,11 @@
 //! text with this statistic and further off with a ratio of sums), and a 95% bootstrap
 //! confidence interval (runs resampled within each configuration).
 
-use super::*;
+use super::{run_method, PaperRow, OBJECTS, PAPER};
+use crate::experiment::context::{load_object, ExperimentError};
+use crate::report::{markdown_table, millis};
+use isolab_algorithms::{Extraction, Grid, Lattice, Samples};
+use serde::{Deserialize, Serialize};
 
 /// Runs per configuration, as the paper's means.
 pub(super) const PASS_RUNS: usize = 100;

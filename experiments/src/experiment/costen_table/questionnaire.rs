@@ -7,7 +7,7 @@
 //! so this recomputes both figures with the paper's 18 answers and with all 19, beside the
 //! paper's printed values.
 
-use super::*;
+use crate::report::markdown_table;
 
 /// Appendix C's questions (left and right configuration) with Appendix D's answers, one letter per
 /// participant column: `L` prefer left, `R` prefer right, `N` no preference.

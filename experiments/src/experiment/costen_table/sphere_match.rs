@@ -6,7 +6,11 @@
 //! sphere (radius 0.4 + 0.1); this runs the paper's `u` and `i` on it on both lattices at the
 //! benchmark's 50 cells and sets the counts and aspect ratios beside the paper's.
 
-use super::*;
+use super::{num, run_method, Row, OBJECTS, PAPER};
+use crate::experiment::context::{load_object, ExperimentError};
+use crate::report::markdown_table;
+use isolab_algorithms::{Extraction, Grid, Lattice, Samples};
+use serde::{Deserialize, Serialize};
 
 /// The radius offset that turns our sphere (radius 0.4) into one of radius 0.5, as an iso-value.
 pub(super) const MATCHED_ISO: f32 = 0.1;

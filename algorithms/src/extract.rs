@@ -210,8 +210,9 @@ pub enum ExtractError {
 }
 
 /// How to build an extractor: its name, one line, and a constructor from options. Each
-/// algorithm file defines its own as `pub const INFO` (the name is written there once, and its
-/// `Extractor::name` returns it); the registry ([`crate::extractors::INFOS`]) lists them.
+/// algorithm file defines its own as `pub const INFO` (the name and description are written there
+/// once; [`Extractor::info`] returns it, and the provided [`Extractor::name`] and
+/// [`Extractor::description`] read it); the registry ([`crate::extractors::INFOS`]) lists them.
 pub struct ExtractorInfo {
     /// Stable kebab-case name (CLI, registry, report).
     pub name: &'static str,
@@ -287,11 +288,19 @@ pub struct PostGuarantees {
 /// An isosurface or volume extractor. Dyn-compatible: experiments iterate over
 /// [`crate::extractors::registry`].
 pub trait Extractor: Send + Sync {
-    /// Stable kebab-case name used by the CLI, the registry and the report.
-    fn name(&self) -> &'static str;
+    /// Its registry entry (the `INFO` its file defines): the one place its name, description,
+    /// options and guarantees are written.
+    fn info(&self) -> &'static ExtractorInfo;
 
-    /// One line saying what it does.
-    fn description(&self) -> &'static str;
+    /// Stable kebab-case name used by the CLI, the registry and the report (its `INFO`'s).
+    fn name(&self) -> &'static str {
+        self.info().name
+    }
+
+    /// One line saying what it does (its `INFO`'s).
+    fn description(&self) -> &'static str {
+        self.info().description
+    }
 
     /// Whether its main output is a tetrahedral volume (whose boundary is the surface) rather
     /// than an isosurface: experiments about isosurface accuracy leave such extractors out.

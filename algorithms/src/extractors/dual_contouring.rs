@@ -129,12 +129,8 @@ impl DualContouring {
 }
 
 impl Extractor for DualContouring {
-    fn name(&self) -> &'static str {
-        INFO.name
-    }
-
-    fn description(&self) -> &'static str {
-        DESCRIPTION
+    fn info(&self) -> &'static ExtractorInfo {
+        &INFO
     }
 
     fn settings(&self) -> String {

@@ -127,16 +127,10 @@ impl ManifoldDualContouring {
 }
 
 impl Extractor for ManifoldDualContouring {
-    fn name(&self) -> &'static str {
-        INFO.name
+    fn info(&self) -> &'static ExtractorInfo {
+        &INFO
     }
 
-    fn description(&self) -> &'static str {
-        DESCRIPTION
-    }
-
-    /// Dual contouring's apron and one cell more: a kept triangle's sides need both of their
-    /// quads, and a cell's face points the quads around its faces.
     fn levels_of_detail(&self) -> LevelsOfDetail<'_> {
         LevelsOfDetail::Unsupported(
             "its triangles are fans around edge points kept inside cells, which a polygon on a seam between levels (spanning a fine and a coarse cell) is not",
@@ -147,6 +141,8 @@ impl Extractor for ManifoldDualContouring {
         self.engine.settings()
     }
 
+    /// Dual contouring's apron and one cell more: a kept triangle's sides need both of their
+    /// quads, and a cell's face points the quads around its faces.
     fn chunking(&self) -> Chunking {
         match self.engine.chunking() {
             Chunking::Apron(a) => Chunking::Apron(a + 1),

@@ -734,11 +734,11 @@ fn join_slab_meshes(
 }
 
 impl Extractor for MarchingCubes {
-    fn name(&self) -> &'static str {
+    fn info(&self) -> &'static ExtractorInfo {
         match self.options.faces {
-            FaceResolution::SeparateInside => INFO.name,
-            FaceResolution::AsymptoticDecider => DECIDER_INFO.name,
-            FaceResolution::Trilinear => MC33_INFO.name,
+            FaceResolution::SeparateInside => &INFO,
+            FaceResolution::AsymptoticDecider => &DECIDER_INFO,
+            FaceResolution::Trilinear => &MC33_INFO,
         }
     }
 
@@ -768,14 +768,6 @@ impl Extractor for MarchingCubes {
             _ => LevelsOfDetail::Unsupported(
                 "its ambiguous faces follow the interpolant, which the seam restriction (inside corners kept apart) does not reproduce",
             ),
-        }
-    }
-
-    fn description(&self) -> &'static str {
-        match self.options.faces {
-            FaceResolution::SeparateInside => DESCRIPTION,
-            FaceResolution::AsymptoticDecider => DECIDER_DESCRIPTION,
-            FaceResolution::Trilinear => MC33_DESCRIPTION,
         }
     }
 

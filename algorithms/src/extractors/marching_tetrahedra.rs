@@ -88,12 +88,8 @@ pub struct MarchingTetrahedra {
 }
 
 impl Extractor for MarchingTetrahedra {
-    fn name(&self) -> &'static str {
-        INFO.name
-    }
-
-    fn description(&self) -> &'static str {
-        DESCRIPTION
+    fn info(&self) -> &'static ExtractorInfo {
+        &INFO
     }
 
     fn levels_of_detail(&self) -> LevelsOfDetail<'_> {

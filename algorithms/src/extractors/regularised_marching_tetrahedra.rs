@@ -318,12 +318,8 @@ fn newton(field: &dyn Field, start: Vec3, iso: f32, reach: f32) -> Vec3 {
 }
 
 impl Extractor for RegularisedMarchingTetrahedra {
-    fn name(&self) -> &'static str {
-        INFO.name
-    }
-
-    fn description(&self) -> &'static str {
-        DESCRIPTION
+    fn info(&self) -> &'static ExtractorInfo {
+        &INFO
     }
 
     fn levels_of_detail(&self) -> LevelsOfDetail<'_> {

@@ -155,12 +155,8 @@ impl SurfaceNets {
 }
 
 impl Extractor for SurfaceNets {
-    fn name(&self) -> &'static str {
-        INFO.name
-    }
-
-    fn description(&self) -> &'static str {
-        DESCRIPTION
+    fn info(&self) -> &'static ExtractorInfo {
+        &INFO
     }
 
     fn settings(&self) -> String {

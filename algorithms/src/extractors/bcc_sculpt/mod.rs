@@ -330,12 +330,8 @@ pub struct Sculpted {
 }
 
 impl Extractor for BccSculpt {
-    fn name(&self) -> &'static str {
-        INFO.name
-    }
-
-    fn description(&self) -> &'static str {
-        DESCRIPTION
+    fn info(&self) -> &'static ExtractorInfo {
+        &INFO
     }
 
     fn produces_volume(&self) -> bool {

@@ -73,7 +73,7 @@ pub fn section(ctx: &Context) -> String {
 }
 
 fn missing(what: &str) -> ExperimentError {
-    ExperimentError::Figure(format!("the data has no {what}"))
+    ExperimentError::Missing(format!("the data has no {what}"))
 }
 
 /// A game terrain: after every one of the scripted edits the chunk seams stay closed (no open

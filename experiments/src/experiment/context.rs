@@ -34,6 +34,24 @@ pub enum ExperimentError {
     /// A figure could not be drawn.
     #[error("figure: {0}")]
     Figure(String),
+    /// Something the experiment needs is not there: an extractor in the registry, an experiment
+    /// by that name, a row in another experiment's data.
+    #[error("missing: {0}")]
+    Missing(String),
+    /// A thread pool of the size a measurement needs could not be built.
+    #[error("thread pool: {0}")]
+    ThreadPool(String),
+    /// A setting (an environment variable) is malformed.
+    #[error("setting {0}")]
+    Setting(String),
+    /// A step of the run failed: what it was, and why.
+    #[error("{what}: {reason}")]
+    Failed {
+        /// The step (streaming a file, applying an edit, ...).
+        what: String,
+        /// The underlying error.
+        reason: String,
+    },
     /// A Python script, or the reference environment it runs in, failed.
     #[error("Python: {0}")]
     Python(String),

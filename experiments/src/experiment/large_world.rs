@@ -73,11 +73,11 @@ struct Data {
 fn world_dims() -> Result<[usize; 3], ExperimentError> {
     let Ok(text) = std::env::var("ISOLAB_WORLD") else { return Ok(DEFAULT_DIMS) };
     let cells: Vec<usize> = text.split(',').map(|s| s.trim().parse::<usize>()).collect::<Result<_, _>>().map_err(|_| {
-        ExperimentError::Figure(format!("ISOLAB_WORLD='{text}': give three cell counts X,Y,Z, multiples of {CHUNK}"))
+        ExperimentError::Setting(format!("ISOLAB_WORLD='{text}': give three cell counts X,Y,Z, multiples of {CHUNK}"))
     })?;
     match cells.as_slice() {
         [x, y, z] if [x, y, z].iter().all(|&&c| c >= CHUNK && c % CHUNK == 0) => Ok([x + 1, y + 1, z + 1]),
-        _ => Err(ExperimentError::Figure(format!("ISOLAB_WORLD='{text}': give three cell counts, multiples of {CHUNK}"))),
+        _ => Err(ExperimentError::Setting(format!("ISOLAB_WORLD='{text}': give three cell counts, multiples of {CHUNK}"))),
     }
 }
 
@@ -102,7 +102,8 @@ impl Experiment for LargeWorld {
         let domain = field.domain();
         let spacing = (domain.max.y - domain.min.y) / (dims[1] - 1) as f32;
         let grid = Grid { origin: domain.min, spacing, dims };
-        let mc = extractors::by_name("marching-cubes").ok_or_else(|| ExperimentError::Figure("no marching-cubes".into()))?;
+        let mc =
+            extractors::by_name("marching-cubes").ok_or_else(|| ExperimentError::Missing("extractor marching-cubes".into()))?;
         let path = std::env::temp_dir().join(format!("isolab-large-world-{}.ply", std::process::id()));
         let slabs = (dims[2] - 1) / CHUNK;
         let bar = ctx.bar(NAME, slabs as u64);
@@ -111,7 +112,7 @@ impl Experiment for LargeWorld {
         let start = Instant::now();
         let mut sink = PlyStream::create(&path)?;
         let stats = stream_chunked(mc.as_ref(), field.as_ref(), grid, 0.0, CHUNK, &mut sink, |_, _| bar.inc(1))
-            .map_err(|e| ExperimentError::Figure(format!("streaming the world: {e}")))?;
+            .map_err(|e| ExperimentError::Failed { what: "streaming the world".into(), reason: e.to_string() })?;
         let file_bytes = sink.finish()?;
         let seconds = start.elapsed().as_secs_f64();
         let peak_rss_mib = crate::memory::peak_rss_mib();
@@ -316,7 +317,10 @@ fn write_volume_file(path: &std::path::Path, side: usize) -> Result<u64, Experim
 /// on disk in bytes.
 fn write_zarr_store(path: &std::path::Path, side: usize) -> Result<u64, ExperimentError> {
     use zarrs::array::{codec::ZstdCodec, ArrayBuilder, DataType};
-    let fail = |e: &dyn std::fmt::Display| ExperimentError::Figure(format!("writing {}: {e}", path.display()));
+    let fail = |e: &dyn std::fmt::Display| ExperimentError::Failed {
+        what: format!("writing {}", path.display()),
+        reason: e.to_string(),
+    };
     let store = std::sync::Arc::new(zarrs::filesystem::FilesystemStore::new(path).map_err(|e| fail(&e))?);
     let (n, c) = (side as u64, VOLUME_CHUNK as u64);
     let array = ArrayBuilder::new(vec![n, n, n], vec![c, c, c], DataType::UInt8, 0u8)
@@ -367,7 +371,7 @@ fn streamed_run(path: &std::path::Path, out: &std::path::Path, iso: Option<f32>)
     let peak_reset = crate::memory::reset_peak_rss();
     let start = Instant::now();
     let report = isolab_pipeline::stream::stream_volume_file(&volume_config(path, iso), out, &mut |_, _| {})
-        .map_err(|e| ExperimentError::Figure(format!("streaming {}: {e}", path.display())))?;
+        .map_err(|e| ExperimentError::Failed { what: format!("streaming {}", path.display()), reason: e.to_string() })?;
     Ok(StreamedRun {
         seconds: start.elapsed().as_secs_f64(),
         threshold_seconds: report.times_ms.threshold / 1e3,
@@ -387,7 +391,7 @@ fn in_memory_run(path: &std::path::Path, out: &std::path::Path) -> Result<(f64, 
     crate::memory::reset_peak_rss();
     let start = Instant::now();
     let outcome = isolab_pipeline::run(&volume_config(path, Some(COMPARE_ISO)))
-        .map_err(|e| ExperimentError::Figure(format!("meshing {} in memory: {e}", path.display())))?;
+        .map_err(|e| ExperimentError::Failed { what: format!("meshing {} in memory", path.display()), reason: e.to_string() })?;
     isolab_io::write_mesh_with(out, &outcome.extraction.surface, isolab_io::MeshExtras::default())?;
     Ok((start.elapsed().as_secs_f64(), crate::memory::peak_rss_mib(), outcome.extraction.surface.triangles.len()))
 }

@@ -211,7 +211,8 @@ fn read_f32(path: &Path) -> Option<Vec<f32>> {
 /// Whether marching cubes makes the same mesh from both fields' samples.
 fn same_marching_cubes(narrow: &MeshField, exact: &MeshField, grid: &Grid) -> Result<bool, ExperimentError> {
     let info = extractors::INFOS.iter().find(|i| i.name == "marching-cubes").expect("marching cubes is registered");
-    let extractor = (info.make)(&Options::new()).map_err(|e| ExperimentError::Figure(format!("building marching cubes: {e}")))?;
+    let extractor = (info.make)(&Options::new())
+        .map_err(|e| ExperimentError::Failed { what: "building marching cubes".into(), reason: e.to_string() })?;
     let mesh = |field: &MeshField| -> Result<Extraction, ExperimentError> {
         let samples = Samples::sample_cubic(Arc::new(field.clone()), *grid, 0.0)?;
         let mut out = Extraction::default();

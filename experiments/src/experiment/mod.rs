@@ -151,7 +151,7 @@ pub fn run_and_assemble(name: &str) -> std::process::ExitCode {
     let result = all()
         .into_iter()
         .find(|e| e.name() == name)
-        .ok_or_else(|| ExperimentError::Figure(format!("no experiment called {name}")))
+        .ok_or_else(|| ExperimentError::Missing(format!("no experiment called {name}")))
         .and_then(|e| e.run(&ctx))
         .and_then(|()| assemble(&ctx));
     match result {

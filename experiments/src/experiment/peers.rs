@@ -139,7 +139,6 @@ const WAKE_REQUESTS: usize = 9;
 /// experiment's thread stays in no pool.
 fn second_thread_start(idle: Duration, caller: WakeCaller) -> Result<Vec<f64>, ExperimentError> {
     use std::sync::atomic::{AtomicBool, Ordering};
-    let failed = |e: String| ExperimentError::Figure(format!("thread pool: {e}"));
     let join_start = |pool: &rayon::ThreadPool| {
         let started = AtomicBool::new(false);
         let asked = Instant::now();
@@ -177,11 +176,14 @@ fn second_thread_start(idle: Duration, caller: WakeCaller) -> Result<Vec<f64>, E
         s.spawn(|| {
             let builder = rayon::ThreadPoolBuilder::new().num_threads(TWO);
             let builder = if matches!(caller, WakeCaller::Inside) { builder.use_current_thread() } else { builder };
-            let pool = builder.build().map_err(|e| failed(e.to_string()))?;
+            let pool = builder.build().map_err(|e| ExperimentError::ThreadPool(e.to_string()))?;
             Ok(measure(&pool))
         })
         .join()
-        .map_err(|_| failed("the measuring thread panicked".into()))?
+        .map_err(|_| ExperimentError::Failed {
+            what: "measuring a second thread's start".into(),
+            reason: "the measuring thread panicked".into(),
+        })?
     })
 }
 

@@ -187,7 +187,7 @@ impl Experiment for RealVolumes {
             .iter()
             .map(|&n| rayon::ThreadPoolBuilder::new().num_threads(n).build())
             .collect::<Result<_, _>>()
-            .map_err(|e| ExperimentError::Figure(format!("thread pool: {e}")))?;
+            .map_err(|e| ExperimentError::ThreadPool(e.to_string()))?;
         let (server, hello) = match PythonServer::start(&root) {
             Ok(p) => p,
             Err(e) => {
@@ -237,8 +237,8 @@ impl Experiment for RealVolumes {
                 for round in 0..ctx.repeats {
                     let last = t == 1 && round + 1 == ctx.repeats;
                     for (k, info) in surface.iter().enumerate() {
-                        let extractor =
-                            extractors::by_name(info.name).ok_or_else(|| ExperimentError::Figure(info.name.into()))?;
+                        let extractor = extractors::by_name(info.name)
+                            .ok_or_else(|| ExperimentError::Missing(format!("extractor {}", info.name)))?;
                         let mut out = Extraction::default();
                         pool.install(|| extractor.extract(&samples, &mut out))?;
                         times[k][t].push(out.stats.times.extraction().as_secs_f64() * 1e3);
@@ -309,7 +309,7 @@ impl Experiment for RealVolumes {
                         let (samples, to_world) = volume_samples(&file, LatticeKind::Cubic, Inside::Above, level.iso)?;
                         let mut out = Extraction::default();
                         let mc = extractors::by_name("marching-cubes")
-                            .ok_or_else(|| ExperimentError::Figure("marching-cubes".into()))?;
+                            .ok_or_else(|| ExperimentError::Missing("extractor marching-cubes".into()))?;
                         mc.extract(&samples, &mut out)?;
                         if let Some(a) = &to_world {
                             out.surface.transform(a);

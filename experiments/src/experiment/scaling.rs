@@ -94,7 +94,8 @@ fn output_bytes(out: &Extraction) -> usize {
 
 /// A fresh extractor (no scratch held from earlier runs).
 fn fresh(index: usize) -> Result<Box<dyn Extractor>, ExperimentError> {
-    (INFOS[index].make)(&Options::new()).map_err(|e| ExperimentError::Figure(format!("building {}: {e}", INFOS[index].name)))
+    (INFOS[index].make)(&Options::new())
+        .map_err(|e| ExperimentError::Failed { what: format!("building {}", INFOS[index].name), reason: e.to_string() })
 }
 
 /// Runs `extractor` on `samples` with `pool`'s thread count: the extraction time. When rayon's
@@ -147,7 +148,7 @@ impl Experiment for Scaling {
             .iter()
             .map(|&t| rayon::ThreadPoolBuilder::new().num_threads(t).build())
             .collect::<Result<Vec<_>, _>>()
-            .map_err(|e| ExperimentError::Figure(format!("thread pool: {e}")))?;
+            .map_err(|e| ExperimentError::ThreadPool(e.to_string()))?;
         let metered = alloc_meter::installed();
         let field = fields::builtin(FIELD, Default::default())?;
         let mut alive: Vec<bool> = vec![true; INFOS.len()];

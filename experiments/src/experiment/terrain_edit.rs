@@ -144,13 +144,11 @@ fn one_thread_run(
 ) -> Result<ChunkRun, ExperimentError> {
     let mut world = ChunkedVolume::new(e, samples.clone(), chunk)?.with_materials(sample_materials.to_vec())?;
     world.remesh_dirty(e)?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .map_err(|err| ExperimentError::Figure(format!("a one-thread pool: {err}")))?;
+    let pool =
+        rayon::ThreadPoolBuilder::new().num_threads(1).build().map_err(|err| ExperimentError::ThreadPool(err.to_string()))?;
     let mut times = Vec::new();
     for (k, brush) in brushes.iter().enumerate() {
-        world.apply(brush).map_err(|err| ExperimentError::Figure(format!("edit {k}: {err}")))?;
+        world.apply(brush).map_err(|err| ExperimentError::Failed { what: format!("edit {k}"), reason: err.to_string() })?;
         times.extend(pool.install(|| world.remesh_dirty_each(e))?.iter().map(|d| d.as_secs_f64() * 1e3));
     }
     times.sort_by(f64::total_cmp);
@@ -231,7 +229,9 @@ impl Experiment for TerrainEdit {
             let mut open_seam_edges_max = 0;
             for (k, brush) in brushes.iter().enumerate() {
                 let start = Instant::now();
-                world.apply(brush).map_err(|err| ExperimentError::Figure(format!("edit {k}: {err}")))?;
+                world
+                    .apply(brush)
+                    .map_err(|err| ExperimentError::Failed { what: format!("edit {k}"), reason: err.to_string() })?;
                 let n = world.remesh_dirty(e.as_ref())?;
                 edit_ms.push(start.elapsed().as_secs_f64() * 1e3);
                 dirtied.push(n);

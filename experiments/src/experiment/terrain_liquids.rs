@@ -98,7 +98,7 @@ struct Data {
 type Cell = dyn Fn(&EditRun) -> String;
 
 fn build(name: &str) -> Result<Box<dyn Extractor>, ExperimentError> {
-    extractors::by_name(name).ok_or_else(|| ExperimentError::Figure(format!("no extractor {name}")))
+    extractors::by_name(name).ok_or_else(|| ExperimentError::Missing(format!("extractor {name}")))
 }
 
 fn closed_manifold(mesh: &TriMesh) -> bool {
@@ -266,7 +266,7 @@ impl Experiment for TerrainLiquids {
         let naive_extractor = rows
             .first()
             .map(|r| r.method.clone())
-            .ok_or_else(|| ExperimentError::Figure("no extractor takes the rule".into()))?;
+            .ok_or_else(|| ExperimentError::Missing("an extractor that takes the rule".into()))?;
         let start = Instant::now();
         let naive_layers = independent_layers(build(&naive_extractor)?.as_ref(), &phases)?;
         let mut times = vec![start.elapsed().as_secs_f64() * 1e3];
@@ -280,7 +280,7 @@ impl Experiment for TerrainLiquids {
             edits.push(run);
             shown.get_or_insert((frames, still));
         }
-        let Some((frames, still)) = shown else { return Err(ExperimentError::Figure("no edit run".into())) };
+        let Some((frames, still)) = shown else { return Err(ExperimentError::Missing("an edit run".into())) };
         let dir = ctx.figure_dir(NAME)?;
         let path = dir.join("after-edits.png");
         render::save_png(&path, &still)?;

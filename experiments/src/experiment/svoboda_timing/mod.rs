@@ -73,11 +73,8 @@ struct Data {
 /// one thread, each with fresh output.
 fn like_for_like() -> Result<Vec<LikeRow>, ExperimentError> {
     let field: std::sync::Arc<dyn isolab_algorithms::Field> = std::sync::Arc::new(paper::PaperField::default());
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .map_err(|e| ExperimentError::Figure(format!("a one-thread pool: {e}")))?;
-    let mc = extractors::by_name("marching-cubes").ok_or_else(|| ExperimentError::Figure("no marching-cubes".into()))?;
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().map_err(|e| ExperimentError::ThreadPool(e.to_string()))?;
+    let mc = extractors::by_name("marching-cubes").ok_or_else(|| ExperimentError::Missing("extractor marching-cubes".into()))?;
     let mut rows = Vec::new();
     for (cubes, _) in PAPER {
         let n = cubes + 1;

@@ -96,7 +96,7 @@ pub(super) fn defect_closeup(
 pub(super) fn charts(dir: &std::path::Path, rows: &[Row]) -> Result<(), ExperimentError> {
     let paper_rows: Vec<&Row> = rows.iter().filter(|r| !r.id.ends_with('+')).collect();
     let categories: Vec<String> = paper_rows.iter().map(|r| r.id.clone()).collect();
-    let paper = |id: &str| PAPER.iter().find(|p| p.0 == id);
+    let paper = |id: &str| PAPER.iter().find(|p| p.id == id);
     let ours = (40, 110, 180);
     let theirs = (200, 120, 40);
     let series = |label: &str, color, values: Vec<f64>| BarSeries { label: label.into(), color, values };
@@ -109,7 +109,11 @@ pub(super) fn charts(dir: &std::path::Path, rows: &[Row]) -> Result<(), Experime
                 categories: categories.clone(),
                 series: vec![
                     series("isolab", ours, paper_rows.iter().map(|r| r.n_triangles as f64).collect()),
-                    series("paper", theirs, paper_rows.iter().map(|r| paper(&r.id).map_or(f64::NAN, |p| p.7 as f64)).collect()),
+                    series(
+                        "paper",
+                        theirs,
+                        paper_rows.iter().map(|r| paper(&r.id).map_or(f64::NAN, |p| p.n_triangles as f64)).collect(),
+                    ),
                 ],
             },
         ),
@@ -129,12 +133,12 @@ pub(super) fn charts(dir: &std::path::Path, rows: &[Row]) -> Result<(), Experime
                     series(
                         "paper vertex",
                         theirs,
-                        paper_rows.iter().map(|r| paper(&r.id).map_or(f64::NAN, |p| p.3 * 1e3)).collect(),
+                        paper_rows.iter().map(|r| paper(&r.id).map_or(f64::NAN, |p| p.t_vertex * 1e3)).collect(),
                     ),
                     series(
                         "paper geometry",
                         (240, 190, 120),
-                        paper_rows.iter().map(|r| paper(&r.id).map_or(f64::NAN, |p| p.4 * 1e3)).collect(),
+                        paper_rows.iter().map(|r| paper(&r.id).map_or(f64::NAN, |p| p.t_geometry * 1e3)).collect(),
                     ),
                 ],
             },
@@ -147,7 +151,11 @@ pub(super) fn charts(dir: &std::path::Path, rows: &[Row]) -> Result<(), Experime
                 categories,
                 series: vec![
                     series("isolab", ours, paper_rows.iter().map(|r| r.metrics.quality.aspect_ratio.mean.log10()).collect()),
-                    series("paper", theirs, paper_rows.iter().map(|r| paper(&r.id).map_or(f64::NAN, |p| p.15.log10())).collect()),
+                    series(
+                        "paper",
+                        theirs,
+                        paper_rows.iter().map(|r| paper(&r.id).map_or(f64::NAN, |p| p.ar_mean.log10())).collect(),
+                    ),
                 ],
             },
         ),

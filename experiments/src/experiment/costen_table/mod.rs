@@ -47,31 +47,83 @@ const OBJECTS: [(&str, &str, [usize; 3]); 3] =
 /// Clusterings: the paper's three, then ours.
 const METHODS: [&str; 5] = ["u", "i", "p", "i+", "p+"];
 
-/// The paper's Appendix B, one row per configuration: id, T_total, T_sampling, T_vertex,
-/// T_geometry (seconds), N_tetrahedra, N_vertices, N_triangles, N_discarded, B_lattice, B_edges,
-/// B_vertices, B_indices, F_tetrahedra (%), F_discard (%), AR_mean, AR_sd.
-type PaperRow = (&'static str, f64, f64, f64, f64, u64, u64, u64, u64, u64, u64, u64, u64, f64, f64, f64, f64);
+/// One row of the paper's Appendix B (times in seconds, bytes, percentages).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct PaperRow {
+    /// Configuration: object, lattice, clustering (`as_bi`).
+    pub(super) id: &'static str,
+    pub(super) t_total: f64,
+    pub(super) t_sampling: f64,
+    pub(super) t_vertex: f64,
+    pub(super) t_geometry: f64,
+    pub(super) n_tetrahedra: u64,
+    pub(super) n_vertices: u64,
+    pub(super) n_triangles: u64,
+    pub(super) n_discarded: u64,
+    pub(super) b_lattice: u64,
+    pub(super) b_edges: u64,
+    pub(super) b_vertices: u64,
+    pub(super) b_indices: u64,
+    /// F_tetrahedra, %.
+    pub(super) f_tetrahedra: f64,
+    /// F_discard, %.
+    pub(super) f_discard: f64,
+    pub(super) ar_mean: f64,
+    pub(super) ar_sd: f64,
+}
+
+/// A [`PaperRow`] in the paper's column order: id, T_total, T_sampling, T_vertex, T_geometry,
+/// N_tetrahedra, N_vertices, N_triangles, N_discarded, B_lattice, B_edges, B_vertices, B_indices,
+/// F_tetrahedra, F_discard, AR_mean, AR_sd (the table reads as the paper prints it).
+#[allow(clippy::too_many_arguments)]
+const fn paper_row(
+    id: &'static str,
+    (t_total, t_sampling, t_vertex, t_geometry): (f64, f64, f64, f64),
+    (n_tetrahedra, n_vertices, n_triangles, n_discarded): (u64, u64, u64, u64),
+    (b_lattice, b_edges, b_vertices, b_indices): (u64, u64, u64, u64),
+    (f_tetrahedra, f_discard, ar_mean, ar_sd): (f64, f64, f64, f64),
+) -> PaperRow {
+    PaperRow {
+        id,
+        t_total,
+        t_sampling,
+        t_vertex,
+        t_geometry,
+        n_tetrahedra,
+        n_vertices,
+        n_triangles,
+        n_discarded,
+        b_lattice,
+        b_edges,
+        b_vertices,
+        b_indices,
+        f_tetrahedra,
+        f_discard,
+        ar_mean,
+        ar_sd,
+    }
+}
 
 #[rustfmt::skip]
 const PAPER: [PaperRow; 18] = [
-    ("ss_bu", 0.0178, 0.00703, 0.00696, 0.00308, 160992, 50865, 101720, 0, 1114048, 16153696, 1220760, 1220640, 10.52, 0.0, 775.93, 12057.93),
-    ("ss_bi", 0.0182, 0.00712, 0.00748, 0.00288, 160992, 13605, 27200, 105086, 1114048, 16153696, 326520, 326400, 10.52, 79.44, 2.16, 58.67),
-    ("ss_bp", 0.0596, 0.01122, 0.00637, 0.0412, 160992, 13074, 26144, 75576, 1114048, 16153696, 313776, 313728, 10.52, 74.30, 1.23, 0.21),
-    ("ss_su", 0.0118, 0.0066, 0.00314, 0.00179, 70104, 35098, 70192, 0, 530604, 7693758, 842352, 842304, 9.347, 0.0, 1207.37, 15880.64),
-    ("ss_si", 0.0122, 0.00657, 0.00363, 0.00175, 70104, 9296, 18588, 72356, 530604, 7693758, 223104, 223056, 9.347, 79.56, 1.34, 0.28),
-    ("ss_sp", 0.0403, 0.0108, 0.0031, 0.0261, 70104, 10685, 21366, 48826, 530604, 7693758, 256440, 256392, 9.347, 69.56, 1.38, 0.32),
-    ("as_bu", 0.0288, 0.0203, 0.00625, 0.00144, 72240, 22550, 45096, 0, 1114048, 16153696, 541200, 541152, 4.722, 0.0, 5.81, 78.56),
-    ("as_bi", 0.0294, 0.0206, 0.00668, 0.00142, 72240, 6012, 12020, 46530, 1114048, 16153696, 144288, 144240, 4.722, 79.47, 1.16, 0.15),
-    ("as_bp", 0.0458, 0.0215, 0.00623, 0.0174, 72240, 5665, 11326, 33770, 1114048, 16153696, 135960, 135912, 4.722, 74.88, 1.23, 0.21),
-    ("as_su", 0.0166, 0.0123, 0.00288, 0.00113, 31572, 15840, 31676, 0, 530604, 7693758, 380160, 380112, 4.210, 0.0, 6.53, 106.34),
-    ("as_si", 0.0172, 0.0125, 0.00323, 0.00115, 31572, 4172, 8340, 32743, 530604, 7693758, 100128, 100080, 4.210, 79.70, 1.33, 0.28),
-    ("as_sp", 0.0306, 0.0159, 0.00283, 0.0115, 31572, 4697, 9390, 22286, 530604, 7693758, 112728, 112680, 4.210, 70.36, 1.39, 0.32),
-    ("bs_bu", 10.0, 10.0, 0.01, 0.00229, 122808, 37332, 74660, 0, 1487640, 21570780, 895968, 895920, 5.980, 0.0, 9.43, 522.45),
-    ("bs_bi", 9.9, 9.89, 0.0112, 0.0022, 122808, 10256, 20508, 77111, 1487640, 21570780, 246144, 246096, 5.980, 78.99, 1.17, 0.16),
-    ("bs_bp", 10.0, 9.96, 0.0101, 0.0297, 122808, 9669, 19334, 55326, 1487640, 21570780, 232056, 232008, 5.980, 74.10, 1.24, 0.21),
-    ("bs_su", 5.96, 5.95, 0.00391, 0.00161, 50910, 25384, 50764, 0, 710448, 10301496, 609216, 609168, 5.051, 0.0, 7.89, 187.63),
-    ("bs_si", 5.98, 5.97, 0.00467, 0.00168, 50910, 6579, 13154, 52610, 710448, 10301496, 157896, 157848, 5.051, 79.99, 1.35, 0.28),
-    ("bs_sp", 5.86, 5.83, 0.00404, 0.0182, 50910, 7616, 15228, 35536, 710448, 10301496, 182784, 182736, 5.051, 70.00, 1.39, 0.32),
+    paper_row("ss_bu", (0.0178, 0.00703, 0.00696, 0.00308), (160992, 50865, 101720, 0), (1114048, 16153696, 1220760, 1220640), (10.52, 0.0, 775.93, 12057.93)),
+    paper_row("ss_bi", (0.0182, 0.00712, 0.00748, 0.00288), (160992, 13605, 27200, 105086), (1114048, 16153696, 326520, 326400), (10.52, 79.44, 2.16, 58.67)),
+    paper_row("ss_bp", (0.0596, 0.01122, 0.00637, 0.0412), (160992, 13074, 26144, 75576), (1114048, 16153696, 313776, 313728), (10.52, 74.30, 1.23, 0.21)),
+    paper_row("ss_su", (0.0118, 0.0066, 0.00314, 0.00179), (70104, 35098, 70192, 0), (530604, 7693758, 842352, 842304), (9.347, 0.0, 1207.37, 15880.64)),
+    paper_row("ss_si", (0.0122, 0.00657, 0.00363, 0.00175), (70104, 9296, 18588, 72356), (530604, 7693758, 223104, 223056), (9.347, 79.56, 1.34, 0.28)),
+    paper_row("ss_sp", (0.0403, 0.0108, 0.0031, 0.0261), (70104, 10685, 21366, 48826), (530604, 7693758, 256440, 256392), (9.347, 69.56, 1.38, 0.32)),
+    paper_row("as_bu", (0.0288, 0.0203, 0.00625, 0.00144), (72240, 22550, 45096, 0), (1114048, 16153696, 541200, 541152), (4.722, 0.0, 5.81, 78.56)),
+    paper_row("as_bi", (0.0294, 0.0206, 0.00668, 0.00142), (72240, 6012, 12020, 46530), (1114048, 16153696, 144288, 144240), (4.722, 79.47, 1.16, 0.15)),
+    paper_row("as_bp", (0.0458, 0.0215, 0.00623, 0.0174), (72240, 5665, 11326, 33770), (1114048, 16153696, 135960, 135912), (4.722, 74.88, 1.23, 0.21)),
+    paper_row("as_su", (0.0166, 0.0123, 0.00288, 0.00113), (31572, 15840, 31676, 0), (530604, 7693758, 380160, 380112), (4.210, 0.0, 6.53, 106.34)),
+    paper_row("as_si", (0.0172, 0.0125, 0.00323, 0.00115), (31572, 4172, 8340, 32743), (530604, 7693758, 100128, 100080), (4.210, 79.70, 1.33, 0.28)),
+    paper_row("as_sp", (0.0306, 0.0159, 0.00283, 0.0115), (31572, 4697, 9390, 22286), (530604, 7693758, 112728, 112680), (4.210, 70.36, 1.39, 0.32)),
+    paper_row("bs_bu", (10.0, 10.0, 0.01, 0.00229), (122808, 37332, 74660, 0), (1487640, 21570780, 895968, 895920), (5.980, 0.0, 9.43, 522.45)),
+    paper_row("bs_bi", (9.9, 9.89, 0.0112, 0.0022), (122808, 10256, 20508, 77111), (1487640, 21570780, 246144, 246096), (5.980, 78.99, 1.17, 0.16)),
+    paper_row("bs_bp", (10.0, 9.96, 0.0101, 0.0297), (122808, 9669, 19334, 55326), (1487640, 21570780, 232056, 232008), (5.980, 74.10, 1.24, 0.21)),
+    paper_row("bs_su", (5.96, 5.95, 0.00391, 0.00161), (50910, 25384, 50764, 0), (710448, 10301496, 609216, 609168), (5.051, 0.0, 7.89, 187.63)),
+    paper_row("bs_si", (5.98, 5.97, 0.00467, 0.00168), (50910, 6579, 13154, 52610), (710448, 10301496, 157896, 157848), (5.051, 79.99, 1.35, 0.28)),
+    paper_row("bs_sp", (5.86, 5.83, 0.00404, 0.0182), (50910, 7616, 15228, 35536), (710448, 10301496, 182784, 182736), (5.051, 70.00, 1.39, 0.32)),
 ];
 
 /// One configuration, measured.
@@ -263,12 +315,12 @@ impl Experiment for CostenTable {
 /// clustering removes, from the paper's own Appendix B counts (`*_bi` against `*_bu`, `*_si`
 /// against `*_su`).
 fn paper_integrated_reduction() -> (f64, f64) {
-    let triangles = |id: &str| PAPER.iter().find(|p| p.0 == id).map(|p| p.7 as f64);
+    let triangles = |id: &str| PAPER.iter().find(|p| p.id == id).map(|p| p.n_triangles as f64);
     PAPER
         .iter()
         .filter_map(|p| {
-            let stem = p.0.strip_suffix('i')?;
-            Some(1.0 - p.7 as f64 / triangles(&format!("{stem}u"))?)
+            let stem = p.id.strip_suffix('i')?;
+            Some(1.0 - p.n_triangles as f64 / triangles(&format!("{stem}u"))?)
         })
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)))
 }
@@ -282,13 +334,13 @@ const PAPER_LOGICAL_PROCESSORS: usize = 16;
 /// the first object's `*_su` row), bytes.
 fn paper_edge_bytes_per_sample() -> f64 {
     let (id, dims) = (format!("{}_su", OBJECTS[0].0), OBJECTS[0].2);
-    PAPER.iter().find(|p| p.0 == id).map_or(f64::NAN, |p| p.10 as f64 / dims.iter().product::<usize>() as f64)
+    PAPER.iter().find(|p| p.id == id).map_or(f64::NAN, |p| p.b_edges as f64 / dims.iter().product::<usize>() as f64)
 }
 
 /// The paper's mean `F_discard` (%) over the rows of one clustering (`i` or `p`): its text's
 /// "average reduction of 79.53%" (integrated) and "72.20%" (post-processed), recomputed.
 fn paper_mean_discard(method: char) -> f64 {
-    let v: Vec<f64> = PAPER.iter().filter(|p| p.0.ends_with(method)).map(|p| p.14).collect();
+    let v: Vec<f64> = PAPER.iter().filter(|p| p.id.ends_with(method)).map(|p| p.f_discard).collect();
     v.iter().sum::<f64>() / v.len().max(1) as f64
 }
 
@@ -296,8 +348,8 @@ fn paper_mean_discard(method: char) -> f64 {
 fn paper_aspect_range(method: char) -> (f64, f64) {
     PAPER
         .iter()
-        .filter(|p| p.0.ends_with(method))
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.15), hi.max(p.15)))
+        .filter(|p| p.id.ends_with(method))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.ar_mean), hi.max(p.ar_mean)))
 }
 
 fn pct(x: f64) -> String {
@@ -356,7 +408,7 @@ fn section(ctx: &Context, data: &Data) -> String {
         data.repeats,
         paper_edge_bytes_per_sample(),
     ));
-    let paper = |id: &str| PAPER.iter().find(|p| p.0 == id);
+    let paper = |id: &str| PAPER.iter().find(|p| p.id == id);
     let rows = &data.rows;
     md.push_str("### Counts\n\n");
     let body: Vec<Vec<String>> = rows
@@ -365,13 +417,13 @@ fn section(ctx: &Context, data: &Data) -> String {
             let p = paper(&r.id);
             vec![
                 r.id.clone(),
-                pair(r.n_tetrahedra.to_string(), p.map(|p| p.5.to_string())),
-                pair(r.n_vertices.to_string(), p.map(|p| p.6.to_string())),
-                pair(r.n_triangles.to_string(), p.map(|p| p.7.to_string())),
-                pair(r.n_discarded.to_string(), p.map(|p| p.8.to_string())),
-                pair(pct(f_discard(r)), p.map(|p| format!("{:.1}%", p.14))),
+                pair(r.n_tetrahedra.to_string(), p.map(|p| p.n_tetrahedra.to_string())),
+                pair(r.n_vertices.to_string(), p.map(|p| p.n_vertices.to_string())),
+                pair(r.n_triangles.to_string(), p.map(|p| p.n_triangles.to_string())),
+                pair(r.n_discarded.to_string(), p.map(|p| p.n_discarded.to_string())),
+                pair(pct(f_discard(r)), p.map(|p| format!("{:.1}%", p.f_discard))),
                 pct(r.removed),
-                pair(pct(r.n_tetrahedra as f64 / r.total_tetrahedra.max(1) as f64), p.map(|p| format!("{:.2}%", p.13))),
+                pair(pct(r.n_tetrahedra as f64 / r.total_tetrahedra.max(1) as f64), p.map(|p| format!("{:.2}%", p.f_tetrahedra))),
             ]
         })
         .collect();
@@ -387,10 +439,10 @@ fn section(ctx: &Context, data: &Data) -> String {
             let total = r.t_sampling + r.t_vertex + r.t_geometry + r.t_normals + r.t_post;
             vec![
                 r.id.clone(),
-                pair(num(total), p.map(|p| num(p.1 * 1e3))),
-                pair(num(r.t_sampling), p.map(|p| num(p.2 * 1e3))),
-                pair(num(r.t_vertex), p.map(|p| num(p.3 * 1e3))),
-                pair(num(r.t_geometry + r.t_post), p.map(|p| num(p.4 * 1e3))),
+                pair(num(total), p.map(|p| num(p.t_total * 1e3))),
+                pair(num(r.t_sampling), p.map(|p| num(p.t_sampling * 1e3))),
+                pair(num(r.t_vertex), p.map(|p| num(p.t_vertex * 1e3))),
+                pair(num(r.t_geometry + r.t_post), p.map(|p| num(p.t_geometry * 1e3))),
                 num(r.t_post),
                 format!(
                     "{:.0}% / {:.0}% / {:.0}%",
@@ -421,12 +473,12 @@ fn section(ctx: &Context, data: &Data) -> String {
             let q = &r.metrics.quality.aspect_ratio;
             vec![
                 r.id.clone(),
-                pair(r.b_lattice.to_string(), p.map(|p| p.9.to_string())),
-                pair(r.b_edges.to_string(), p.map(|p| p.10.to_string())),
-                pair(r.b_vertices.to_string(), p.map(|p| p.11.to_string())),
-                pair(r.b_indices.to_string(), p.map(|p| p.12.to_string())),
-                pair(num(q.mean), p.map(|p| num(p.15))),
-                pair(num(q.sd), p.map(|p| num(p.16))),
+                pair(r.b_lattice.to_string(), p.map(|p| p.b_lattice.to_string())),
+                pair(r.b_edges.to_string(), p.map(|p| p.b_edges.to_string())),
+                pair(r.b_vertices.to_string(), p.map(|p| p.b_vertices.to_string())),
+                pair(r.b_indices.to_string(), p.map(|p| p.b_indices.to_string())),
+                pair(num(q.mean), p.map(|p| num(p.ar_mean))),
+                pair(num(q.sd), p.map(|p| num(p.ar_sd))),
                 format!("{:.1}°", r.metrics.quality.min_angle_deg),
             ]
         })
@@ -549,8 +601,8 @@ mod tests {
     fn the_papers_edge_scratch_is_58_bytes_a_sample_on_every_cubic_row() {
         assert_eq!(format!("{:.0}", paper_edge_bytes_per_sample()), "58");
         for (prefix, _, dims) in OBJECTS {
-            let p = PAPER.iter().find(|p| p.0 == format!("{prefix}_su")).unwrap();
-            let per_sample = p.10 as f64 / dims.iter().product::<usize>() as f64;
+            let p = PAPER.iter().find(|p| p.id == format!("{prefix}_su")).unwrap();
+            let per_sample = p.b_edges as f64 / dims.iter().product::<usize>() as f64;
             assert!((per_sample - 58.0).abs() < 0.1, "{prefix}: {per_sample}");
         }
     }

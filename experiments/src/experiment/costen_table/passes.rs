@@ -90,13 +90,13 @@ fn mean_change(runs: &Runs, method: usize, pass: usize) -> f64 {
 
 /// The same statistic on the paper's Appendix B (`T_vertex` column 3, `T_geometry` column 4).
 pub(super) fn paper_table_change(method: char, pass: &str) -> f64 {
-    let column = |p: &PaperRow| if pass == "vertex" { p.3 } else { p.4 };
+    let column = |p: &PaperRow| if pass == "vertex" { p.t_vertex } else { p.t_geometry };
     let changes: Vec<f64> = PAPER
         .iter()
-        .filter(|p| p.0.ends_with('u'))
+        .filter(|p| p.id.ends_with('u'))
         .filter_map(|u| {
-            let id = format!("{}{method}", &u.0[..u.0.len() - 1]);
-            PAPER.iter().find(|p| p.0 == id).map(|m| column(m) / column(u) - 1.0)
+            let id = format!("{}{method}", &u.id[..u.id.len() - 1]);
+            PAPER.iter().find(|p| p.id == id).map(|m| column(m) / column(u) - 1.0)
         })
         .collect();
     100.0 * changes.iter().sum::<f64>() / changes.len().max(1) as f64

@@ -81,17 +81,17 @@ pub(super) fn matched_section(rows: &[MatchedRow]) -> String {
          (the aspect ratio is the mean over non-degenerate triangles, and the paper does not say how it treats zero-area \
          ones):\n\n"
     );
-    let paper = |id: &str| PAPER.iter().find(|p| p.0 == id);
+    let paper = |id: &str| PAPER.iter().find(|p| p.id == id);
     let body: Vec<Vec<String>> = rows
         .iter()
         .map(|r| {
             let p = paper(&r.id);
             vec![
                 r.id.clone(),
-                format!("{} ({})", r.n_triangles, p.map_or("-".into(), |p| p.7.to_string())),
+                format!("{} ({})", r.n_triangles, p.map_or("-".into(), |p| p.n_triangles.to_string())),
                 format!("{:.2}", r.n_triangles as f64 / r.ours_default.max(1) as f64),
                 r.degenerate.to_string(),
-                format!("{} ({})", num(r.aspect_mean), p.map_or("-".into(), |p| num(p.15))),
+                format!("{} ({})", num(r.aspect_mean), p.map_or("-".into(), |p| num(p.ar_mean))),
             ]
         })
         .collect();
@@ -102,7 +102,7 @@ pub(super) fn matched_section(rows: &[MatchedRow]) -> String {
     let unmerged: Vec<f64> = rows
         .iter()
         .filter(|r| r.id.ends_with('u'))
-        .filter_map(|r| paper(&r.id).map(|p| r.n_triangles as f64 / p.7 as f64))
+        .filter_map(|r| paper(&r.id).map(|p| r.n_triangles as f64 / p.n_triangles as f64))
         .collect();
     if let (Some(lo), Some(hi)) = (unmerged.iter().copied().reduce(f64::min), unmerged.iter().copied().reduce(f64::max)) {
         md.push_str(&format!(

@@ -199,27 +199,9 @@ pub fn extract_lod(
         .collect::<Result<_, _>>()?;
     // Weld same-position vertices (exact: index coordinates), remembering each triangle's level.
     out.clear();
-    let mut index: HashMap<[u32; 3], u32> = HashMap::new();
-    let mut triangle_levels = Vec::new();
-    for (mesh, &level) in meshes.iter().zip(levels) {
-        let remap: Vec<u32> = mesh
-            .surface
-            .positions
-            .iter()
-            .map(|&p| {
-                let next = out.surface.positions.len() as u32;
-                // Only vertices on a chunk plane can be shared (index coordinates are exact).
-                let on_plane = (0..3).any(|a| p[a].fract() == 0.0 && (p[a] as usize) % chunk == 0);
-                let id = if on_plane { *index.entry(p.to_array().map(f32::to_bits)).or_insert(next) } else { next };
-                if id == next {
-                    out.surface.positions.push(p);
-                }
-                id
-            })
-            .collect();
-        out.surface.triangles.extend(mesh.surface.triangles.iter().map(|t| t.map(|v| remap[v as usize])));
-        triangle_levels.extend(std::iter::repeat_n(level, mesh.surface.triangles.len()));
-    }
+    let counts_per_chunk = super::weld_on_chunk_planes(meshes.iter().map(|m| &m.surface), chunk, &mut out.surface);
+    let mut triangle_levels: Vec<u8> =
+        counts_per_chunk.iter().zip(levels).flat_map(|(&n, &level)| std::iter::repeat_n(level, n)).collect();
     let top = levels.iter().copied().max().unwrap_or(0);
     let (mut stitched, mut unmatched) = (0, 0);
     for coarse in 1..=top {

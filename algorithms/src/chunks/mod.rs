@@ -57,6 +57,7 @@ mod weld;
 pub use blocks::*;
 pub use edit::*;
 pub use stream::*;
+pub use weld::weld_on_chunk_planes;
 use weld::*;
 
 /// What chunked extraction did.

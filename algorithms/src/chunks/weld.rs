@@ -64,3 +64,32 @@ pub(super) fn weld<'a>(pieces: impl Iterator<Item = WeldPiece<'a>>, out: &mut Ex
         out.surface.normals.clear();
     }
 }
+
+/// Joins meshes made in a grid's index coordinates, chunk by chunk (`chunk` cells), into `out`
+/// (cleared first): a vertex on a chunk plane is one with every vertex at the same position bits
+/// (only there can two chunks make the same vertex); others stay their own. Returns each part's
+/// triangle count, in order. Used by the levels of detail and the chunked liquids, whose parts
+/// keep no weld keys.
+pub fn weld_on_chunk_planes<'a>(parts: impl IntoIterator<Item = &'a TriMesh>, chunk: usize, out: &mut TriMesh) -> Vec<usize> {
+    out.clear();
+    let mut index: HashMap<u128, u32> = HashMap::new();
+    let mut triangles = Vec::new();
+    for part in parts {
+        let remap: Vec<u32> = part
+            .positions
+            .iter()
+            .map(|&p| {
+                let next = out.positions.len() as u32;
+                let on_plane = (0..3).any(|a| p[a].fract() == 0.0 && (p[a] as usize) % chunk == 0);
+                let id = if on_plane { *index.entry(position_key(p)).or_insert(next) } else { next };
+                if id == next {
+                    out.positions.push(p);
+                }
+                id
+            })
+            .collect();
+        out.triangles.extend(part.triangles.iter().map(|t| t.map(|v| remap[v as usize])));
+        triangles.push(part.triangles.len());
+    }
+    triangles
+}

@@ -12,7 +12,6 @@ use crate::lattice::Grid;
 use crate::mesh::TriMesh;
 use glam::Vec3;
 use rayon::prelude::*;
-use rustc_hash::FxHashMap;
 
 /// Two layers meshed chunk by chunk (module doc).
 pub struct ChunkedLayers {
@@ -101,28 +100,9 @@ impl ChunkedLayers {
     /// The whole grid's two layers: the chunks' welded by exact position on the chunk planes, in
     /// world coordinates; `contact` sums the chunks'.
     pub fn welded(&self) -> Layers {
-        let chunk = self.chunk;
         let weld = |layer: fn(&Layers) -> &TriMesh| {
             let mut mesh = TriMesh::default();
-            let mut index: FxHashMap<[u32; 3], u32> = FxHashMap::default();
-            for slot in &self.slots {
-                let part = layer(slot);
-                let remap: Vec<u32> = part
-                    .positions
-                    .iter()
-                    .map(|&p| {
-                        let next = mesh.positions.len() as u32;
-                        // Only vertices on a chunk plane can be shared (index coordinates are exact).
-                        let on_plane = (0..3).any(|a| p[a].fract() == 0.0 && (p[a] as usize) % chunk == 0);
-                        let id = if on_plane { *index.entry(p.to_array().map(f32::to_bits)).or_insert(next) } else { next };
-                        if id == next {
-                            mesh.positions.push(p);
-                        }
-                        id
-                    })
-                    .collect();
-                mesh.triangles.extend(part.triangles.iter().map(|t| t.map(|v| remap[v as usize])));
-            }
+            crate::chunks::weld_on_chunk_planes(self.slots.iter().map(layer), self.chunk, &mut mesh);
             for p in &mut mesh.positions {
                 *p = self.grid.origin + *p * self.grid.spacing;
             }

@@ -33,12 +33,12 @@ use std::time::Instant;
 pub struct LargeWorld;
 
 const NAME: &str = "large_world";
-/// The data file of a run at [`ISSUE_WORLD_CELLS`].
+/// The data file of a run at [`TARGET_WORLD_CELLS`].
 const ISSUE_DATA: &str = "large_world_issue";
 const CHUNK: usize = 32;
 const DEFAULT_DIMS: [usize; 3] = [2049, 513, 2049];
 /// The issue's example world, cells (samples are one more a side).
-const ISSUE_WORLD_CELLS: [usize; 3] = [8192, 512, 8192];
+const TARGET_WORLD_CELLS: [usize; 3] = [8192, 512, 8192];
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct Data {
@@ -144,7 +144,7 @@ impl Experiment for LargeWorld {
             peak_keys: stats.peak_keys,
             peak_slab_mib: stats.peak_slab_bytes as f64 / (1u64 << 20) as f64,
         };
-        let is_issue_world = ISSUE_WORLD_CELLS.iter().zip(&dims).all(|(c, d)| c + 1 == *d);
+        let is_issue_world = TARGET_WORLD_CELLS.iter().zip(&dims).all(|(c, d)| c + 1 == *d);
         ctx.write_data(if is_issue_world { ISSUE_DATA } else { NAME }, &data)?;
         run_volume(ctx)
     }
@@ -206,15 +206,15 @@ impl Experiment for LargeWorld {
         );
         if issue.is_none() {
             md.push_str(&format!(
-                " `ISOLAB_WORLD={},{},{} cargo run --release -p isolab-experiments --bin large_world` runs the issue's example \
-                 size and adds it to this table.",
-                ISSUE_WORLD_CELLS[0], ISSUE_WORLD_CELLS[1], ISSUE_WORLD_CELLS[2],
+                " `ISOLAB_WORLD={},{},{} cargo run --release -p isolab-experiments --bin large_world` runs the size a streamed \
+                 world is meant for and adds it to this table.",
+                TARGET_WORLD_CELLS[0], TARGET_WORLD_CELLS[1], TARGET_WORLD_CELLS[2],
             ));
         } else {
             md.push_str(&format!(
-                " The larger world is the issue's example size, run with `ISOLAB_WORLD={},{},{} cargo run --release -p \
+                " The larger world is the size a streamed world is meant for, run with `ISOLAB_WORLD={},{},{} cargo run --release -p \
                  isolab-experiments --bin large_world` (the report's main job runs the default size only).",
-                ISSUE_WORLD_CELLS[0], ISSUE_WORLD_CELLS[1], ISSUE_WORLD_CELLS[2],
+                TARGET_WORLD_CELLS[0], TARGET_WORLD_CELLS[1], TARGET_WORLD_CELLS[2],
             ));
         }
         md.push('\n');

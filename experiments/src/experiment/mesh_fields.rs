@@ -298,7 +298,7 @@ fn section(data: &Data) -> String {
     let below =
         data.rows.iter().filter(|r| r.libigl.as_ref().is_some_and(|l| l.median < TARGET_RATIO * r.narrow_band.median)).count();
     md.push_str(&format!(
-        "\nThe issue's target is {TARGET_RATIO}x libigl's time with the same inside/outside on every sample; {} of {} \
+        "\nOur target is {TARGET_RATIO}x libigl's time with the same inside/outside on every sample; {} of {} \
          models miss it here. \"Marching cubes unchanged\" compares its mesh from the narrow band with its mesh from exact samples, \
          bit for bit; `tests/tests/models.rs` checks the same for every registered extractor on three models, and \
          `fields::mesh_sdf`'s tests check that every sample in the band is exact and every one beyond is a bound. Where \

@@ -384,8 +384,8 @@ impl Experiment for RealVolumes {
         s.push_str(&format!(
             "The MNI ICBM152 2009a symmetric T1 template, {}: {a} x {b} x {c} voxels of {} ({:.0} x {:.0} x {:.0} mm), {:.1} MB \
              gzipped, read by isolab's NIfTI reader and meshed on its own voxel grid (no resampling) in RAS world coordinates. \
-             This copy is brain-extracted ({:.0}% of its voxels are zero), so it has no skin to mesh, and the issue's \"skin\" \
-             level is the brain's outer surface here. Iso-values, computed by the experiment: {}. Inside is above the \
+             This copy is brain-extracted ({:.0}% of its voxels are zero), so it has no skin to mesh, and the \"skin\" \
+             level a scan user would ask for is the brain's outer surface here. Iso-values, computed by the experiment: {}. Inside is above the \
              iso-value (`--inside above`, the default for volume files).\n\n",
             data.source,
             data.data_type,

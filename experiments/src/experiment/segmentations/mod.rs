@@ -346,7 +346,7 @@ fn section(data: &Data, pictures: bool) -> String {
         data.versions.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
     ));
     md.push_str(&format!(
-        "### The speed target\n\nThe issue asks for at least {TARGET}× against VTK and zmesh on one thread, like with like: our \
+        "### The speed target\n\nOur target is at least {TARGET}× against VTK and zmesh on one thread, like with like: our \
          smoothed surface nets against VTK's smoothed SurfaceNets3D, our unsmoothed surface nets against zmesh (unsmoothed \
          marching cubes).\n\n"
     ));

@@ -65,7 +65,7 @@ pub(crate) const TABLE2_RATIO: f32 = 0.6;
 /// The paper's best-of runs per configuration ("between 3 and 13 times depending on the example").
 const PAPER_RUNS: (usize, usize) = (3, 13);
 /// The issue's floor on the minimum dihedral angle at ratio [`TABLE2_RATIO`], degrees.
-const ISSUE_MIN_DIHEDRAL: f64 = 20.0;
+const TARGET_MIN_DIHEDRAL: f64 = 20.0;
 /// The ablation's clearance option, in h.
 const ABLATION_CLEARANCE: f32 = 0.5;
 

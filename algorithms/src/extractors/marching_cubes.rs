@@ -56,7 +56,7 @@
 //! exactly at the iso-value would give coincident vertices; by default vertices keep 1e-4 of the
 //! spacing from the edge ends instead ([`OnIsoSamples`]), so no triangle has zero area.
 //!
-//! **Why one file of about 900 lines.** The sweep's vertex pass, geometry pass, counting pass, slab
+//! **Why one file of about 1,000 lines (a tenth of it tests).** The sweep's vertex pass, geometry pass, counting pass, slab
 //! join and normals share one set of per-layer index arrays; split apart they would pass those arrays
 //! through half a dozen signatures. It is one algorithm that reads best whole.
 //!

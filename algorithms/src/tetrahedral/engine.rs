@@ -1,6 +1,12 @@
 //! The two passes marching tetrahedra and RMT share (Costen 2026, Algorithms 2 and 3): the
 //! vertex pass (each sample's nearby crossings, handed to a [`Clustering`]) and the geometry pass
 //! (each tetrahedron's case), both in slabs of layers on rayon, joined in order.
+//!
+//! **Why one file of about 700 lines.** The two passes, their slab join and the driver share the
+//! per-slab scratch (the vertex indices of two layers, the packed signs, the clustering's state);
+//! split apart they would pass it through every signature. The geometry of a tetrahedron's case
+//! (`geometry`), the guard (`repair`, `folds`) and the lattices (`topology`) are already rooms of
+//! their own.
 
 use super::*;
 

@@ -18,6 +18,7 @@
 //!
 //! The front ends' module docs give the papers, guarantees and costs.
 
+mod boundary;
 mod cells;
 mod intersection_free;
 pub mod lod;

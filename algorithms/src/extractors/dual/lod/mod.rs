@@ -25,7 +25,8 @@
 
 mod pinch;
 
-use super::cells::{boundary_split, place, split_least_folded, Tables, SPLIT};
+use super::boundary::{boundary_split, SPLIT};
+use super::cells::{place, split_least_folded, Tables};
 use super::smoothing::{build_adjacency, smooth_within, SmoothBuffers};
 use super::{DualEngine, Placement, Smoothing};
 use crate::field::Field;

@@ -163,7 +163,8 @@ pub const DESCRIPTION: &str = "Lorensen & Cline 1987: 256-case cube table, one v
 
 /// Options by name: `normals` (auto, field, samples, faces, none), `parallelism` (rayon, serial),
 /// `on-iso` (separate, exact), `faces` (separate: ambiguous faces separate the inside corners;
-/// decider: the asymptotic decider, `marching-cubes-decider`'s default).
+/// decider: the asymptotic decider, `marching-cubes-decider`'s default; trilinear: faces and
+/// tunnels as the trilinear interpolant has them, `marching-cubes-33`'s default).
 pub const OPTION_NAMES: &[&str] = &["normals", "parallelism", "on-iso", "faces"];
 
 /// Lorensen & Cline 1987: the 256-case cube table, one vertex per crossing edge.

@@ -15,7 +15,7 @@
 //! band against libigl's, and marching cubes on the narrow band against marching cubes on exact
 //! samples (the mesh must be the same, bit for bit).
 
-use super::{Context, Experiment, ExperimentError};
+use super::context::{Context, Experiment, ExperimentError};
 use crate::peers::python::PythonServer;
 use crate::report::{markdown_table, Spread};
 use isolab_algorithms::fields::{MeshField, CAP_WINDING_BOUND, CROSSING_TOLERANCE, DEFAULT_BAND_CELLS};

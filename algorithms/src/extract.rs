@@ -259,7 +259,7 @@ impl Guarantees {
 }
 
 /// How to build a post-process: [`ExtractorInfo`]'s counterpart (`pub const INFO` in its file,
-/// listed in [`crate::extractors::POST_INFOS`]).
+/// listed in [`crate::post::POST_INFOS`]).
 pub struct PostInfo {
     /// Stable kebab-case name (the CLI's `--post NAME` or `--post NAME:OPTION=VALUE,...`).
     pub name: &'static str,

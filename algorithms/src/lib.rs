@@ -43,10 +43,8 @@ pub mod post;
 pub mod predicates;
 pub mod random;
 pub mod samples;
-pub mod sign_rows;
-pub mod slabs;
+pub mod sweep;
 pub mod tables;
-pub mod tetrahedral;
 
 pub use extract::{
     Chunking, ExtractError, Extraction, Extractor, Guarantees, LevelsOfDetail, Origins, PostGuarantees, PostProcess, StageTimes,

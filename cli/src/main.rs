@@ -6,7 +6,7 @@
 //! field, bad arguments) or a mesh `isolab metrics` cannot read.
 
 use clap::{Parser, Subcommand};
-use isolab_algorithms::{extractors, fields};
+use isolab_algorithms::{extractors, fields, post};
 use isolab_io as io;
 use isolab_io::volume::{Inside, VolumeOptions};
 use isolab_metrics::MeshMetrics;
@@ -230,7 +230,7 @@ fn list() {
         println!("  {:<34} {}", "", guarantees(&e.guarantees));
     }
     println!("post-processes:");
-    for p in extractors::POST_INFOS {
+    for p in post::POST_INFOS {
         println!("  {:<34} {}", p.name, p.description);
         if !p.options.is_empty() {
             println!("  {:<34} options: {}", "", p.options.join(", "));

@@ -7,7 +7,7 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 mod protocol;
 use isolab_algorithms::extractors::marching_cubes::{MarchingCubes, McOptions, NormalSource};
-use isolab_algorithms::slabs::Parallelism;
+use isolab_algorithms::sweep::slabs::Parallelism;
 use isolab_algorithms::{fields, Extraction, Extractor, Grid, Lattice, Samples};
 use isolab_pipeline::load_field;
 use protocol::one_shot;

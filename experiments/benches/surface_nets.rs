@@ -10,7 +10,7 @@ mod protocol;
 use fast_surface_nets::ndshape::{RuntimeShape, Shape};
 use fast_surface_nets::{surface_nets, SurfaceNetsBuffer};
 use isolab_algorithms::extractors::surface_nets::{Smoothing, SnOptions, SurfaceNets};
-use isolab_algorithms::slabs::Parallelism;
+use isolab_algorithms::sweep::slabs::Parallelism;
 use isolab_algorithms::{fields, Extraction, Extractor, Grid, Samples};
 use protocol::one_shot;
 use std::hint::black_box;

@@ -20,7 +20,7 @@ use crate::input::{load_input, InputKind, MeshChecks};
 use glam::{DAffine3, DMat3, DVec3};
 use isolab_algorithms::chunks::extract_chunked;
 use isolab_algorithms::fields::Complement;
-use isolab_algorithms::{extractors, fields, Extraction, Field, Grid, Lattice, Options, Samples, TetMesh, TriMesh};
+use isolab_algorithms::{extractors, fields, post, Extraction, Field, Grid, Lattice, Options, Samples, TetMesh, TriMesh};
 use isolab_io::volume::{Inside, Space, VolumeOptions};
 use isolab_io::{self as io, IoError};
 use isolab_metrics::{volume_metrics, MeshMetrics, VolumeMetrics};
@@ -361,7 +361,7 @@ fn check_names(config: &RunConfig) -> Result<(), RunError> {
     extractors::build(&config.algorithm, &config.options)?
         .ok_or_else(|| RunError::UnknownAlgorithm { name: config.algorithm.clone(), valid: extractors::names() })?;
     for p in &config.post {
-        extractors::build_post(p)?.ok_or_else(|| RunError::UnknownPost { name: p.clone(), valid: extractors::post_names() })?;
+        post::build_post(p)?.ok_or_else(|| RunError::UnknownPost { name: p.clone(), valid: post::post_names() })?;
     }
     Ok(())
 }
@@ -375,9 +375,7 @@ pub fn run_input(config: &RunConfig, input: Input) -> Result<RunOutcome, RunErro
     let posts = config
         .post
         .iter()
-        .map(|p| {
-            extractors::build_post(p)?.ok_or_else(|| RunError::UnknownPost { name: p.clone(), valid: extractors::post_names() })
-        })
+        .map(|p| post::build_post(p)?.ok_or_else(|| RunError::UnknownPost { name: p.clone(), valid: post::post_names() }))
         .collect::<Result<Vec<_>, _>>()?;
     if let Some(iso) = config.iso.filter(|v| !v.is_finite()) {
         return Err(RunError::BadIso(iso));

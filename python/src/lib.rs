@@ -74,7 +74,7 @@ fn algorithms(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
         d.set_item("apron", apron)?;
         out.push(d);
     }
-    for p in extractors::POST_INFOS {
+    for p in isolab_algorithms::post::POST_INFOS {
         let d = PyDict::new(py);
         d.set_item("name", p.name)?;
         d.set_item("kind", "post-process")?;

@@ -251,7 +251,7 @@ pub fn interpolant_shape(g: &[f32; 8], shift: f32) -> (usize, i64) {
     let s = grid_samples([n + 1; 3], |x, y, z| trilinear(g, [x, y, z].map(|i| i as f32 / n as f32)) - shift);
     let decider = MarchingCubes::new(McOptions {
         faces: FaceResolution::AsymptoticDecider,
-        parallelism: isolab_algorithms::slabs::Parallelism::Serial,
+        parallelism: isolab_algorithms::sweep::slabs::Parallelism::Serial,
         ..Default::default()
     });
     cell_shape(&extract(&decider, &s).surface)

@@ -25,7 +25,7 @@
 
 use glam::Vec3;
 use isolab_algorithms::extractors::{self, ExtractorInfo};
-use isolab_algorithms::{ExtractError, Extraction, Extractor, Options, Samples};
+use isolab_algorithms::{post, ExtractError, Extraction, Extractor, Options, Samples};
 use isolab_metrics::{self_intersections, topology};
 use isolab_tests::{
     cell_samples, cell_shape, interpolant_shape, lattice_blobs, lattice_samples, near_critical, tunnel_corner_values,
@@ -325,7 +325,7 @@ fn on_iso(bcc: bool, n: usize, seed: u64) -> Samples {
 /// on a second run, and it keeps whatever its `guarantees` promise.
 fn every_post_process(samples: &Samples, input: &Extraction, what: &str) {
     let before = topology(&input.surface);
-    for info in extractors::POST_INFOS {
+    for info in post::POST_INFOS {
         let mut settings = vec![Options::new()];
         if info.options.contains(&"target") {
             let mut o = Options::new();

@@ -3,7 +3,8 @@
 //! self-intersection.
 
 use isolab_algorithms::extract::{Extraction, PostProcess};
-use isolab_algorithms::extractors::{build_post, MarchingTetrahedra};
+use isolab_algorithms::extractors::MarchingTetrahedra;
+use isolab_algorithms::post::build_post;
 use isolab_algorithms::post::EdgeCollapse;
 use isolab_algorithms::{Grid, Lattice, Samples, TetMesh};
 use isolab_metrics::{self_intersections, topology};

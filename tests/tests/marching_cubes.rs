@@ -2,7 +2,7 @@
 //! parallel, and analytic invariants on the built-in fields and shipped models.
 
 use isolab_algorithms::extractors::marching_cubes::{FaceResolution, MarchingCubes, McOptions, NormalSource};
-use isolab_algorithms::slabs::Parallelism;
+use isolab_algorithms::sweep::slabs::Parallelism;
 use isolab_algorithms::{fields, Extractor, Grid, Samples};
 use isolab_pipeline::{run, RunConfig};
 use isolab_tests::{assert_closed_manifold, assert_closed_manifold_for, blob_field, extract, grid_samples};

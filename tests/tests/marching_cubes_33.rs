@@ -5,7 +5,7 @@
 //! components and Euler characteristic the cell's mesh must have.
 
 use isolab_algorithms::extractors::marching_cubes::{FaceResolution, MarchingCubes, McOptions};
-use isolab_algorithms::slabs::Parallelism;
+use isolab_algorithms::sweep::slabs::Parallelism;
 use isolab_tests::{
     assert_closed_manifold, cell_samples, cell_shape, embedded_case, extract, interpolant_shape, near_critical,
     tunnel_corner_values,

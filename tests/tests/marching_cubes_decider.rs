@@ -3,7 +3,7 @@
 //! exactly where the trilinear interpolant says so.
 
 use isolab_algorithms::extractors::marching_cubes::{FaceResolution, MarchingCubes, McOptions};
-use isolab_algorithms::slabs::Parallelism;
+use isolab_algorithms::sweep::slabs::Parallelism;
 use isolab_tests::{assert_closed_manifold, extract, grid_samples};
 use proptest::prelude::*;
 

@@ -3,8 +3,8 @@
 //! RMT paper's reduction and quality claims.
 
 use isolab_algorithms::extractors::regularised_marching_tetrahedra::{RegularisedMarchingTetrahedra, RmtOptions};
+use isolab_algorithms::extractors::tetrahedral::{topology, TetKind, DIRECTIONS};
 use isolab_algorithms::extractors::MarchingTetrahedra;
-use isolab_algorithms::tetrahedral::{topology, TetKind, DIRECTIONS};
 use isolab_algorithms::{mesh::manifold_defects, Extractor, Grid, Lattice, Samples};
 use isolab_tests::{assert_closed_manifold, assert_closed_manifold_for, extract, lattice_samples};
 use proptest::prelude::*;

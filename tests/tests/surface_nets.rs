@@ -157,7 +157,7 @@ fn normals_follow_the_field_gradient() {
 #[test]
 fn parallel_slabs_join_exactly_like_one_slab_on_a_rough_field() {
     use isolab_algorithms::extractors::dual_contouring::{DcOptions, DualContouring};
-    use isolab_algorithms::slabs::Parallelism;
+    use isolab_algorithms::sweep::slabs::Parallelism;
     use isolab_algorithms::{Extraction, Extractor};
     // Many slabs on a rough field: every slab boundary is crowded with quads.
     let f = fields::builtin("asteroid", Default::default()).unwrap();

@@ -64,12 +64,12 @@ pub struct DcOptions {
     /// Keep each vertex inside its cell (default true).
     pub clamp: bool,
     /// Slabs in parallel (default) or serial.
-    pub parallelism: crate::slabs::Parallelism,
+    pub parallelism: crate::sweep::slabs::Parallelism,
 }
 
 impl Default for DcOptions {
     fn default() -> Self {
-        Self { svd_tolerance: 0.1, clamp: true, parallelism: crate::slabs::Parallelism::Rayon }
+        Self { svd_tolerance: 0.1, clamp: true, parallelism: crate::sweep::slabs::Parallelism::Rayon }
     }
 }
 
@@ -92,7 +92,7 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
 
 /// Builds dual contouring from named options.
 pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError> {
-    use crate::slabs::Parallelism;
+    use crate::sweep::slabs::Parallelism;
     let d = DcOptions::default();
     let mut r = options.reader(INFO.name, OPTION_NAMES);
     let o = DcOptions {

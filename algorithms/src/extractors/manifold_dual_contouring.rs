@@ -81,18 +81,18 @@ pub struct MdcOptions {
     /// Singular values below this fraction of the largest are dropped (default 0.1, as dual contouring).
     pub svd_tolerance: f32,
     /// Slabs in parallel (default) or serial.
-    pub parallelism: crate::slabs::Parallelism,
+    pub parallelism: crate::sweep::slabs::Parallelism,
 }
 
 impl Default for MdcOptions {
     fn default() -> Self {
-        Self { svd_tolerance: 0.1, parallelism: crate::slabs::Parallelism::Rayon }
+        Self { svd_tolerance: 0.1, parallelism: crate::sweep::slabs::Parallelism::Rayon }
     }
 }
 
 /// Builds the extractor from named options.
 pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError> {
-    use crate::slabs::Parallelism;
+    use crate::sweep::slabs::Parallelism;
     let d = MdcOptions::default();
     let mut r = options.reader(INFO.name, OPTION_NAMES);
     let o = MdcOptions {

@@ -10,8 +10,8 @@
 //! its main diagonal (the Kuhn split of the paper's Fig. 19). Each tetrahedron looks up its sign
 //! pattern in the 16-case table and emits nothing, a triangle or a quad (split along its shorter
 //! diagonal). One vertex per crossing lattice edge, at the linear interpolation of its samples.
-//! The engine is [`crate::tetrahedral`]; this extractor is it with
-//! [`crate::tetrahedral::NoClustering`].
+//! The engine is [`crate::extractors::tetrahedral`]; this extractor is it with
+//! [`crate::extractors::tetrahedral::NoClustering`].
 //!
 //! **Guarantees.** No ambiguity: a tetrahedron's pattern fixes its surface, so the mesh is closed
 //! wherever the surface stays inside the lattice, manifold, and wound outward (tests: every
@@ -44,11 +44,11 @@
 //! ```
 
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees, LevelsOfDetail};
+use crate::extractors::tetrahedral::{compute_normals, extract_tetrahedral, NoClustering, TetScratch};
 use crate::lattice::Lattice;
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
-use crate::slabs::ScratchPool;
-use crate::tetrahedral::{compute_normals, extract_tetrahedral, NoClustering, TetScratch};
+use crate::sweep::slabs::ScratchPool;
 
 /// One line for listings.
 pub const DESCRIPTION: &str =

@@ -14,6 +14,7 @@ pub mod marching_cubes;
 pub mod marching_tetrahedra;
 pub mod regularised_marching_tetrahedra;
 pub mod surface_nets;
+pub mod tetrahedral;
 
 pub use bcc_sculpt::BccSculpt;
 pub use dual_contouring::DualContouring;
@@ -25,9 +26,8 @@ pub use surface_nets::SurfaceNets;
 
 pub use crate::extract::{ExtractorInfo, Guarantees, PostInfo};
 
-use crate::extract::{Extractor, PostProcess};
+use crate::extract::Extractor;
 use crate::options::{OptionError, Options};
-use crate::post::edge_collapse;
 
 /// Every extractor, in the order the report lists them: one line each (the paper is in each
 /// `INFO`'s doc and its module's).
@@ -49,35 +49,6 @@ pub fn registry() -> Vec<Box<dyn Extractor>> {
     INFOS.iter().map(|i| (i.make)(&Options::new()).unwrap_or_else(|e| panic!("{}'s default options fail: {e}", i.name))).collect()
 }
 
-/// Every post-process, one line each.
-pub const POST_INFOS: &[PostInfo] = &[edge_collapse::PAPER_INFO, edge_collapse::SAFE_INFO];
-
-/// Every post-process with default options (tested to build, as [`registry`]).
-pub fn post_processes() -> Vec<Box<dyn PostProcess>> {
-    POST_INFOS
-        .iter()
-        .map(|i| (i.make)(&Options::new()).unwrap_or_else(|e| panic!("{}'s default options fail: {e}", i.name)))
-        .collect()
-}
-
-/// The post-process a CLI spec names: `NAME` or `NAME:OPTION=VALUE,OPTION=VALUE`. `Ok(None)` when
-/// no post-process has that name; a malformed option list is an error naming it.
-pub fn build_post(spec: &str) -> Result<Option<Box<dyn PostProcess>>, OptionError> {
-    let (name, list) = spec.split_once(':').unwrap_or((spec, ""));
-    let Some(info) = POST_INFOS.iter().find(|i| i.name == name.trim()) else { return Ok(None) };
-    let mut options = Options::new();
-    for item in list.split(',').filter(|s| !s.trim().is_empty()) {
-        let (k, v) = item.split_once('=').ok_or_else(|| OptionError::BadValue {
-            algorithm: info.name,
-            option: item.trim().to_owned(),
-            value: String::new(),
-            reason: "options are written OPTION=VALUE".into(),
-        })?;
-        options.set(k.trim(), v.trim());
-    }
-    (info.make)(&options).map(Some)
-}
-
 /// The extractor called `name` with default options, or `None`.
 pub fn by_name(name: &str) -> Option<Box<dyn Extractor>> {
     build(name, &Options::new()).ok().flatten()
@@ -93,11 +64,6 @@ pub fn names() -> String {
     INFOS.iter().map(|e| e.name).collect::<Vec<_>>().join(", ")
 }
 
-/// Comma-separated names of all post-processes (for error messages).
-pub fn post_names() -> String {
-    post_processes().iter().map(|e| e.name()).collect::<Vec<_>>().join(", ")
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -111,12 +77,9 @@ mod tests {
             assert_eq!(e.description(), info.description, "{}", info.name);
             assert!(names.insert(info.name), "{} is registered twice", info.name);
         }
-        for info in POST_INFOS {
-            let p = (info.make)(&Options::new()).unwrap_or_else(|err| panic!("{}: {err}", info.name));
-            assert_eq!(p.name(), info.name);
-            assert!(names.insert(info.name), "{} is registered twice", info.name);
+        for info in crate::post::POST_INFOS {
+            assert!(names.insert(info.name), "{} is registered both as an extractor and a post-process", info.name);
         }
         assert_eq!(registry().len(), INFOS.len());
-        assert_eq!(post_processes().len(), POST_INFOS.len());
     }
 }

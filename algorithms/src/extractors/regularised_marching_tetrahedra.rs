@@ -6,11 +6,11 @@
 //! section 2.4, Algorithms 2 and 3 and section 3.1.1 (the paper's `*_bi` and `*_si`
 //! configurations).
 //!
-//! **Summary.** Marching tetrahedra ([`crate::tetrahedral`]) whose vertex pass merges, around each
+//! **Summary.** Marching tetrahedra ([`crate::extractors::tetrahedral`]) whose vertex pass merges, around each
 //! sample, the crossings nearer that sample than the other end of their edge (its *nearby
 //! intersections*, at most 14):
 //! 1. their adjacency graph: two nearby crossings are joined when their edges span a face of the
-//!    sample's star (bit flags, [`crate::tetrahedral::TetTopology::adjacency`]);
+//!    sample's star (bit flags, [`crate::extractors::tetrahedral::TetTopology::adjacency`]);
 //! 2. merging is skipped when more than `max-nearby` (10) are nearby (a complex, concave case), or
 //!    when the complement graph (the star's other neighbours) has more than one island: the nearby
 //!    crossings then ring the sample, a loop such as a thin tube that merging would collapse;
@@ -39,11 +39,11 @@
 //!   geometry pass the guard lists the merged vertices where the mesh is not a consistently wound
 //!   manifold ([`crate::mesh::ManifoldCheck`]), forbids merging at the samples that made them,
 //!   gives their crossings one vertex each and re-emits the triangles of the tetrahedra around
-//!   those samples (on cubic grids only those: [`crate::tetrahedral::regenerate_anchors`]; on the
+//!   those samples (on cubic grids only those: [`crate::extractors::tetrahedral::regenerate_anchors`]; on the
 //!   BCC lattice the whole geometry pass); plain marching tetrahedra is manifold, so this ends,
 //!   usually after one or two rounds. After a repair only the vertices of the triangles it
 //!   removed or made are checked again (elsewhere every link is as the last check saw it). Once
-//!   the mesh is manifold the guard looks for folds ([`crate::tetrahedral::folds`]): merged
+//!   the mesh is manifold the guard looks for folds ([`crate::extractors::tetrahedral::folds`]): merged
 //!   vertices whose triangles cross a triangle of their two-ring, unmerged the same way
 //!   (`guard=manifold` skips this). Its cost is in the geometry time.
 //!
@@ -77,17 +77,17 @@
 //! ```
 
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees, LevelsOfDetail};
+use crate::extractors::tetrahedral::folds::FoldCheck;
+use crate::extractors::tetrahedral::{
+    compute_normals, extract_tetrahedral, finish_repair, unmerge_and_regenerate, Clustering, Islands, NoClustering, Star,
+    TetScratch, TetTopology, DIRECTIONS,
+};
 use crate::field::Field;
 use crate::lattice::Lattice;
 use crate::mesh::ManifoldCheck;
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
-use crate::slabs::ScratchPool;
-use crate::tetrahedral::folds::FoldCheck;
-use crate::tetrahedral::{
-    compute_normals, extract_tetrahedral, finish_repair, unmerge_and_regenerate, Clustering, Islands, NoClustering, Star,
-    TetScratch, TetTopology, DIRECTIONS,
-};
+use crate::sweep::slabs::ScratchPool;
 use glam::Vec3;
 use std::time::Instant;
 
@@ -122,7 +122,7 @@ pub struct RmtOptions {
     /// Repair: after the geometry pass, find vertices where the mesh is not manifold, forbid
     /// merging at the samples that made them, and extract again until none is left.
     pub guard: bool,
-    /// With the guard: also repair the folds merging makes ([`crate::tetrahedral::folds`]).
+    /// With the guard: also repair the folds merging makes ([`crate::extractors::tetrahedral::folds`]).
     pub fold_check: bool,
 }
 
@@ -395,7 +395,7 @@ impl RegularisedMarchingTetrahedra {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tetrahedral::{topology, TetKind};
+    use crate::extractors::tetrahedral::{topology, TetKind};
 
     #[test]
     fn islands_split_a_mask_into_connected_parts() {
@@ -430,7 +430,7 @@ mod tests {
     /// ones), on smooth fields and on white noise (where repairs take more than one round).
     #[test]
     fn rechecking_only_rewritten_vertices_finds_every_defect() {
-        use crate::tetrahedral::{compute_normals, extract_tetrahedral, finish_repair, unmerge_and_regenerate};
+        use crate::extractors::tetrahedral::{compute_normals, extract_tetrahedral, finish_repair, unmerge_and_regenerate};
         let mut cases: Vec<(String, Samples)> = Vec::new();
         for name in ["thin", "gyroid", "terrain", "asteroid"] {
             let field = crate::fields::builtin(name, Default::default()).unwrap();

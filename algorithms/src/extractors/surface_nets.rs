@@ -54,7 +54,7 @@
 //! contouring; this file is surface nets' options and its place in the registry.
 //!
 //! **Costs.** One read of every sample to pack its sign, layer by layer as the sweep reaches it
-//! ([`crate::sign_rows::LayerSigns`]: surface cells and crossing edges are found 64 samples at a
+//! ([`crate::sweep::sign_rows::LayerSigns`]: surface cells and crossing edges are found 64 samples at a
 //! time), then work proportional to surface cells; smoothing is
 //! `iterations` passes over the vertices (implicit: a conjugate-gradient solve per iteration).
 //!
@@ -73,7 +73,7 @@ use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInf
 use crate::extractors::dual::{DualEngine, Placement};
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
-use crate::slabs::Parallelism;
+use crate::sweep::slabs::Parallelism;
 
 pub use crate::extractors::dual::{DualOptions as SnOptions, Smoothing};
 

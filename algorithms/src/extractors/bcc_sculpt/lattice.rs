@@ -49,7 +49,7 @@ impl BccLattice {
 
 /// The BCC tetrahedralization, spacing `h`, of `bounds` plus `MARGIN_CELLS`, built in a frame
 /// rotated by `rotation` and shifted by `shift` cells. The tetrahedra are
-/// [`crate::tetrahedral::TetTopology`]'s BCC templates (the lattice marching tetrahedra meshes):
+/// [`crate::extractors::tetrahedral::TetTopology`]'s BCC templates (the lattice marching tetrahedra meshes):
 /// around each edge between adjacent centres, the four corners of the face they straddle close
 /// four tetrahedra (twelve per cell).
 pub fn bcc_lattice(bounds: Aabb, h: f64, rotation: DQuat, shift: DVec3) -> BccLattice {
@@ -90,7 +90,7 @@ pub fn bcc_lattice(bounds: Aabb, h: f64, rotation: DQuat, shift: DVec3) -> BccLa
     // The tetrahedra are the BCC topology's templates (the one BCC lattice marching tetrahedra
     // also uses), anchored at every cell centre whose neighbour across the template's face exists.
     // Template vertices are doubled offsets: odd coordinates are centres, even ones corners.
-    let templates = &crate::tetrahedral::topology(crate::tetrahedral::TetKind::Bcc).templates;
+    let templates = &crate::extractors::tetrahedral::topology(crate::extractors::tetrahedral::TetKind::Bcc).templates;
     let vertex = |d: [i64; 3]| {
         let [x, y, z] = d.map(|c| (c.div_euclid(2)) as usize);
         if d[0] & 1 == 1 {

@@ -417,10 +417,10 @@ impl Ctx<'_> {
         let [nx, ny, _] = self.grid.dims;
         let layer = (nx - 1) * (ny - 1);
         for b in [&mut s.prev, &mut s.cur] {
-            crate::slabs::grow_zeroed(b, layer);
+            crate::sweep::slabs::grow_zeroed(b, layer);
         }
         for b in [&mut s.prev_case, &mut s.cur_case] {
-            crate::slabs::grow_zeroed(b, layer);
+            crate::sweep::slabs::grow_zeroed(b, layer);
         }
         s.ghost.clear();
         s.cell_min.clear();

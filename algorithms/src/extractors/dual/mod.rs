@@ -8,7 +8,7 @@
 //! `cells::split_least_folded`) and wound so normals point toward increasing `f`. Only the vertex
 //! [`Placement`] differs: the mass point of the piece's crossings (surface nets) or the minimum of
 //! its quadric error ([`qef`], dual contouring). Cells are swept in layers along z, slabs of
-//! layers in parallel ([`crate::slabs`]); each slab recomputes the cell layer below it, whose
+//! layers in parallel ([`crate::sweep::slabs`]); each slab recomputes the cell layer below it, whose
 //! vertices belong to the slab below, and refers to them by tagged indices resolved at the join,
 //! so the mesh is the same on any number of threads. A fresh output without smoothing (one-shot)
 //! skips the join, as flying edges does: every slab's output is counted from the sign bits first,
@@ -34,8 +34,10 @@ use crate::geometry::trilinear_gradient;
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
 use crate::samples::Samples;
-use crate::sign_rows::{count_crossing_edges, for_each_bit, for_each_surface_cell, next_bits, span, LayerSigns};
-use crate::slabs::{for_each_slab, join_parts, mesh_pieces, slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN};
+use crate::sweep::sign_rows::{count_crossing_edges, for_each_bit, for_each_surface_cell, next_bits, span, LayerSigns};
+use crate::sweep::slabs::{
+    for_each_slab, join_parts, mesh_pieces, slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN,
+};
 use crate::tables::marching_cubes::{
     face_edges, opposite_face, Case, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, RING_FACES, TABLE,
 };
@@ -352,7 +354,7 @@ impl DualEngine {
             keep_cell_min: smoothing || out.origins.wanted || keep_quads,
         };
         let cell_layers = nz - 1;
-        let tasks = crate::slabs::task_count(self.options.parallelism, grid.cell_count(), cell_layers);
+        let tasks = crate::sweep::slabs::task_count(self.options.parallelism, grid.cell_count(), cell_layers);
         while s.slabs.len() < tasks {
             s.slabs.push(Slab::default());
         }
@@ -434,7 +436,7 @@ impl DualEngine {
             out.surface.normals.clear();
             let inverse_spacing = 1.0 / grid.spacing;
             out.surface.normals.par_extend(
-                positions.par_iter().zip(cell_min.par_iter()).with_min_len(crate::slabs::MIN_VERTICES_PER_TASK).map(
+                positions.par_iter().zip(cell_min.par_iter()).with_min_len(crate::sweep::slabs::MIN_VERTICES_PER_TASK).map(
                     |(&p, &min)| {
                         // The cell's lower corner is a lattice point: nearest integer by truncation.
                         let cell = ((min - grid.origin) * inverse_spacing + Vec3::splat(0.5)).as_uvec3();

@@ -5,7 +5,7 @@
 //! Jacobi-preconditioned conjugate gradients.
 
 use super::{DualEngine, DualOptions, Scratch, Smoothing};
-use crate::slabs::MIN_VERTICES_PER_TASK;
+use crate::sweep::slabs::MIN_VERTICES_PER_TASK;
 use glam::Vec3;
 use rayon::prelude::*;
 

@@ -151,8 +151,8 @@ pub(super) fn against_table_one(data: &Data) -> String {
     let (or, os) = rising_with_resolution(&ours_series);
     md.push_str(&format!(
         "\nIn all, the paper converged {pc} of {pn} configurations and we converge {} of {}, fewest at the small ratios; \
-         unexplained so far (our models are not the paper's, and our relaxation is guarded where the paper's is not; the \
-         paper's update, step size and stopping rule are still to be read again against ours). Of our {} converged meshes, \
+         unexplained (our models are not the paper's, and our relaxation is guarded where the paper's is not). Of our {} \
+         converged meshes, \
          {held} have their minimum dihedral angle within {FLOOR_BINDS_WITHIN}° of our {floor}° quality floor: there the \
          floor, not the relaxation, sets the minimum (the paper has no floor). From the coarsest to the finest converged \
          spacing, the paper's minimum angle rises in {pr} of its {ps} (model, ratio) series and ours in {or} of {os}.\n\n",

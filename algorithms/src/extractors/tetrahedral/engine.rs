@@ -615,7 +615,7 @@ pub fn extract_tetrahedral(
     // Slabs of sample layers, per grid, in index order: each writes its own samples' flags and
     // slots and makes its own vertices; joined in order, the result is the serial pass's.
     let layers: usize = layout.parts.iter().map(|p| p.dims[2]).sum();
-    let tasks = crate::slabs::task_count(crate::slabs::Parallelism::Rayon, n, layers);
+    let tasks = crate::sweep::slabs::task_count(crate::sweep::slabs::Parallelism::Rayon, n, layers);
     let slabs = &mut scratch.slabs; // (part, z0, z1)
     slabs.clear();
     for (p, part) in layout.parts.iter().enumerate() {

@@ -237,7 +237,7 @@ fn geometry_with(
         }
         None => {
             anchors.clear();
-            let tasks = crate::slabs::task_count(crate::slabs::Parallelism::Rayon, ax * ay * az, az);
+            let tasks = crate::sweep::slabs::task_count(crate::sweep::slabs::Parallelism::Rayon, ax * ay * az, az);
             triangles.clear();
             if tasks <= 1 {
                 layers(0, az, &mut triangles, &mut counts, anchors);

@@ -10,7 +10,7 @@
 //! layer is swept, and found again through per-layer index arrays (no hash map). As the sweep
 //! reaches a sample layer it packs the layer's inside states into bits, 64 samples to a word, and
 //! summarises each x-row (uniform, or the x-range where the sign changes)
-//! ([`crate::sign_rows::LayerSigns`]): uniform rows are skipped whole, crossing edges and surface
+//! ([`crate::sweep::sign_rows::LayerSigns`]): uniform rows are skipped whole, crossing edges and surface
 //! cells are found by word operations over 64 samples at a time, and only they are visited one by
 //! one, while the layer's samples are still in cache. The volume is split into slabs
 //! of cells along z meshed in parallel (rayon); vertices on a slab's bottom layer belong to the
@@ -56,7 +56,7 @@
 //! exactly at the iso-value would give coincident vertices; by default vertices keep 1e-4 of the
 //! spacing from the edge ends instead ([`OnIsoSamples`]), so no triangle has zero area.
 //!
-//! **Why one file of about 1,000 lines (a tenth of it tests).** The sweep's vertex pass, geometry pass, counting pass, slab
+//! **Why one file of about 900 lines.** The sweep's vertex pass, geometry pass, counting pass, slab
 //! join and normals share one set of per-layer index arrays; split apart they would pass those arrays
 //! through half a dozen signatures. It is one algorithm that reads best whole.
 //!
@@ -79,10 +79,10 @@ use crate::geometry::{normalize_all, trilinear_gradient};
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
 use crate::samples::Samples;
-use crate::sign_rows::{
+use crate::sweep::sign_rows::{
     count_bits, count_crossing_edges, for_each_bit, for_each_surface_cell, layer_edge_words, span, z_edge_words, LayerSigns,
 };
-use crate::slabs::{
+use crate::sweep::slabs::{
     for_each_slab, grow_zeroed, join_parts, mesh_pieces, slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN,
 };
 use crate::tables::marching_cubes::{
@@ -801,7 +801,7 @@ impl Extractor for MarchingCubes {
         let setup_time = start.elapsed();
 
         let slab_cells = nz - 1;
-        let tasks = crate::slabs::task_count(self.options.parallelism, grid.cell_count(), slab_cells);
+        let tasks = crate::sweep::slabs::task_count(self.options.parallelism, grid.cell_count(), slab_cells);
         while pool.len() < tasks {
             pool.push(Scratch::default());
         }
@@ -909,92 +909,4 @@ impl Extractor for MarchingCubes {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::fields;
-
-    fn sphere_samples(n: usize) -> Samples {
-        let f = fields::builtin("sphere", Default::default()).unwrap();
-        Samples::sample_cubic(f.clone(), Grid::covering(&f.domain(), n).unwrap(), 0.0).unwrap()
-    }
-
-    #[test]
-    fn the_vertex_count_before_the_sweep_is_exact_and_a_fresh_output_never_grows() {
-        for (name, n) in [("sphere", 37), ("gyroid", 41), ("terrain", 33), ("asteroid", 29)] {
-            let f = fields::builtin(name, Default::default()).unwrap();
-            let s = Samples::sample_cubic(f.clone(), Grid::covering(&f.domain(), n).unwrap(), 0.0).unwrap();
-            let Lattice::Cubic(grid) = *s.lattice() else { unreachable!() };
-            let ctx = Ctx {
-                values: s.values(),
-                grid,
-                iso: s.iso(),
-                sample_normals: false,
-                t_min: MIN_EDGE_FRACTION,
-                faces: FaceResolution::SeparateInside,
-            };
-            let mut out = Extraction::default();
-            let mc = MarchingCubes::new(McOptions {
-                normals: NormalSource::None,
-                parallelism: Parallelism::Serial,
-                ..Default::default()
-            });
-            mc.extract(&s, &mut out).unwrap();
-            let nz = grid.dims[2];
-            let mut signs = LayerSigns::default();
-            let count = |signs: &mut LayerSigns, z0, z1, bottom| {
-                count_crossing_edges(signs, ctx.values, grid.dims, ctx.iso, z0, z1, bottom)
-            };
-            assert_eq!(count(&mut signs, 0, nz - 1, true), out.surface.positions.len(), "{name}");
-            // Slabs: the bottom layer of a slab above the first is counted by the slab below.
-            let mid = nz / 2;
-            let split = count(&mut signs, 0, mid, true) + count(&mut signs, mid, nz - 1, false);
-            assert_eq!(split, out.surface.positions.len(), "{name}, two slabs");
-            // Allocated once: the capacity is the reservation, not a doubling.
-            let v = out.surface.positions.len();
-            assert_eq!(out.surface.positions.capacity(), v + v / 64 + 16, "{name}");
-            assert!(out.surface.triangles.len() <= out.surface.triangles.capacity());
-            assert_eq!(out.surface.triangles.capacity(), 2 * v + v / 8 + 64, "{name}: the triangles fit the estimate");
-        }
-    }
-
-    #[test]
-    fn serial_and_parallel_give_the_same_mesh() {
-        let s = sphere_samples(90);
-        let mut a = Extraction::default();
-        let mut b = Extraction::default();
-        MarchingCubes::new(McOptions { parallelism: Parallelism::Serial, ..Default::default() }).extract(&s, &mut a).unwrap();
-        let par = MarchingCubes::default();
-        par.extract(&s, &mut b).unwrap();
-        assert_eq!(a.surface.positions.len(), b.surface.positions.len());
-        assert_eq!(a.surface.triangles.len(), b.surface.triangles.len());
-        // Same triangles as position triples (vertex order differs between runs).
-        let key = |m: &TriMesh| {
-            let mut v: Vec<[[u32; 3]; 3]> =
-                m.triangles.iter().map(|t| t.map(|i| m.positions[i as usize].to_array().map(f32::to_bits))).collect();
-            v.sort_unstable();
-            v
-        };
-        assert_eq!(key(&a.surface), key(&b.surface));
-    }
-
-    #[test]
-    fn bcc_samples_are_refused() {
-        let f = fields::builtin("sphere", Default::default()).unwrap();
-        let s = Samples::sample(f.clone(), Lattice::Bcc(Grid::covering(&f.domain(), 8).unwrap()), 0.0).unwrap();
-        let err = MarchingCubes::default().extract(&s, &mut Extraction::default()).unwrap_err();
-        assert!(err.to_string().contains("cubic"), "{err}");
-    }
-
-    #[test]
-    fn reuse_keeps_buffers() {
-        let s = sphere_samples(40);
-        let mc = MarchingCubes::default();
-        let mut out = Extraction::default();
-        mc.extract(&s, &mut out).unwrap();
-        let cap = out.surface.positions.capacity();
-        let first = out.clone();
-        mc.extract(&s, &mut out).unwrap();
-        assert_eq!(out.surface, first.surface);
-        assert_eq!(out.surface.positions.capacity(), cap);
-    }
-}
+mod tests;

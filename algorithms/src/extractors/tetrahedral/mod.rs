@@ -40,7 +40,7 @@
 //! Groups of tetrahedra whose samples all share a sign are skipped from their signs alone (the
 //! paper skips a cube when its centre has no flags, which misses tetrahedra whose crossings are
 //! all owned by corners; this test cannot). On a cubic grid both passes read the samples' signs
-//! packed 64 to a word ([`crate::sign_rows::GridSigns`]): the vertex pass visits only samples with
+//! packed 64 to a word ([`crate::sweep::sign_rows::GridSigns`]): the vertex pass visits only samples with
 //! a sign change on one of their 14 edges and reads the values across those edges only (which
 //! edges change comes from the bits), the geometry pass only cubes whose corners disagree.
 //! The per-sample bookkeeping ([`TetScratch`]) is kept by the extractors between calls, so
@@ -53,7 +53,7 @@
 //!
 //! **Costs.** O(samples): one sign pass over every sample (a word per 64 on a cubic grid, a row
 //! summary per row on BCC), then the 14 neighbours of the samples near the surface. Both passes
-//! run in slabs of layers on rayon ([`crate::slabs`]) joined in order, so the mesh is the same on
+//! run in slabs of layers on rayon ([`crate::sweep::slabs`]) joined in order, so the mesh is the same on
 //! any number of threads (the paper's section 3.1.4 parallelises sampling only).
 //!
 //! Files: [`topology`](mod@topology) (the lattices), [`table`] (the 16 cases), [`engine`] (the vertex pass and
@@ -65,7 +65,7 @@ use crate::field::Field;
 use crate::geometry::edge_crossing_fraction;
 use crate::lattice::{Grid, Lattice};
 use crate::samples::Samples;
-use crate::sign_rows::{classify_rows, range_mask, span, surface_cell_word, GridSigns, Row};
+use crate::sweep::sign_rows::{classify_rows, range_mask, span, surface_cell_word, GridSigns, Row};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::LazyLock;

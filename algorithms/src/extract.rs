@@ -325,8 +325,35 @@ pub trait Extractor: Send + Sync {
         LevelsOfDetail::Unsupported("its seams between levels of detail are not stitched")
     }
 
-    /// Extracts from `samples` into `out`, which is cleared first (keeping capacity).
-    fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError>;
+    /// The algorithm's own work: fills `out`, which arrives cleared (capacity kept) with its
+    /// sampling time set, from samples on a lattice its guarantees declare; fills the stage times
+    /// it has (`vertex`, `geometry`, `smoothing`, `normals`) and returns the bytes of scratch it
+    /// holds between calls. [`Extractor::extract`] does the rest.
+    fn extract_into(&self, samples: &Samples, out: &mut Extraction) -> Result<usize, ExtractError>;
+
+    /// Extracts from `samples` into `out`: the bookkeeping every extractor shares around its
+    /// [`Extractor::extract_into`] (clear the output keeping capacity, copy the sampling time,
+    /// refuse a lattice its `INFO`'s guarantees do not declare, and fill the counts and buffer
+    /// sizes with [`Extraction::finish_counts`]).
+    fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
+        out.clear();
+        out.stats.times.sampling = samples.sampling_time();
+        let guarantees = &self.info().guarantees;
+        let declared = match samples.lattice() {
+            crate::lattice::Lattice::Cubic(_) => guarantees.cubic,
+            crate::lattice::Lattice::Bcc(_) => guarantees.bcc,
+        };
+        if !declared {
+            return Err(ExtractError::UnsupportedLattice {
+                algorithm: self.name(),
+                lattice: samples.lattice().kind(),
+                supported: if guarantees.cubic { "cubic" } else { "bcc" },
+            });
+        }
+        let scratch = self.extract_into(samples, out)?;
+        out.finish_counts(scratch);
+        Ok(())
+    }
 }
 
 /// A mesh-to-mesh filter that composes with any extractor (edge collapse, relaxation, ...).

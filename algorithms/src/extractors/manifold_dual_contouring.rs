@@ -150,7 +150,7 @@ impl Extractor for ManifoldDualContouring {
         }
     }
 
-    fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
-        self.engine.extract_intersection_free(samples, out)
+    fn extract_into(&self, samples: &Samples, out: &mut Extraction) -> Result<usize, ExtractError> {
+        self.engine.extract_intersection_free_into(samples, out)
     }
 }

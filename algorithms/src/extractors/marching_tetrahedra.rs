@@ -104,7 +104,7 @@ impl Extractor for MarchingTetrahedra {
         Chunking::CellLocal
     }
 
-    fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
+    fn extract_into(&self, samples: &Samples, out: &mut Extraction) -> Result<usize, ExtractError> {
         let mut scratch = self.scratch.take();
         let result = extract_tetrahedral(samples, &NoClustering, &mut scratch, out);
         compute_normals(out);
@@ -114,7 +114,6 @@ impl Extractor for MarchingTetrahedra {
         let bytes = scratch.bytes();
         self.scratch.give(scratch);
         result?;
-        out.finish_counts(bytes);
-        Ok(())
+        Ok(bytes)
     }
 }

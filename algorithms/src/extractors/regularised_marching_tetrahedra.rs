@@ -332,7 +332,7 @@ impl Extractor for RegularisedMarchingTetrahedra {
         Chunking::Apron(3)
     }
 
-    fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
+    fn extract_into(&self, samples: &Samples, out: &mut Extraction) -> Result<usize, ExtractError> {
         let mut held = self.scratch.take();
         let result = self.extract_with(samples, out, &mut held);
         self.scratch.give(held);
@@ -341,7 +341,7 @@ impl Extractor for RegularisedMarchingTetrahedra {
 }
 
 impl RegularisedMarchingTetrahedra {
-    fn extract_with(&self, samples: &Samples, out: &mut Extraction, s: &mut RmtScratch) -> Result<(), ExtractError> {
+    fn extract_with(&self, samples: &Samples, out: &mut Extraction, s: &mut RmtScratch) -> Result<usize, ExtractError> {
         let counts = extract_tetrahedral(samples, &self.options, &mut s.tet, out)?;
         let first_pass_vertices = out.surface.positions.len();
         let mut repaired = false;
@@ -385,10 +385,7 @@ impl RegularisedMarchingTetrahedra {
             finish_repair(out, &mut s.renumber);
         }
         compute_normals(out);
-        out.finish_counts(
-            s.tet.bytes() + s.renumber.capacity() * 4 + s.recheck.capacity() + s.folds.bytes() + s.defects.capacity() * 4,
-        );
-        Ok(())
+        Ok(s.tet.bytes() + s.renumber.capacity() * 4 + s.recheck.capacity() + s.folds.bytes() + s.defects.capacity() * 4)
     }
 }
 

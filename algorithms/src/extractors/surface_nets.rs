@@ -171,8 +171,8 @@ impl Extractor for SurfaceNets {
         LevelsOfDetail::Dual(&self.engine)
     }
 
-    fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
-        self.engine.extract(samples, out)
+    fn extract_into(&self, samples: &Samples, out: &mut Extraction) -> Result<usize, ExtractError> {
+        self.engine.extract_into(samples, out)
     }
 }
 

@@ -338,9 +338,7 @@ impl Extractor for BccSculpt {
         true
     }
 
-    fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
-        out.clear();
-        out.stats.times.sampling = samples.sampling_time();
+    fn extract_into(&self, samples: &Samples, out: &mut Extraction) -> Result<usize, ExtractError> {
         let owned;
         let surface: &TriangleBvh = match samples.field().and_then(|f| f.surface_mesh()) {
             Some(bvh) => bvh,
@@ -353,8 +351,7 @@ impl Extractor for BccSculpt {
         out.stats.warnings = input_warnings(&name, surface);
         if surface.is_empty() {
             // Nothing to enclose: an empty volume, as every extractor gives where the field keeps its sign.
-            out.finish_counts(0);
-            return Ok(());
+            return Ok(0);
         }
         let sculpted = sculpt_surface(surface, &name, &self.options)?;
         let r = &sculpted.report;
@@ -373,8 +370,7 @@ impl Extractor for BccSculpt {
         }
         out.volume = sculpted.volume;
         out.surface = sculpted.boundary;
-        out.finish_counts(0);
-        Ok(())
+        Ok(0)
     }
 }
 

@@ -286,18 +286,19 @@ impl DualEngine {
         Chunking::Apron(2 + smoothing)
     }
 
-    /// Extracts into `out`, cleared first (the [`crate::Extractor`] contract).
-    pub fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
+    /// The sweep into `out` ([`crate::Extractor::extract_into`]: `out` arrives cleared); returns
+    /// the scratch bytes it holds.
+    pub fn extract_into(&self, samples: &Samples, out: &mut Extraction) -> Result<usize, ExtractError> {
         self.run(samples, out, None)
     }
 
     /// Extracts into `out` and then replaces each quad by triangles that each stay inside one
     /// cell (the engine's `intersection_free` pass, after Ju and Udeshi 2006): the mesh cannot cross itself.
-    pub fn extract_intersection_free(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
+    pub fn extract_intersection_free_into(&self, samples: &Samples, out: &mut Extraction) -> Result<usize, ExtractError> {
         let mut scratch = self.free_scratch.take();
         let mut engine_bytes = 0;
-        let result = self.run(samples, out, Some(&mut scratch)).and_then(|()| {
-            engine_bytes = out.stats.buffer_bytes - out.surface.capacity_bytes() - out.volume.capacity_bytes();
+        let result = self.run(samples, out, Some(&mut scratch)).and_then(|bytes| {
+            engine_bytes = bytes;
             let t = Instant::now();
             let Lattice::Cubic(grid) = *samples.lattice() else { unreachable!("run refuses other lattices") };
             let input = intersection_free::Input { values: samples.values(), grid, iso: samples.iso() };
@@ -315,20 +316,18 @@ impl DualEngine {
         let held = engine_bytes + scratch.bytes();
         self.free_scratch.give(scratch);
         result?;
-        out.finish_counts(held);
-        Ok(())
+        Ok(held)
     }
 
-    /// The sweep behind [`DualEngine::extract`]; with `quads`, it also keeps each quad's cycle
-    /// and each vertex's cell for [`intersection_free::triangulate`].
+    /// The sweep behind [`DualEngine::extract_into`]; with `quads`, it also keeps each quad's
+    /// cycle and each vertex's cell for [`intersection_free::triangulate`]. Returns the scratch
+    /// bytes it holds.
     fn run(
         &self,
         samples: &Samples,
         out: &mut Extraction,
         quads: Option<&mut intersection_free::Scratch>,
-    ) -> Result<(), ExtractError> {
-        out.clear();
-        out.stats.times.sampling = samples.sampling_time();
+    ) -> Result<usize, ExtractError> {
         let Lattice::Cubic(grid) = *samples.lattice() else {
             return Err(ExtractError::UnsupportedLattice {
                 algorithm: self.name,
@@ -461,8 +460,7 @@ impl DualEngine {
             quads.swap_with(&mut s.links, &mut s.cell_min);
         }
         self.scratch.give(held);
-        out.finish_counts(scratch);
-        Ok(())
+        Ok(scratch)
     }
 }
 
@@ -487,7 +485,8 @@ mod tests {
                     "surface-nets",
                 );
                 let mut out = Extraction::default();
-                engine.extract(&s, &mut out).unwrap();
+                out.clear();
+                engine.extract_into(&s, &mut out).unwrap();
                 let dims = s.grid().dims;
                 let edges = count_crossing_edges(&mut LayerSigns::default(), s.values(), dims, s.iso(), 0, dims[2] - 1, true);
                 let (v, t) = (out.surface.positions.len(), out.surface.triangles.len());
@@ -511,7 +510,8 @@ mod tests {
             let mut out = Extraction::default();
             // Origins wanted: the cell corners are kept without smoothing too.
             out.origins.wanted = true;
-            sn.extract(&s, &mut out).unwrap();
+            out.clear();
+            sn.extract_into(&s, &mut out).unwrap();
             let scratch = sn.scratch.take();
             assert_eq!(scratch.cell_min.len(), out.surface.positions.len(), "{smoothing:?}");
             for (p, min) in out.surface.positions.iter().zip(&scratch.cell_min) {

@@ -772,9 +772,7 @@ impl Extractor for MarchingCubes {
         }
     }
 
-    fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
-        out.clear();
-        out.stats.times.sampling = samples.sampling_time();
+    fn extract_into(&self, samples: &Samples, out: &mut Extraction) -> Result<usize, ExtractError> {
         let Lattice::Cubic(grid) = *samples.lattice() else {
             return Err(ExtractError::UnsupportedLattice {
                 algorithm: self.name(),
@@ -903,8 +901,7 @@ impl Extractor for MarchingCubes {
         out.stats.times.normals = t_normals.elapsed();
         let scratch_bytes = pool.iter().map(Scratch::bytes).sum::<usize>();
         self.scratch.give(held);
-        out.finish_counts(scratch_bytes);
-        Ok(())
+        Ok(scratch_bytes)
     }
 }
 

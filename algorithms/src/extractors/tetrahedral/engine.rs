@@ -539,16 +539,14 @@ impl VertexPass<'_> {
 }
 
 /// Marching tetrahedra on `samples` (BCC lattice: [`TetKind::Bcc`]; cubic grid: [`TetKind::Kuhn`])
-/// with the given clustering, into `out`, without normals ([`compute_normals`]). Returns the
-/// geometry pass counts.
+/// with the given clustering, into `out` (which arrives cleared: [`crate::Extractor::extract`]
+/// clears it), without normals ([`compute_normals`]). Returns the geometry pass counts.
 pub fn extract_tetrahedral(
     samples: &Samples,
     clustering: &dyn Clustering,
     scratch: &mut TetScratch,
     out: &mut Extraction,
 ) -> Result<TetCounts, ExtractError> {
-    out.clear();
-    out.stats.times.sampling = samples.sampling_time();
     let lattice = *samples.lattice();
     let topo = topology(TetKind::of(&lattice));
     let at = Addresser::new(&lattice);

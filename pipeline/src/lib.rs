@@ -30,7 +30,11 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
+mod memory;
 mod report;
+
+use memory::check_volume_size;
+pub use memory::{available_memory, check_memory, check_memory_against, volume_file_need};
 
 pub use crate::error::RunError;
 
@@ -179,45 +183,6 @@ pub(crate) const ISO_FROM_OTSU: &str = "Otsu's threshold of the volume's values"
 /// See [`ISO_FROM_GRID`].
 pub(crate) const ISO_FROM_CONSTANT: &str = "every voxel has this value";
 
-/// Memory available to this process, from `/proc/meminfo` (None where unknown), or the
-/// `ISOLAB_MEMORY_MIB` environment variable when it is set (to try the memory checks as a
-/// smaller machine would see them).
-pub fn available_memory() -> Option<u64> {
-    if let Some(mib) = std::env::var("ISOLAB_MEMORY_MIB").ok().and_then(|v| v.trim().parse::<u64>().ok()) {
-        return Some(mib << 20);
-    }
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
-}
-
-/// Refuses lattices whose samples plus a generous output estimate (four times the samples'
-/// bytes) exceed the memory available to this process.
-pub fn check_memory(lattice: &Lattice) -> Result<(), RunError> {
-    check_memory_against(lattice, available_memory())
-}
-
-/// [`check_memory`] against a given number of available bytes (`None`: unknown, accept).
-pub fn check_memory_against(lattice: &Lattice, available: Option<u64>) -> Result<(), RunError> {
-    check_memory_plus(lattice, 0, available)
-}
-
-/// [`check_memory_against`] with `extra` bytes held beside the lattice (a volume file's data and
-/// values while its samples are made).
-fn check_memory_plus(lattice: &Lattice, extra: u64, available: Option<u64>) -> Result<(), RunError> {
-    let need = lattice.sample_count() as u64 * 4 * 5 + extra;
-    match available {
-        Some(available) if need > available => Err(RunError::OutOfMemory {
-            dims: lattice.grid().dims,
-            lattice: lattice.kind(),
-            need_mib: need >> 20,
-            available_mib: available >> 20,
-        }),
-        _ => Ok(()),
-    }
-}
-
 /// Builds the lattice a config asks for.
 pub fn lattice_for(field: &dyn Field, config: &RunConfig) -> Result<Lattice, RunError> {
     let domain = field.domain();
@@ -317,43 +282,6 @@ pub fn run(config: &RunConfig) -> Result<RunOutcome, RunError> {
     check_volume_size(config)?;
     let input = load_input(&config.field, config.seed, config.volume, MeshChecks::Warn)?;
     run_input(config, input)
-}
-
-/// Refuses a volume file meshed on its own grid that cannot fit in memory, from its header,
-/// before its data is read (a file whose header does not say plainly is left to the reader).
-/// Besides the lattice and its output, a run holds the file's data and its values as f32 while
-/// the samples are made.
-fn check_volume_size(config: &RunConfig) -> Result<(), RunError> {
-    if config.volume_grid != VolumeGrid::Native || !input::is_file_spec(&config.field) {
-        return Ok(());
-    }
-    let path = std::path::Path::new(&config.field);
-    let (dims, data_bytes) = match isolab_io::volume::read_header(path, config.volume) {
-        Ok(h) => (h.dims, h.layout.as_ref().map_or(4, |l| l.data_type().size()) as u64),
-        Err(_) => match isolab_io::volume::peek_dims(path) {
-            Some(dims) => (dims, 4),
-            None => return Ok(()),
-        },
-    };
-    let grid = Grid { origin: glam::Vec3::ZERO, spacing: 1.0, dims };
-    let lattice = match config.lattice {
-        LatticeKind::Cubic => Lattice::Cubic(grid),
-        LatticeKind::Bcc => Lattice::Bcc(grid),
-    };
-    check_memory_plus(&lattice, volume_reading_bytes(dims, data_bytes), available_memory())
-}
-
-/// Bytes a run holds while it reads a volume file of `dims` voxels of `data_bytes` each (the
-/// file's data and its values as f32), besides the lattice.
-fn volume_reading_bytes(dims: [usize; 3], data_bytes: u64) -> u64 {
-    dims.iter().map(|&n| n as u64).product::<u64>() * (4 + data_bytes)
-}
-
-/// What the in-memory run's header check asks for to mesh a volume file of `dims` voxels of
-/// `data_bytes` each on its own cubic grid, bytes.
-pub fn volume_file_need(dims: [usize; 3], data_bytes: u64) -> u64 {
-    let lattice = Lattice::Cubic(Grid { origin: glam::Vec3::ZERO, spacing: 1.0, dims });
-    lattice.sample_count() as u64 * 4 * 5 + volume_reading_bytes(dims, data_bytes)
 }
 
 /// Refuses an unknown algorithm, option or post-process before anything is read.

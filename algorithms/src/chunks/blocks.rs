@@ -9,8 +9,11 @@
 //! Unlike [`extract_chunked`], a plan takes any volume size: the last block along an axis holds
 //! the cells that remain (fewer than `chunk`).
 
-use super::*;
+use super::{apron_of, check_chunk_and_size, chunk_ids, weld, Block, ChunkSlot, ChunkState, ChunkStats, WeldPiece};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
+use crate::lattice::Grid;
 use crate::mesh::TriMesh;
+use glam::Vec3;
 
 /// The samples one block reads, in the volume's sample indices (x fastest).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

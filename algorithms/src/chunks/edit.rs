@@ -1,7 +1,12 @@
 //! Editing: a [`ChunkedVolume`] keeps one slot per chunk and re-meshes only the chunks a
 //! [`Brush`] (a sphere carving or adding, with a falloff and a material) dirtied.
 
-use super::*;
+use super::{apron_of, check_chunkable, chunk_counts, chunk_ids, weld, Block, ChunkSlot, ChunkStats};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
+use crate::lattice::{Grid, Lattice};
+use crate::samples::Samples;
+use glam::Vec3;
+use rayon::prelude::*;
 
 /// A spherical brush: adds material (`add`) or removes it within `radius` of `centre`, blended
 /// into the field over `falloff` (a smooth minimum / maximum with the sphere's distance, so the

@@ -38,13 +38,12 @@
 //! two steps).
 
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
-use crate::field::{BlockSide, Field};
+use crate::field::Field;
 use crate::geometry::Aabb;
 use crate::lattice::{Grid, Lattice};
 use crate::samples::Samples;
 use glam::Vec3;
 use rayon::prelude::*;
-use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -58,7 +57,7 @@ pub use blocks::*;
 pub use edit::*;
 pub use stream::*;
 pub use weld::weld_on_chunk_planes;
-use weld::*;
+use weld::{position_key, weld, WeldPiece};
 
 /// What chunked extraction did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -2,7 +2,13 @@
 //! the field ([`stream_chunked`]) or from a volume read z-slice by z-slice ([`stream_blocks`]),
 //! each slab welded only against the previous slab's top face, and handed to a [`MeshSink`].
 
-use super::*;
+use super::{chunk_counts, mesh_block, Block, BlockBounds, BlockPlan, ChunkSlot, ChunkState, Fragment};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
+use crate::field::{BlockSide, Field};
+use crate::lattice::Grid;
+use glam::Vec3;
+use rayon::prelude::*;
+use std::collections::HashMap;
 
 /// Receives a mesh streamed chunk by chunk: new vertices (world space), then triangles in global
 /// vertex indices (every index refers to a vertex already received).

@@ -2,8 +2,11 @@
 //! samples give bit-identical vertices), apron chunks by lattice key (the sample that owns each
 //! vertex and its ordinal there).
 
-use super::*;
+use super::{ChunkState, ChunkStats};
+use crate::extract::Extraction;
 use crate::mesh::TriMesh;
+use glam::Vec3;
+use std::collections::HashMap;
 
 /// A weld key from exact position bits.
 pub(super) fn position_key(p: Vec3) -> u128 {

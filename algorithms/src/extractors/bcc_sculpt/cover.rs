@@ -2,7 +2,8 @@
 //! exactly by branch and bound per group of interacting bombs (capped at
 //! [`super::COVER_NODE_LIMIT`] nodes), seeded with a greedy cover.
 
-use super::*;
+use super::lattice::BccLattice;
+use std::collections::HashMap;
 
 /// Groups of bombs (indices into `candidates`) whose candidate snowflakes share a vertex or a
 /// missing tetrahedron; groups are independent of each other.

@@ -3,7 +3,10 @@
 //! lattice's congruent tetrahedra, optionally rotated and shifted (perturbed attempts), with the
 //! tetrahedra's face neighbours.
 
-use super::*;
+use super::{FACES, MARGIN_CELLS};
+use crate::geometry::Aabb;
+use glam::{DQuat, DVec3, Vec3};
+use std::collections::HashMap;
 
 /// Rotation and translation (as a fraction of a cell) of attempt `attempt`: none for attempt 0,
 /// else a uniformly random rotation (Shoemake 1992) and shift, from a SplitMix64 stream.

@@ -3,7 +3,16 @@
 //! by exact tests (no inverted tetrahedron, the swept region of each boundary triangle clear of
 //! the surface, the quality floor), halving the step until clear.
 
-use super::*;
+use super::lattice::signed_volume;
+use super::lattice::BccLattice;
+use super::{tets_dihedral_range, RelaxIteration, SculptOptions, FACES};
+use crate::bvh::TriangleBvh;
+use crate::geometry::{circumcentre, dihedral_angles, Aabb};
+use crate::mesh::{TetMesh, TriMesh};
+use crate::predicates::triangle_meets_tetrahedron;
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+use std::time::Instant;
 
 /// The kept tetrahedra as a mesh of their own, with boundary faces and stars.
 pub(super) struct VolumeMesh {

@@ -2,7 +2,15 @@
 //! bounded by the surface, defusing the "bombs" (boundary vertices whose removal would pinch)
 //! with snowflakes, and repairing what is left non-manifold.
 
-use super::*;
+use super::cover::{interacting_groups, CoverProblem};
+use super::lattice::BccLattice;
+use super::{COVER_NODE_LIMIT, FACES, SNOWFLAKE};
+use crate::bvh::TriangleBvh;
+use crate::geometry::Aabb;
+use crate::mesh::{manifold_defects, TriMesh};
+use crate::predicates::triangle_meets_tetrahedron;
+use glam::Vec3;
+use rayon::prelude::*;
 
 /// Sculpting: which lattice tetrahedra overlap the volume bounded by `S`.
 pub fn sculpt(lattice: &BccLattice, surface: &TriangleBvh) -> Vec<bool> {

@@ -23,23 +23,22 @@ mod cells;
 mod intersection_free;
 pub mod lod;
 pub mod qef;
+mod slab_out;
 pub mod smoothing;
 
-use cells::*;
+use cells::{Ctx, Tables};
+use slab_out::{Piece, PieceTriangles, SlabCount};
 
 pub use qef::solve_qef;
 
 use crate::extract::{Chunking, ExtractError, Extraction};
 use crate::geometry::trilinear_gradient;
-use crate::lattice::{Grid, Lattice};
+use crate::lattice::Lattice;
 use crate::mesh::TriMesh;
 use crate::samples::Samples;
-use crate::sweep::sign_rows::{count_crossing_edges, for_each_bit, for_each_surface_cell, next_bits, span, LayerSigns};
+use crate::sweep::sign_rows::LayerSigns;
 use crate::sweep::slabs::{
     for_each_slab, join_parts, mesh_pieces, slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN,
-};
-use crate::tables::marching_cubes::{
-    face_edges, opposite_face, Case, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, RING_FACES, TABLE,
 };
 use glam::Vec3;
 use rayon::prelude::*;
@@ -468,6 +467,8 @@ impl DualEngine {
 mod tests {
     use super::*;
     use crate::fields;
+    use crate::lattice::Grid;
+    use crate::sweep::sign_rows::count_crossing_edges;
 
     fn samples(name: &str, n: usize) -> Samples {
         let f = fields::builtin(name, Default::default()).unwrap();

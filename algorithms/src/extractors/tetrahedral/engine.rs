@@ -8,7 +8,16 @@
 //! (`geometry`), the guard (`repair`, `folds`) and the lattices (`topology`) are already rooms of
 //! their own.
 
-use super::*;
+use super::{geometry_pass, topology, TetKind, TetTopology, DIRECTIONS};
+use crate::extract::{ExtractError, Extraction};
+use crate::field::Field;
+use crate::geometry::edge_crossing_fraction;
+use crate::lattice::{Grid, Lattice};
+use crate::samples::Samples;
+use crate::sweep::sign_rows::{classify_rows, range_mask, span, GridSigns, Row};
+use glam::Vec3;
+use rayon::prelude::*;
+use std::time::Instant;
 
 /// The crossings one sample owns, as a clustering policy sees them.
 #[derive(Clone, Copy, Debug)]

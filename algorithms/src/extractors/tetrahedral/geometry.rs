@@ -3,7 +3,12 @@
 //! slabs of anchor layers joined in order; triangles collapsed by clustering are counted and
 //! dropped.
 
-use super::*;
+use super::{owns, topology, Addresser, Plan, TetCounts, TetKind, TetScratch, MT_TABLE};
+use crate::extract::Extraction;
+use crate::samples::Samples;
+use crate::sweep::sign_rows::{range_mask, surface_cell_word};
+use rayon::prelude::*;
+use std::time::Instant;
 
 /// The geometry pass (Algorithm 3) over the vertex indices in `scratch`, replacing
 /// `out.surface.triangles`; sets the geometry time and the counts in `out.stats`. Records each

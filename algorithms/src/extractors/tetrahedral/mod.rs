@@ -60,17 +60,6 @@
 //! the driver), [`geometry`] (the geometry pass),
 //! [`repair`] (the guard's re-extraction).
 
-use crate::extract::{ExtractError, Extraction};
-use crate::field::Field;
-use crate::geometry::edge_crossing_fraction;
-use crate::lattice::{Grid, Lattice};
-use crate::samples::Samples;
-use crate::sweep::sign_rows::{classify_rows, range_mask, span, surface_cell_word, GridSigns, Row};
-use glam::Vec3;
-use rayon::prelude::*;
-use std::sync::LazyLock;
-use std::time::Instant;
-
 pub mod engine;
 pub mod folds;
 pub mod geometry;
@@ -86,6 +75,7 @@ pub use topology::*;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
 
     #[test]
     fn every_star_is_a_sphere_of_24_tetrahedra() {

@@ -1,7 +1,11 @@
 //! The repair RMT's guard uses: samples whose merging left a non-manifold vertex get one vertex
 //! per crossing again and only the geometry pass reruns; unused vertices are dropped at the end.
 
-use super::*;
+use super::{owns, regenerate_anchors, topology, Addresser, TetKind, TetScratch};
+use crate::extract::Extraction;
+use crate::geometry::edge_crossing_fraction;
+use crate::samples::Samples;
+use glam::Vec3;
 
 /// Forbids merging at the samples that made the merged vertices among `vertices`, gives each of
 /// their crossings its own new vertex, and re-emits the triangles of the tetrahedra around them
@@ -94,6 +98,8 @@ pub fn finish_repair(out: &mut Extraction, used: &mut Vec<u32>) {
 mod tests {
     use super::*;
     use crate::extractors::regularised_marching_tetrahedra::RmtOptions;
+    use crate::extractors::tetrahedral::extract_tetrahedral;
+    use crate::lattice::{Grid, Lattice};
     use crate::mesh::ManifoldCheck;
 
     /// Each repair round, re-emitting only the anchors around the unmerged samples gives the

@@ -1,7 +1,8 @@
 //! The 16-case marching tetrahedra table, generated: for each sign pattern of a tetrahedron, the
 //! crossing edges of its triangle or quad, wound so normals point toward increasing `f`.
 
-use super::*;
+use glam::Vec3;
+use std::sync::LazyLock;
 
 /// One marching tetrahedra case for a positively oriented tetrahedron: the crossing edges of its
 /// polygon in cyclic order, wound counter-clockwise seen from outside (`f > iso`).

@@ -1,7 +1,8 @@
 //! The two tetrahedral lattices in doubled integer coordinates: the body-centred cubic lattice
 //! and Kuhn-split cubes, each sample's 14 neighbour directions and its star of 24 tetrahedra.
 
-use super::*;
+use crate::lattice::Lattice;
+use std::sync::LazyLock;
 
 /// Neighbours of every sample in both tetrahedral lattices.
 pub const DIRECTIONS: usize = 14;

@@ -1,6 +1,7 @@
 //! `MeshField`'s tests: signs, distances, the narrow band against exact sampling, inward and
 //! open meshes.
 
+use super::sides::crossing_x;
 use super::*;
 
 fn octahedron() -> (Vec<Vec3>, Vec<[u32; 3]>) {

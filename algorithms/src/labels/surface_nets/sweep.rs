@@ -1,0 +1,401 @@
+//! The sweep of multi-label surface nets: cell layers in slabs on rayon, each cell's pieces
+//! (from a cache of the patterns met) as vertices, each differing lattice edge as a quad, the
+//! slabs joined in order into the net the parent module smooths and triangulates.
+
+use super::super::blocks::LabelBlock;
+use super::super::cell::{cell_pieces, checkered_faces, edge_index, is_ring_face, larger_label_flips, CellPieces, EDGES};
+use super::super::Label;
+use super::Net;
+use glam::Vec3;
+use rayon::prelude::*;
+use rustc_hash::FxHashMap;
+
+/// The unsmoothed net of `block`'s computed cells (its owned cells and apron; `all` the map's
+/// cells per axis, padded), and the number of owned surface cells.
+pub(super) fn net<T: Label>(block: &LabelBlock<'_, T>, all: &[std::ops::Range<usize>; 3]) -> (Net, usize) {
+    let computed: [std::ops::Range<usize>; 3] = std::array::from_fn(|a| block.computed(a, &all[a]));
+    // The local frame starts one sample before the first computed cell (or at the padding).
+    let origin = computed.clone().map(|r| r.start.saturating_sub(1));
+    let width = |a: usize| (computed[a].end + 1).min(block.map_dims[a] + 1) + 1 - origin[a];
+    let window = Window { block, origin, p: [width(0), width(1)] };
+    let local = |r: &std::ops::Range<usize>, a: usize| (r.start - origin[a])..(r.end - origin[a]);
+    let frame = Frame {
+        lo: std::array::from_fn(|a| computed[a].start - origin[a]),
+        hi: std::array::from_fn(|a| computed[a].end - origin[a]),
+        all: std::array::from_fn(|a| (all[a].start as isize - origin[a] as isize, all[a].end as isize - origin[a] as isize)),
+        owned: std::array::from_fn(|a| local(&block.cells[a].clone(), a)),
+        origin,
+    };
+    // Slabs of cell layers in parallel (one per thread, at least SLAB_LAYERS layers each), each
+    // numbering its own vertices and naming those of the layer below it by their place in that
+    // layer; joined in order, the net is the one a single sweep makes.
+    let (lo, hi) = (frame.lo[2], frame.hi[2]);
+    let layers = hi.saturating_sub(lo);
+    let slabs = rayon::current_num_threads().min(layers / SLAB_LAYERS).max(1);
+    let bounds: Vec<usize> = (0..=slabs).map(|k| lo + layers * k / slabs).collect();
+    let parts: Vec<Slab> = (0..slabs).into_par_iter().map(|k| sweep(&window, &frame, bounds[k]..bounds[k + 1])).collect();
+    join(parts)
+}
+
+/// The samples one sweep reads, in a local frame: local padded sample `s` is padded sample
+/// `s + origin` of the map (background outside the map).
+struct Window<'b, 'a, T> {
+    block: &'b LabelBlock<'a, T>,
+    /// The map's padded sample at local `0`.
+    origin: [usize; 3],
+    /// Local samples per layer row and column.
+    p: [usize; 2],
+}
+
+impl<T: Label> Window<'_, '_, T> {
+    /// Local sample layer `pz` into `layer`: background outside the map (and for the layers
+    /// below and above the window, which only the ring rule's neighbour lookups read).
+    fn fill_layer(&self, pz: isize, layer: &mut Vec<T>) {
+        let [px, py] = self.p;
+        layer.clear();
+        layer.resize(px * py, T::default());
+        let b = self.block;
+        let gz = pz + self.origin[2] as isize;
+        if gz <= 0 || gz > b.map_dims[2] as isize {
+            return;
+        }
+        let [wx, wy, _] = b.window_dims;
+        let z = gz as usize - 1 - b.window_lo[2];
+        // Local x with a map sample: padded 1 ..= nx.
+        let x0 = 1usize.saturating_sub(self.origin[0]);
+        let x1 = (b.map_dims[0] + 1 - self.origin[0]).min(px);
+        for y in 0..py {
+            let gy = y + self.origin[1];
+            if gy == 0 || gy > b.map_dims[1] || x0 >= x1 {
+                continue;
+            }
+            let row = wx * (gy - 1 - b.window_lo[1] + wy * z);
+            let from = row + x0 + self.origin[0] - 1 - b.window_lo[0];
+            layer[px * y + x0..px * y + x1].copy_from_slice(&b.samples[from..from + (x1 - x0)]);
+        }
+    }
+}
+
+/// The piece tables of the cell patterns met so far, by canonical pattern (each corner's label
+/// replaced by the rank of its first occurrence: three bits a corner).
+#[derive(Default)]
+struct PieceCache {
+    index: FxHashMap<u32, u32>,
+    pieces: Vec<CellPieces>,
+    /// Cells of two labels, by the corners holding the larger: their pieces with the default
+    /// face rule ([`larger_label_flips`] is a function of that mask).
+    two: Vec<u32>,
+}
+
+impl PieceCache {
+    /// The pieces of a cell with the default face rule, and the rule's flips.
+    fn plain<T: Label>(&mut self, labels: &[T; 8]) -> (u32, u8) {
+        let l0 = labels[0];
+        let other = labels.iter().copied().find(|&l| l != l0).unwrap_or(l0);
+        if labels.iter().all(|&l| l == l0 || l == other) {
+            let hi = if other.id() > l0.id() { other } else { l0 };
+            let mask = labels.iter().enumerate().fold(0usize, |m, (i, &l)| m | usize::from(l == hi) << i);
+            if self.two.is_empty() {
+                self.two = vec![u32::MAX; 256];
+            }
+            let flips = larger_label_flips(labels);
+            if self.two[mask] == u32::MAX {
+                self.two[mask] = self.get(labels, flips);
+            }
+            return (self.two[mask], flips);
+        }
+        let flips = larger_label_flips(labels);
+        (self.get(labels, flips), flips)
+    }
+
+    fn get<T: Label>(&mut self, labels: &[T; 8], flips: u8) -> u32 {
+        let mut firsts = [labels[0]; 8];
+        let mut n = 1usize;
+        let mut key = 0u32;
+        for (i, &l) in labels.iter().enumerate().skip(1) {
+            let rank = firsts[..n].iter().position(|&f| f == l).unwrap_or_else(|| {
+                firsts[n] = l;
+                n += 1;
+                n - 1
+            });
+            key |= (rank as u32) << (3 * i);
+        }
+        key |= u32::from(flips) << 24;
+        let pieces = &mut self.pieces;
+        *self.index.entry(key).or_insert_with(|| {
+            pieces.push(cell_pieces(labels, flips));
+            (pieces.len() - 1) as u32
+        })
+    }
+}
+
+/// One layer of cells: the first vertex of each surface cell and its piece table.
+struct CellLayer {
+    first: Vec<u32>,
+    table: Vec<u32>,
+}
+
+impl CellLayer {
+    fn reset(&mut self, n: usize) {
+        self.first.clear();
+        self.first.resize(n, u32::MAX);
+        self.table.clear();
+        self.table.resize(n, 0);
+    }
+}
+
+/// The cells a sweep meshes, in the window's local frame.
+struct Frame {
+    /// Computed cells per axis: `lo[a]..hi[a]`.
+    lo: [usize; 3],
+    hi: [usize; 3],
+    /// The map's cells (the ring rule looks at a neighbour only if the map has it).
+    all: [(isize, isize); 3],
+    /// The block's own cells (counted as surface cells).
+    owned: [std::ops::Range<usize>; 3],
+    /// The map's padded sample at local `0`.
+    origin: [usize; 3],
+}
+
+/// Fewest cell layers a slab task takes.
+const SLAB_LAYERS: usize = 16;
+
+/// Marks a vertex of the layer below a slab: the rest is its place in that layer.
+const BELOW: u32 = 1 << 31;
+
+/// One slab's net: its own vertices and quads (some naming [`BELOW`] vertices), where its last
+/// cell layer's vertices start, and its surface cells.
+struct Slab {
+    net: Net,
+    last_layer_start: u32,
+    active_cells: usize,
+}
+
+/// The slabs' nets in order as one: vertex indices offset by the slabs before, [`BELOW`]
+/// vertices resolved to the previous slab's last layer.
+fn join(parts: Vec<Slab>) -> (Net, usize) {
+    let mut net = Net::default();
+    net.label_start.push(0);
+    let mut previous_last_layer = 0u32;
+    let mut active_cells = 0;
+    for part in parts {
+        let offset = net.positions.len() as u32;
+        let label_offset = net.labels.len() as u32;
+        active_cells += part.active_cells;
+        net.positions.extend_from_slice(&part.net.positions);
+        net.cells.extend_from_slice(&part.net.cells);
+        net.labels.extend_from_slice(&part.net.labels);
+        net.label_start.extend(part.net.label_start[1..].iter().map(|&s| s + label_offset));
+        let below = previous_last_layer;
+        net.quads
+            .extend(part.net.quads.iter().map(|q| q.map(|v| if v & BELOW != 0 { below + (v & !BELOW) } else { offset + v })));
+        net.pairs.extend_from_slice(&part.net.pairs);
+        previous_last_layer = offset + part.last_layer_start;
+    }
+    (net, active_cells)
+}
+
+/// The sweep over cell layers `layers_range` (the vertex layer below the first one is recomputed
+/// to name its vertices, not kept).
+fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std::ops::Range<usize>) -> Slab {
+    let p = window.p;
+    let (lo, hi) = (frame.lo, frame.hi);
+    let cells_x = p[0] - 1;
+    let layer_cells = cells_x * (p[1] - 1);
+    let mut cache = PieceCache::default();
+    let mut net = Net::default();
+    net.label_start.push(0);
+    let mut active_cells = 0;
+    let mut last_layer_start = 0;
+    // The layer below the slab (not the map's first): its vertices are named, not made.
+    let first = if layers_range.start > lo[2] { layers_range.start - 1 } else { layers_range.start };
+    // Sample layers cz - 1 ..= cz + 2 (the ring rule reads the cells above and below).
+    let mut layers: [Vec<T>; 4] = Default::default();
+    for (k, layer) in layers.iter_mut().enumerate().skip(1) {
+        window.fill_layer(first as isize + k as isize - 2, layer);
+    }
+    let mut prev = CellLayer { first: Vec::new(), table: Vec::new() };
+    let mut cur = CellLayer { first: Vec::new(), table: Vec::new() };
+    let in_range = |c: [isize; 3]| (0..3).all(|d| c[d] >= frame.all[d].0 && c[d] < frame.all[d].1);
+    let owned = |c: [usize; 3]| (0..3).all(|d| frame.owned[d].contains(&c[d]));
+    for cz in first..layers_range.end {
+        let below = cz < layers_range.start;
+        layers.rotate_left(1);
+        window.fill_layer(cz as isize + 2, &mut layers[3]);
+        std::mem::swap(&mut prev, &mut cur);
+        cur.reset(layer_cells);
+        let px = p[0];
+        let at = |layer: &Vec<T>, x: usize, y: usize| layer[x + px * y];
+        // The labels of the cell at (x, y) whose lower layer is `layers[k]`.
+        let cell_labels = |k: usize, x: usize, y: usize| -> [T; 8] {
+            std::array::from_fn(|i| at(&layers[k + (i >> 2)], x + (i & 1), y + (i >> 1 & 1)))
+        };
+        let (s0, s1) = (&layers[1], &layers[2]);
+        // Vertices of cell layer cz (below the slab: only their places in the layer).
+        last_layer_start = net.positions.len() as u32;
+        let mut named = 0u32;
+        const SKIP: usize = 16;
+        for cy in lo[1]..hi[1] {
+            let rows = [&s0[px * cy..][..px], &s0[px * (cy + 1)..][..px], &s1[px * cy..][..px], &s1[px * (cy + 1)..][..px]];
+            let mut cx = lo[0];
+            while cx < hi[0] {
+                // Skip a run of cells of one label: the four rows agree over the run and are
+                // constant along it.
+                if cx + SKIP < px {
+                    let run = &rows[0][cx..=cx + SKIP];
+                    if rows[1..].iter().all(|r| &r[cx..=cx + SKIP] == run) && run.iter().all(|&l| l == run[0]) {
+                        cx += SKIP;
+                        continue;
+                    }
+                }
+                let x = cx;
+                cx += 1;
+                let [r0, r1, r2, r3] = rows;
+                let labels = [r0[x], r0[x + 1], r1[x], r1[x + 1], r2[x], r2[x + 1], r3[x], r3[x + 1]];
+                if labels.iter().all(|&l| l == labels[0]) {
+                    continue;
+                }
+                let cx = x;
+                if !below && owned([cx, cy, cz]) {
+                    active_cells += 1;
+                }
+                let (plain, base) = cache.plain(&labels);
+                let mut flips = base;
+                let mut checkered = checkered_faces(&labels);
+                while checkered != 0 {
+                    let f = checkered.trailing_zeros() as usize;
+                    checkered &= checkered - 1;
+                    if !is_ring_face(&labels, &cache.pieces[plain as usize], f) {
+                        continue;
+                    }
+                    let (d, side) = (f / 2, f % 2);
+                    let mut n = [cx as isize, cy as isize, cz as isize];
+                    n[d] += if side == 1 { 1 } else { -1 };
+                    if !in_range(n) {
+                        continue;
+                    }
+                    let theirs = cell_labels((n[2] - cz as isize + 1) as usize, n[0] as usize, n[1] as usize);
+                    let (t, _) = cache.plain(&theirs);
+                    if is_ring_face(&theirs, &cache.pieces[t as usize], f ^ 1) {
+                        flips ^= 1 << f;
+                    }
+                }
+                let t = if flips == base { plain } else { cache.get(&labels, flips) };
+                let pieces = &cache.pieces[t as usize];
+                let c = cx + cells_x * cy;
+                cur.table[c] = t;
+                if below {
+                    cur.first[c] = BELOW | named;
+                    named += u32::from(pieces.count);
+                } else {
+                    cur.first[c] = net.positions.len() as u32;
+                    let o = frame.origin;
+                    add_vertices(&mut net, pieces, &labels, [cx + o[0], cy + o[1], cz + o[2]]);
+                }
+            }
+        }
+        let vertex = |layer: &CellLayer, cx: usize, cy: usize, d: usize, corner: u8| -> u32 {
+            let c = cx + cells_x * cy;
+            layer.first[c] + u32::from(cache.pieces[layer.table[c] as usize].piece[edge_index(d, corner)])
+        };
+        if below {
+            continue;
+        }
+        // z edges from sample layer cz to cz + 1: their four cells are in layer cz.
+        for y in (lo[1] + 1)..hi[1] {
+            if s0[px * y..][..px] == s1[px * y..][..px] {
+                continue;
+            }
+            for x in (lo[0] + 1)..hi[0] {
+                let (a, b) = (at(s0, x, y), at(s1, x, y));
+                if a != b {
+                    let q = [
+                        vertex(&cur, x - 1, y - 1, 2, 3),
+                        vertex(&cur, x, y - 1, 2, 2),
+                        vertex(&cur, x, y, 2, 0),
+                        vertex(&cur, x - 1, y, 2, 1),
+                    ];
+                    push_quad(&mut net, q, a.id(), b.id());
+                }
+            }
+        }
+        // x and y edges of sample layer cz: cells in layers cz - 1 and cz.
+        if cz > lo[2] {
+            for y in lo[1]..hi[1] {
+                let row = &s0[px * y..][..px];
+                if row.iter().all(|&l| l == row[0]) && s0[px * (y + 1)..][..px] == *row {
+                    continue;
+                }
+                for x in lo[0]..hi[0] {
+                    let a = at(s0, x, y);
+                    // x edge (x, y) - (x + 1, y): cells (x, y - 1 ..= y, cz - 1 ..= cz).
+                    let b = at(s0, x + 1, y);
+                    if y > lo[1] && a != b {
+                        let q = [
+                            vertex(&prev, x, y - 1, 0, 6),
+                            vertex(&prev, x, y, 0, 4),
+                            vertex(&cur, x, y, 0, 0),
+                            vertex(&cur, x, y - 1, 0, 2),
+                        ];
+                        push_quad(&mut net, q, a.id(), b.id());
+                    }
+                    // y edge (x, y) - (x, y + 1): cells (x - 1 ..= x, y, cz - 1 ..= cz).
+                    let b = at(s0, x, y + 1);
+                    if x > lo[0] && a != b {
+                        let q = [
+                            vertex(&prev, x - 1, y, 1, 5),
+                            vertex(&cur, x - 1, y, 1, 1),
+                            vertex(&cur, x, y, 1, 0),
+                            vertex(&prev, x, y, 1, 4),
+                        ];
+                        push_quad(&mut net, q, a.id(), b.id());
+                    }
+                }
+            }
+        }
+    }
+    Slab { net, last_layer_start, active_cells }
+}
+
+/// The vertices of one surface cell at padded cell `c`: per piece, the mean of its crossing
+/// edges' midpoints, with the labels the piece separates.
+fn add_vertices<T: Label>(net: &mut Net, pieces: &CellPieces, labels: &[T; 8], c: [usize; 3]) {
+    let base = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
+    for piece in 0..pieces.count {
+        let mut sum = Vec3::ZERO;
+        let mut n = 0.0;
+        let start = net.labels.len();
+        for (e, &(a, b)) in EDGES.iter().enumerate() {
+            if pieces.piece[e] != piece {
+                continue;
+            }
+            sum += (corner_offset(a) + corner_offset(b)) * 0.5;
+            n += 1.0;
+            for l in [labels[a as usize].id(), labels[b as usize].id()] {
+                if !net.labels[start..].contains(&l) {
+                    net.labels.push(l);
+                }
+            }
+        }
+        net.labels[start..].sort_unstable();
+        net.label_start.push(net.labels.len() as u32);
+        net.positions.push(base + sum / n);
+        net.cells.push(c.map(|v| v as u32));
+    }
+}
+
+fn corner_offset(i: u8) -> Vec3 {
+    Vec3::new(f32::from(i & 1), f32::from(i >> 1 & 1), f32::from(i >> 2 & 1))
+}
+
+/// A quad around an edge from a sample of label `a` to one of label `b`, given counter-clockwise
+/// seen from the `b` side: kept when `a` is the larger (inside) label, reversed otherwise.
+fn push_quad(net: &mut Net, q: [u32; 4], a: u32, b: u32) {
+    if a > b {
+        net.quads.push(q);
+        net.pairs.push([a, b]);
+    } else {
+        net.quads.push([q[0], q[3], q[2], q[1]]);
+        net.pairs.push([b, a]);
+    }
+}

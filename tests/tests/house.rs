@@ -1,0 +1,89 @@
+//! The house rules ARCHITECTURE.md states, checked on the sources so a new file keeps them:
+//! no source file much over 600 lines unless its module doc says why it reads best whole, and no
+//! glob import of the crate's own modules outside tests (explicit imports say where a name
+//! comes from; an external prelude such as rayon's is allowed).
+
+use std::path::{Path, PathBuf};
+
+/// The line count above which a file needs its reason ("about 600").
+const LONG_FILE_LINES: usize = 620;
+
+/// The words a long file's module doc opens its reason with.
+const REASON: &str = "**Why one file";
+
+/// The crates' source folders.
+const SOURCE_DIRS: &[&str] =
+    &["algorithms/src", "metrics/src", "io/src", "pipeline/src", "cli/src", "python/src", "experiments/src"];
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let entries = std::fs::read_dir(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
+    for entry in entries {
+        let path = entry.expect("a directory entry").path();
+        if path.is_dir() {
+            rust_files(&path, out);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
+}
+
+fn sources() -> Vec<(PathBuf, String)> {
+    let mut files = Vec::new();
+    for dir in SOURCE_DIRS {
+        rust_files(&workspace().join(dir), &mut files);
+    }
+    files.sort();
+    assert!(files.len() > 100, "found only {} source files: are the folders right?", files.len());
+    files
+        .into_iter()
+        .map(|p| {
+            let text = std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            (p, text)
+        })
+        .collect()
+}
+
+/// Whether a file's module doc (its leading `//!` lines) gives the reason a long file is whole.
+fn states_its_reason(text: &str) -> bool {
+    text.lines().take_while(|l| l.starts_with("//!") || l.trim().is_empty()).any(|l| l.contains(REASON))
+}
+
+/// Top-level `use path::*;` lines of the crate's own modules (not a `prelude`), outside tests.
+fn own_globs(path: &Path, text: &str) -> Vec<String> {
+    if path.file_name().is_some_and(|n| n == "tests.rs") {
+        return Vec::new();
+    }
+    text.lines().filter(|l| l.starts_with("use ") && l.ends_with("::*;") && !l.contains("prelude::")).map(str::to_owned).collect()
+}
+
+#[test]
+fn long_files_say_why_they_are_whole() {
+    let long: Vec<String> = sources()
+        .iter()
+        .filter(|(_, text)| text.lines().count() > LONG_FILE_LINES && !states_its_reason(text))
+        .map(|(p, text)| format!("{} ({} lines)", p.display(), text.lines().count()))
+        .collect();
+    assert!(long.is_empty(), "over {LONG_FILE_LINES} lines with no \"{REASON}\" in the module doc: {long:#?}");
+}
+
+#[test]
+fn no_glob_imports_of_our_own_modules() {
+    let globs: Vec<String> = sources()
+        .iter()
+        .flat_map(|(p, text)| own_globs(p, text).into_iter().map(move |l| format!("{}: {l}", p.display())))
+        .collect();
+    assert!(globs.is_empty(), "glob imports outside tests (import the names): {globs:#?}");
+}
+
+#[test]
+fn the_checks_see_what_they_look_for() {
+    assert!(states_its_reason("//! Title\n//!\n//! **Why one file of about 900 lines.** ...\n\nuse x;\n"));
+    assert!(!states_its_reason("//! Title\n\nuse x;\n// **Why one file** in a later comment\n"));
+    let p = Path::new("a/mod.rs");
+    assert_eq!(own_globs(p, "use super::*;\nuse rayon::prelude::*;\n    use super::*;\n"), vec!["use super::*;"]);
+    assert!(own_globs(Path::new("a/tests.rs"), "use super::*;\n").is_empty());
+}

@@ -277,12 +277,16 @@ pub struct PostInfo {
 /// self-intersection, as data (the extractors' [`Guarantees`] for post-processes).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PostGuarantees {
-    /// The output is closed and manifold with the input's Euler characteristic.
+    /// The output is closed and manifold, each component with its Euler characteristic in the
+    /// input (the whole's too when it also keeps every component).
     pub keeps_closed_manifold: bool,
     /// Triangles keep facing the way they faced (an outward input stays outward).
     pub keeps_outward: bool,
     /// No two triangles come to meet that did not meet in the input.
     pub adds_no_intersection: bool,
+    /// Every connected component of the input is kept (so a closed manifold keeps its Euler
+    /// characteristic, not only each kept component's).
+    pub keeps_every_component: bool,
 }
 
 /// An isosurface or volume extractor. Dyn-compatible: experiments iterate over

@@ -237,7 +237,8 @@ fn list() {
         }
         let g = &p.guarantees;
         let flags = [
-            ("closed manifold and Euler characteristic", g.keeps_closed_manifold),
+            ("closed manifold", g.keeps_closed_manifold),
+            ("every component (so the Euler characteristic)", g.keeps_every_component),
             ("orientation", g.keeps_outward),
             ("no new self-intersection", g.adds_no_intersection),
         ];

@@ -187,3 +187,44 @@ fn mesh_files_in_any_format_are_fields_and_inward_ones_say_so() {
     let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "16", "--iso", "3"]);
     assert!(o.status.success() && stderr(&o).contains("the mesh is empty"), "{}", stderr(&o));
 }
+
+#[test]
+fn a_scans_islands_are_dropped_by_keep_components() {
+    let dir = tempfile::tempdir().unwrap();
+    let scan = fixture("mni-small.nii.gz");
+    let mesh = |name: &str, post: &[&str]| {
+        let (out, metrics) = (dir.path().join(format!("{name}.ply")), dir.path().join(format!("{name}.json")));
+        let args = [
+            &["extract", "-a", "marching-cubes", "-f", &scan, "--iso", "60.5"][..],
+            post,
+            &["-o", out.to_str().unwrap(), "-m", metrics.to_str().unwrap()],
+        ]
+        .concat();
+        let o = isolab(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let m: serde_json::Value = serde_json::from_slice(&std::fs::read(&metrics).unwrap()).unwrap();
+        m
+    };
+    let all = mesh("all", &[]);
+    let one = mesh("one", &["--post", "keep-components:largest=1"]);
+    let components = |m: &serde_json::Value| m["components"].as_u64().unwrap_or_else(|| panic!("no components in {m}"));
+    assert!(components(&all) > 1, "the small MNI at 60.5 has islands: {}", components(&all));
+    assert_eq!(components(&one), 1);
+    assert!(one["closed"].as_bool().unwrap() && one["outward"].as_bool().unwrap(), "{one}");
+    let triangles = |m: &serde_json::Value| m["triangles"].as_u64().unwrap();
+    assert!(triangles(&one) < triangles(&all));
+    let bad = dir.path().join("bad.ply");
+    let o = isolab(&[
+        "extract",
+        "-a",
+        "marching-cubes",
+        "-f",
+        &scan,
+        "--post",
+        "keep-components:min-volume=-1",
+        "-o",
+        bad.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success() && stderr(&o).contains("min-volume"), "{}", stderr(&o));
+    assert!(!bad.exists());
+}

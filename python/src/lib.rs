@@ -84,6 +84,7 @@ fn algorithms(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
         g.set_item("keeps_closed_manifold", p.guarantees.keeps_closed_manifold)?;
         g.set_item("keeps_outward", p.guarantees.keeps_outward)?;
         g.set_item("adds_no_intersection", p.guarantees.adds_no_intersection)?;
+        g.set_item("keeps_every_component", p.guarantees.keeps_every_component)?;
         d.set_item("guarantees", g)?;
         out.push(d);
     }

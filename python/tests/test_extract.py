@@ -89,6 +89,18 @@ def test_options_post_processes_threads_and_materials():
     np.testing.assert_array_equal(a.faces, b.faces)
     c = isolab.extract("torus", algorithm="marching-tetrahedra", resolution=32, post=["edge-collapse"])
     assert c.stats["post"] == ["edge-collapse"] and c.metrics()["genus"] == 1
+    # Two boxes of different sizes: keep-components keeps the larger, or both above a volume.
+    vol = np.zeros((24, 20, 20), dtype=np.uint8)
+    vol[2:12, 3:15, 3:15] = 200
+    vol[16:20, 5:9, 5:9] = 200
+    both = isolab.extract(vol, 100, "marching-cubes", inside="above")
+    big = isolab.extract(vol, 100, "marching-cubes", inside="above", post=["keep-components:largest=1"])
+    assert both.metrics()["components"] == 2 and big.metrics()["components"] == 1
+    assert big.metrics()["volume"] > 0.8 * both.metrics()["volume"]
+    kept = isolab.extract(vol, 100, "marching-cubes", inside="above", post=["keep-components:largest=0,min-volume=20"])
+    assert kept.metrics()["components"] == 2
+    with pytest.raises(ValueError, match="min-volume"):
+        isolab.extract(vol, 100, "marching-cubes", inside="above", post=["keep-components:min-volume=x"])
     t = isolab.extract("terrain", algorithm="marching-cubes", resolution=24, materials=True)
     assert t.materials is not None and t.materials.shape == (len(t.vertices),)
 

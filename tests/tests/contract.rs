@@ -350,7 +350,12 @@ fn every_post_process(samples: &Samples, input: &Extraction, what: &str) {
             let after = topology(mesh);
             if g.keeps_closed_manifold {
                 assert!(after.is_watertight_manifold(), "{what}: not a closed manifold: {after:?}");
+            }
+            if g.keeps_closed_manifold && g.keeps_every_component {
                 assert_eq!(after.euler, before.euler, "{what}: Euler characteristic");
+            }
+            if g.keeps_every_component {
+                assert_eq!(after.components, before.components, "{what}: components");
             }
             if g.keeps_outward {
                 assert!(after.outward, "{what}: not outward");

@@ -1,6 +1,7 @@
 //! Post-processes: mesh-to-mesh filters usable after any surface extractor, and their registry
 //! ([`POST_INFOS`]: one line each, as [`crate::extractors::INFOS`] for the extractors).
 
+pub mod components;
 pub mod edge_collapse;
 pub mod triangle_grid;
 
@@ -10,7 +11,7 @@ use crate::extract::{PostInfo, PostProcess};
 use crate::options::{OptionError, Options};
 
 /// Every post-process, one line each.
-pub const POST_INFOS: &[PostInfo] = &[edge_collapse::PAPER_INFO, edge_collapse::SAFE_INFO];
+pub const POST_INFOS: &[PostInfo] = &[edge_collapse::PAPER_INFO, edge_collapse::SAFE_INFO, components::INFO];
 
 /// Every post-process with default options (tested to build, as [`crate::extractors::registry`]).
 pub fn post_processes() -> Vec<Box<dyn PostProcess>> {

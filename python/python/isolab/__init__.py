@@ -280,7 +280,9 @@ def extract(data: Union[np.ndarray, str, os.PathLike], level: Optional[float] = 
     options : dict, optional
         Extractor options as the CLI's ``--set NAME=VALUE`` (``{"smoothing": "elastic"}``).
     post : list of str
-        Post-processes to apply in order (``"edge-collapse"``, ...).
+        Post-processes to apply in order, each ``NAME`` or ``NAME:OPTION=VALUE,...`` as the
+        CLI's ``--post`` (``"edge-collapse"``; ``"keep-components:largest=1"`` keeps a scan's
+        largest part, ``"keep-components:largest=0,min-volume=100"`` drops parts under 100 voxels).
     threads : int, optional
         Threads for this call; 1 runs the extractors that have a serial path serially.
     resolution, dims, lattice, seed, chunk, materials

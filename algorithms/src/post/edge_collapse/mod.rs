@@ -138,7 +138,12 @@ pub const PAPER_INFO: PostInfo = PostInfo {
     description: PAPER_DESCRIPTION,
     options: PAPER_OPTION_NAMES,
     make: paper_from_options,
-    guarantees: PostGuarantees { keeps_closed_manifold: false, keeps_outward: false, adds_no_intersection: false },
+    guarantees: PostGuarantees {
+        keeps_closed_manifold: false,
+        keeps_outward: false,
+        adds_no_intersection: false,
+        keeps_every_component: false,
+    },
 };
 
 /// Shortest-first collapse under the link condition and a normal test.
@@ -147,7 +152,12 @@ pub const SAFE_INFO: PostInfo = PostInfo {
     description: SAFE_DESCRIPTION,
     options: SAFE_OPTION_NAMES,
     make: safe_from_options,
-    guarantees: PostGuarantees { keeps_closed_manifold: true, keeps_outward: true, adds_no_intersection: true },
+    guarantees: PostGuarantees {
+        keeps_closed_manifold: true,
+        keeps_outward: true,
+        adds_no_intersection: true,
+        keeps_every_component: true,
+    },
 };
 
 /// The paper's sweep from named options.

@@ -294,6 +294,14 @@ def main():
         path = os.path.join(os.path.dirname(nilearn.__file__), "datasets", "data", "mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz")
         if os.path.exists(path):
             hello["mni_t1"] = path
+        # A second volume of another kind: the fMRI series nibabel ships as test data (int16,
+        # 2 x 2 x 2.2 mm, oblique, 4-D), with the affine and orientation nibabel reads.
+        epi = os.path.join(os.path.dirname(nibabel.__file__), "tests", "data", "example4d.nii.gz")
+        if os.path.exists(epi):
+            img = nibabel.load(epi)
+            hello["epi"] = epi
+            hello["epi_affine"] = [[float(x) for x in row] for row in img.affine]
+            hello["epi_axcodes"] = "".join(nibabel.aff2axcodes(img.affine))
     except Exception as e:  # noqa: BLE001
         errors["nilearn"] = str(e)
     print(json.dumps(hello), flush=True)

@@ -7,7 +7,9 @@ use isolab_experiments::experiment::{all, assemble, Context};
 use std::path::{Path, PathBuf};
 
 /// The front page must fit on a few screens.
-const FRONT_PAGE_MAX_LINES: usize = 60;
+/// Lines of the front page outside its tables (the tables grow with the registries of
+/// extractors and experiments, which must not need a test edit).
+const FRONT_PAGE_MAX_LINES: usize = 40;
 
 fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -95,8 +97,8 @@ fn the_front_page_recommends_for_every_use_case_links_every_page_and_is_short() 
     for e in all() {
         assert!(front.contains(&format!("]({}.md)", e.name())), "front page does not link {}", e.name());
     }
-    let lines = front.lines().count();
-    assert!(lines <= FRONT_PAGE_MAX_LINES, "front page has {lines} lines (at most {FRONT_PAGE_MAX_LINES})");
+    let lines = front.lines().filter(|l| !l.starts_with('|')).count();
+    assert!(lines <= FRONT_PAGE_MAX_LINES, "front page has {lines} lines outside its tables (at most {FRONT_PAGE_MAX_LINES})");
 }
 
 /// A string literal of a Rust source file: its text and line.

@@ -28,14 +28,6 @@ struct Args {
     assemble_only: bool,
 }
 
-/// Records an experiment's wall time in `data/run_times.json` (seconds by experiment, the last
-/// run of each through this binary), which the README points to instead of typing times.
-fn record_run_time(ctx: &Context, name: &str, seconds: f64) -> Result<(), experiment::ExperimentError> {
-    let mut times: std::collections::BTreeMap<String, f64> = ctx.read_data("run_times").unwrap_or_default();
-    times.insert(name.to_owned(), (seconds * 10.0).round() / 10.0);
-    ctx.write_data("run_times", &times)
-}
-
 fn main() -> ExitCode {
     let args = Args::parse();
     let ctx = Context::new(args.out, args.repeats);
@@ -57,7 +49,7 @@ fn main() -> ExitCode {
             }
             let seconds = t.elapsed().as_secs_f64();
             eprintln!("{} done in {seconds:.1} s", e.name());
-            if let Err(err) = record_run_time(&ctx, e.name(), seconds) {
+            if let Err(err) = experiment::record_run_time(&ctx, e.name(), seconds) {
                 eprintln!("error: {err}");
                 return ExitCode::FAILURE;
             }

@@ -7,7 +7,7 @@ use super::context::{
 };
 use crate::figures::color_of;
 use crate::figures::plot::{self, HistogramPlot, Scale, Series, Style, XyPlot};
-use crate::report::{first_seen, markdown_table};
+use crate::report::{first_seen, markdown_table, Spread};
 use isolab_algorithms::{extractors, fields, Samples};
 use isolab_cli::render::{render, save_png, save_turntable, side_by_side, RenderOptions, Shading};
 use isolab_metrics::Histogram;
@@ -115,6 +115,45 @@ impl Experiment for CompareAlgorithms {
 pub fn glance(ctx: &Context) -> Result<String, ExperimentError> {
     let data: Data = ctx.read_data(NAME)?;
     Ok(summary(&data))
+}
+
+/// The front page's figure, drawn at assembly from the data: one point per extractor, the median
+/// over the middle-resolution inputs of its extraction time against the median of its mean
+/// aspect ratio (the glance table's two columns). Returns the Markdown that shows it.
+pub fn front_figure(ctx: &Context) -> Result<String, ExperimentError> {
+    let data: Data = ctx.read_data(NAME)?;
+    let mut series = Vec::new();
+    let mut inputs = 0;
+    for e in extractors::registry() {
+        let rows: Vec<&Measured> = middle(&data).filter(|r| r.algorithm == e.name()).collect();
+        if rows.is_empty() {
+            continue;
+        }
+        inputs = inputs.max(rows.len());
+        let time = Spread::of(rows.iter().map(|r| r.extraction_ms).collect()).median;
+        let aspect = Spread::of(rows.iter().map(|r| r.metrics.quality.aspect_ratio.mean).collect()).median;
+        series.push(Series { label: e.name().to_owned(), color: color_of(e.name()), points: vec![(time, aspect)] });
+    }
+    let chart = XyPlot {
+        title: "Every extractor: triangle quality against extraction time".into(),
+        x_label: "median extraction time, ms".into(),
+        y_label: "median mean aspect ratio (1 is ideal)".into(),
+        x_scale: Scale::Log,
+        y_scale: Scale::Linear,
+        style: Style::Scatter,
+        series,
+    };
+    let stem = ctx.figure_dir("front")?.join("quality-cost");
+    plot::xy(&stem, &chart).map_err(ExperimentError::Figure)?;
+    Ok(format!(
+        "![Every extractor: triangle quality against extraction time]({})\n\n_Each point is one extractor: the median, over \
+         the {inputs} inputs at the middle resolution (fields at {}³ samples, models at {}³), of its extraction time and of \
+         its triangles' mean aspect ratio; lower and to the left is better. Every input's point is in \
+         [compare_algorithms](compare_algorithms.md)._\n\n",
+        ctx.link(&stem.with_extension("png")),
+        data.field_levels[1],
+        data.model_levels[1],
+    ))
 }
 
 /// The algorithm's colour as a surface tint (lightened palette colour).

@@ -110,6 +110,10 @@ fn front_page(ctx: &Context, pages: &[(&str, String, &str)]) -> String {
     match compare_algorithms::glance(ctx) {
         Ok(table) => {
             md.push_str("## Every extractor at a glance\n\n");
+            match compare_algorithms::front_figure(ctx) {
+                Ok(figure) => md.push_str(&figure),
+                Err(e) => md.push_str(&format!("_No figure: {e}_\n\n")),
+            }
             md.push_str(&table);
             md.push_str("\nPer input, per resolution, with pictures: [compare_algorithms](compare_algorithms.md).\n\n");
         }
@@ -120,6 +124,7 @@ fn front_page(ctx: &Context, pages: &[(&str, String, &str)]) -> String {
          in 3D ([viewer](viewer.md) says how to open it).\n\n",
     );
     md.push_str("## The experiments\n\n");
+    md.push_str(&main_job_time(ctx, &pages.iter().map(|p| p.0).collect::<Vec<_>>()));
     let rows: Vec<Vec<String>> =
         pages.iter().map(|(name, title, question)| vec![format!("[{title}]({name}.md)"), (*question).to_owned()]).collect();
     md.push_str(&crate::report::markdown_table(&["page", "the question it answers"], &rows));
@@ -145,6 +150,38 @@ fn promote_headings(section: &str) -> String {
     out
 }
 
+/// The data file of the experiments' last wall times.
+const RUN_TIMES: &str = "run_times";
+
+/// Records an experiment's wall time in `data/run_times.json` (seconds by experiment, the last
+/// run of each, through the main job or the experiment's own binary); the front page states the
+/// main job's time from it.
+pub fn record_run_time(ctx: &Context, name: &str, seconds: f64) -> Result<(), ExperimentError> {
+    let mut times: std::collections::BTreeMap<String, f64> = ctx.read_data(RUN_TIMES).unwrap_or_default();
+    times.insert(name.to_owned(), (seconds * 10.0).round() / 10.0);
+    ctx.write_data(RUN_TIMES, &times)
+}
+
+/// The front page's sentence on how long the main job takes, from the recorded run times.
+fn main_job_time(ctx: &Context, names: &[&str]) -> String {
+    let times: std::collections::BTreeMap<String, f64> = ctx.read_data(RUN_TIMES).unwrap_or_default();
+    let recorded: Vec<f64> = names.iter().filter_map(|n| times.get(*n).copied()).collect();
+    let missing: Vec<&str> = names.iter().copied().filter(|n| !times.contains_key(*n)).collect();
+    let mut s = format!(
+        "The main job runs every experiment below; their last recorded runs on this machine (`data/{RUN_TIMES}.json`) \
+         took {:.0} minutes in all ({} of {} experiments recorded",
+        recorded.iter().sum::<f64>() / 60.0,
+        recorded.len(),
+        names.len()
+    );
+    if missing.is_empty() {
+        s.push_str(").\n\n");
+    } else {
+        s.push_str(&format!("; not recorded: {}, last run before times were recorded).\n\n", missing.join(", ")));
+    }
+    s
+}
+
 /// Runs the experiment called `name` and reassembles the report (what each binary does).
 pub fn run_and_assemble(name: &str) -> std::process::ExitCode {
     let ctx = Context::new(default_report_dir(), 5);
@@ -152,7 +189,11 @@ pub fn run_and_assemble(name: &str) -> std::process::ExitCode {
         .into_iter()
         .find(|e| e.name() == name)
         .ok_or_else(|| ExperimentError::Missing(format!("no experiment called {name}")))
-        .and_then(|e| e.run(&ctx))
+        .and_then(|e| {
+            let t = std::time::Instant::now();
+            e.run(&ctx)?;
+            record_run_time(&ctx, e.name(), t.elapsed().as_secs_f64())
+        })
         .and_then(|()| assemble(&ctx));
     match result {
         Ok(path) => {

@@ -16,7 +16,7 @@
 use super::context::{Context, Experiment, ExperimentError};
 use crate::alloc_meter;
 use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
-use crate::report::{markdown_table, median};
+use crate::report::{log_slope, markdown_table, median};
 use isolab_algorithms::extractors::INFOS;
 use isolab_algorithms::options::Options;
 use isolab_algorithms::{fields, Extraction, Extractor, Grid, Samples};
@@ -119,19 +119,6 @@ fn timed(
 /// Whether [`timed`] runs `threads` threads from this thread on the global pool.
 fn on_global_pool(threads: usize) -> bool {
     threads > 1 && crate::peers::ours::caller_outside(threads)
-}
-
-/// Least-squares slope of `ln y` against `ln x`.
-fn log_slope(points: &[(f64, f64)]) -> Option<f64> {
-    let pts: Vec<(f64, f64)> = points.iter().filter(|(x, y)| *x > 0.0 && *y > 0.0).map(|(x, y)| (x.ln(), y.ln())).collect();
-    if pts.len() < 2 {
-        return None;
-    }
-    let n = pts.len() as f64;
-    let (mx, my) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    (sxx > 0.0).then(|| sxy / sxx)
 }
 
 impl Experiment for Scaling {
@@ -435,7 +422,7 @@ fn section(ctx: &Context, data: &Data) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::log_slope;
+    use crate::report::log_slope;
 
     #[test]
     fn slopes_of_power_laws() {

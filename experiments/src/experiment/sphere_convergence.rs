@@ -4,7 +4,7 @@
 use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::color_of;
 use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
-use crate::report::markdown_table;
+use crate::report::{log_slope, markdown_table};
 use isolab_algorithms::{extractors, fields, Extraction, Samples};
 use isolab_pipeline::{lattice_for, RunConfig};
 use serde::{Deserialize, Serialize};
@@ -104,6 +104,7 @@ impl Experiment for SphereConvergence {
              spacings, as the resolution doubles. Second-order convergence shows as a slope of -2 on the log-log plot.\n\n",
             data.radius
         ));
+        s.push_str(&reading(&data.rows));
         let rows: Vec<Vec<String>> = data
             .rows
             .iter()
@@ -125,5 +126,105 @@ impl Experiment for SphereConvergence {
         ));
         s.push_str(&format!("\n![volume error]({})\n", data.plot));
         Ok(s)
+    }
+}
+
+/// The log-log slope of an error that falls with the square of the spacing.
+const SECOND_ORDER_SLOPE: f64 = -2.0;
+
+/// How near that slope a volume error's log-log slope must be to read as second order.
+const SECOND_ORDER_TOLERANCE: f64 = 0.25;
+
+/// What the table shows, worded from it: each extractor's order of convergence (the log-log
+/// slope of its volume error against resolution), which side of the exact volume it stays on,
+/// and the largest error at the finest resolution, with each extractor's settings.
+fn reading(rows: &[Row]) -> String {
+    let mut names: Vec<&str> = Vec::new();
+    for r in rows {
+        if !names.contains(&r.algorithm.as_str()) {
+            names.push(&r.algorithm);
+        }
+    }
+    fn of<'a>(rows: &'a [Row], name: &'a str) -> impl Iterator<Item = &'a Row> + 'a {
+        rows.iter().filter(move |r| r.algorithm == name)
+    }
+    let slopes: Vec<(&str, f64)> = names
+        .iter()
+        .filter_map(|&n| {
+            Some((n, log_slope(&of(rows, n).map(|r| (r.resolution as f64, r.volume_error.abs())).collect::<Vec<_>>())?))
+        })
+        .collect();
+    let (second, other): (Vec<_>, Vec<_>) =
+        slopes.iter().partition(|(_, s)| (s - SECOND_ORDER_SLOPE).abs() <= SECOND_ORDER_TOLERANCE);
+    let list = |v: &[&(&str, f64)]| v.iter().map(|(n, s)| format!("{n} {s:.2}")).collect::<Vec<_>>().join(", ");
+    let mut lines = Vec::new();
+    if !second.is_empty() {
+        lines.push(format!(
+            "Second order (a volume-error slope within {SECOND_ORDER_TOLERANCE} of {SECOND_ORDER_SLOPE} over the resolutions): {}.",
+            list(&second)
+        ));
+    }
+    if !other.is_empty() {
+        lines.push(format!("Not second order: {}.", list(&other)));
+    }
+    let side = |sign: f64| -> Vec<&str> {
+        names.iter().copied().filter(|&n| of(rows, n).all(|r| r.volume_error * sign > 0.0)).collect()
+    };
+    let (below, above) = (side(-1.0), side(1.0));
+    if !below.is_empty() {
+        lines.push(format!("Below the exact volume at every resolution: {}.", below.join(", ")));
+    }
+    if !above.is_empty() {
+        lines.push(format!("Above it at every resolution: {}.", above.join(", ")));
+    }
+    let finest = rows.iter().map(|r| r.resolution).max().unwrap_or(0);
+    if let Some(worst) =
+        rows.iter().filter(|r| r.resolution == finest).max_by(|a, b| a.volume_error.abs().total_cmp(&b.volume_error.abs()))
+    {
+        let settings = isolab_algorithms::extractors::by_name(&worst.algorithm).map(|e| e.settings()).unwrap_or_default();
+        lines.push(format!(
+            "The largest volume error at {finest} samples is that of {}, {:+.4}%{}.",
+            worst.algorithm,
+            100.0 * worst.volume_error,
+            if settings.is_empty() { String::new() } else { format!(" (it runs with its defaults: {settings})") }
+        ));
+    }
+    format!("**Reading.** {}\n\n", lines.join(" "))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(algorithm: &str, resolution: usize, volume_error: f64) -> Row {
+        Row {
+            algorithm: algorithm.into(),
+            resolution,
+            triangles: 0,
+            volume_error,
+            area_error: 0.0,
+            mean_distance_over_spacing: 0.0,
+            max_distance_over_spacing: 0.0,
+        }
+    }
+
+    #[test]
+    fn the_reading_follows_the_numbers() {
+        let rows = vec![
+            row("a", 16, -0.04),
+            row("a", 32, -0.01),
+            row("a", 64, -0.0025),
+            row("b", 16, 0.02),
+            row("b", 32, 0.01),
+            row("b", 64, 0.005),
+        ];
+        let r = reading(&rows);
+        assert!(r.contains("Second order (a volume-error slope within 0.25 of -2 over the resolutions): a -2.00."), "{r}");
+        assert!(r.contains("Not second order: b -1.00."), "{r}");
+        assert!(
+            r.contains("Below the exact volume at every resolution: a.") && r.contains("Above it at every resolution: b."),
+            "{r}"
+        );
+        assert!(r.contains("The largest volume error at 64 samples is that of b, +0.5000%"), "{r}");
     }
 }

@@ -1,7 +1,11 @@
 //! Plots with plotters: scatter plots, line plots (optionally log-log) and histograms, each written
 //! as SVG and PNG with text drawn from an embedded font (DejaVu Sans), so no system font is needed.
-//! Log axes plot `log10` of the data on a linear axis labelled with powers of ten.
+//! Log axes plot `log10` of the data on a linear axis whose ticks sit at round values (1, 2 and 5
+//! times a power of ten, or every decade on wide ranges). The legend stands in a panel beside the
+//! plot, never over the data, and each series has its own marker (and, in line plots, solid or
+//! dashed lines), so series that overlap stay told apart.
 
+use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -108,17 +112,139 @@ fn padded(lo: f64, hi: f64) -> (f64, f64) {
     (lo - 0.06 * span, hi + 0.06 * span)
 }
 
-/// The legend, in the same place and style on every chart.
-fn draw_legend<'a, DB: DrawingBackend + 'a>(
-    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
-) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(RGBColor(180, 180, 180))
-        .label_font(("sans-serif", 13))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
+/// An axis over `lo..hi` in plotted (for [`Scale::Log`]: `log10`) units, with ticks at round
+/// values of the data.
+#[derive(Clone)]
+struct Axis {
+    lo: f64,
+    hi: f64,
+    scale: Scale,
+}
+
+impl Ranged for Axis {
+    type FormatOption = DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        RangedCoordf64::from(self.lo..self.hi).map(value, limit)
+    }
+
+    fn key_points<Hint: KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
+        match self.scale {
+            Scale::Linear => RangedCoordf64::from(self.lo..self.hi).key_points(hint),
+            Scale::Log => log_ticks(self.lo, self.hi, hint.max_num_points()),
+        }
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.lo..self.hi
+    }
+}
+
+/// Ticks (in `log10` units) between `lo` and `hi` at round values: the densest of every decade,
+/// 1-2-5 times a decade, or 1 to 9 times a decade that gives at most `max` ticks (every n-th
+/// decade when even the decades are too many).
+fn log_ticks(lo: f64, hi: f64, max: usize) -> Vec<f64> {
+    let max = max.max(2);
+    let within = |mantissas: &[f64]| -> Vec<f64> {
+        let (k0, k1) = (lo.floor() as i32, hi.ceil() as i32);
+        (k0..=k1)
+            .flat_map(|k| mantissas.iter().map(move |m| f64::from(k) + m.log10()))
+            .filter(|t| (lo - 1e-9..=hi + 1e-9).contains(t))
+            .collect()
+    };
+    let sets: [&[f64]; 3] = [&[1.0], &[1.0, 2.0, 5.0], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]];
+    let mut best = within(sets[0]);
+    for set in &sets[1..] {
+        let ticks = within(set);
+        if ticks.len() <= max {
+            best = ticks;
+        }
+    }
+    if best.len() > max {
+        let step = best.len().div_ceil(max);
+        best = best.into_iter().step_by(step).collect();
+    }
+    best
+}
+
+/// How each series is marked: by its place in the list.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Marker {
+    Circle,
+    Triangle,
+    Square,
+    Diamond,
+    Cross,
+}
+
+const MARKERS: [Marker; 5] = [Marker::Circle, Marker::Triangle, Marker::Square, Marker::Diamond, Marker::Cross];
+
+fn marker_of(i: usize) -> Marker {
+    MARKERS[i % MARKERS.len()]
+}
+
+/// A marker centred at pixel `(x, y)` of `area`.
+fn draw_marker<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    m: Marker,
+    (x, y): (i32, i32),
+    color: RGBColor,
+) -> Result<(), String> {
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let fill = color.filled();
+    match m {
+        Marker::Circle => area.draw(&Circle::new((x, y), 4, fill)),
+        Marker::Triangle => area.draw(&Polygon::new(vec![(x, y - 5), (x + 5, y + 4), (x - 5, y + 4)], fill)),
+        Marker::Square => area.draw(&Rectangle::new([(x - 4, y - 4), (x + 4, y + 4)], fill)),
+        Marker::Diamond => area.draw(&Polygon::new(vec![(x, y - 5), (x + 5, y), (x, y + 5), (x - 5, y)], fill)),
+        Marker::Cross => area.draw(&Cross::new((x, y), 4, color.stroke_width(2))),
+    }
+    .map_err(err)
+}
+
+/// What a legend entry shows: a marker, a bar swatch, and the line style.
+#[derive(Clone, Copy)]
+enum Swatch {
+    Marker(Marker, Option<bool>),
+    Bar,
+}
+
+/// The width a legend panel needs for `labels` (0 when there are none).
+fn legend_width(labels: &[&str]) -> u32 {
+    let longest = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0);
+    if longest == 0 {
+        0
+    } else {
+        (longest as u32 * 7 + 44).min(SIZE.0 / 2)
+    }
+}
+
+/// The legend in its own panel beside the plot: one row per entry.
+fn draw_legend_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[(String, RGBColor, Swatch)],
+) -> Result<(), String> {
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    let style = TextStyle::from(("sans-serif", 13).into_font()).color(&BLACK);
+    for (i, (label, color, swatch)) in entries.iter().enumerate() {
+        let y = 48 + 20 * i as i32;
+        match *swatch {
+            Swatch::Marker(m, line) => {
+                if let Some(dashed) = line {
+                    let seg = if dashed { vec![(2, y), (8, y)] } else { vec![(2, y), (22, y)] };
+                    area.draw(&PathElement::new(seg, color.stroke_width(2))).map_err(err)?;
+                    if dashed {
+                        area.draw(&PathElement::new(vec![(16, y), (22, y)], color.stroke_width(2))).map_err(err)?;
+                    }
+                }
+                draw_marker(area, m, (12, y), *color)?;
+            }
+            Swatch::Bar => area.draw(&Rectangle::new([(6, y - 5), (18, y + 5)], color.filled())).map_err(err)?,
+        }
+        area.draw(&Text::new(label.clone(), (28, y - 7), style.clone())).map_err(err)?;
+    }
+    Ok(())
 }
 
 fn draw_xy<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, plot: &XyPlot) -> Result<(), String> {
@@ -140,12 +266,15 @@ fn draw_xy<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, plot: &XyPlot) -> 
     );
     let (y0, y1) =
         padded(all.clone().map(|p| p.1).fold(f64::INFINITY, f64::min), all.map(|p| p.1).fold(f64::NEG_INFINITY, f64::max));
-    let mut chart = ChartBuilder::on(root)
+    let labels: Vec<&str> = series.iter().map(|(s, _)| s.label.as_str()).collect();
+    let (w, _) = root.dim_in_pixel();
+    let (plot_area, legend_area) = root.split_horizontally(w - legend_width(&labels));
+    let mut chart = ChartBuilder::on(&plot_area)
         .caption(&plot.title, ("sans-serif", 20))
         .margin(12)
         .x_label_area_size(44)
         .y_label_area_size(64)
-        .build_cartesian_2d(x0..x1, y0..y1)
+        .build_cartesian_2d(Axis { lo: x0, hi: x1, scale: plot.x_scale }, Axis { lo: y0, hi: y1, scale: plot.y_scale })
         .map_err(err)?;
     let (xs, ys) = (plot.x_scale, plot.y_scale);
     chart
@@ -159,18 +288,26 @@ fn draw_xy<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, plot: &XyPlot) -> 
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
         .map_err(err)?;
-    for (s, pts) in &series {
+    let mut entries = Vec::new();
+    for (i, (s, pts)) in series.iter().enumerate() {
         let color = RGBColor(s.color.0, s.color.1, s.color.2);
+        let dashed = i % 2 == 1;
         if plot.style == Style::Lines {
-            chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2))).map_err(err)?;
+            if dashed {
+                chart.draw_series(DashedLineSeries::new(pts.iter().copied(), 6, 4, color.stroke_width(2))).map_err(err)?;
+            } else {
+                chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2))).map_err(err)?;
+            }
         }
-        chart
-            .draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled())))
-            .map_err(err)?
-            .label(&s.label)
-            .legend(move |(x, y)| Circle::new((x + 8, y), 5, color.filled()));
+        let m = marker_of(i);
+        for p in pts {
+            let px = chart.backend_coord(p);
+            let (ox, oy) = plot_area.get_base_pixel();
+            draw_marker(&plot_area, m, (px.0 - ox, px.1 - oy), color)?;
+        }
+        entries.push((s.label.clone(), color, Swatch::Marker(m, (plot.style == Style::Lines).then_some(dashed))));
     }
-    draw_legend(&mut chart).map_err(err)?;
+    draw_legend_panel(&legend_area, &entries)?;
     root.present().map_err(err)
 }
 
@@ -243,7 +380,10 @@ fn draw_bars<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart_spec: &Bar
     let top =
         chart_spec.series.iter().flat_map(|s| s.values.iter().copied()).filter(|v| v.is_finite()).fold(0.0, f64::max).max(1e-12)
             * 1.1;
-    let mut chart = ChartBuilder::on(root)
+    let labels: Vec<&str> = chart_spec.series.iter().map(|s| s.label.as_str()).collect();
+    let (w, _) = root.dim_in_pixel();
+    let (plot_area, legend_area) = root.split_horizontally(w - legend_width(&labels));
+    let mut chart = ChartBuilder::on(&plot_area)
         .caption(&chart_spec.title, ("sans-serif", 20))
         .margin(12)
         .x_label_area_size(70)
@@ -262,6 +402,7 @@ fn draw_bars<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart_spec: &Bar
         .draw()
         .map_err(err)?;
     let width = 0.8 / k as f64;
+    let mut entries = Vec::new();
     for (j, BarSeries { label: name, color, values }) in chart_spec.series.iter().enumerate() {
         let color = RGBColor(color.0, color.1, color.2);
         chart
@@ -269,11 +410,10 @@ fn draw_bars<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart_spec: &Bar
                 let x0 = i as f64 + 0.1 + j as f64 * width;
                 Rectangle::new([(x0, 0.0), (x0 + width * 0.92, v)], color.filled())
             }))
-            .map_err(err)?
-            .label(name)
-            .legend(move |(x, y)| Rectangle::new([(x + 2, y - 5), (x + 12, y + 5)], color.filled()));
+            .map_err(err)?;
+        entries.push((name.clone(), color, Swatch::Bar));
     }
-    draw_legend(&mut chart).map_err(err)?;
+    draw_legend_panel(&legend_area, &entries)?;
     // Category names under their groups, turned to fit.
     let style = TextStyle::from(("sans-serif", 13).into_font()).transform(FontTransform::Rotate270).color(&BLACK);
     for (i, c) in chart_spec.categories.iter().enumerate() {
@@ -372,6 +512,27 @@ mod tests {
         let svg = std::fs::read_to_string(stem.with_extension("svg")).unwrap();
         assert!(svg.contains("sphere") && svg.contains("torus") && svg.contains("other"));
         assert!(stem.with_extension("png").exists());
+    }
+
+    #[test]
+    fn log_ticks_sit_at_round_values() {
+        let values = |lo: f64, hi: f64, max: usize| -> Vec<String> {
+            log_ticks(lo.log10(), hi.log10(), max).iter().map(|&t| label(t, Scale::Log)).collect()
+        };
+        // The range that drew 15.8, 25.1 and 39.8 before: now round values only.
+        assert_eq!(values(12.0, 45.0, 2), ["20"]);
+        assert_eq!(values(12.0, 45.0, 4), ["20", "30", "40"]);
+        assert_eq!(values(0.5, 300.0, 6), ["1", "10", "100"]);
+        assert_eq!(values(0.5, 300.0, 12), ["0.5", "1", "2", "5", "10", "20", "50", "100", "200"]);
+        assert_eq!(values(1.0, 1e9, 4), ["1", "1000", "1e6", "1e9"]);
+    }
+
+    #[test]
+    fn the_legend_has_room_beside_the_plot() {
+        assert_eq!(legend_width(&[]), 0);
+        assert!(legend_width(&["marching-cubes"]) > 100 && legend_width(&["x".repeat(500).as_str()]) <= SIZE.0 / 2);
+        assert_eq!(marker_of(0), Marker::Circle);
+        assert_ne!(marker_of(1), marker_of(0));
     }
 
     #[test]

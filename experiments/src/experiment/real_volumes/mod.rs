@@ -18,8 +18,15 @@
 //! Runs alternate, medians with the min-max spread. One thread for VTK (its default backend);
 //! ours on rayon's pool (both cores of this machine).
 //!
-//! The volume itself is not committed (the Python peers' environment installs it); without it
-//! the section says so.
+//! The page opens with the commands that mesh one's own scan (its iso-values the ones computed
+//! here). Every mesh's islands (connected components) are counted with what the
+//! `keep-components` post-process keeps of them ([`islands`]). A second volume of another kind,
+//! nibabel's oblique, anisotropic, int16 fMRI series, is meshed through the pipeline's own run
+//! by every surface extractor, its world placement checked against nibabel's affine
+//! ([`second`]).
+//!
+//! The volumes themselves are not committed (the Python peers' environment installs them);
+//! without them the section says so.
 
 use super::context::{Context, Experiment, ExperimentError};
 use crate::peers::python::{PythonPeer, PythonServer};
@@ -38,6 +45,11 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
+
+mod islands;
+mod second;
+
+use islands::{islands, Islands};
 
 /// The experiment.
 pub struct RealVolumes;
@@ -77,6 +89,9 @@ pub(crate) struct Row {
     /// Mean and max distance of vertices to the trilinear level set, in voxels (1 mm).
     pub(crate) distance_mean: f64,
     pub(crate) distance_max: f64,
+    /// Its components and what `keep-components` keeps (absent from runs before it existed).
+    #[serde(default)]
+    pub(crate) islands: Option<Islands>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -109,6 +124,9 @@ pub(crate) struct Data {
     pub(crate) skipped: Vec<String>,
     pub(crate) repeats: usize,
     pub(crate) threads: usize,
+    /// The second volume, of another kind (absent from runs before it was added).
+    #[serde(default)]
+    pub(crate) second: Option<second::SecondVolume>,
 }
 
 /// The iso-values: Otsu of all voxels, then Otsu of the voxels above the first.
@@ -126,6 +144,8 @@ fn levels(values: &[f32]) -> Vec<Level> {
     ]
 }
 
+/// A mesh's row; `voxel_volume` in cubic world units.
+#[allow(clippy::too_many_arguments)]
 fn row(
     implementation: &str,
     ours: bool,
@@ -134,6 +154,7 @@ fn row(
     mesh: &TriMesh,
     field: &dyn Field,
     iso: f32,
+    voxel_volume: f64,
 ) -> Row {
     let m = MeshMetrics::measure(mesh, Some((field, iso)));
     let t = &m.topology;
@@ -158,6 +179,7 @@ fn row(
         self_intersections: m.intersecting_pairs(),
         distance_mean: d.mean,
         distance_max: d.max,
+        islands: Some(islands(mesh, voxel_volume)),
     }
 }
 
@@ -216,6 +238,7 @@ impl Experiment for RealVolumes {
         data.levels = levels(&file.volume.values);
         data.zero_fraction = file.volume.values.iter().filter(|&&v| v == 0.0).count() as f64 / file.volume.values.len() as f64;
         let field: Arc<dyn Field> = Arc::new(Complement(Arc::new(VolumeField::new(file.volume.clone()))));
+        let voxel_volume = data.spacing.iter().product::<f64>();
         let surface: Vec<_> =
             extractors::INFOS.iter().filter(|i| extractors::by_name(i.name).is_some_and(|e| !e.produces_volume())).collect();
         let peers = [("vtk-flying-edges", "vtkFlyingEdges3D"), ("skimage-lewiner", "scikit-image (Lewiner)")];
@@ -278,7 +301,7 @@ impl Experiment for RealVolumes {
             for (k, info) in surface.iter().enumerate() {
                 if let Some(mesh) = &meshes[k] {
                     let t = std::mem::take(&mut times[k]);
-                    data.rows.push(row(info.name, true, &level, t, mesh, field.as_ref(), internal));
+                    data.rows.push(row(info.name, true, &level, t, mesh, field.as_ref(), internal, voxel_volume));
                 }
                 bar.inc(1);
             }
@@ -292,6 +315,7 @@ impl Experiment for RealVolumes {
                         mesh,
                         field.as_ref(),
                         internal,
+                        voxel_volume,
                     )),
                     (_, e) => {
                         data.skipped.push(format!("{label} at {}: {}", level.name, e.clone().unwrap_or_else(|| "no mesh".into())))
@@ -369,6 +393,14 @@ impl Experiment for RealVolumes {
             ));
         }
         let _ = std::fs::remove_dir_all(&tmp);
+        match (hello["epi"].as_str(), serde_json::from_value::<[[f64; 4]; 4]>(hello["epi_affine"].clone())) {
+            (Some(epi), Ok(affine)) => {
+                let package = format!("nibabel {}", data.versions.get("nibabel").cloned().unwrap_or_default());
+                data.second =
+                    Some(second::run_second(ctx, epi, &affine, hello["epi_axcodes"].as_str().unwrap_or("?"), &package)?);
+            }
+            _ => data.skipped.push(format!("the second volume: nibabel's example4d.nii.gz not found ({})", hello["errors"])),
+        }
         bar.finish();
         ctx.write_data(NAME, &data)
     }
@@ -380,6 +412,7 @@ impl Experiment for RealVolumes {
             s.push_str(&format!("_Not run: {}._\n", data.skipped.join("; ")));
             return Ok(s);
         }
+        s.push_str(&own_scan_commands(&data));
         let [a, b, c] = data.shape;
         s.push_str(&format!(
             "The MNI ICBM152 2009a symmetric T1 template, {}: {a} x {b} x {c} voxels of {} ({:.0} x {:.0} x {:.0} mm), {:.1} MB \
@@ -404,8 +437,8 @@ impl Experiment for RealVolumes {
              array as stored ({}); isolab's samples are f32 (four bytes a voxel), converted \
              beforehand (the conversion is in the end-to-end times below). Distance: the mean over vertices of the first-order distance \
              `|f - iso| / |grad f|` to the trilinear interpolant's level set, in voxels ({:.0} mm; the maximum is not shown: \
-             where the interpolant is nearly flat this estimate is meaningless). Every mesh is measured by isolab's metrics, checked against CGAL, pymeshlab and VTK \
-             elsewhere in this report.\n\n",
+             where the interpolant is nearly flat this estimate is meaningless). Every mesh is measured by isolab's metrics, which the Rust tests check \
+             against CGAL, pymeshlab and VTK (golden values in `tests/reference/golden/`).\n\n",
             data.repeats, data.threads, data.data_type, data.spacing[0]
         ));
         for level in &data.levels {
@@ -459,6 +492,7 @@ impl Experiment for RealVolumes {
             s.push('\n');
         }
         s.push_str(&comparison_notes(&data));
+        s.push_str(&islands_section(&data));
         let rows: Vec<Vec<String>> = data
             .end_to_end
             .iter()
@@ -484,6 +518,9 @@ impl Experiment for RealVolumes {
             &rows,
         ));
         s.push('\n');
+        if let Some(second) = &data.second {
+            s.push_str(&second::section(second));
+        }
         for (label, path) in &data.images {
             s.push_str(&format!("![{label}]({path})\n\n_{label}_\n\n"));
         }
@@ -496,6 +533,80 @@ impl Experiment for RealVolumes {
         ));
         Ok(s)
     }
+}
+
+/// What opens the page: the commands that mesh one's own scan, the iso-values and threshold
+/// the data used.
+fn own_scan_commands(data: &Data) -> String {
+    let iso = |k: usize| data.levels.get(k).map_or(String::new(), |l| format!("{:.1}", l.iso));
+    let volume = data.second.as_ref().map_or(0, |s| s.volume_index);
+    format!(
+        "**Meshing your own scan.** A volume file (NIfTI `.nii`/`.nii.gz`, NRRD `.nrrd`/`.nhdr`, MetaImage `.mhd`/`.mha`, \
+         or a zarr store) is meshed on its own voxel grid, and the mesh is placed in world coordinates by the file's header \
+         (spacing, origin, direction; RAS as 3D Slicer shows it, or `--space lps`). Inside is above the iso-value (a bright \
+         object); `--inside below` for a dark one. Without `--iso` the run takes Otsu's threshold and says so. The iso-values \
+         below are the ones this page computed for the MNI template:\n\n```sh\n\
+         isolab extract -a marching-cubes -f scan.nii.gz -o scan.glb                 # Otsu's threshold, said on stderr\n\
+         isolab extract -a marching-cubes -f scan.nii.gz --iso {} -o brain.stl      # an iso-value in the file's own units\n\
+         isolab extract -a surface-nets -f scan.nrrd --iso {} -m wm.json -o wm.ply  # with every metric, as in the tables\n\
+         isolab extract -a marching-cubes -f scan.mha --iso {} --post keep-components:largest={} -o one.ply    # the largest part only\n\
+         isolab extract -a marching-cubes -f scan.mha --iso {} --post keep-components:largest={},min-volume={:.0} -o parts.ply  # islands dropped\n\
+         isolab extract -a marching-cubes -f ct.nii.gz --iso {} --inside below -o air.ply   # a dark object: inside below\n\
+         isolab extract -a marching-cubes -f fmri.nii.gz --volume {volume} -o epi.ply             # one volume of a time series\n\
+         ```\n\nFrom Python, the same run on a file or on an array with its affine: \
+         `isolab.extract(\"scan.nii.gz\", {}, post=[\"keep-components:largest={}\"])`, \
+         `isolab.extract(array, {}, affine=img.affine, inside=\"above\")`.\n\n",
+        iso(0),
+        iso(1),
+        iso(0),
+        islands::KEEP_LARGEST,
+        iso(0),
+        islands::KEEP_ANY,
+        islands::MIN_ISLAND_VOXELS,
+        islands::AIR_ISO_HU,
+        iso(0),
+        islands::KEEP_LARGEST,
+        iso(0),
+    )
+}
+
+/// The islands each mesh comes with, and what `keep-components` leaves.
+fn islands_section(data: &Data) -> String {
+    let mut s = String::new();
+    let with: Vec<&Row> = data.rows.iter().filter(|r| r.islands.is_some()).collect();
+    if with.is_empty() {
+        return s;
+    }
+    s.push_str(&format!(
+        "**Islands.** An isosurface of a real scan comes in many connected components: noise, vessels and folds cut by the \
+         iso-value. `--post keep-components:largest={},min-volume={:.0}` drops the components enclosing fewer than {:.0} \
+         voxels, `keep-components:largest={}` keeps the largest alone (components ranked by the volume they enclose, with \
+         the post-process's own ranking):\n\n",
+        islands::KEEP_ANY,
+        islands::MIN_ISLAND_VOXELS,
+        islands::MIN_ISLAND_VOXELS,
+        islands::KEEP_LARGEST
+    ));
+    let mut readings = Vec::new();
+    for level in &data.levels {
+        let here: Vec<(&str, &Islands)> = with
+            .iter()
+            .filter(|r| r.level == level.name)
+            .filter_map(|r| Some((r.implementation.as_str(), r.islands.as_ref()?)))
+            .collect();
+        let rows: Vec<Vec<String>> = here
+            .iter()
+            .map(|(name, i)| [vec![level.name.clone(), (*name).to_owned()], islands::cells(i).to_vec()].concat())
+            .collect();
+        let headers: Vec<String> =
+            ["level".to_owned(), "implementation".to_owned()].into_iter().chain(islands::headers()).collect();
+        s.push_str(&markdown_table(&headers.iter().map(String::as_str).collect::<Vec<_>>(), &rows));
+        s.push('\n');
+        readings.extend(islands::reading(&format!("At the {} level", level.name), &here));
+    }
+    s.push_str(&readings.join(" "));
+    s.push_str("\n\n");
+    s
 }
 
 /// What the tables show about marching cubes against the peers, worded from the data.

@@ -36,6 +36,10 @@ pub(crate) struct Data {
     pub(crate) overshading: String,
     pub(crate) bars: String,
     pub(crate) histograms: Vec<String>,
+    /// Each extractor's options as it ran, in words (its `settings()`; absent from runs before
+    /// they were recorded).
+    #[serde(default)]
+    pub(crate) settings: Vec<(String, String)>,
 }
 
 impl Experiment for CompareAlgorithms {
@@ -64,6 +68,7 @@ impl Experiment for CompareAlgorithms {
             overshading: String::new(),
             bars: String::new(),
             histograms: Vec::new(),
+            settings: extractors.iter().map(|e| (e.name().to_owned(), e.settings())).collect(),
         };
         for (name, spec, levels) in &inputs {
             let field = load_field(spec, fields::DEFAULT_SEED)?;
@@ -340,7 +345,18 @@ fn summary(data: &Data) -> String {
         &rows,
     );
     s.push_str("\nMedians are over the inputs (so one bad field does not hide the rest); the triangle ratio sums every input.\n");
+    s.push_str(&settings_line(data));
     s
+}
+
+/// The options each extractor ran with, from the run's data (its defaults).
+fn settings_line(data: &Data) -> String {
+    let said: Vec<String> =
+        data.settings.iter().filter(|(_, s)| !s.is_empty()).map(|(name, s)| format!("`{name}`: {s}")).collect();
+    if said.is_empty() {
+        return String::new();
+    }
+    format!("\nEach extractor ran with its defaults: {}.\n", said.join("; "))
 }
 
 fn yes(b: bool) -> &'static str {

@@ -70,6 +70,18 @@ pub fn init_fonts() {
     });
 }
 
+/// Writes `text` into the top left corner of an RGB image (`width * height * 3` bytes, rows top
+/// to bottom) on a pale band, so thumbnails in a grid say what each shows.
+pub fn caption(rgb: &mut [u8], (width, height): (u32, u32), text: &str) -> Result<(), String> {
+    init_fonts();
+    let area = BitMapBackend::with_buffer(rgb, (width, height)).into_drawing_area();
+    let err = |e: DrawingAreaErrorKind<_>| e.to_string();
+    let band = (text.chars().count() as i32 * 7 + 10).min(width as i32);
+    area.draw(&Rectangle::new([(0, 0), (band, 20)], WHITE.mix(0.8).filled())).map_err(err)?;
+    area.draw(&Text::new(text.to_owned(), (5, 3), ("sans-serif", 13).into_font().color(&BLACK))).map_err(err)?;
+    area.present().map_err(err)
+}
+
 fn transform(v: f64, scale: Scale) -> Option<f64> {
     match scale {
         Scale::Linear => v.is_finite().then_some(v),
@@ -512,6 +524,16 @@ mod tests {
         let svg = std::fs::read_to_string(stem.with_extension("svg")).unwrap();
         assert!(svg.contains("sphere") && svg.contains("torus") && svg.contains("other"));
         assert!(stem.with_extension("png").exists());
+    }
+
+    #[test]
+    fn captions_write_dark_text_on_the_corner_only() {
+        let (w, h) = (120u32, 60u32);
+        let mut rgb = vec![128u8; (w * h * 3) as usize];
+        caption(&mut rgb, (w, h), "surface-nets").unwrap();
+        let dark = |x: u32, y: u32| rgb[((y * w + x) * 3) as usize] < 100;
+        assert!((0..20).any(|y| (0..100).any(|x| dark(x, y))), "no text drawn");
+        assert!((30..h).all(|y| (0..w).all(|x| rgb[((y * w + x) * 3) as usize] == 128)), "drawn outside the band");
     }
 
     #[test]

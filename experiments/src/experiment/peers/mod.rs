@@ -97,6 +97,9 @@ struct Data {
     /// Idle before each recorded call, ms (absent from runs before there was one).
     #[serde(default)]
     idle_before_call_ms: Option<u64>,
+    /// Our extractors' settings as they ran (absent from runs before they were recorded).
+    #[serde(default)]
+    settings: Vec<(String, String)>,
 }
 
 /// One implementation as the run alternates them: its label, the peer, its threads, and whether
@@ -109,6 +112,30 @@ struct Entry {
     slow: bool,
 }
 
+/// Our two extractors and the options they run with here: no normals for marching cubes, as VTK
+/// runs with ComputeNormalsOff and the other marching cubes peers make none; surface nets without
+/// smoothing, as `fast-surface-nets` and the other peers do not smooth (its usual normals kept).
+const MC: &str = "marching-cubes";
+const MC_OPTIONS: &[(&str, &str)] = &[("normals", "none")];
+const SN: &str = "surface-nets";
+const SN_OPTIONS: &[(&str, &str)] = &[("smoothing", "none")];
+
+/// Our extractors' settings in words, as the run builds them.
+fn our_settings() -> Vec<(String, String)> {
+    [(OUR_MC, MC, MC_OPTIONS), (OUR_SN, SN, SN_OPTIONS)]
+        .iter()
+        .map(|(label, name, options)| {
+            let mut o = isolab_algorithms::Options::new();
+            options.iter().for_each(|(k, v)| {
+                o.set(k, v);
+            });
+            let settings =
+                isolab_algorithms::extractors::build(name, &o).ok().flatten().map(|e| e.settings()).unwrap_or_default();
+            ((*label).to_owned(), settings)
+        })
+        .collect()
+}
+
 /// Every implementation the run alternates, Python peers when the server started.
 fn entries(python: Option<&std::rc::Rc<std::cell::RefCell<PythonServer>>>, root: &Path) -> Vec<Entry> {
     let entry = |name: &str, peer: Box<dyn Peer>, threads: usize, steady: bool, slow: bool| Entry {
@@ -118,10 +145,8 @@ fn entries(python: Option<&std::rc::Rc<std::cell::RefCell<PythonServer>>>, root:
         steady,
         slow,
     };
-    // No normals for marching cubes, as VTK runs with ComputeNormalsOff and the other marching
-    // cubes peers make none; surface nets makes its usual normals, as `fast-surface-nets` does.
-    let mc = || Box::new(Ours::new("marching-cubes", &[("normals", "none")]));
-    let sn = || Box::new(Ours::new("surface-nets", &[("smoothing", "none")]));
+    let mc = || Box::new(Ours::new(MC, MC_OPTIONS));
+    let sn = || Box::new(Ours::new(SN, SN_OPTIONS));
     let mut list = vec![
         entry(OUR_MC, mc(), TWO, true, false),
         entry(OUR_MC, mc(), ONE, true, false),
@@ -270,7 +295,17 @@ impl Experiment for Peers {
         bar.finish();
         let two_threads_global = Some(crate::peers::ours::caller_outside(TWO));
         let idle_before_call_ms = Some(IDLE_BEFORE_CALL.as_millis() as u64);
-        let data = Data { repeats, timings, floors, versions, skipped, wake, two_threads_global, idle_before_call_ms };
+        let data = Data {
+            repeats,
+            timings,
+            floors,
+            versions,
+            skipped,
+            wake,
+            two_threads_global,
+            idle_before_call_ms,
+            settings: our_settings(),
+        };
         charts(&ctx.figure_dir(NAME)?, &data)?;
         ctx.write_data(NAME, &data)
     }
@@ -461,7 +496,7 @@ fn section(data: &Data) -> String {
          peers keep nothing between calls and run one-shot only. Ratios are peer median / our median under the same protocol \
          (above one means we are faster); the times tables give each median with its fastest and slowest run. \
          Our marching cubes makes no normals here, as VTK runs with ComputeNormalsOff and the other marching cubes peers make \
-         none; surface nets makes its usual normals, as `fast-surface-nets` does. Threads: our one-thread runs are serial on the \
+         none; surface nets makes its usual normals, as `fast-surface-nets` does, and does not smooth, as no peer does. Threads: our one-thread runs are serial on the \
          experiment's own thread; {} Pool set-ups tried before (the caller as a pool thread, the caller left out, a new pool \
          per call, pinned threads) are described, with what they measured, in `experiments/src/peers/ours.rs`. Each one-shot output is freed when its call returns, so the allocator may hand the \
          next call pages already touched, on both sides; a process's very first call gets fresh pages from the kernel and costs \
@@ -487,6 +522,10 @@ fn section(data: &Data) -> String {
             data.versions.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
         }
     ));
+    if !data.settings.is_empty() {
+        let said: Vec<String> = data.settings.iter().map(|(label, s)| format!("{label}: {s}")).collect();
+        md.push_str(&format!("Our extractors' settings in this run: {}.\n\n", said.join("; ")));
+    }
     if !data.skipped.is_empty() {
         md.push_str("**Skipped peers:** ");
         md.push_str(&data.skipped.join("; "));

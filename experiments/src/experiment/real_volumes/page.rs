@@ -1,0 +1,147 @@
+//! The page's generated prose: the commands that open it, the islands table and its reading,
+//! and the notes comparing marching cubes, dual contouring and the peers, each worded from the
+//! run's data.
+
+use super::islands::{self, Islands};
+use super::{Data, Row};
+use crate::report::markdown_table;
+
+/// What opens the page: the commands that mesh one's own scan, the iso-values and threshold
+/// the data used.
+pub(super) fn own_scan_commands(data: &Data) -> String {
+    let iso = |k: usize| data.levels.get(k).map_or(String::new(), |l| format!("{:.1}", l.iso));
+    let volume = data.second.as_ref().map_or(0, |s| s.volume_index);
+    format!(
+        "**Meshing your own scan.** A volume file (NIfTI `.nii`/`.nii.gz`, NRRD `.nrrd`/`.nhdr`, MetaImage `.mhd`/`.mha`, \
+         or a zarr store) is meshed on its own voxel grid, and the mesh is placed in world coordinates by the file's header \
+         (spacing, origin, direction; RAS as 3D Slicer shows it, or `--space lps`). Inside is above the iso-value (a bright \
+         object); `--inside below` for a dark one. Without `--iso` the run takes Otsu's threshold and says so. The iso-values \
+         below are the ones this page computed for the MNI template:\n\n```sh\n\
+         isolab extract -a marching-cubes -f scan.nii.gz -o scan.glb                 # Otsu's threshold, said on stderr\n\
+         isolab extract -a marching-cubes -f scan.nii.gz --iso {} -o brain.stl      # an iso-value in the file's own units\n\
+         isolab extract -a surface-nets -f scan.nrrd --iso {} -m wm.json -o wm.ply  # with every metric, as in the tables\n\
+         isolab extract -a marching-cubes -f scan.mha --iso {} --post keep-components:largest={} -o one.ply    # the largest part only\n\
+         isolab extract -a marching-cubes -f scan.mha --iso {} --post keep-components:largest={},min-volume={:.0} -o parts.ply  # islands dropped\n\
+         isolab extract -a marching-cubes -f ct.nii.gz --iso {} --inside below -o air.ply   # a dark object: inside below\n\
+         isolab extract -a marching-cubes -f fmri.nii.gz --volume {volume} -o epi.ply             # one volume of a time series\n\
+         ```\n\nFrom Python, the same run on a file or on an array with its affine: \
+         `isolab.extract(\"scan.nii.gz\", {}, post=[\"keep-components:largest={}\"])`, \
+         `isolab.extract(array, {}, affine=img.affine, inside=\"above\")`.\n\n",
+        iso(0),
+        iso(1),
+        iso(0),
+        islands::KEEP_LARGEST,
+        iso(0),
+        islands::KEEP_ANY,
+        islands::MIN_ISLAND_VOXELS,
+        islands::AIR_ISO_HU,
+        iso(0),
+        islands::KEEP_LARGEST,
+        iso(0),
+    )
+}
+
+/// The islands each mesh comes with, and what `keep-components` leaves.
+pub(super) fn islands_section(data: &Data) -> String {
+    let mut s = String::new();
+    let with: Vec<&Row> = data.rows.iter().filter(|r| r.islands.is_some()).collect();
+    if with.is_empty() {
+        return s;
+    }
+    s.push_str(&format!(
+        "**Islands.** An isosurface of a real scan comes in many connected components: noise, vessels and folds cut by the \
+         iso-value. `--post keep-components:largest={},min-volume={:.0}` drops the components enclosing fewer than {:.0} \
+         voxels, `keep-components:largest={}` keeps the largest alone (components ranked by the volume they enclose, with \
+         the post-process's own ranking):\n\n",
+        islands::KEEP_ANY,
+        islands::MIN_ISLAND_VOXELS,
+        islands::MIN_ISLAND_VOXELS,
+        islands::KEEP_LARGEST
+    ));
+    let mut readings = Vec::new();
+    for level in &data.levels {
+        let here: Vec<(&str, &Islands)> = with
+            .iter()
+            .filter(|r| r.level == level.name)
+            .filter_map(|r| Some((r.implementation.as_str(), r.islands.as_ref()?)))
+            .collect();
+        let rows: Vec<Vec<String>> = here
+            .iter()
+            .map(|(name, i)| [vec![level.name.clone(), (*name).to_owned()], islands::cells(i).to_vec()].concat())
+            .collect();
+        let headers: Vec<String> =
+            ["level".to_owned(), "implementation".to_owned()].into_iter().chain(islands::headers()).collect();
+        s.push_str(&markdown_table(&headers.iter().map(String::as_str).collect::<Vec<_>>(), &rows));
+        s.push('\n');
+        readings.extend(islands::reading(&format!("At the {} level", level.name), &here));
+    }
+    s.push_str(&readings.join(" "));
+    s.push_str("\n\n");
+    s
+}
+
+/// What the tables show about marching cubes against the peers, worded from the data.
+pub(super) fn comparison_notes(data: &Data) -> String {
+    let find = |name: &str, level: &str| data.rows.iter().find(|r| r.implementation == name && r.level == level);
+    let mut notes = vec!["Peers in italics.".to_owned()];
+    let same: Vec<bool> = data
+        .levels
+        .iter()
+        .filter_map(|l| Some((find("marching-cubes", &l.name)?, find("vtkFlyingEdges3D", &l.name)?)))
+        .map(|(a, b)| a.vertices == b.vertices && a.triangles == b.triangles)
+        .collect();
+    if !same.is_empty() && same.iter().all(|&s| s) {
+        notes.push(
+            "Our marching cubes and VTK's flying edges make as many vertices and triangles at every level (their vertex \
+             sets and cell polygons are checked equal on a subsampled copy of this template in `tests/reference/`)."
+                .into(),
+        );
+    }
+    for l in &data.levels {
+        if let (Some(mc), Some(fe)) = (find("marching-cubes", &l.name), find("vtkFlyingEdges3D", &l.name)) {
+            if mc.self_intersections > fe.self_intersections {
+                notes.push(format!(
+                    "At the {} level our marching cubes has {} self-intersecting triangle pairs and flying edges {}. The \
+                     pairs we inspected lie within one cell: our table fans a strongly non-planar polygon, whose vertices \
+                     crowd a corner near the iso-value, into triangles that cross (its rule keeps diagonals off the cube's \
+                     faces, not off each other); flying edges triangulates the same polygon without crossing.",
+                    l.name, mc.self_intersections, fe.self_intersections
+                ));
+            }
+        }
+    }
+    for l in &data.levels {
+        if let (Some(dc), Some(mdc)) = (find("dual-contouring", &l.name), find("manifold-dual-contouring", &l.name)) {
+            notes.push(format!(
+                "At the {} level manifold dual contouring has {} self-intersecting pairs against dual contouring's {}, for \
+                 {:.2}x its triangles and {:.2}x its one-thread time; its vertices' mean distance to the trilinear level \
+                 set is {:.3} voxels against {:.3}, lower because it keeps dual contouring's vertices and adds an edge \
+                 point per quad, which lies on the level set.",
+                l.name,
+                mdc.self_intersections,
+                dc.self_intersections,
+                mdc.triangles as f64 / dc.triangles.max(1) as f64,
+                mdc.time_1.median / dc.time_1.median.max(f64::MIN_POSITIVE),
+                mdc.distance_mean,
+                dc.distance_mean
+            ));
+        }
+    }
+    let inward = data
+        .levels
+        .iter()
+        .find_map(|l| find("scikit-image (Lewiner)", &l.name).filter(|r| r.oriented && !r.outward && r.closed).map(|r| (l, r)));
+    if let Some((l, sk)) = inward {
+        notes.push(format!(
+            "scikit-image's Lewiner variant resolves ambiguous cells by the trilinear interpolant and may add a vertex \
+             inside a cell ({} vertices at the {} level), and it winds triangles by its `gradient_direction` (default \
+             `descent`): for a bright object its consistently oriented mesh faces inward.",
+            sk.vertices, l.name
+        ));
+    }
+    notes.join(" ") + "\n\n"
+}
+
+pub(super) fn yes_no(b: bool) -> String {
+    if b { "yes" } else { "no" }.into()
+}

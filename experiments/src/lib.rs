@@ -8,6 +8,7 @@
 pub mod alloc_meter;
 pub mod experiment;
 pub mod figures;
+pub mod html;
 pub mod memory;
 pub mod peers;
 pub mod report;

@@ -42,6 +42,16 @@ fn links(md: &str) -> Vec<String> {
         .collect()
 }
 
+/// The relative `href` and `src` targets of an HTML page, without anchors.
+fn html_links(html: &str) -> Vec<String> {
+    ["href=\"", "src=\""]
+        .iter()
+        .flat_map(|attr| html.split(attr).skip(1).filter_map(|rest| rest.split('"').next()))
+        .map(|t| t.split('#').next().unwrap_or("").to_owned())
+        .filter(|t| !t.is_empty() && !t.contains("://") && !t.starts_with("data:"))
+        .collect()
+}
+
 /// The front page's list of the registered extractors ("compares isolab's N extractors (...)
 /// on"), cut out: it follows the registry, which the tests check directly, so that registering an
 /// extractor needs no reassembly for the committed pages to match.
@@ -59,7 +69,7 @@ fn without_registry_list(text: &str) -> String {
 #[test]
 fn pages_assemble_from_the_committed_data_and_match_what_is_committed() {
     let tmp = assembled();
-    let mut names: Vec<String> = all().iter().map(|e| format!("{}.md", e.name())).collect();
+    let mut names: Vec<String> = all().iter().flat_map(|e| [format!("{}.md", e.name()), format!("{}.html", e.name())]).collect();
     names.extend(["REPORT.md", "index.html", "viewer.js"].map(String::from));
     for name in &names {
         let fresh = std::fs::read_to_string(tmp.path().join(name)).expect("assembled page");
@@ -70,7 +80,7 @@ fn pages_assemble_from_the_committed_data_and_match_what_is_committed() {
             without_registry_list(&fresh) == without_registry_list(&committed),
             "report/{name} is stale: rerun `--bin report -- --assemble-only` and commit it"
         );
-        for target in links(&fresh) {
+        for target in links(&fresh).into_iter().chain(html_links(&fresh)) {
             assert!(report_dir().join(&target).exists(), "{name}: link to '{target}', which does not exist");
         }
     }
@@ -209,7 +219,9 @@ const REFERENCES: [&str; 12] =
 
 /// The typed numbers of one literal: the numbers of its words that are not names (a word that
 /// starts with a letter or a placeholder: `log10`, `x86_64`, `i7-11700`, `{n}^3`), references into
-/// a paper (`Table 2`, `Figs. 7-10`) or years of a citation (`Costen (2026)`, `Svoboda 2020`).
+/// a paper (`Table 2`, `Figs. 7-10`) or years of a citation (`Costen (2026)`, `Svoboda 2020`). A
+/// word that starts with a letter is a number all the same when it is a multiple (`x52`) or holds
+/// a decimal (`h0.5`, `AR1.34`), except a version (`v1.2`).
 fn typed_numbers(text: &str) -> Vec<String> {
     let t = without_placeholders(text);
     let chars: Vec<char> = t.chars().collect();
@@ -227,6 +239,10 @@ fn typed_numbers(text: &str) -> Vec<String> {
         }
         let word: String = chars[start..k].iter().collect();
         let first = word.trim_start_matches(['.', '-', '\'']).chars().next().unwrap_or(' ');
+        if first.is_alphabetic() {
+            found.extend(letter_initial_numbers(&word));
+            continue;
+        }
         if !first.is_ascii_digit() || word.starts_with("3D") || word.starts_with("2D") {
             continue;
         }
@@ -255,11 +271,47 @@ fn typed_numbers(text: &str) -> Vec<String> {
     found
 }
 
+/// The numbers a word that starts with a letter types: those after a multiplication sign's `x`
+/// (`x52`, `x1.5`) and decimals after letters (`h0.5`, `AR1.34`); none from names (`f32`,
+/// `MNI152`, `x86_64`) or versions (`v1.2`).
+fn letter_initial_numbers(word: &str) -> Vec<String> {
+    let lead: String = word.chars().take_while(|c| c.is_alphabetic() || *c == '_').collect();
+    let rest = &word[lead.len()..];
+    let number: String = rest.chars().take_while(|c| c.is_ascii_digit() || *c == '.').collect();
+    let number = number.trim_end_matches('.');
+    let tail = &rest[number.len()..];
+    if number.is_empty() || lead.eq_ignore_ascii_case("v") || tail.starts_with('_') {
+        return Vec::new();
+    }
+    let multiple = lead == "x" && (tail.is_empty() || !tail.starts_with(|c: char| c.is_ascii_alphanumeric()));
+    let decimal = number.contains('.') && !tail.starts_with('.');
+    if multiple || decimal {
+        vec![number.to_owned()]
+    } else {
+        Vec::new()
+    }
+}
+
+/// Words that state a comparison; a sentence with one of them typed without a placeholder states
+/// a verdict no data chose.
+const COMPARISONS: [&str; 9] = ["faster", "slower", "better", "worse", "above", "below", "matches", "reproduced", "reproduces"];
+
+/// Whether a literal is a typed comparison: a sentence (six words or more) with a comparison word
+/// and no placeholder, so that no number or choice from the data is in it.
+fn typed_comparison(text: &str) -> Option<&'static str> {
+    if text.contains('{') || text.split_whitespace().count() < 6 {
+        return None;
+    }
+    let words: Vec<String> =
+        text.split(|c: char| !c.is_alphanumeric()).filter(|w| !w.is_empty()).map(str::to_lowercase).collect();
+    COMPARISONS.iter().copied().find(|c| words.iter().any(|w| w == c))
+}
+
 /// Reviewed literals whose numbers are not measurements: (file, fragment of the literal, why).
 const REVIEWED: &[(&str, &str, &str)] = &[
-    ("compare_algorithms.rs", "(1 is ideal)", "a plot axis: the measure's ideal value, by its definition"),
+    ("compare_algorithms/mod.rs", "(1 is ideal)", "a plot axis: the measure's ideal value, by its definition"),
     (
-        "compare_algorithms.rs",
+        "compare_algorithms/mod.rs",
         "when GPUs shade 2x2 quads",
         "how GPUs shade (2x2 pixel quads) and the measure's ideal value, by definition",
     ),
@@ -289,6 +341,73 @@ const REVIEWED: &[(&str, &str, &str)] = &[
         "scaling.rs",
         "A slope near 1 means",
         "the slopes that cost proportional to cells (1) and to surface area (2/3) have, by definition",
+    ),
+];
+
+#[test]
+fn the_detectors_catch_what_they_look_for() {
+    assert_eq!(typed_numbers("runs x52 faster with h0.5 and AR1.34"), ["52", "0.5", "1.34"]);
+    assert!(
+        typed_numbers("f32 samples, MNI152, x86_64, v1.2, log10 and u8").is_empty(),
+        "{:?}",
+        typed_numbers("f32 MNI152 x86_64 v1.2")
+    );
+    assert_eq!(typed_comparison("our marching cubes is faster than VTK on every grid"), Some("faster"));
+    assert_eq!(typed_comparison("at {n} cells ours is faster than VTK"), None);
+    assert_eq!(typed_comparison("faster"), None);
+}
+
+#[test]
+fn no_comparison_is_typed_into_the_experiments_prose() {
+    let dir = workspace().join("experiments/src/experiment");
+    let mut typed = Vec::new();
+    for path in experiment_sources(&dir) {
+        let src = std::fs::read_to_string(&path).expect("source");
+        let rel = path.strip_prefix(&dir).unwrap_or(&path).to_string_lossy().into_owned();
+        for lit in string_literals(&src) {
+            let Some(word) = typed_comparison(&lit.text) else { continue };
+            if REVIEWED_COMPARISONS.iter().any(|(f, frag, _)| *f == rel && lit.text.contains(frag)) {
+                continue;
+            }
+            typed.push(format!("{rel}:{}: \"{word}\" in {:?}", lit.line, lit.text.chars().take(120).collect::<String>()));
+        }
+    }
+    assert!(
+        typed.is_empty(),
+        "{} literals state a comparison no data chose; generate it from the numbers it compares, or review it:\n{}",
+        typed.len(),
+        typed.join("\n")
+    );
+}
+
+/// The experiments' sources that write the report (tests apart).
+fn experiment_sources(dir: &std::path::Path) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).expect("experiment sources") {
+            let path = entry.expect("entry").path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.extension().is_some_and(|e| e == "rs") && path.file_name().is_some_and(|n| n != "tests.rs") {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
+/// Reviewed literals that state a comparison without data: (file, fragment, why it is not a
+/// verdict).
+const REVIEWED_COMPARISONS: &[(&str, &str, &str)] = &[
+    ("real_volumes/mod.rs", "the voxels above the first level", "a place (the voxels brighter than a level), not a verdict"),
+    ("real_volumes/mod.rs", "above one when isolab is", "how to read the ratio column, by its definition"),
+    ("stuart_tables/checks.rs", "from the rows above", "a place on the page"),
+    (
+        "stuart_tables/table_two.rs",
+        "claim of the fewest elements is not reproduced",
+        "the branch taken when the data counts CGAL fewer on some model (`ours_fewer > 0`)",
     ),
 ];
 

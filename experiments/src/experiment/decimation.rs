@@ -15,6 +15,7 @@
 //! A decimator that is not installed is listed as not run, with the reason.
 
 use super::context::{load_object, Context, Experiment, ExperimentError};
+use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
 use crate::peers::python::{PythonPeer, PythonServer};
 use crate::peers::{Job, Peer, Protocol};
 use crate::report::{markdown_table, median};
@@ -263,6 +264,8 @@ impl Experiment for Decimation {
              self-intersection test (the default) and without it (`intersections=allow`). Median of {} runs.\n\n",
             data.repeats
         ));
+        md.push_str(&reading(&data.rows));
+        md.push_str(&figure(ctx, &data.rows)?);
         let body: Vec<Vec<String>> = data
             .rows
             .iter()
@@ -306,5 +309,177 @@ impl Experiment for Decimation {
             md.push('\n');
         }
         Ok(md)
+    }
+}
+
+/// The page's figure, drawn at assembly from the rows: each decimator's Hausdorff distance
+/// against its time, one point per input and target.
+fn figure(ctx: &Context, rows: &[Row]) -> Result<String, ExperimentError> {
+    let mut decimators: Vec<&str> = Vec::new();
+    for r in rows {
+        if !decimators.contains(&r.decimator.as_str()) {
+            decimators.push(&r.decimator);
+        }
+    }
+    if decimators.is_empty() {
+        return Ok(String::new());
+    }
+    let series = decimators
+        .iter()
+        .enumerate()
+        .map(|(k, d)| (d, crate::figures::series_color(k)))
+        .map(|(d, color)| Series {
+            label: (*d).to_owned(),
+            color,
+            points: rows.iter().filter(|r| r.decimator == *d).map(|r| (r.ms, r.hausdorff_h)).collect(),
+        })
+        .collect();
+    let chart = XyPlot {
+        title: "Distance to the input against time, every input and target".into(),
+        x_label: "time, ms".into(),
+        y_label: "Hausdorff distance to the input, grid spacings".into(),
+        x_scale: Scale::Log,
+        y_scale: Scale::Linear,
+        style: Style::Scatter,
+        series,
+    };
+    let stem = ctx.figure_dir(NAME)?.join("distance-time");
+    plot::xy(&stem, &chart).map_err(ExperimentError::Figure)?;
+    Ok(format!(
+        "![Distance to the input against time]({})\n\n_Each point is one decimator on one input and target; lower and to \
+         the left is better._\n\n",
+        ctx.link(&stem.with_extension("png"))
+    ))
+}
+
+/// A decimator's mean aspect ratio on an input this many times the median of the others' is
+/// called out as unexplained.
+const OUTLIER_FACTOR: f64 = 5.0;
+
+/// What the table shows, worded from its rows: who keeps every mesh clean, who comes nearest the
+/// input (Hausdorff) and makes the best-shaped triangles most often, the median times, and the
+/// outliers nobody explained.
+fn reading(rows: &[Row]) -> String {
+    let mut decimators: Vec<&str> = Vec::new();
+    let mut cases: Vec<(&str, usize)> = Vec::new();
+    for r in rows {
+        if !decimators.contains(&r.decimator.as_str()) {
+            decimators.push(&r.decimator);
+        }
+        if !cases.contains(&(r.object.as_str(), r.target)) {
+            cases.push((&r.object, r.target));
+        }
+    }
+    if rows.is_empty() {
+        return String::new();
+    }
+    let of = |d: &str| rows.iter().filter(move |r| r.decimator == d).collect::<Vec<_>>();
+    let clean: Vec<&str> =
+        decimators.iter().copied().filter(|d| of(d).iter().all(|r| r.manifold && r.self_intersections == 0)).collect();
+    let unclean: Vec<String> = decimators
+        .iter()
+        .filter(|d| !clean.contains(d))
+        .map(|d| {
+            let rs = of(d);
+            format!(
+                "{d} ({} of {} not closed manifold, {} self-intersecting pairs in all)",
+                rs.iter().filter(|r| !r.manifold).count(),
+                rs.len(),
+                rs.iter().map(|r| r.self_intersections).sum::<usize>()
+            )
+        })
+        .collect();
+    let mut lines = Vec::new();
+    if !clean.is_empty() {
+        lines.push(format!("Closed, manifold and free of self-intersections on every input: {}.", clean.join(", ")));
+    }
+    if !unclean.is_empty() {
+        lines.push(format!("Not always: {}.", unclean.join("; ")));
+    }
+    let wins = |better: &dyn Fn(&Row, &Row) -> bool| -> Vec<(String, usize)> {
+        let mut count: Vec<(String, usize)> = decimators.iter().map(|d| (d.to_string(), 0)).collect();
+        for (object, target) in &cases {
+            let here: Vec<&Row> = rows.iter().filter(|r| r.object == *object && r.target == *target).collect();
+            if let Some(best) = here.iter().copied().reduce(|a, b| if better(b, a) { b } else { a }) {
+                if let Some(c) = count.iter_mut().find(|(d, _)| *d == best.decimator) {
+                    c.1 += 1;
+                }
+            }
+        }
+        count.retain(|(_, n)| *n > 0);
+        count.sort_by_key(|c| std::cmp::Reverse(c.1));
+        count
+    };
+    let said = |w: Vec<(String, usize)>| w.iter().map(|(d, n)| format!("{d} {n}")).collect::<Vec<_>>().join(", ");
+    lines.push(format!(
+        "Nearest the input (least Hausdorff distance), cases won of {}: {}.",
+        cases.len(),
+        said(wins(&|a, b| a.hausdorff_h < b.hausdorff_h))
+    ));
+    lines.push(format!(
+        "Best-shaped triangles (least mean aspect ratio), cases won of {}: {}.",
+        cases.len(),
+        said(wins(&|a, b| a.aspect_mean < b.aspect_mean))
+    ));
+    let median_ms: Vec<String> = decimators
+        .iter()
+        .map(|d| format!("{d} {}", super::context::ms(crate::report::Spread::of(of(d).iter().map(|r| r.ms).collect()).median)))
+        .collect();
+    lines.push(format!("Median time over the cases, ms: {}.", median_ms.join(", ")));
+    for (object, target) in &cases {
+        let here: Vec<&Row> = rows.iter().filter(|r| r.object == *object && r.target == *target).collect();
+        for r in &here {
+            let others =
+                crate::report::Spread::of(here.iter().filter(|o| o.decimator != r.decimator).map(|o| o.aspect_mean).collect())
+                    .median;
+            if r.aspect_mean > OUTLIER_FACTOR * others {
+                lines.push(format!(
+                    "On {object} at {target} triangles, {}'s mean aspect ratio is {:.1} against the others' median {:.2}, its \
+                     minimum angle {:.1}° (unexplained).",
+                    r.decimator, r.aspect_mean, others, r.min_angle_deg
+                ));
+            }
+        }
+    }
+    format!("**Reading.** {}\n\n", lines.join(" "))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(object: &str, decimator: &str, hausdorff_h: f64, aspect_mean: f64, manifold: bool, self_intersections: usize) -> Row {
+        Row {
+            object: object.into(),
+            input_triangles: 100,
+            target: 25,
+            decimator: decimator.into(),
+            triangles: 25,
+            aspect_mean,
+            min_angle_deg: 1.0,
+            degenerate: 0,
+            hausdorff_h,
+            manifold,
+            self_intersections,
+            ms: 1.0,
+        }
+    }
+
+    #[test]
+    fn the_reading_follows_the_rows() {
+        let rows = vec![
+            row("sphere", "a", 0.1, 1.2, true, 0),
+            row("sphere", "b", 0.2, 1.1, true, 2),
+            row("sphere", "c", 0.3, 30.0, true, 0),
+            row("bunny", "a", 0.4, 1.3, true, 0),
+            row("bunny", "b", 0.1, 1.4, false, 0),
+            row("bunny", "c", 0.5, 1.5, true, 0),
+        ];
+        let r = reading(&rows);
+        assert!(r.contains("free of self-intersections on every input: a, c."), "{r}");
+        assert!(r.contains("b (1 of 2 not closed manifold, 2 self-intersecting pairs in all)"), "{r}");
+        assert!(r.contains("least Hausdorff distance), cases won of 2: a 1, b 1."), "{r}");
+        assert!(r.contains("least mean aspect ratio), cases won of 2: a 1, b 1."), "{r}");
+        assert!(r.contains("On sphere at 25 triangles, c's mean aspect ratio is 30.0"), "{r}");
     }
 }

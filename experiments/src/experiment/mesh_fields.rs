@@ -16,6 +16,8 @@
 //! samples (the mesh must be the same, bit for bit).
 
 use super::context::{Context, Experiment, ExperimentError};
+use crate::figures::plot::{self, BarChart, BarSeries};
+use crate::figures::series_color;
 use crate::peers::python::PythonServer;
 use crate::report::{markdown_table, Spread};
 use isolab_algorithms::fields::{MeshField, CAP_WINDING_BOUND, CROSSING_TOLERANCE, DEFAULT_BAND_CELLS};
@@ -185,8 +187,46 @@ impl Experiment for MeshFields {
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
-        Ok(section(&ctx.read_data(NAME)?))
+        let data: Data = ctx.read_data(NAME)?;
+        Ok(section(&data) + &figure(ctx, &data)?)
     }
+}
+
+/// The page's figure, drawn at assembly from the data: each model's time for our narrow band, our
+/// exact sampling and libigl's signed distance.
+fn figure(ctx: &Context, data: &Data) -> Result<String, ExperimentError> {
+    if data.rows.is_empty() {
+        return Ok(String::new());
+    }
+    let medians = |f: &dyn Fn(&Row) -> Option<f64>| data.rows.iter().map(|r| f(r).unwrap_or(f64::NAN)).collect::<Vec<f64>>();
+    let mut series = vec![
+        BarSeries {
+            label: "isolab, narrow band".into(),
+            color: series_color(0),
+            values: medians(&|r| Some(r.narrow_band.median)),
+        },
+        BarSeries { label: "isolab, exact".into(), color: series_color(1), values: medians(&|r| Some(r.exact.median)) },
+    ];
+    if data.rows.iter().any(|r| r.libigl.is_some()) {
+        series.push(BarSeries {
+            label: "libigl signed_distance".into(),
+            color: series_color(2),
+            values: medians(&|r| r.libigl.as_ref().map(|s| s.median)),
+        });
+    }
+    let chart = BarChart {
+        title: format!("A mesh to {} samples a side of signed distance", data.resolution),
+        y_label: "time, ms (median)".into(),
+        categories: data.rows.iter().map(|r| r.model.clone()).collect(),
+        series,
+    };
+    let stem = ctx.figure_dir(NAME)?.join("time");
+    plot::bars(&stem, &chart).map_err(ExperimentError::Figure)?;
+    Ok(format!(
+        "\n![time per model]({})\n\n_Each model's median time, {} threads on each side._\n",
+        ctx.link(&stem.with_extension("png")),
+        data.threads
+    ))
 }
 
 /// Wall time of `f`, ms.

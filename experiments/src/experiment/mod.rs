@@ -75,6 +75,8 @@ pub fn assemble(ctx: &Context) -> Result<PathBuf, ExperimentError> {
         let page = format!("[isolab report](REPORT.md) › {title}\n\n{}", promote_headings(&section).trim_end()) + "\n";
         let path = ctx.report_dir.join(format!("{}.md", e.name()));
         write_atomic(&path, |w| std::io::Write::write_all(w, page.as_bytes()))?;
+        let html = crate::html::html_page(&title, &page);
+        write_atomic(&ctx.report_dir.join(format!("{}.html", e.name())), |w| std::io::Write::write_all(w, html.as_bytes()))?;
         pages.push((e.name(), title, e.question()));
     }
     let md = front_page(ctx, &pages);

@@ -179,9 +179,7 @@ pub const SCRIPT: &str = include_str!("viewer.js");
 pub fn page(ctx: &Context, front_md: &str) -> String {
     let data: Data = ctx.read_data(NAME).unwrap_or_default();
     let meshes = serde_json::to_string(&data.meshes).unwrap_or_else(|_| "[]".into()).replace("</", "<\\/");
-    let mut body = String::new();
-    let options = pulldown_cmark::Options::ENABLE_TABLES;
-    pulldown_cmark::html::push_html(&mut body, pulldown_cmark::Parser::new_ext(front_md, options));
+    let body = crate::html::markdown_to_html(front_md);
     TEMPLATE.replacen("%MESHES%", &meshes, 1).replacen("%BODY%", &body, 1)
 }
 

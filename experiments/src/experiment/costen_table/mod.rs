@@ -22,6 +22,7 @@ use serde::{Deserialize, Serialize};
 use std::time::Duration;
 
 mod ablations;
+mod counts;
 mod ferreus;
 mod figures;
 mod passes;
@@ -441,6 +442,7 @@ fn section(ctx: &Context, data: &Data) -> String {
         &["ID", "N_tetrahedra", "N_vertices", "N_triangles", "N_discarded", "F_discard", "removed", "F_tetrahedra"],
         &body,
     ));
+    md.push_str(&counts::count_ratios(rows, |id| paper(id).copied()));
     md.push_str("\n### Times (ms)\n\n");
     let body: Vec<Vec<String>> = rows
         .iter()

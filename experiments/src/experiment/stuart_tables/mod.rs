@@ -200,13 +200,16 @@ pub struct Ablation {
     pub encloses: bool,
 }
 
+/// The ablation's variant that runs the paper's update alone (the front page cites it).
+pub(crate) const NO_FLOOR_VARIANT: &str = "the paper's update (no quality floor)";
+
 /// The variants of the ablation (one unperturbed lattice at the Table 2 configuration).
 fn variants() -> Vec<(String, SculptOptions)> {
     let base = SculptOptions { cells: TABLE2_CELLS, offset_ratio: TABLE2_RATIO, perturbations: 1, ..Default::default() };
     let c = ABLATION_CLEARANCE;
     vec![
         (format!("default (the paper's update + {}° quality floor)", base.quality_floor), base),
-        ("the paper's update (no quality floor)".into(), SculptOptions { quality_floor: 0.0, ..base }),
+        (NO_FLOOR_VARIANT.into(), SculptOptions { quality_floor: 0.0, ..base }),
         (format!("default + clearance={c}"), SculptOptions { clearance: c, ..base }),
         ("default + attract=true".into(), SculptOptions { attract: true, ..base }),
         (format!("default + clearance={c} + attract=true"), SculptOptions { clearance: c, attract: true, ..base }),

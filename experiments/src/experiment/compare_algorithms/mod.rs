@@ -14,6 +14,8 @@ use isolab_metrics::Histogram;
 use isolab_pipeline::{lattice_for, load_field, RunConfig};
 use serde::{Deserialize, Serialize};
 
+mod reading;
+
 /// The experiment.
 pub struct CompareAlgorithms;
 
@@ -420,6 +422,7 @@ fn section(data: &Data) -> String {
          invocations per covered pixel when GPUs shade 2x2 quads ({}x{}, early depth test; 1 is ideal).\n\n",
         data.field_levels, data.model_levels, data.repeats, view.width, view.height
     ));
+    s.push_str(&reading::reading(data));
     s.push_str("### At a glance (middle resolution, every field and model)\n\n");
     s.push_str(&summary(data));
     s.push_str("\n### At the middle resolution\n\n");

@@ -43,7 +43,7 @@ fn escape(text: &str) -> String {
 pub fn html_page(title: &str, md: &str) -> String {
     format!(
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n{}</body>\n</html>\n",
-        escape(title),
+        escape(&title.replace('`', "")),
         markdown_to_html(md)
     )
 }
@@ -69,5 +69,6 @@ mod tests {
         assert!(html.contains("href=\"https://example.org/a.md\""), "{html}");
         assert!(html.contains("<img src=\"figures/x.png\" alt=\"chart\""), "{html}");
         assert!(html.contains("<table>") && html.contains("<title>A &lt;page&gt;</title>"), "{html}");
+        assert!(html_page("Peers (`peers`)", "").contains("<title>Peers (peers)</title>"));
     }
 }

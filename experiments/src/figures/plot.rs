@@ -154,8 +154,8 @@ impl Ranged for Axis {
 }
 
 /// Ticks (in `log10` units) between `lo` and `hi` at round values: the densest of every decade,
-/// 1-2-5 times a decade, or 1 to 9 times a decade that gives at most `max` ticks (every n-th
-/// decade when even the decades are too many).
+/// 1-2-5 times a decade, or (within one decade) 1 to 9 times a decade that gives at most `max`
+/// ticks (every n-th decade when even the decades are too many).
 fn log_ticks(lo: f64, hi: f64, max: usize) -> Vec<f64> {
     let max = max.max(2);
     let within = |mantissas: &[f64]| -> Vec<f64> {
@@ -166,8 +166,10 @@ fn log_ticks(lo: f64, hi: f64, max: usize) -> Vec<f64> {
             .collect()
     };
     let sets: [&[f64]; 3] = [&[1.0], &[1.0, 2.0, 5.0], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]];
+    // Every integer mantissa only within one decade: across more, 7, 8 and 9 crowd each other.
+    let usable = if hi - lo < 1.0 { 3 } else { 2 };
     let mut best = within(sets[0]);
-    for set in &sets[1..] {
+    for set in &sets[1..usable] {
         let ticks = within(set);
         if ticks.len() <= max {
             best = ticks;
@@ -546,6 +548,7 @@ mod tests {
         assert_eq!(values(12.0, 45.0, 4), ["20", "30", "40"]);
         assert_eq!(values(0.5, 300.0, 6), ["1", "10", "100"]);
         assert_eq!(values(0.5, 300.0, 12), ["0.5", "1", "2", "5", "10", "20", "50", "100", "200"]);
+        assert_eq!(values(16.0, 256.0, 20), ["20", "50", "100", "200"], "more than a decade: no crowding 7-8-9");
         assert_eq!(values(1.0, 1e9, 4), ["1", "1000", "1e6", "1e9"]);
     }
 

@@ -43,7 +43,7 @@ pub struct BlockPlan {
 impl BlockPlan {
     /// The plan for `extractor` on a volume of `dims` samples, or an error saying why it cannot
     /// mesh in blocks (an extractor that cannot chunk, a chunk under 2 cells, a volume under 2
-    /// samples or above 2²⁴ on an axis: the checks [`chunk_counts`] makes, without asking the
+    /// samples or above 2²⁴ on an axis: the checks [`chunk_counts`](super::chunk_counts) makes, without asking the
     /// chunk to divide the volume).
     pub fn new(extractor: &dyn Extractor, dims: [usize; 3], chunk: usize) -> Result<BlockPlan, ExtractError> {
         let algorithm = extractor.name();
@@ -165,7 +165,7 @@ pub fn mesh_block(
 
 /// Welds fragments, given in the plan's block order, into `out` (cleared first): vertices with
 /// the same key become one (the first fragment's position and normal kept), as
-/// [`extract_chunked`] welds its chunks.
+/// [`extract_chunked`](super::extract_chunked) welds its chunks.
 pub fn weld_fragments<'a>(fragments: impl IntoIterator<Item = &'a Fragment>, out: &mut Extraction) -> ChunkStats {
     out.clear();
     let mut stats = ChunkStats::default();

@@ -211,7 +211,7 @@ pub type SliceReader<'a> = dyn FnMut(usize, &mut Vec<f32>) -> Result<(), String>
 /// value is below `iso`) and is asked for each slice once, in order. Each layer of blocks along z
 /// is meshed in parallel ([`mesh_block`], the extractor's apron included) and welded onto the
 /// previous layer's top face by the fragments' keys, in the plan's order: the mesh written is
-/// [`weld_fragments`] of every block's fragment (same vertices in the same order, same
+/// [`weld_fragments`](super::blocks::weld_fragments) of every block's fragment (same vertices in the same order, same
 /// triangles; tested), with `map` applied to each vertex (index coordinates to the world) and
 /// the winding reversed when `mirror`. Memory: the slices one layer of blocks reads, one copy of
 /// them in blocks, one layer's meshes and one face of seam keys. `progress(done, total)` is

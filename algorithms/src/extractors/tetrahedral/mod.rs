@@ -9,12 +9,12 @@
 //! Two ways to fill space with tetrahedra, both with **14 neighbours per sample** (so per-edge
 //! flags fit 16 bits and every sample's star is 24 tetrahedra whose link is a triangulated sphere
 //! of 14 vertices, 36 edges and 24 triangles):
-//! - [`TetKind::Bcc`] on a [`Lattice::Bcc`]: the body-centred cubic lattice (the paper's "BCDL").
+//! - [`TetKind::Bcc`] on a [`Lattice::Bcc`](crate::lattice::Lattice::Bcc): the body-centred cubic lattice (the paper's "BCDL").
 //!   Each tetrahedron joins two neighbouring cell centres (a long edge of the centre grid) and a
 //!   corner-grid edge of the face between them (a long edge of the corner grid), so it has two long
 //!   edges (length h) and four short ones (h√3/2), dihedral angles of 60 and 90 degrees, and every
 //!   tetrahedron is congruent. Twelve tetrahedra per cell (24 touch a cell, each shared by two).
-//! - [`TetKind::Kuhn`] on a [`Lattice::Cubic`]: six congruent tetrahedra around each cube's main
+//! - [`TetKind::Kuhn`] on a [`Lattice::Cubic`](crate::lattice::Lattice::Cubic): six congruent tetrahedra around each cube's main
 //!   diagonal from `(0,0,0)` to `(1,1,1)`, cut in the same direction on opposite faces (the
 //!   Kuhn / Freudenthal split, the paper's Fig. 19 "simple cubic"), so neighbouring cubes agree
 //!   on every face without mirroring.

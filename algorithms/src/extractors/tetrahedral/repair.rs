@@ -61,7 +61,7 @@ pub fn unmerge_and_regenerate(samples: &Samples, scratch: &mut TetScratch, out: 
 }
 
 /// After repairs: drops vertices no triangle uses (renumbering the rest in order). `used` is a
-/// buffer for the renumbering, kept by the caller. Normals come after ([`compute_normals`]).
+/// buffer for the renumbering, kept by the caller. Normals come after ([`compute_normals`](super::engine::compute_normals)).
 pub fn finish_repair(out: &mut Extraction, used: &mut Vec<u32>) {
     let mesh = &mut out.surface;
     used.clear();

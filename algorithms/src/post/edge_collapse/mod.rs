@@ -21,7 +21,7 @@
 //!   triangle turns by more than `max-turn` degrees in one collapse or ends facing away from its
 //!   first normal, no surviving triangle of the two fans would meet another triangle beyond the
 //!   vertices and edges they share (the self-intersection metric's rules and exact predicates,
-//!   against the live triangles near the fan, found in a [`TriangleGrid`]; `intersections=allow`
+//!   against the live triangles near the fan, found in a [`TriangleGrid`](crate::post::triangle_grid::TriangleGrid); `intersections=allow`
 //!   skips this test), and parts of [`MIN_PART`] vertices or fewer are left as they are (so a
 //!   small closed part cannot shrink into an inside-out tetrahedron). It stops when the shortest
 //!   edge reaches `threshold × h` or the mesh is down to `target` triangles. The output is

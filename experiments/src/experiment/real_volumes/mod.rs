@@ -20,10 +20,10 @@
 //!
 //! The page opens with the commands that mesh one's own scan (its iso-values the ones computed
 //! here). Every mesh's islands (connected components) are counted with what the
-//! `keep-components` post-process keeps of them ([`islands`]). A second volume of another kind,
+//! `keep-components` post-process keeps of them (`islands.rs`). A second volume of another kind,
 //! nibabel's oblique, anisotropic, int16 fMRI series, is meshed through the pipeline's own run
 //! by every surface extractor, its world placement checked against nibabel's affine
-//! ([`second`]).
+//! (`second.rs`).
 //!
 //! The volumes themselves are not committed (the Python peers' environment installs them);
 //! without them the section says so.

@@ -242,7 +242,7 @@ fn draw_legend_panel<DB: DrawingBackend>(
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     let style = TextStyle::from(("sans-serif", 13).into_font()).color(&BLACK);
     for (i, (label, color, swatch)) in entries.iter().enumerate() {
-        let y = 48 + 20 * i as i32;
+        let y = 24 + 20 * i as i32;
         match *swatch {
             Swatch::Marker(m, line) => {
                 if let Some(dashed) = line {
@@ -281,10 +281,11 @@ fn draw_xy<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, plot: &XyPlot) -> 
     let (y0, y1) =
         padded(all.clone().map(|p| p.1).fold(f64::INFINITY, f64::min), all.map(|p| p.1).fold(f64::NEG_INFINITY, f64::max));
     let labels: Vec<&str> = series.iter().map(|(s, _)| s.label.as_str()).collect();
-    let (w, _) = root.dim_in_pixel();
-    let (plot_area, legend_area) = root.split_horizontally(w - legend_width(&labels));
+    // The title over the whole width (legend panel included), so a long one is not cut.
+    let body = root.titled(&plot.title, ("sans-serif", 20)).map_err(err)?;
+    let (w, _) = body.dim_in_pixel();
+    let (plot_area, legend_area) = body.split_horizontally(w - legend_width(&labels));
     let mut chart = ChartBuilder::on(&plot_area)
-        .caption(&plot.title, ("sans-serif", 20))
         .margin(12)
         .x_label_area_size(44)
         .y_label_area_size(64)
@@ -395,10 +396,11 @@ fn draw_bars<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart_spec: &Bar
         chart_spec.series.iter().flat_map(|s| s.values.iter().copied()).filter(|v| v.is_finite()).fold(0.0, f64::max).max(1e-12)
             * 1.1;
     let labels: Vec<&str> = chart_spec.series.iter().map(|s| s.label.as_str()).collect();
-    let (w, _) = root.dim_in_pixel();
-    let (plot_area, legend_area) = root.split_horizontally(w - legend_width(&labels));
+    // The title over the whole width (legend panel included), so a long one is not cut.
+    let body = root.titled(&chart_spec.title, ("sans-serif", 20)).map_err(err)?;
+    let (w, _) = body.dim_in_pixel();
+    let (plot_area, legend_area) = body.split_horizontally(w - legend_width(&labels));
     let mut chart = ChartBuilder::on(&plot_area)
-        .caption(&chart_spec.title, ("sans-serif", 20))
         .margin(12)
         .x_label_area_size(70)
         .y_label_area_size(70)

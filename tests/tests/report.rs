@@ -380,7 +380,8 @@ fn no_comparison_is_typed_into_the_experiments_prose() {
     );
 }
 
-/// The experiments' sources that write the report (tests apart).
+/// The experiments' sources that write the report (a module's tests in their own `tests.rs`
+/// write nothing into it).
 fn experiment_sources(dir: &std::path::Path) -> Vec<PathBuf> {
     let mut files = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
@@ -414,24 +415,10 @@ const REVIEWED_COMPARISONS: &[(&str, &str, &str)] = &[
 #[test]
 fn no_number_is_typed_into_the_experiments_prose() {
     let dir = workspace().join("experiments/src/experiment");
-    let mut files = Vec::new();
-    let mut stack = vec![dir.clone()];
-    while let Some(d) = stack.pop() {
-        for entry in std::fs::read_dir(&d).expect("experiment sources") {
-            let path = entry.expect("entry").path();
-            if path.is_dir() {
-                stack.push(path);
-            } else if path.extension().is_some_and(|e| e == "rs") && path.file_name().is_some_and(|n| n != "tests.rs") {
-                // A module's tests in their own file write nothing into the report.
-                files.push(path);
-            }
-        }
-    }
-    files.sort();
     let mut typed = Vec::new();
-    for path in &files {
-        let src = std::fs::read_to_string(path).expect("source");
-        let rel = path.strip_prefix(&dir).unwrap_or(path).to_string_lossy().into_owned();
+    for path in experiment_sources(&dir) {
+        let src = std::fs::read_to_string(&path).expect("source");
+        let rel = path.strip_prefix(&dir).unwrap_or(&path).to_string_lossy().into_owned();
         for lit in string_literals(&src) {
             let numbers = typed_numbers(&lit.text);
             if numbers.is_empty() || REVIEWED.iter().any(|(f, frag, _)| *f == rel && lit.text.contains(frag)) {

@@ -17,9 +17,8 @@ fn is_field(name: &str) -> bool {
     fields::registry().iter().any(|f| f.name == name)
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+fn median(v: Vec<f64>) -> f64 {
+    crate::report::Spread::of(v).median
 }
 
 /// The most common value (the first met of the most common).

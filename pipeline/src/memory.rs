@@ -31,7 +31,7 @@ pub fn check_memory_against(lattice: &Lattice, available: Option<u64>) -> Result
 
 /// [`check_memory_against`] with `extra` bytes held beside the lattice (a volume file's data and
 /// values while its samples are made).
-pub(crate) fn check_memory_plus(lattice: &Lattice, extra: u64, available: Option<u64>) -> Result<(), RunError> {
+fn check_memory_plus(lattice: &Lattice, extra: u64, available: Option<u64>) -> Result<(), RunError> {
     let need = lattice.sample_count() as u64 * 4 * 5 + extra;
     match available {
         Some(available) if need > available => Err(RunError::OutOfMemory {
@@ -70,7 +70,7 @@ pub(crate) fn check_volume_size(config: &RunConfig) -> Result<(), RunError> {
 
 /// Bytes a run holds while it reads a volume file of `dims` voxels of `data_bytes` each (the
 /// file's data and its values as f32), besides the lattice.
-pub(crate) fn volume_reading_bytes(dims: [usize; 3], data_bytes: u64) -> u64 {
+fn volume_reading_bytes(dims: [usize; 3], data_bytes: u64) -> u64 {
     dims.iter().map(|&n| n as u64).product::<u64>() * (4 + data_bytes)
 }
 

@@ -315,12 +315,7 @@ impl Experiment for Decimation {
 /// The page's figure, drawn at assembly from the rows: each decimator's Hausdorff distance
 /// against its time, one point per input and target.
 fn figure(ctx: &Context, rows: &[Row]) -> Result<String, ExperimentError> {
-    let mut decimators: Vec<&str> = Vec::new();
-    for r in rows {
-        if !decimators.contains(&r.decimator.as_str()) {
-            decimators.push(&r.decimator);
-        }
-    }
+    let decimators: Vec<&str> = crate::report::first_seen(rows.iter().map(|r| r.decimator.as_str()));
     if decimators.is_empty() {
         return Ok(String::new());
     }
@@ -360,16 +355,8 @@ const OUTLIER_FACTOR: f64 = 5.0;
 /// input (Hausdorff) and makes the best-shaped triangles most often, the median times, and the
 /// outliers nobody explained.
 fn reading(rows: &[Row]) -> String {
-    let mut decimators: Vec<&str> = Vec::new();
-    let mut cases: Vec<(&str, usize)> = Vec::new();
-    for r in rows {
-        if !decimators.contains(&r.decimator.as_str()) {
-            decimators.push(&r.decimator);
-        }
-        if !cases.contains(&(r.object.as_str(), r.target)) {
-            cases.push((&r.object, r.target));
-        }
-    }
+    let decimators: Vec<&str> = crate::report::first_seen(rows.iter().map(|r| r.decimator.as_str()));
+    let cases: Vec<(&str, usize)> = crate::report::first_seen(rows.iter().map(|r| (r.object.as_str(), r.target)));
     if rows.is_empty() {
         return String::new();
     }

@@ -126,12 +126,7 @@ impl Experiment for SharpFeatures {
 fn reading(rows: &[Row]) -> String {
     let Some(finest) = rows.iter().map(|r| r.resolution).max() else { return String::new() };
     let coarsest = rows.iter().map(|r| r.resolution).min().unwrap_or(finest);
-    let mut names: Vec<&str> = Vec::new();
-    for r in rows {
-        if !names.contains(&r.algorithm.as_str()) {
-            names.push(&r.algorithm);
-        }
-    }
+    let names: Vec<&str> = crate::report::first_seen(rows.iter().map(|r| r.algorithm.as_str()));
     let at = |name: &str, n: usize| rows.iter().find(|r| r.algorithm == name && r.resolution == n);
     let keeps: Vec<&str> =
         names.iter().copied().filter(|n| at(n, finest).is_some_and(|r| r.worst_corner_h <= CORNER_KEPT_H)).collect();

@@ -139,12 +139,7 @@ const SECOND_ORDER_TOLERANCE: f64 = 0.25;
 /// slope of its volume error against resolution), which side of the exact volume it stays on,
 /// and the largest error at the finest resolution, with each extractor's settings.
 fn reading(rows: &[Row]) -> String {
-    let mut names: Vec<&str> = Vec::new();
-    for r in rows {
-        if !names.contains(&r.algorithm.as_str()) {
-            names.push(&r.algorithm);
-        }
-    }
+    let names: Vec<&str> = crate::report::first_seen(rows.iter().map(|r| r.algorithm.as_str()));
     fn of<'a>(rows: &'a [Row], name: &'a str) -> impl Iterator<Item = &'a Row> + 'a {
         rows.iter().filter(move |r| r.algorithm == name)
     }

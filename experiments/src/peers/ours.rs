@@ -70,6 +70,11 @@ impl Ours {
         Ours { name, options: options.to_vec(), kept: HashMap::new() }
     }
 
+    /// The extractor's settings in words, as a run on more than one thread builds it.
+    pub fn settings(&self) -> String {
+        self.build(2).map(|e| e.settings()).unwrap_or_default()
+    }
+
     fn build(&self, threads: usize) -> Result<Box<dyn Extractor>, PeerError> {
         let mut options = Options::new();
         for (k, v) in &self.options {

@@ -5,6 +5,7 @@
 
 use super::{leaves_domain, Data, Measured};
 use crate::experiment::context::ms;
+use crate::report::first_seen;
 use isolab_algorithms::fields;
 
 /// Inputs listed by name in a sentence; the rest are counted.
@@ -28,16 +29,8 @@ fn mode<T: PartialEq + Copy>(values: &[T]) -> Option<T> {
 
 /// The reading, three to six sentences.
 pub(super) fn reading(data: &Data) -> String {
-    let mut names: Vec<&str> = Vec::new();
-    let mut inputs: Vec<(&str, usize)> = Vec::new();
-    for r in &data.rows {
-        if !names.contains(&r.algorithm.as_str()) {
-            names.push(&r.algorithm);
-        }
-        if !inputs.contains(&(r.field.as_str(), r.resolution)) {
-            inputs.push((&r.field, r.resolution));
-        }
-    }
+    let names: Vec<&str> = first_seen(data.rows.iter().map(|r| r.algorithm.as_str()));
+    let inputs: Vec<(&str, usize)> = first_seen(data.rows.iter().map(|r| (r.field.as_str(), r.resolution)));
     if data.rows.is_empty() {
         return String::new();
     }

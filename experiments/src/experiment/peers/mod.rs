@@ -124,15 +124,7 @@ const SN_OPTIONS: &[(&str, &str)] = &[("smoothing", "none")];
 fn our_settings() -> Vec<(String, String)> {
     [(OUR_MC, MC, MC_OPTIONS), (OUR_SN, SN, SN_OPTIONS)]
         .iter()
-        .map(|(label, name, options)| {
-            let mut o = isolab_algorithms::Options::new();
-            options.iter().for_each(|(k, v)| {
-                o.set(k, v);
-            });
-            let settings =
-                isolab_algorithms::extractors::build(name, &o).ok().flatten().map(|e| e.settings()).unwrap_or_default();
-            ((*label).to_owned(), settings)
-        })
+        .map(|(label, name, options)| ((*label).to_owned(), Ours::new(name, options).settings()))
         .collect()
 }
 

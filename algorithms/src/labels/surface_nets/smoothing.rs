@@ -3,44 +3,48 @@
 //! of its own, and never out of its cell (kept [`MARGIN`] inside).
 
 use super::Net;
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 
-/// Frisken's constrained smoothing (module doc): Jacobi passes over the net's quad sides.
+/// Frisken's constrained smoothing (module doc): Jacobi passes over the net's quad sides, each a
+/// dense sweep over the vertices in SIMD-width positions (a vertex with no neighbour to follow
+/// keeps its place in both buffers).
 pub(super) fn smooth(net: &mut Net, iterations: usize, relaxation: f32) {
     let (start, next) = followed_neighbours(net);
-    // Only vertices with a neighbour to follow move; the others keep their place in both buffers.
-    let movable: Vec<u32> = (0..net.positions.len() as u32).filter(|&v| start[v as usize + 1] > start[v as usize]).collect();
-    let lows: Vec<Vec3> = movable
-        .iter()
-        .map(|&v| {
-            let c = net.cells[v as usize];
-            Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) + MARGIN
-        })
-        .collect();
-    let mut moved = net.positions.clone();
-    let mut updates = vec![Vec3::ZERO; movable.len()];
+    // Per vertex: the step toward its neighbours' sum (`relaxation / count`, 0 for a fixed
+    // vertex) and the low corner of the box it stays in.
+    let steps: Vec<f32> = start.windows(2).map(|w| if w[1] > w[0] { relaxation / (w[1] - w[0]) as f32 } else { 0.0 }).collect();
+    let lows: Vec<Vec3A> = net.cells.iter().map(|c| Vec3A::new(c[0] as f32, c[1] as f32, c[2] as f32) + MARGIN).collect();
+    let mut positions: Vec<Vec3A> = net.positions.iter().map(|&p| Vec3A::from(p)).collect();
+    let mut moved = positions.clone();
+    let keep = 1.0 - relaxation;
+    let width = Vec3A::splat(1.0 - 2.0 * MARGIN);
     for _ in 0..iterations {
-        let positions = &net.positions;
-        updates.par_chunks_mut(4096).zip(movable.par_chunks(4096)).zip(lows.par_chunks(4096)).for_each(|((out, vs), lows)| {
-            for ((m, &v), &lo) in out.iter_mut().zip(vs).zip(lows) {
-                let around = &next[start[v as usize] as usize..start[v as usize + 1] as usize];
-                let mut sum = Vec3::ZERO;
-                for &w in around {
-                    sum += positions[w as usize];
+        let from = &positions;
+        moved.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
+            for (i, m) in out.iter_mut().enumerate() {
+                let v = c * CHUNK + i;
+                let step = steps[v];
+                if step == 0.0 {
+                    continue;
                 }
-                let x = positions[v as usize];
-                let mean = sum / around.len() as f32;
-                *m = (x + relaxation * (mean - x)).clamp(lo, lo + (1.0 - 2.0 * MARGIN));
+                let mut sum = Vec3A::ZERO;
+                for &w in &next[start[v] as usize..start[v + 1] as usize] {
+                    sum += from[w as usize];
+                }
+                let lo = lows[v];
+                *m = (from[v] * keep + sum * step).clamp(lo, lo + width);
             }
         });
-        for (&v, &u) in movable.iter().zip(&updates) {
-            moved[v as usize] = u;
-        }
-        std::mem::swap(&mut net.positions, &mut moved);
-        // `moved` now holds the previous positions: the fixed vertices are the same in both.
+        std::mem::swap(&mut positions, &mut moved);
+    }
+    for (p, q) in net.positions.iter_mut().zip(&positions) {
+        *p = Vec3::from(*q);
     }
 }
+
+/// Vertices per parallel task of a smoothing pass.
+const CHUNK: usize = 4096;
 
 /// Each vertex's net neighbours (the vertices it shares a quad side with) whose labels include
 /// all of its own, compressed: `next[start[v]..start[v + 1]]`.

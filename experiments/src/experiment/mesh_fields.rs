@@ -271,6 +271,70 @@ fn ms(s: &Spread) -> String {
     format!("{:.0} ({:.0}–{:.0})", s.median, s.min, s.max)
 }
 
+/// The page's opening reading: libigl's time over ours, the target met, where the signs differ
+/// (marked unverified: nobody examined those samples), and whether the narrow band changes the
+/// mesh or its distances.
+fn reading(data: &Data) -> String {
+    let timed: Vec<&Row> = data.rows.iter().filter(|r| r.libigl.is_some()).collect();
+    if data.rows.is_empty() {
+        return String::new();
+    }
+    let mut lines = Vec::new();
+    if !timed.is_empty() {
+        let over = |ours: fn(&Row) -> f64| {
+            Spread::of(timed.iter().map(|r| r.libigl.as_ref().map_or(f64::NAN, |l| l.median) / ours(r)).collect())
+        };
+        let (narrow, exact) = (over(|r| r.narrow_band.median), over(|r| r.exact.median));
+        let met =
+            timed.iter().filter(|r| r.libigl.as_ref().is_some_and(|l| l.median >= TARGET_RATIO * r.narrow_band.median)).count();
+        lines.push(format!(
+            "libigl takes {:.1}x ({:.1}–{:.1}) the time of our narrow band, median over {} models, and {:.1}x ({:.1}–{:.1}) that \
+             of our exact field; the target of {TARGET_RATIO}x is met on {met} of {}.",
+            narrow.median,
+            narrow.min,
+            narrow.max,
+            timed.len(),
+            exact.median,
+            exact.min,
+            exact.max,
+            timed.len()
+        ));
+    }
+    let differing: Vec<String> = data
+        .rows
+        .iter()
+        .filter(|r| r.sign_differs.is_some_and(|n| n > 0))
+        .map(|r| format!("{} ({} samples, {})", r.model, r.sign_differs.unwrap_or(0), mesh_kind(r)))
+        .collect();
+    lines.push(if differing.is_empty() {
+        "Our signs and libigl's agree on every sample of every model.".to_owned()
+    } else {
+        format!(
+            "Signs differing from libigl's, cause unverified: {}; every other model agrees on every sample.",
+            differing.join(", ")
+        )
+    });
+    let unchanged = data.rows.iter().filter(|r| r.mesh_unchanged).count();
+    let from_exact: usize = data.rows.iter().filter_map(|r| r.sign_differs_from_exact).sum();
+    let band = data.rows.iter().filter_map(|r| r.band_difference_h).fold(f64::NAN, f64::max);
+    lines.push(format!(
+        "Marching cubes makes the same mesh from the narrow band as from exact samples on {unchanged} of {} models; \
+         narrow-band signs differing from our exact field: {from_exact} in all; in the band our distances are within \
+         {band:.1e} spacings of libigl's exact ones.",
+        data.rows.len()
+    ));
+    format!("**Reading.** {}\n\n", lines.join(" "))
+}
+
+/// "closed" or "open: capped".
+fn mesh_kind(r: &Row) -> &'static str {
+    match r.closed {
+        Some(true) => "closed",
+        Some(false) => "open: capped",
+        None => "–",
+    }
+}
+
 fn section(data: &Data) -> String {
     let mut md = String::from("## Mesh fields: a triangle mesh as a signed distance field, against libigl\n\n");
     md.push_str(&format!(
@@ -292,6 +356,7 @@ fn section(data: &Data) -> String {
         CROSSING_TOLERANCE,
         data.libigl
     ));
+    md.push_str(&reading(data));
     let body: Vec<Vec<String>> = data
         .rows
         .iter()
@@ -299,7 +364,7 @@ fn section(data: &Data) -> String {
             vec![
                 r.model.clone(),
                 r.triangles.to_string(),
-                r.closed.map_or("–".into(), |c| if c { "closed".into() } else { "open: capped".into() }),
+                mesh_kind(r).into(),
                 format!("{}", r.dims.iter().product::<usize>()),
                 format!("{}", r.in_band),
                 ms(&r.narrow_band),
@@ -351,4 +416,41 @@ fn section(data: &Data) -> String {
         data.rows.len()
     ));
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(model: &str, narrow: f64, libigl: f64, signs: usize, closed: bool) -> Row {
+        Row {
+            model: model.into(),
+            triangles: 1,
+            dims: [1, 1, 1],
+            in_band: 1,
+            narrow_band: Spread::of(vec![narrow]),
+            exact: Spread::of(vec![narrow * 5.0]),
+            libigl: Some(Spread::of(vec![libigl])),
+            sign_differs: Some(signs),
+            band_difference_h: Some(1e-5),
+            fwn_magnitude_h: None,
+            mesh_unchanged: true,
+            closed: Some(closed),
+            sign_differs_from_exact: Some(0),
+        }
+    }
+
+    #[test]
+    fn the_reading_follows_the_rows() {
+        let mut data = Data { resolution: 96, band_cells: 2.0, threads: 2, libigl: "2.5".into(), rows: Vec::new() };
+        assert_eq!(reading(&data), "");
+        data.rows = vec![row("a", 10.0, 300.0, 0, true), row("b", 10.0, 50.0, 4, false)];
+        let r = reading(&data);
+        assert!(r.contains("libigl takes 17.5x (5.0–30.0) the time of our narrow band, median over 2 models"), "{r}");
+        assert!(r.contains("target of 10x is met on 1 of 2."), "{r}");
+        assert!(r.contains("cause unverified: b (4 samples, open: capped)"), "{r}");
+        assert!(r.contains("on 2 of 2 models"), "{r}");
+        data.rows[1].sign_differs = Some(0);
+        assert!(reading(&data).contains("agree on every sample of every model"));
+    }
 }

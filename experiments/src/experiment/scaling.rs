@@ -290,10 +290,70 @@ fn second_thread(data: &Data) -> String {
     if parts.is_empty() {
         return String::new();
     }
-    format!(
-        "**The second thread at {SECOND_THREAD_GRID}³** (target: at least {SECOND_THREAD_TARGET}×): {}.\n\n",
-        parts.join("; ")
-    )
+    format!("The second thread at {SECOND_THREAD_GRID}³ (target: at least {SECOND_THREAD_TARGET}×): {}.", parts.join("; "))
+}
+
+/// The slope of log time against log cells of `name` on thread count number `k` (steady state).
+fn slope(data: &Data, name: &str, k: usize) -> Option<f64> {
+    let pts: Vec<(f64, f64)> =
+        data.rows.iter().filter(|r| r.algorithm == name && r.n >= SLOPE_FROM).map(|r| (r.cells as f64, r.ms[k])).collect();
+    log_slope(&pts)
+}
+
+/// Slopes from this one up read as "grows with the cells", from [`SURFACE_SLOPE_FROM`] up as
+/// "grows with the surface" (whose exponent is 2/3 on the sphere), below as "hardly driven by
+/// the grid".
+const CELLS_SLOPE_FROM: f64 = 0.9;
+/// See [`CELLS_SLOPE_FROM`].
+const SURFACE_SLOPE_FROM: f64 = 0.55;
+
+/// The page's opening reading: what drives each extractor's time (its one-thread slope), the
+/// fastest on the largest grid, and the second thread's target.
+fn reading(data: &Data) -> String {
+    let names = algorithms(data);
+    if names.is_empty() {
+        return String::new();
+    }
+    let mut bands: [Vec<String>; 3] = Default::default();
+    for name in &names {
+        let Some(s) = slope(data, name, 0) else { continue };
+        let band = if s >= CELLS_SLOPE_FROM {
+            0
+        } else if s >= SURFACE_SLOPE_FROM {
+            1
+        } else {
+            2
+        };
+        bands[band].push(format!("{name} {s:.2}"));
+    }
+    let said = |v: &[String]| if v.is_empty() { "none".to_owned() } else { v.join(", ") };
+    let mut lines = vec![format!(
+        "One-thread slopes of log time against log cells: with the cells (from {CELLS_SLOPE_FROM}): {}; with the surface \
+         ({SURFACE_SLOPE_FROM} to {CELLS_SLOPE_FROM}): {}; hardly driven by the grid: {}.",
+        said(&bands[0]),
+        said(&bands[1]),
+        said(&bands[2])
+    )];
+    let largest = data.rows.iter().map(|r| r.n).max().unwrap_or(0);
+    for (k, t) in data.threads.iter().enumerate() {
+        let mut at: Vec<&Row> = data.rows.iter().filter(|r| r.n == largest && r.ms.len() > k).collect();
+        at.sort_by(|a, b| a.ms[k].total_cmp(&b.ms[k]));
+        if let (Some(first), Some(last)) = (at.first(), at.last()) {
+            lines.push(format!(
+                "At {largest}³ on {t} thread{}, steady state: fastest {} ({} ms), slowest {} ({} ms).",
+                if *t == 1 { "" } else { "s" },
+                first.algorithm,
+                super::context::ms(first.ms[k]),
+                last.algorithm,
+                super::context::ms(last.ms[k])
+            ));
+        }
+    }
+    let second = second_thread(data);
+    if !second.is_empty() {
+        lines.push(second);
+    }
+    format!("**Reading.** {}\n\n", lines.join(" "))
 }
 
 fn mib(bytes: usize) -> String {
@@ -323,19 +383,14 @@ fn section(ctx: &Context, data: &Data) -> String {
             None => " (rayon limited to each count by a pool of that size)".to_owned(),
         },
     ));
+    md.push_str(&reading(data));
     // Slopes.
     md.push_str(&format!("### Slopes of log time against log cells ({SLOPE_FROM}³ and up)\n\n"));
     let mut slopes = Vec::new();
     for name in algorithms(data) {
         let mut row = vec![name.clone()];
         for k in 0..threads.len() {
-            let pts: Vec<(f64, f64)> = data
-                .rows
-                .iter()
-                .filter(|r| r.algorithm == name && r.n >= SLOPE_FROM)
-                .map(|r| (r.cells as f64, r.ms[k]))
-                .collect();
-            row.push(log_slope(&pts).map_or("-".into(), |s| format!("{s:.2}")));
+            row.push(slope(data, &name, k).map_or("-".into(), |s| format!("{s:.2}")));
         }
         let largest = data.rows.iter().filter(|r| r.algorithm == name).map(|r| r.n).max().unwrap_or(0);
         row.push(format!("{largest}³"));
@@ -358,7 +413,6 @@ fn section(ctx: &Context, data: &Data) -> String {
             ctx.link(&ctx.report_dir.join("figures").join(NAME).join(format!("time-{t}-threads.png")))
         ));
     }
-    md.push_str(&second_thread(data));
     md.push_str("### Every run\n\n");
     md.push_str(
         "Median (fastest-slowest) per protocol. **One-shot**: a new extractor and a new output every call, as a CLI user or a \
@@ -422,7 +476,51 @@ fn section(ctx: &Context, data: &Data) -> String {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
     use crate::report::log_slope;
+
+    fn row(algorithm: &str, n: usize, ms: [f64; 2]) -> Row {
+        Row {
+            algorithm: algorithm.into(),
+            n,
+            cells: n * n * n,
+            ms: ms.to_vec(),
+            spread: Vec::new(),
+            one_shot_ms: ms.to_vec(),
+            one_shot_spread: Vec::new(),
+            runs: 1,
+            triangles: 0,
+            tetrahedra: 0,
+            floor_ms: 1.0,
+            grid_bytes: 0,
+            output_bytes: 0,
+            peak_bytes: None,
+        }
+    }
+
+    #[test]
+    fn the_reading_follows_the_rows() {
+        let mut data = Data {
+            field: "sphere".into(),
+            threads: vec![1, 2],
+            rows: Vec::new(),
+            skipped: Vec::new(),
+            global_pool_threads: None,
+        };
+        assert_eq!(reading(&data), "");
+        // Time times 8 per doubling (slope 1), times 4 (slope 2/3), times 1 (slope 0).
+        for (k, n) in [64usize, 128, 256].into_iter().enumerate() {
+            let f = k as i32;
+            data.rows.push(row("marching-cubes", n, [8f64.powi(f), 8f64.powi(f) / 2.0]));
+            data.rows.push(row("surface-nets", n, [4f64.powi(f) * 3.0, 4f64.powi(f)]));
+            data.rows.push(row("bcc-sculpt", n, [100.0, 90.0]));
+        }
+        let r = reading(&data);
+        assert!(r.contains("with the cells (from 0.9): marching-cubes 1.00; with the surface (0.55 to 0.9): surface-nets 0.67; hardly driven by the grid: bcc-sculpt 0.00."), "{r}");
+        assert!(r.contains("At 256³ on 1 thread, steady state: fastest surface-nets (48"), "{r}");
+        assert!(r.contains("slowest bcc-sculpt (100 ms)"), "{r}");
+        assert!(r.contains("`marching-cubes` one-shot 2.00×, steady state 2.00×; `surface-nets` one-shot 3.00×"), "{r}");
+    }
 
     #[test]
     fn slopes_of_power_laws() {

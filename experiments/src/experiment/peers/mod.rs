@@ -34,6 +34,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 use wake::Wake;
 
+mod reading;
 mod wake;
 
 /// The experiment.
@@ -514,6 +515,9 @@ fn section(data: &Data) -> String {
             data.versions.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
         }
     ));
+    let mut grids: Vec<(String, usize)> = data.floors.iter().map(|f| (f.field.clone(), f.n)).collect();
+    grids.dedup();
+    md.push_str(&reading::reading(data, &grids));
     if !data.settings.is_empty() {
         let said: Vec<String> = data.settings.iter().map(|(label, s)| format!("{label}: {s}")).collect();
         md.push_str(&format!("Our extractors' settings in this run: {}.\n\n", said.join("; ")));
@@ -523,8 +527,6 @@ fn section(data: &Data) -> String {
         md.push_str(&data.skipped.join("; "));
         md.push_str("\n\n");
     }
-    let mut grids: Vec<(String, usize)> = data.floors.iter().map(|f| (f.field.clone(), f.n)).collect();
-    grids.dedup();
     md.push_str("### Ratios, one-shot (peer time / ours)\n\n");
     md.push_str(&ratio_table(data, &grids, Protocol::OneShot, &one_shot_ratios()));
     md.push_str("\n### Ratios, steady state (peer time / ours)\n\n");

@@ -199,7 +199,7 @@ fn timing_table(data: &Data, environment: &str, threads: usize) -> String {
 /// The sentence for one input: how many times longer each peer takes than ours, one thread.
 fn headline(data: &Data, input: &str, n: usize) -> Option<String> {
     let ours = spread(find(data, "default", OURS, input, n, 1)?).median;
-    let peers: Vec<String> = ["skimage lorensen", "skimage lewiner", "PyMCubes", "zmesh", "VTK flying edges"]
+    let peers: Vec<String> = PEERS
         .iter()
         .filter_map(|p| find(data, "default", p, input, n, 1).map(|r| format!("{p} {:.2}×", spread(r).median / ours)))
         .collect();
@@ -210,6 +210,69 @@ fn headline(data: &Data, input: &str, n: usize) -> Option<String> {
         ms(ours),
         peers.join(", ")
     ))
+}
+
+/// The peers timed on one thread beside ours.
+const PEERS: [&str; 5] = ["skimage lorensen", "skimage lewiner", "PyMCubes", "zmesh", "VTK flying edges"];
+
+/// The page's opening reading: the headline of the largest gyroid and of the MNI template, then
+/// which peers are faster or slower than ours on every input (one thread), and what the second
+/// thread gives ours.
+fn reading(data: &Data) -> String {
+    let all = inputs(data);
+    let mut lines: Vec<String> = all
+        .iter()
+        .filter(|(input, n)| input != "gyroid" || *n == 256)
+        .filter_map(|(input, n)| headline(data, input, *n))
+        .collect();
+    if lines.is_empty() {
+        return String::new();
+    }
+    let ratios = |peer: &str| -> Vec<f64> {
+        all.iter()
+            .filter_map(|(input, n)| {
+                let ours = spread(find(data, "default", OURS, input, *n, 1)?).median;
+                Some(spread(find(data, "default", peer, input, *n, 1)?).median / ours)
+            })
+            .collect()
+    };
+    let (mut faster, mut slower, mut mixed) = (Vec::new(), Vec::new(), Vec::new());
+    for peer in PEERS {
+        let r = ratios(peer);
+        if r.is_empty() {
+            continue;
+        }
+        if r.iter().all(|&x| x < 1.0) {
+            faster.push(peer);
+        } else if r.iter().all(|&x| x > 1.0) {
+            slower.push(peer);
+        } else {
+            mixed.push(peer);
+        }
+    }
+    let said = |v: &[&str]| if v.is_empty() { "none".to_owned() } else { v.join(", ") };
+    lines.push(format!(
+        "Over all {} inputs on one thread, faster than ours on every one: {}; slower on every one: {}; either, by input: {}.",
+        all.len(),
+        said(&faster),
+        said(&slower),
+        said(&mixed)
+    ));
+    let second: Vec<f64> = all
+        .iter()
+        .filter_map(|(input, n)| {
+            let one = spread(find(data, "default", OURS, input, *n, THREADS[0])?).median;
+            Some(one / spread(find(data, "default", OURS, input, *n, THREADS[1])?).median)
+        })
+        .collect();
+    if !second.is_empty() {
+        let s = Spread::of(second);
+        lines.push(format!(
+            "Ours on {} threads: {:.2}× the one-thread speed, median over the inputs ({:.2}–{:.2}).",
+            THREADS[1], s.median, s.min, s.max
+        ));
+    }
+    format!("**Reading.** {}\n\n", lines.join(" "))
 }
 
 fn section(data: &Data) -> String {
@@ -225,20 +288,13 @@ fn section(data: &Data) -> String {
          `experiments/src/experiment/python_users/bench.py`, run in `tests/reference/.venv` after `pip install ./python` \
          of this commit.\n\n",
     ));
+    md.push_str(&reading(data));
     md.push_str(&format!(
         "Rounds: {} per input ({} from {LARGE}³ on). Versions: {}.\n\n",
         data.repeats,
         data.large_repeats,
         data.versions.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
     ));
-    for (input, n) in inputs(data) {
-        if input == "gyroid" && n != 256 {
-            continue;
-        }
-        if let Some(h) = headline(data, &input, n) {
-            md.push_str(&format!("{h}\n\n"));
-        }
-    }
     md.push_str("### One thread\n\n");
     md.push_str(&timing_table(data, "default", THREADS[0]));
     md.push_str("\n![time against samples](figures/python_users/time-gyroid.png)\n\n");
@@ -320,4 +376,53 @@ fn figures(ctx: &Context, data: &Data) -> Result<(), ExperimentError> {
         series,
     };
     plot::xy(&dir.join("time-gyroid"), &chart).map_err(ExperimentError::Figure)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(implementation: &str, input: &str, n: usize, threads: usize, ms: f64) -> Row {
+        Row {
+            implementation: implementation.into(),
+            input: input.into(),
+            n,
+            threads,
+            environment: default_environment(),
+            ms: vec![ms],
+            vertices: 0,
+            triangles: 0,
+            converts: String::new(),
+        }
+    }
+
+    #[test]
+    fn the_reading_follows_the_rows() {
+        let mut data = Data {
+            repeats: 1,
+            large_repeats: 1,
+            versions: BTreeMap::new(),
+            notes: Vec::new(),
+            inputs: Vec::new(),
+            rows: Vec::new(),
+        };
+        assert_eq!(reading(&data), "");
+        data.rows = vec![
+            row(OURS, "gyroid", 256, 1, 100.0),
+            row(OURS, "gyroid", 256, 2, 50.0),
+            row("zmesh", "gyroid", 256, 1, 300.0),
+            row("VTK flying edges", "gyroid", 256, 1, 80.0),
+            row(OURS, "mni", 0, 1, 40.0),
+            row(OURS, "mni", 0, 2, 40.0),
+            row("zmesh", "mni", 0, 1, 60.0),
+            row("VTK flying edges", "mni", 0, 1, 50.0),
+        ];
+        let r = reading(&data);
+        assert!(r.contains("zmesh 3.00×, VTK flying edges 0.80×"), "{r}");
+        assert!(
+            r.contains("faster than ours on every one: none; slower on every one: zmesh; either, by input: VTK flying edges."),
+            "{r}"
+        );
+        assert!(r.contains("2 threads: 1.50× the one-thread speed, median over the inputs (1.00–2.00)"), "{r}");
+    }
 }

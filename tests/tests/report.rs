@@ -115,8 +115,6 @@ fn the_front_page_recommends_for_every_use_case_links_every_page_and_is_short() 
 /// asks for one on every page): this list only shrinks.
 const PAGES_WITHOUT_A_READING: &[&str] = &[
     "costen_table",
-    "distributed",
-    "large_world",
     "real_volumes",
     "stuart_tables",
     "surface_nets_smoothing",

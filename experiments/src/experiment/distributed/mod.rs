@@ -166,6 +166,68 @@ fn yes(b: bool) -> &'static str {
     }
 }
 
+/// The second worker on the largest volume, per block size, with how busy one worker alone keeps
+/// the cores.
+fn two_workers(data: &Data) -> Option<String> {
+    let v = data.volumes.iter().max_by(|a, b| a.mib.total_cmp(&b.mib))?;
+    let ratios: Vec<String> = data
+        .chunks
+        .iter()
+        .filter_map(|&chunk| {
+            let one = runs_of(data, &v.volume, chunk, WORKERS[0]);
+            let two = runs_of(data, &v.volume, chunk, WORKERS[1]);
+            (!one.is_empty() && !two.is_empty()).then(|| {
+                let busy = median(one.iter().map(|r| r.worker_cpu_seconds)) / seconds(&one).median;
+                format!(
+                    "{:.2}× with {chunk}³ blocks (where one worker alone keeps {busy:.2} cores busy: CPU seconds over \
+                     wall seconds)",
+                    seconds(&one).median / seconds(&two).median
+                )
+            })
+        })
+        .collect();
+    (!ratios.is_empty()).then(|| {
+        format!("On the largest volume ({}), {} workers against {}: {}.", v.volume, WORKERS[1], WORKERS[0], ratios.join(", "))
+    })
+}
+
+/// The page's opening reading: the second worker, whether every welded mesh is the one-process
+/// mesh (undisturbed and with a worker killed), the workers' memory against their limit, and the
+/// naive zmesh merge's defects.
+fn reading(data: &Data) -> String {
+    if data.volumes.is_empty() && data.runs.is_empty() {
+        return String::new();
+    }
+    let mut lines: Vec<String> = two_workers(data).into_iter().collect();
+    let n = data.volumes.len();
+    let equal = data.volumes.iter().filter(|v| v.equals_one_process == Some(true)).count();
+    let killed = data.volumes.iter().filter(|v| v.killed_equal).count();
+    let closed = data.volumes.iter().filter(|v| v.topology.closed && v.topology.non_manifold_edges == 0).count();
+    lines.push(format!(
+        "The welded mesh equals the one-process mesh on {equal} of {n} volumes, stays the same with a worker killed \
+         mid-run on {killed} of {n}, and is closed with no non-manifold edge on {closed} of {n}."
+    ));
+    let peak = data.runs.iter().flat_map(|r| r.worker_peak_rss_mib.iter().copied()).fold(0.0f64, f64::max);
+    let restarted = data.runs.iter().filter(|r| r.restarted).count();
+    lines.push(format!(
+        "The largest worker peak is {peak:.0} MiB against the {} MiB limit; runs with a worker restarted: {restarted} of {}.",
+        data.memory_limit_mib,
+        data.runs.len()
+    ));
+    let zmesh: Vec<String> = data
+        .volumes
+        .iter()
+        .filter_map(|v| {
+            let z = v.zmesh.as_ref()?;
+            Some(format!("{} {} boundary and {} non-manifold edges", v.volume, z.boundary_edges, z.non_manifold_edges))
+        })
+        .collect();
+    if !zmesh.is_empty() {
+        lines.push(format!("zmesh's blocks merged naively leave: {}.", zmesh.join("; ")));
+    }
+    format!("**Reading.** {}\n\n", lines.join(" "))
+}
+
 fn section(data: &Data) -> String {
     let mut md = String::from("## Bigger than one machine: zarr volumes on a Dask cluster (`distributed`)\n\n");
     let chunks = data.chunks.iter().map(|c| format!("{c}³")).collect::<Vec<_>>().join(" and ");
@@ -185,6 +247,7 @@ fn section(data: &Data) -> String {
         data.repeats,
         data.versions.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
     ));
+    md.push_str(&reading(data));
     let mut rows = Vec::new();
     for v in &data.volumes {
         for &chunk in &data.chunks {
@@ -232,31 +295,6 @@ fn section(data: &Data) -> String {
         ],
         &rows,
     ));
-    if let Some(v) = data.volumes.iter().max_by(|a, b| a.mib.total_cmp(&b.mib)) {
-        let ratios: Vec<String> = data
-            .chunks
-            .iter()
-            .filter_map(|&chunk| {
-                let one = runs_of(data, &v.volume, chunk, WORKERS[0]);
-                let two = runs_of(data, &v.volume, chunk, WORKERS[1]);
-                (!one.is_empty() && !two.is_empty()).then(|| {
-                    let busy = median(one.iter().map(|r| r.worker_cpu_seconds)) / seconds(&one).median;
-                    format!(
-                        "{:.2}× with {chunk}³ blocks (where one worker alone keeps {busy:.2} cores busy: CPU seconds over \
-                         wall seconds)",
-                        seconds(&one).median / seconds(&two).median
-                    )
-                })
-            })
-            .collect();
-        md.push_str(&format!(
-            "\nOn the largest volume ({}), {} workers against {}: {}.\n",
-            v.volume,
-            WORKERS[1],
-            WORKERS[0],
-            ratios.join(", ")
-        ));
-    }
     let amplification: Vec<String> = data
         .chunks
         .iter()
@@ -397,4 +435,66 @@ fn section(data: &Data) -> String {
         md.push_str(&format!("\nNotes from the run: {}.\n", data.notes.join("; ")));
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(workers: usize, seconds: f64, cpu: f64) -> Run {
+        Run {
+            volume: "v".into(),
+            round: 0,
+            workers,
+            chunk: 128,
+            worker_cpu_seconds: cpu,
+            driver_cpu_seconds: 0.0,
+            seconds,
+            blocks: 10,
+            blocks_per_second: 1.0,
+            worker_peak_rss_mib: vec![100.0, 120.0],
+            restarted: false,
+        }
+    }
+
+    #[test]
+    fn the_reading_follows_the_data() {
+        let volume: Volume = serde_json::from_value(serde_json::json!({
+            "volume": "v", "shape": [1, 1, 1], "dtype": "f4", "mib": 1000.0, "level": 0.0, "inside": "above",
+            "chunk": 128, "weld_seconds": 1.0, "vertices": 1, "triangles": 1,
+            "topology": {"closed": true, "boundary_edges": 0, "non_manifold_edges": 0, "genus": 0, "components": 1},
+            "killed": {"seconds": 1.0, "fragments_before_kill": 1, "worker_replaced": true},
+            "killed_equal": false, "equals_one_process": true,
+            "zmesh": {"seconds": 1.0, "vertices_before_merge": 1, "coincident_vertices_merged": 0, "vertices": 1,
+                      "triangles": 1, "collapsed_triangles": 0, "boundary_edges": 12, "non_manifold_edges": 3, "closed": false}
+        }))
+        .unwrap();
+        let mut data = Data {
+            versions: BTreeMap::new(),
+            notes: Vec::new(),
+            memory_limit_mib: 256,
+            chunks: vec![128],
+            store_chunk: 64,
+            repeats: 1,
+            cores: 2,
+            runs: Vec::new(),
+            volumes: Vec::new(),
+        };
+        assert_eq!(reading(&data), "");
+        data.volumes.push(volume);
+        data.runs = vec![run(1, 8.0, 8.0), run(2, 5.0, 9.0)];
+        let r = reading(&data);
+        assert!(
+            r.contains(
+                "On the largest volume (v), 2 workers against 1: 1.60× with 128³ blocks (where one worker alone keeps 1.00 cores"
+            ),
+            "{r}"
+        );
+        assert!(
+            r.contains("equals the one-process mesh on 1 of 1 volumes, stays the same with a worker killed mid-run on 0 of 1"),
+            "{r}"
+        );
+        assert!(r.contains("largest worker peak is 120 MiB against the 256 MiB limit"), "{r}");
+        assert!(r.contains("v 12 boundary and 3 non-manifold edges"), "{r}");
+    }
 }

@@ -78,6 +78,115 @@ struct Data {
     images: Vec<(String, String)>,
 }
 
+/// A ratio of ours within this factor of the post's counts as agreeing with it.
+const RATIO_AGREES: f64 = 2.0;
+
+/// The page's opening reading, worded from the rows: the sphere's shrinkage and the triangles'
+/// shape per smoothing at the finest grid, the cost order the post gives, and whether its
+/// feature-retention claim holds.
+fn reading(data: &Data) -> String {
+    let finest = CHUNKS[CHUNKS.len() - 1];
+    let at = |field: &str, method: &str| data.rows.iter().find(|r| r.field == field && r.cells == finest && r.method == method);
+    let per = |field: &str, f: &dyn Fn(&Row) -> Option<String>| -> Vec<String> {
+        METHODS.iter().filter_map(|(m, _)| at(field, m).and_then(f).map(|v| format!("{m} {v}"))).collect()
+    };
+    let shrink = per("sphere", &|r| r.volume_change.map(|v| format!("{:+.3}%", 100.0 * v)));
+    let shape = per("terrain", &|r| Some(format!("{:.3}", r.aspect_mean)));
+    if shrink.is_empty() && shape.is_empty() {
+        return String::new();
+    }
+    let mut lines = Vec::new();
+    if !shrink.is_empty() {
+        lines.push(format!("The sphere's volume change at {finest}^3 cells: {}.", shrink.join(", ")));
+    }
+    if !shape.is_empty() {
+        lines.push(format!("Mean aspect ratio on the {finest}^3 terrain (lower is better shaped): {}.", shape.join(", ")));
+    }
+    let cost = |m: &str| {
+        data.rows.iter().find(|r| r.method == m && r.cells == POST_CHUNK && r.field == "terrain").map(|r| r.smoothing_ms)
+    };
+    let order = match (cost("elastic"), cost("spring"), cost("implicit")) {
+        (Some(e), Some(sp), Some(i)) => Some(e < sp && sp < i),
+        _ => None,
+    };
+    if let Some(holds) = order {
+        lines.push(format!(
+            "The post's cost order (linear < explicit < implicit) {} on the {POST_CHUNK}^3 chunk.",
+            if holds { "holds" } else { "does not hold" }
+        ));
+    }
+    if let Some(supported) = retention_claim_holds(data) {
+        lines.push(format!(
+            "Its claim that the implicit matrix retains features best is {} on the sharp `{FEATURE_FIELD}` shape.",
+            if supported { "supported" } else { "not supported" }
+        ));
+    }
+    format!("**Reading.** {} Where we differ from the post is listed at the end.\n\n", lines.join(" "))
+}
+
+/// Whether the post's feature-retention claim holds at every size (`None` without data).
+fn retention_claim_holds(data: &Data) -> Option<bool> {
+    let corner = |c: usize, m: &str| {
+        data.rows.iter().find(|r| r.field == FEATURE_FIELD && r.cells == c && r.method == m).and_then(|r| r.worst_corner_h)
+    };
+    let claim: Vec<bool> = CHUNKS
+        .iter()
+        .filter_map(|&c| {
+            let implicit = corner(c, "implicit")?;
+            let other = METHODS
+                .iter()
+                .filter(|(m, _)| *m != "implicit" && *m != "none")
+                .filter_map(|(m, _)| corner(c, m))
+                .reduce(f64::min)?;
+            Some(implicit <= other)
+        })
+        .collect();
+    (!claim.is_empty()).then(|| claim.iter().all(|&b| b))
+}
+
+/// Where we differ from the post, each with its reason or "unexplained" (empty without rows).
+fn differences(data: &Data) -> String {
+    if data.rows.is_empty() {
+        return String::new();
+    }
+    let cost = |m: &str| {
+        data.rows.iter().find(|r| r.method == m && r.cells == POST_CHUNK && r.field == "terrain").map(|r| r.smoothing_ms)
+    };
+    let mut md = String::from("\n### Where we differ from the post\n\n");
+    let post = |m: &str| POST_MS.iter().find(|p| p.0 == m).map_or(f64::NAN, |p| p.1);
+    let differ = |ours: f64, theirs: f64| !(ours / theirs > 1.0 / RATIO_AGREES && ours / theirs < RATIO_AGREES);
+    if let (Some(e), Some(sp), Some(i)) = (cost("elastic"), cost("spring"), cost("implicit")) {
+        let (ours_sp, ours_i) = (sp / e.max(1e-9), i / e.max(1e-9));
+        // The post's implicit time is a lower bound: ours differs only if below it by the factor.
+        if !(differ(ours_sp, post("spring") / post("elastic")) || ours_i * RATIO_AGREES < post("implicit") / post("elastic")) {
+            md.push_str("- **Relative costs**: within the factor we count as agreeing.\n");
+        } else {
+            md.push_str(&format!(
+                "- **Relative costs**: the post's explicit and implicit matrices take {:.1}x and more than {:.0}x its linear \
+             interpolation; ours {:.1}x and {:.1}x. Reasons in part: Unity C# on unstated hardware, an unstated iteration \
+             count ({}-{} found enough), and the explicit method's set-up; the rest is unexplained.\n",
+                post("spring") / post("elastic"),
+                post("implicit") / post("elastic"),
+                sp / e.max(1e-9),
+                i / e.max(1e-9),
+                POST_ITERATIONS.0,
+                POST_ITERATIONS.1
+            ));
+        }
+    }
+    if retention_claim_holds(data) == Some(false) {
+        md.push_str(
+            "- **Feature retention**: not supported here (the numbers follow the table); every smoothing moves vertices toward \
+             their neighbours' mean, which rounds a corner.\n",
+        );
+    }
+    md.push_str(&format!(
+        "- **Iterations**: {} here, for every smoothing; the post names a range, not the count its times used.\n\n",
+        data.iterations
+    ));
+    md
+}
+
 /// The post's relative costs (each smoothing over `elastic`, its "Linear Interpolation") beside
 /// ours on the same chunk size, smoothing alone.
 fn against_the_post(data: &Data) -> String {
@@ -316,6 +425,7 @@ impl Experiment for SurfaceNetsSmoothing {
                 .collect::<Vec<_>>()
                 .join("; ")
         ));
+        s.push_str(&reading(&data));
         let rows: Vec<Vec<String>> = data
             .rows
             .iter()
@@ -360,6 +470,7 @@ impl Experiment for SurfaceNetsSmoothing {
         ));
         s.push_str(&against_the_post(&data));
         s.push_str(&feature_retention(&data));
+        s.push_str(&differences(&data));
         s.push_str(&format!(
             "\n![smoothing time]({})\n\nThe {}^3 terrain chunk, flat shaded with its wireframe:\n\n",
             data.chart, CHUNKS[0]
@@ -368,5 +479,52 @@ impl Experiment for SurfaceNetsSmoothing {
         let row: Vec<String> = data.images.iter().map(|(m, p)| format!("![{m}]({p})")).collect();
         s.push_str(&markdown_table(&header, &[row]));
         Ok(s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(field: &str, cells: usize, method: &str, smoothing_ms: f64, corner: Option<f64>) -> Row {
+        Row {
+            field: field.into(),
+            cells,
+            method: method.into(),
+            triangles: 1,
+            smoothing_ms,
+            extraction_ms: 1.0,
+            aspect_mean: 1.25,
+            min_angle_deg: 30.0,
+            mean_signed_distance_h: -0.1,
+            mean_distance_h: 0.1,
+            volume_change: (field == "sphere").then_some(-0.01),
+            watertight: true,
+            worst_corner_h: corner,
+        }
+    }
+
+    #[test]
+    fn the_reading_follows_the_rows() {
+        let mut data = Data { iterations: 5, repeats: 1, rows: Vec::new(), chart: String::new(), images: Vec::new() };
+        assert_eq!(reading(&data), "");
+        for (m, ms, corner) in [("none", 0.0, 1.1), ("elastic", 1.0, 1.6), ("spring", 1.1, 1.7), ("implicit", 18.0, 1.7)] {
+            data.rows.push(row("terrain", 32, m, ms, None));
+            data.rows.push(row("terrain", 128, m, ms, None));
+            data.rows.push(row("sphere", 128, m, ms, None));
+            data.rows.push(row(FEATURE_FIELD, 32, m, ms, Some(corner)));
+        }
+        let r = reading(&data);
+        assert!(r.contains("volume change at 128^3 cells: none -1.000%, elastic -1.000%"), "{r}");
+        assert!(r.contains("(linear < explicit < implicit) holds"), "{r}");
+        assert!(r.contains("retains features best is not supported"), "{r}");
+        assert!(differences(&data).contains("ours 1.1x and 18.0x"), "{}", differences(&data));
+        // The implicit matrix nearest the corners: the claim holds, no difference listed for it.
+        data.rows
+            .iter_mut()
+            .filter(|r| r.method == "implicit" && r.field == FEATURE_FIELD)
+            .for_each(|r| r.worst_corner_h = Some(1.2));
+        let r = reading(&data);
+        assert!(r.contains("retains features best is supported") && !differences(&data).contains("**Feature retention**"), "{r}");
     }
 }

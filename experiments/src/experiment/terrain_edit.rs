@@ -101,6 +101,55 @@ pub(crate) struct Data {
     pub(crate) plot: String,
 }
 
+/// Names, or "none".
+fn names<'a>(v: impl Iterator<Item = &'a str>) -> String {
+    let v: Vec<&str> = v.collect();
+    if v.is_empty() {
+        "none".to_owned()
+    } else {
+        v.join(", ")
+    }
+}
+
+/// The page's opening reading: who keeps every edit within a frame, the median edits, who leaves
+/// no crack and stays manifold, and who keeps one chunk within the per-chunk budget.
+fn reading(data: &Data) -> String {
+    if data.runs.is_empty() {
+        return String::new();
+    }
+    let within = |r: &Run| r.edit_ms.iter().filter(|&&ms| ms <= FRAME_MS).count();
+    let missed: Vec<String> = data
+        .runs
+        .iter()
+        .filter(|r| within(r) < r.edit_ms.len())
+        .map(|r| format!("{} ({} of {})", r.algorithm, within(r), r.edit_ms.len()))
+        .collect();
+    let mut lines = vec![format!(
+        "Every edit within a {FRAME_MS:.1} ms frame: {}; not every one: {}.",
+        names(data.runs.iter().filter(|r| within(r) == r.edit_ms.len()).map(|r| r.algorithm.as_str())),
+        if missed.is_empty() { "none".to_owned() } else { missed.join(", ") }
+    )];
+    let mut by_median: Vec<&Run> = data.runs.iter().collect();
+    by_median.sort_by(|a, b| a.median_ms.total_cmp(&b.median_ms));
+    lines.push(format!(
+        "Median edit, ms: {}.",
+        by_median.iter().map(|r| format!("{} {:.2}", r.algorithm, r.median_ms)).collect::<Vec<_>>().join(", ")
+    ));
+    lines.push(format!(
+        "No crack after any edit and closed manifold after the sequence: {}; not: {}.",
+        names(data.runs.iter().filter(|r| r.open_seam_edges_max == 0 && r.manifold_after).map(|r| r.algorithm.as_str())),
+        names(data.runs.iter().filter(|r| !(r.open_seam_edges_max == 0 && r.manifold_after)).map(|r| r.algorithm.as_str()))
+    ));
+    let at = |r: &Run| r.chunk_runs.iter().find(|c| c.chunk == CHUNK).map(|c| c.chunk_ms[1]);
+    if data.runs.iter().any(|r| at(r).is_some()) {
+        lines.push(format!(
+            "One {CHUNK}³ chunk on one thread with its p99 within the {CHUNK_BUDGET_MS} ms budget: {}.",
+            names(data.runs.iter().filter(|r| at(r).is_some_and(|p| p <= CHUNK_BUDGET_MS)).map(|r| r.algorithm.as_str()))
+        ));
+    }
+    format!("**Reading.** {}\n\n", lines.join(" "))
+}
+
 /// What an extractor reads to mesh one chunk, in words.
 fn chunk_reads(algorithm: &str) -> String {
     match isolab_algorithms::extractors::by_name(algorithm).map(|e| e.chunking()) {
@@ -325,6 +374,7 @@ impl Experiment for TerrainEdit {
             BRUSH_FALLOFF.1,
             data.runs.iter().map(|r| format!("`{}` {}", r.algorithm, chunk_reads(&r.algorithm))).collect::<Vec<_>>().join("; "),
         ));
+        md.push_str(&reading(&data));
         if data.runs.iter().any(|r| !r.settings.is_empty()) {
             md.push_str("Options as run (each extractor's defaults):\n\n");
             for r in data.runs.iter().filter(|r| !r.settings.is_empty()) {
@@ -413,5 +463,47 @@ impl Experiment for TerrainEdit {
             data.before, data.after, data.gif
         ));
         Ok(md)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(algorithm: &str, edits: [f64; 2], cracks: usize, chunk_p99: f64) -> Run {
+        Run {
+            algorithm: algorithm.into(),
+            initial_ms: 1.0,
+            edit_ms: edits.to_vec(),
+            dirtied: vec![1, 1],
+            median_ms: edits[0],
+            p99_ms: edits[1],
+            max_ms: edits[1],
+            triangles: [1, 1],
+            manifold_after: true,
+            open_seam_edges_max: cracks,
+            quality_after: [1.0, 1.0],
+            chunk_runs: vec![ChunkRun { chunk: CHUNK, chunks: 1, chunk_ms: [1.0, chunk_p99, chunk_p99], open_seam_edges: 0 }],
+            settings: String::new(),
+        }
+    }
+
+    #[test]
+    fn the_reading_follows_the_runs() {
+        let mut data = Data {
+            runs: Vec::new(),
+            not_run: Vec::new(),
+            before: String::new(),
+            after: String::new(),
+            gif: String::new(),
+            plot: String::new(),
+        };
+        assert_eq!(reading(&data), "");
+        data.runs = vec![run("slow", [5.0, 20.0], 0, 3.0), run("fast", [1.0, 2.0], 2, 1.0)];
+        let r = reading(&data);
+        assert!(r.contains("Every edit within a 16.7 ms frame: fast; not every one: slow (1 of 2)."), "{r}");
+        assert!(r.contains("Median edit, ms: fast 1.00, slow 5.00."), "{r}");
+        assert!(r.contains("closed manifold after the sequence: slow; not: fast."), "{r}");
+        assert!(r.contains("within the 2 ms budget: fast."), "{r}");
     }
 }

@@ -94,6 +94,51 @@ struct Data {
     gif: String,
 }
 
+/// The page's opening reading: who keeps the layers clean with the rule, what the naive two
+/// meshes leave, and what the edit script keeps (closed layers, crossings, the mass books).
+fn reading(d: &Data) -> String {
+    if d.rows.is_empty() {
+        return String::new();
+    }
+    let clean = |c: &LayerContact| c.unshared == 0 && c.crossing_pairs == 0 && c.liquid_inside_solid == 0;
+    let said = |v: Vec<String>| if v.is_empty() { "none".to_owned() } else { v.join(", ") };
+    let mut lines = vec![format!(
+        "With the shared-vertex rule, layers that share every contact vertex, never cross and hold no liquid inside the \
+         solid: {}; layers that cross: {}.",
+        said(d.rows.iter().filter(|r| clean(&r.contact)).map(|r| r.method.clone()).collect()),
+        said(
+            d.rows
+                .iter()
+                .filter(|r| r.contact.crossing_pairs > 0)
+                .map(|r| format!("{} ({} pairs)", r.method, r.contact.crossing_pairs))
+                .collect()
+        )
+    )];
+    let n = &d.naive.contact;
+    lines.push(format!(
+        "Two independent meshes leave {} of {} contact vertices unshared, {} crossing pairs and {} liquid vertices inside the \
+         solid.",
+        n.unshared, n.contact_vertices, n.crossing_pairs, n.liquid_inside_solid
+    ));
+    for e in &d.edits {
+        lines.push(format!(
+            "Over {} edits by {}: a layer open or non-manifold after {} of them, at most {} crossing pairs and {} unshared \
+             contact vertices after one, {}.",
+            e.edits,
+            e.extractor,
+            e.open_after,
+            e.worst.crossing_pairs,
+            e.worst.unshared,
+            if e.mass_drift == 0.0 {
+                "the masses equal to the brushes' books".to_owned()
+            } else {
+                format!("the masses within {:.1e} (relative) of the brushes' books", e.mass_drift)
+            }
+        ));
+    }
+    format!("**Reading.** {}\n\n", lines.join(" "))
+}
+
 /// One cell of the edit table: a measure of one extractor's run.
 type Cell = dyn Fn(&EditRun) -> String;
 
@@ -308,6 +353,7 @@ impl Experiment for TerrainLiquids {
              meshes that cross (exact predicates), liquid vertices inside the solid. Median of {RUNS} runs; the naive row is \
              one run.\n\n"
         );
+        md.push_str(&reading(&d));
         let yes = |b: bool| if b { "yes" } else { "**no**" }.to_owned();
         let rows: Vec<Vec<String>> = d
             .rows
@@ -433,7 +479,7 @@ impl Experiment for TerrainLiquids {
             format!("the masses differ from the brushes' books by at most {drift:.1e} (relative)")
         };
         md.push_str(&format!(
-            "\n### The post's claims beside ours\n\n\
+            "\n### Where we differ from the post: its claims beside ours\n\n\
              - *Layered meshes for liquids without overlap, connected where they meet*: the rows above (contact vertices \
              shared, crossing pairs). No overlap is proved for marching tetrahedra alone (`liquids` module doc); crossing \
              pairs with the rule: {}.\n\
@@ -450,5 +496,46 @@ impl Experiment for TerrainLiquids {
             list(&crossing),
         ));
         Ok(md)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(method: &str, unshared: usize, crossing: usize) -> Row {
+        Row {
+            method: method.into(),
+            solid_triangles: 1,
+            liquid_triangles: 1,
+            solid_closed_manifold: true,
+            liquid_closed_manifold: true,
+            contact: LayerContact { contact_vertices: 10, unshared, crossing_pairs: crossing, liquid_inside_solid: 0 },
+            median_ms: 1.0,
+        }
+    }
+
+    #[test]
+    fn the_reading_follows_the_rows() {
+        let mut d = Data {
+            scene: [1, 1, 1],
+            rows: Vec::new(),
+            naive: row("naive", 3, 4),
+            refused: Vec::new(),
+            edits: Vec::new(),
+            edit_scene: [1, 1, 1],
+            picture: String::new(),
+            gif: String::new(),
+        };
+        assert_eq!(reading(&d), "");
+        d.rows = vec![row("mc", 0, 6), row("mt", 0, 0)];
+        d.edits = vec![EditRun { extractor: "mt".into(), edits: 200, open_after: 0, mass_drift: 0.0, ..EditRun::default() }];
+        let r = reading(&d);
+        assert!(r.contains("hold no liquid inside the solid: mt; layers that cross: mc (6 pairs)."), "{r}");
+        assert!(r.contains("leave 3 of 10 contact vertices unshared, 4 crossing pairs"), "{r}");
+        assert!(r.contains("Over 200 edits by mt: a layer open or non-manifold after 0 of them"), "{r}");
+        assert!(r.contains("the masses equal to the brushes' books"), "{r}");
+        d.edits[0].mass_drift = 2e-7;
+        assert!(reading(&d).contains("the masses within 2.0e-7 (relative)"));
     }
 }

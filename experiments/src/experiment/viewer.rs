@@ -147,6 +147,7 @@ impl Experiment for Viewer {
             total as f64 / 1e6,
             MESH_BUDGET_BYTES as f64 / 1e6,
         ));
+        md.push_str(&reading(&data));
         if !data.left_out.is_empty() {
             md.push_str(&format!(
                 "Left out by the budget: {}.\n\n",
@@ -169,6 +170,33 @@ impl Experiment for Viewer {
         md.push_str(&markdown_table(&["input", "extractor", "samples", "triangles", "glb"], &rows));
         Ok(md)
     }
+}
+
+/// The page's opening reading: what the viewer offers, by input, and what the budget left out.
+fn reading(data: &Data) -> String {
+    if data.meshes.is_empty() {
+        return String::new();
+    }
+    let inputs = crate::report::first_seen(data.meshes.iter().map(|m| m.input.as_str()));
+    let extractors = crate::report::first_seen(data.meshes.iter().map(|m| m.algorithm.as_str()));
+    let largest = data
+        .meshes
+        .iter()
+        .max_by_key(|m| m.triangles)
+        .map_or(String::new(), |m| format!(" The largest is {} of {} ({} triangles).", m.algorithm, m.input, m.triangles));
+    format!(
+        "**Reading.** {} meshes: {} inputs ({}) by up to {} extractors.{largest} Inputs left out by the budget: {}; the \
+         viewer shows each mesh's triangle count and no other metric.\n\n",
+        data.meshes.len(),
+        inputs.len(),
+        inputs.join(", "),
+        extractors.len(),
+        if data.left_out.is_empty() {
+            "none".to_owned()
+        } else {
+            data.left_out.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ")
+        }
+    )
 }
 
 /// The viewer's own script, written beside the page.
@@ -214,6 +242,28 @@ mod tests {
         .unwrap();
         let html = page(&ctx, "");
         assert!(!html.contains("</script><b>"), "a mesh name must not close the script");
+    }
+
+    #[test]
+    fn the_reading_follows_the_data() {
+        let mesh = |input: &str, algorithm: &str, triangles: usize| Mesh {
+            algorithm: algorithm.into(),
+            input: input.into(),
+            resolution: 32,
+            triangles,
+            path: String::new(),
+            bytes: 1,
+        };
+        let mut data = Data::default();
+        assert_eq!(reading(&data), "");
+        data.meshes = vec![mesh("sphere", "mc", 10), mesh("sphere", "sn", 12), mesh("torus", "mc", 30)];
+        data.left_out = vec![("gyroid".into(), 4)];
+        let r = reading(&data);
+        assert!(
+            r.contains("3 meshes: 2 inputs (sphere, torus) by up to 2 extractors. The largest is mc of torus (30 triangles)."),
+            "{r}"
+        );
+        assert!(r.contains("left out by the budget: gyroid;"), "{r}");
     }
 
     #[test]

@@ -44,6 +44,11 @@ const QUESTIONS: [(&str, &str, &str); 27] = [
 
 /// The participants the paper states.
 const PAPER_PARTICIPANTS: usize = 18;
+
+/// The answer columns of the paper's raw answers and the participants it states.
+pub(super) fn columns_and_participants() -> (usize, usize) {
+    (QUESTIONS[0].2.len(), PAPER_PARTICIPANTS)
+}
 /// The answer column the paper's figures leave out (0-based): found by recomputing Fig. 28 with
 /// each column left out in turn; only this one reproduces it (see the test).
 const DROPPED_COLUMN: usize = 17;

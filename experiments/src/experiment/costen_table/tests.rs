@@ -25,3 +25,25 @@ fn the_papers_table_gives_its_texts_averages_and_aspect_ranges() {
     assert_eq!(paper_aspect_range('i'), (1.16, 2.16));
     assert_eq!(paper_aspect_range('p'), (1.23, 1.39));
 }
+
+#[test]
+fn the_reading_follows_the_rows() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../report/data/costen_table.json"))
+        .expect("committed data");
+    let mut data: Data = serde_json::from_str(&text).expect("costen_table data");
+    assert!(reading(&data.rows).starts_with("**Reading.** Integrated clustering discards"));
+    let r = differences(&data.rows, "70%", "75%");
+    assert!(r.contains("removes 70% of our asteroid's triangles against the paper's 75%"), "{r}");
+    let said = |rows: &[Row]| {
+        let (tets, tris) = counts::ratios(rows, |id| PAPER.iter().find(|p| p.id == id).copied()).unwrap();
+        format!("our tetrahedra are {:.2}x the paper's and our triangles {:.2}x", tets.median, tris.median)
+    };
+    assert!(r.contains(&said(&data.rows)), "{r}");
+    // Ten times the triangles on every row: the ratio in the text follows.
+    for row in &mut data.rows {
+        row.n_triangles *= 10;
+    }
+    let turned = differences(&data.rows, "70%", "75%");
+    assert!(turned.contains(&said(&data.rows)) && turned != r, "{turned}");
+    assert_eq!((reading(&[]), differences(&[], "", "")), (String::new(), String::new()));
+}

@@ -417,6 +417,7 @@ impl Experiment for RealVolumes {
             s.push_str(&format!("_Not run: {}._\n", data.skipped.join("; ")));
             return Ok(s);
         }
+        s.push_str(&page::reading(&data));
         s.push_str(&own_scan_commands(&data));
         let [a, b, c] = data.shape;
         s.push_str(&format!(

@@ -41,6 +41,44 @@ pub(super) fn own_scan_commands(data: &Data) -> String {
     )
 }
 
+/// The page's opening reading: per iso-value, the fastest on one thread, who is closed and
+/// manifold and who has self-intersections; the islands; the second volume's openness.
+pub(super) fn reading(data: &Data) -> String {
+    let mut lines = Vec::new();
+    for level in &data.levels {
+        let here: Vec<&Row> = data.rows.iter().filter(|r| r.level == level.name).collect();
+        let Some(fastest) = here.iter().min_by(|a, b| a.time_1.median.total_cmp(&b.time_1.median)) else { continue };
+        let names = |keep: &dyn Fn(&Row) -> bool| {
+            let v: Vec<&str> = here.iter().filter(|r| keep(r)).map(|r| r.implementation.as_str()).collect();
+            if v.is_empty() {
+                "none".to_owned()
+            } else {
+                v.join(", ")
+            }
+        };
+        lines.push(format!(
+            "At the {} level (iso {:.1}), fastest on one thread: {} ({} ms); not closed and manifold: {}; with \
+             self-intersections: {}.",
+            level.name,
+            level.iso,
+            fastest.implementation,
+            super::super::context::ms(fastest.time_1.median),
+            names(&|r| !(r.closed && r.manifold)),
+            names(&|r| r.self_intersections > 0)
+        ));
+        let islands: Vec<(&str, &Islands)> =
+            here.iter().filter_map(|r| Some((r.implementation.as_str(), r.islands.as_ref()?))).collect();
+        lines.extend(islands::reading("Islands", &islands));
+    }
+    if let Some(v) = &data.second {
+        lines.push(format!("The second volume ({}): {}", v.source, super::second::openness(v)));
+    }
+    if lines.is_empty() {
+        return String::new();
+    }
+    format!("**Reading.** {}\n\n", lines.join(" "))
+}
+
 /// The islands each mesh comes with, and what `keep-components` leaves.
 pub(super) fn islands_section(data: &Data) -> String {
     let mut s = String::new();
@@ -144,4 +182,45 @@ pub(super) fn comparison_notes(data: &Data) -> String {
 
 pub(super) fn yes_no(b: bool) -> String {
     if b { "yes" } else { "no" }.into()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Level;
+    use super::*;
+
+    fn row(implementation: &str, ms: f64, closed: bool, self_intersections: usize) -> Row {
+        let mut r: Row = serde_json::from_value(serde_json::json!({
+            "implementation": implementation, "ours": true, "level": "brain",
+            "time_1": {"median": ms, "min": ms, "max": ms, "runs": [ms]}, "time_2": null,
+            "vertices": 1, "triangles": 100, "min_angle_deg": 1.0, "aspect_mean": 1.0, "aspect_max": 1.0,
+            "components": 3, "genus": 0, "closed": closed, "manifold": true, "outward": true, "oriented": true,
+            "self_intersections": self_intersections, "distance_mean": 0.0, "distance_max": 0.0
+        }))
+        .unwrap();
+        r.islands = Some(Islands {
+            min_volume_voxels: 100.0,
+            components: 3,
+            triangles: 100,
+            components_after: 1,
+            triangles_after: 90,
+            largest_triangles: 90,
+        });
+        r
+    }
+
+    #[test]
+    fn the_reading_follows_the_rows() {
+        let mut data = Data::default();
+        assert_eq!(reading(&data), "");
+        data.levels = vec![Level { name: "brain".into(), iso: 89.6, how: String::new() }];
+        data.rows = vec![row("marching-cubes", 20.0, true, 0), row("dual-contouring", 10.0, false, 4)];
+        let r = reading(&data);
+        assert!(r.contains("At the brain level (iso 89.6), fastest on one thread: dual-contouring (10"), "{r}");
+        assert!(r.contains("not closed and manifold: dual-contouring; with self-intersections: dual-contouring."), "{r}");
+        assert!(r.contains("Islands: 3 components per mesh"), "{r}");
+        data.rows[1].closed = true;
+        data.rows[1].self_intersections = 0;
+        assert!(reading(&data).contains("not closed and manifold: none; with self-intersections: none."));
+    }
 }

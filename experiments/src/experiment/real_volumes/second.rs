@@ -241,7 +241,7 @@ pub(crate) fn section(v: &SecondVolume) -> String {
 }
 
 /// Whether the meshes are open, and where, worded from the rows.
-fn openness(v: &SecondVolume) -> String {
+pub(super) fn openness(v: &SecondVolume) -> String {
     let open = v.rows.iter().filter(|r| r.open_edges > 0).count();
     let off_border = v.rows.iter().filter(|r| r.open_edges_inside > 0).count();
     match (open, off_border) {

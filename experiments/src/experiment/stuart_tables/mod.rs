@@ -30,6 +30,7 @@ use isolab_metrics::volume_mesh::volume_metrics;
 use serde::{Deserialize, Serialize};
 
 mod checks;
+mod reading;
 pub mod relaxation;
 mod table_one;
 mod table_two;
@@ -387,6 +388,8 @@ impl Experiment for StuartTables {
                 .fold(f64::INFINITY, f64::min),
             CELLS.map(|c| c.to_string()).join(", "),
         ));
+        let peers: Option<Peers> = ctx.read_data("stuart_tables_peers").ok();
+        md.push_str(&reading::reading(&data));
         md.push_str(&table_one(&data.rows));
         md.push_str(&checks(&data));
         md.push_str(&against_table_one(&data));
@@ -399,6 +402,7 @@ impl Experiment for StuartTables {
             ));
         }
         md.push_str(&table_two(ctx, &data.rows));
+        md.push_str(&reading::differences(&data, peers.as_ref()));
         md.push_str(&format!(
             "\n**Figures 7-10 of the paper, for our models**: boundary surfaces, spacing from coarse (top) to fine, offset ratio {} (left) to {}.\n\n",
             RATIOS[RATIOS.len() - 1],

@@ -34,6 +34,7 @@ pub(super) fn page(d: &Data) -> String {
         DIMS[2] - 1,
         ours.iter().map(|i| format!("`{i}`")).collect::<Vec<_>>().join(", "),
     ));
+    md.push_str(&reading(d));
     if !d.options.is_empty() {
         md.push_str("Options as run (each extractor's defaults):\n\n");
         for (name, settings) in &d.options {
@@ -82,7 +83,6 @@ pub(super) fn page(d: &Data) -> String {
         ],
         &body,
     ));
-    md.push_str(&reading(d));
     if let Some(s) = &d.switch {
         let ours_times: Vec<String> =
             s.ours.iter().map(|(name, t)| format!("{name} {:.1} ms median [{:.1}-{:.1}]", t.median, t.min, t.max)).collect();
@@ -125,7 +125,10 @@ pub(super) fn page(d: &Data) -> String {
 /// Lines read off the rows: cracks and manifoldness per implementation, triangles kept by the
 /// viewer pattern, and each of ours against the crate on the patterns with seams.
 fn reading(d: &Data) -> String {
-    let mut md = String::from("\n");
+    if d.rows.is_empty() {
+        return String::new();
+    }
+    let mut md = String::from("**Reading.**\n\n");
     let implementations = first_seen(d.rows.iter().map(|r| r.implementation.as_str()));
     for &implementation in &implementations {
         let rows: Vec<&Row> = d.rows.iter().filter(|r| r.implementation == implementation).collect();
@@ -174,5 +177,57 @@ fn reading(d: &Data) -> String {
             ratios.join(", "),
         ));
     }
+    md.push('\n');
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(implementation: &str, pattern: &str, triangles: usize, open: usize, seam: usize, ms: f64, aspect: f64) -> Row {
+        Row {
+            implementation: implementation.into(),
+            pattern: pattern.into(),
+            per_level: vec![1],
+            triangles,
+            stitched: None,
+            pinched: None,
+            seam_boundary_edges: open,
+            non_manifold_edges: 0,
+            non_manifold_vertices: 0,
+            misoriented_edges: 0,
+            self_intersecting_pairs: 0,
+            seam_triangles: seam,
+            seam_aspect_mean: aspect,
+            seam_aspect_max: aspect,
+            seam_min_angle_deg: None,
+            time_ms: crate::report::Spread::of(vec![ms]),
+        }
+    }
+
+    #[test]
+    fn the_reading_follows_the_rows() {
+        let mut d = Data {
+            rows: Vec::new(),
+            switch: None,
+            picture: String::new(),
+            crate_picture: String::new(),
+            dual_picture: String::new(),
+            options: Vec::new(),
+        };
+        assert_eq!(reading(&d), "");
+        d.rows = vec![
+            row("ours", "full", 100, 0, 0, 10.0, 1.0),
+            row("ours", "near", 20, 0, 5, 10.0, 1.2),
+            row(CRATE, "full", 100, 3, 0, 5.0, 1.0),
+            row(CRATE, "near", 25, 0, 5, 5.0, 2.0),
+        ];
+        let r = reading(&d);
+        assert!(r.starts_with("**Reading.**"), "{r}");
+        assert!(r.contains("- ours: watertight, manifold over the 2 patterns"), "{r}");
+        assert!(r.contains(&format!("- {CRATE}: not watertight")), "{r}");
+        assert!(r.contains("- ours: the viewer-distance pattern keeps 20 % of the full-resolution triangles."), "{r}");
+        assert!(r.contains("time ratio 2.00 (ours over the crate's median); seam triangles better shaped (lower mean aspect ratio) on 1 of them."), "{r}");
+    }
 }

@@ -1,8 +1,11 @@
 //! `viewer`: every extractor's mesh of every pictured input at the lowest resolution of
 //! `compare_algorithms`, written as small quantized binary glTF (`report/meshes/*.glb`,
 //! `io::gltf::write_glb_quantized`) for the report's interactive page `report/index.html`, where a
-//! reader turns two of them side by side. The inputs go in by their meshes' total size, smallest
-//! first, until [`MESH_BUDGET_BYTES`]; the page names any left out.
+//! reader turns two of them side by side, with each mesh's measures (closed, manifold,
+//! self-intersections, aspect ratio) and the triangles that intersect. The inputs go in by their
+//! meshes' total size, smallest first, until [`MESH_BUDGET_BYTES`]; an input that does not fit is
+//! meshed again at three quarters of its resolution until it does (down to [`MIN_RESOLUTION`]),
+//! and the page names any left out.
 //!
 //! The page itself is written by the assembler ([`page`]), from `REPORT.md` and this experiment's
 //! data, with the viewer's JavaScript pinned in `report/vendor/` (see `viewer/README.md`).
@@ -19,10 +22,13 @@ pub struct Viewer;
 
 const NAME: &str = "viewer";
 /// The most bytes of meshes the report commits for the page.
-pub const MESH_BUDGET_BYTES: usize = 8 << 20;
+pub const MESH_BUDGET_BYTES: usize = 10 << 20;
+
+/// The coarsest resolution an input is meshed at to fit the budget before it is left out.
+pub const MIN_RESOLUTION: usize = 12;
 
 /// One mesh on the page.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct Mesh {
     /// Extractor.
     pub algorithm: String,
@@ -36,6 +42,21 @@ pub struct Mesh {
     pub path: String,
     /// Its size.
     pub bytes: usize,
+    /// Closed (no boundary edge).
+    #[serde(default)]
+    pub closed: bool,
+    /// Edge- and vertex-manifold.
+    #[serde(default)]
+    pub manifold: bool,
+    /// Self-intersecting triangle pairs.
+    #[serde(default)]
+    pub intersecting_pairs: usize,
+    /// The triangles of the first listed intersecting pairs (`metrics::intersections`), sorted.
+    #[serde(default)]
+    pub intersecting_triangles: Vec<u32>,
+    /// Mean and largest aspect ratio (1 for equilateral).
+    #[serde(default)]
+    pub aspect: [f64; 2],
 }
 
 /// The experiment's data.
@@ -51,6 +72,44 @@ pub struct Data {
 /// resolution).
 fn inputs() -> Vec<(String, String, usize)> {
     super::context::compared_inputs().into_iter().map(|(name, spec, levels)| (name, spec, levels[0])).collect()
+}
+
+/// Every extractor's mesh of input `name` (`spec`) at `resolution`, measured and encoded.
+fn meshes_of(name: &str, spec: &str, resolution: usize) -> Result<Vec<(Mesh, Vec<u8>)>, ExperimentError> {
+    let field = load_field(spec, fields::DEFAULT_SEED)?;
+    let lattice = lattice_for(field.as_ref(), &RunConfig::new("", spec, resolution))?;
+    let samples = Samples::sample(field.clone(), lattice, 0.0)?;
+    let mut meshes = Vec::new();
+    for extractor in extractors::registry() {
+        let mut out = Extraction::default();
+        extractor.extract(&samples, &mut out)?;
+        let mut bytes = Vec::new();
+        isolab_io::gltf::write_glb_quantized(&mut bytes, &out.surface, "isolab report viewer")
+            .map_err(|source| IoError::Write { path: "glb in memory".into(), source })?;
+        let topology = isolab_metrics::topology::topology(&out.surface);
+        let quality = isolab_metrics::quality::triangle_quality(&out.surface);
+        let crossings = isolab_metrics::intersections::self_intersections(&out.surface);
+        let mut intersecting: Vec<u32> = crossings.pairs.iter().flatten().copied().collect();
+        intersecting.sort_unstable();
+        intersecting.dedup();
+        meshes.push((
+            Mesh {
+                algorithm: extractor.name().into(),
+                input: name.to_owned(),
+                resolution,
+                triangles: out.surface.triangles.len(),
+                path: format!("meshes/{}-{name}.glb", extractor.name()),
+                bytes: bytes.len(),
+                closed: topology.closed,
+                manifold: topology.edge_manifold && topology.vertex_manifold,
+                intersecting_pairs: crossings.count,
+                intersecting_triangles: intersecting,
+                aspect: [quality.aspect_ratio.mean, quality.aspect_ratio.max],
+            },
+            bytes,
+        ));
+    }
+    Ok(meshes)
 }
 
 /// Picks whole inputs, smallest total first, while the running total stays within `budget`:
@@ -88,47 +147,49 @@ impl Experiment for Viewer {
         // Every input's meshes in memory first, so the budget can choose whole inputs.
         let mut encoded: Vec<Vec<(Mesh, Vec<u8>)>> = Vec::new();
         for (name, spec, resolution) in &inputs {
-            let field = load_field(spec, fields::DEFAULT_SEED)?;
-            let lattice = lattice_for(field.as_ref(), &RunConfig::new("", spec, *resolution))?;
-            let samples = Samples::sample(field.clone(), lattice, 0.0)?;
-            let mut meshes = Vec::new();
-            for extractor in &extractors {
-                bar.set_message(format!("{} {name}", extractor.name()));
-                let mut out = Extraction::default();
-                extractor.extract(&samples, &mut out)?;
-                let mut bytes = Vec::new();
-                isolab_io::gltf::write_glb_quantized(&mut bytes, &out.surface, "isolab report viewer")
-                    .map_err(|source| IoError::Write { path: "glb in memory".into(), source })?;
-                let path = format!("meshes/{}-{name}.glb", extractor.name());
-                let mesh = Mesh {
-                    algorithm: extractor.name().into(),
-                    input: name.clone(),
-                    resolution: *resolution,
-                    triangles: out.surface.triangles.len(),
-                    path,
-                    bytes: bytes.len(),
-                };
-                meshes.push((mesh, bytes));
-                bar.inc(1);
-            }
-            encoded.push(meshes);
+            bar.set_message(name.clone());
+            encoded.push(meshes_of(name, spec, *resolution)?);
+            bar.inc(extractors.len() as u64);
         }
         bar.finish_with_message("done");
         let totals: Vec<usize> = encoded.iter().map(|m| m.iter().map(|(mesh, _)| mesh.bytes).sum()).collect();
         let (kept, left) = within_budget(&totals, MESH_BUDGET_BYTES);
+        let mut room = MESH_BUDGET_BYTES - kept.iter().map(|&k| totals[k]).sum::<usize>();
+        let mut chosen: Vec<usize> = kept;
+        let mut still_left = Vec::new();
+        // The inputs left out, again at coarser resolutions, smallest first, while they fit.
+        for k in left {
+            let (name, spec, mut resolution) = inputs[k].clone();
+            loop {
+                resolution = resolution * 3 / 4;
+                if resolution < MIN_RESOLUTION {
+                    still_left.push((name.clone(), totals[k]));
+                    break;
+                }
+                let meshes = meshes_of(&name, &spec, resolution)?;
+                let total: usize = meshes.iter().map(|(m, _)| m.bytes).sum();
+                if total <= room {
+                    room -= total;
+                    encoded[k] = meshes;
+                    chosen.push(k);
+                    break;
+                }
+            }
+        }
+        chosen.sort_unstable();
         let dir = ctx.report_dir.join("meshes");
         if dir.exists() {
             std::fs::remove_dir_all(&dir).map_err(|source| IoError::Write { path: dir.clone(), source })?;
         }
         std::fs::create_dir_all(&dir).map_err(|source| IoError::Write { path: dir.clone(), source })?;
         let mut data = Data::default();
-        for k in kept {
+        for k in chosen {
             for (mesh, bytes) in &encoded[k] {
                 write_atomic(&ctx.report_dir.join(&mesh.path), |w| std::io::Write::write_all(w, bytes))?;
                 data.meshes.push(mesh.clone());
             }
         }
-        data.left_out = left.into_iter().map(|k| (inputs[k].0.clone(), totals[k])).collect();
+        data.left_out = still_left;
         ctx.write_data(NAME, &data)
     }
 
@@ -138,7 +199,9 @@ impl Experiment for Viewer {
         let total: usize = data.meshes.iter().map(|m| m.bytes).sum();
         md.push_str(&format!(
             "[`index.html`](index.html) shows the front page beside a viewer that turns any two of these meshes side by side \
-             (wireframe on or off). Each is an extractor's mesh of an input at the lowest resolution `compare_algorithms` \
+             (wireframe on or off, both sides of open meshes shaded), with each mesh's measures; it colours triangles by \
+             shape or marks the boundary, non-manifold and self-intersecting ones, and keeps what it shows in the address, \
+             so a view can be linked. Each is an extractor's mesh of an input at the lowest resolution `compare_algorithms` \
              pictures, as binary glTF with {}-bit quantized positions (`KHR_mesh_quantization`), {} meshes and {:.1} MB in all \
              (budget {:.1} MB). The page loads them with `fetch`, which browsers refuse for `file://` pages: serve the \
              directory, for example `python3 -m http.server --directory report`, and open the address it prints.\n\n",
@@ -158,16 +221,34 @@ impl Experiment for Viewer {
             .meshes
             .iter()
             .map(|m| {
+                let yes = |b: bool| if b { "yes" } else { "no" }.to_owned();
                 vec![
                     m.input.clone(),
                     m.algorithm.clone(),
                     m.resolution.to_string(),
                     m.triangles.to_string(),
+                    yes(m.closed),
+                    yes(m.manifold),
+                    m.intersecting_pairs.to_string(),
+                    format!("{:.2} / {:.1}", m.aspect[0], m.aspect[1]),
                     format!("[{:.0} KB]({})", m.bytes as f64 / 1e3, m.path),
                 ]
             })
             .collect();
-        md.push_str(&markdown_table(&["input", "extractor", "samples", "triangles", "glb"], &rows));
+        md.push_str(&markdown_table(
+            &[
+                "input",
+                "extractor",
+                "samples",
+                "triangles",
+                "closed",
+                "manifold",
+                "self-intersecting pairs",
+                "aspect mean / max",
+                "glb",
+            ],
+            &rows,
+        ));
         Ok(md)
     }
 }
@@ -184,13 +265,26 @@ fn reading(data: &Data) -> String {
         .iter()
         .max_by_key(|m| m.triangles)
         .map_or(String::new(), |m| format!(" The largest is {} of {} ({} triangles).", m.algorithm, m.input, m.triangles));
+    let count = |keep: &dyn Fn(&Mesh) -> bool| data.meshes.iter().filter(|m| keep(m)).count();
+    let coarser: Vec<String> = inputs
+        .iter()
+        .filter_map(|i| {
+            let m = data.meshes.iter().find(|m| m.input == *i)?;
+            let lowest = super::context::compared_inputs().into_iter().find(|c| c.0 == *i).map(|c| c.2[0])?;
+            (m.resolution < lowest).then(|| format!("{i} at {} instead of {lowest}", m.resolution))
+        })
+        .collect();
     format!(
-        "**Reading.** {} meshes: {} inputs ({}) by up to {} extractors.{largest} Inputs left out by the budget: {}; the \
-         viewer shows each mesh's triangle count and no other metric.\n\n",
+        "**Reading.** {} meshes: {} inputs ({}) by up to {} extractors.{largest} Closed: {} of them; manifold: {}; \
+         with self-intersections: {}. Meshed coarser to fit the budget: {}. Inputs left out by the budget: {}.\n\n",
         data.meshes.len(),
         inputs.len(),
         inputs.join(", "),
         extractors.len(),
+        count(&|m| m.closed),
+        count(&|m| m.manifold),
+        count(&|m| m.intersecting_pairs > 0),
+        if coarser.is_empty() { "none".to_owned() } else { coarser.join(", ") },
         if data.left_out.is_empty() {
             "none".to_owned()
         } else {
@@ -235,6 +329,7 @@ mod tests {
                     triangles: 1,
                     path: "meshes/x.glb".into(),
                     bytes: 3,
+                    ..Mesh::default()
                 }],
                 left_out: vec![],
             },
@@ -251,8 +346,10 @@ mod tests {
             input: input.into(),
             resolution: 32,
             triangles,
-            path: String::new(),
             bytes: 1,
+            closed: triangles > 10,
+            intersecting_pairs: usize::from(triangles == 12),
+            ..Mesh::default()
         };
         let mut data = Data::default();
         assert_eq!(reading(&data), "");
@@ -263,7 +360,8 @@ mod tests {
             r.contains("3 meshes: 2 inputs (sphere, torus) by up to 2 extractors. The largest is mc of torus (30 triangles)."),
             "{r}"
         );
-        assert!(r.contains("left out by the budget: gyroid;"), "{r}");
+        assert!(r.contains("Closed: 2 of them; manifold: 0; with self-intersections: 1."), "{r}");
+        assert!(r.contains("Meshed coarser to fit the budget: none. Inputs left out by the budget: gyroid."), "{r}");
     }
 
     #[test]

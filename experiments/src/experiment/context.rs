@@ -254,3 +254,19 @@ pub fn corner_distances_h(mesh: &isolab_algorithms::TriMesh, spacing: f32) -> Ve
         .map(|c| f64::from(mesh.positions.iter().map(|p| p.distance(*c)).fold(f32::INFINITY, f32::min) / spacing))
         .collect()
 }
+
+/// The options each extractor ran with, as recorded in an experiment's data (name, its
+/// `Extractor::settings()`): a list for the page, empty when none were recorded.
+pub fn options_as_run(settings: &[(String, String)]) -> String {
+    let listed: Vec<String> =
+        settings.iter().filter(|(_, s)| !s.is_empty()).map(|(name, s)| format!("- `{name}`: {s}\n")).collect();
+    if listed.is_empty() {
+        return String::new();
+    }
+    format!("Options as run (each extractor's defaults):\n\n{}\n", listed.concat())
+}
+
+/// Each extractor's name and `settings()`, to record in an experiment's data as it runs.
+pub fn settings_of<'a>(extractors: impl IntoIterator<Item = &'a dyn isolab_algorithms::Extractor>) -> Vec<(String, String)> {
+    extractors.into_iter().map(|e| (e.name().to_owned(), e.settings())).collect()
+}

@@ -80,6 +80,9 @@ struct Data {
     /// others ran inside a pool of their size); None in runs before this was recorded.
     #[serde(default)]
     global_pool_threads: Option<usize>,
+    /// Each extractor's options as it ran (absent from runs before they were recorded).
+    #[serde(default)]
+    settings: Vec<(String, String)>,
 }
 
 /// Bytes of the extraction's meshes as stored (positions, normals, indices).
@@ -220,7 +223,9 @@ impl Experiment for Scaling {
         }
         bar.finish_with_message("done");
         let global_pool_threads = THREADS.iter().copied().find(|&t| on_global_pool(t));
-        let data = Data { field: FIELD.into(), threads: THREADS.to_vec(), rows, skipped, global_pool_threads };
+        let built: Vec<Box<dyn Extractor>> = (0..INFOS.len()).map(fresh).collect::<Result<_, _>>()?;
+        let settings = super::context::settings_of(built.iter().map(|e| &**e));
+        let data = Data { field: FIELD.into(), threads: THREADS.to_vec(), rows, skipped, global_pool_threads, settings };
         figures(ctx, &data)?;
         ctx.write_data(NAME, &data)
     }
@@ -384,6 +389,7 @@ fn section(ctx: &Context, data: &Data) -> String {
         },
     ));
     md.push_str(&reading(data));
+    md.push_str(&super::context::options_as_run(&data.settings));
     // Slopes.
     md.push_str(&format!("### Slopes of log time against log cells ({SLOPE_FROM}³ and up)\n\n"));
     let mut slopes = Vec::new();
@@ -506,6 +512,7 @@ mod tests {
             rows: Vec::new(),
             skipped: Vec::new(),
             global_pool_threads: None,
+            settings: Vec::new(),
         };
         assert_eq!(reading(&data), "");
         // Time times 8 per doubling (slope 1), times 4 (slope 2/3), times 1 (slope 0).

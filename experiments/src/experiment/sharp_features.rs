@@ -33,6 +33,9 @@ pub(crate) struct Row {
 pub(crate) struct Data {
     pub(crate) rows: Vec<Row>,
     pub(crate) images: Vec<(String, String)>,
+    /// Each extractor's options as it ran (absent from runs before they were recorded).
+    #[serde(default)]
+    pub(crate) settings: Vec<(String, String)>,
 }
 
 impl Experiment for SharpFeatures {
@@ -83,7 +86,8 @@ impl Experiment for SharpFeatures {
             }
         }
         bar.finish_with_message("done");
-        ctx.write_data(NAME, &Data { rows, images })
+        let settings = super::context::settings_of(all.iter().map(|e| &**e));
+        ctx.write_data(NAME, &Data { rows, images, settings })
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
@@ -94,6 +98,7 @@ impl Experiment for SharpFeatures {
              over the corners), with the mesh's self-intersecting triangle pairs and whether it is watertight and manifold.\n\n",
         );
         s.push_str(&reading(&data.rows));
+        s.push_str(&super::context::options_as_run(&data.settings));
         let rows: Vec<Vec<String>> = data
             .rows
             .iter()

@@ -28,6 +28,9 @@ pub(crate) struct Row {
 
 #[derive(Serialize, Deserialize)]
 pub(crate) struct Data {
+    /// Each extractor's options as it ran (absent from runs before they were recorded).
+    #[serde(default)]
+    pub(crate) settings: Vec<(String, String)>,
     pub(crate) radius: f64,
     pub(crate) rows: Vec<Row>,
     pub(crate) plot: String,
@@ -93,7 +96,8 @@ impl Experiment for SphereConvergence {
             series,
         };
         plot::xy(&stem, &plot).map_err(ExperimentError::Figure)?;
-        ctx.write_data(NAME, &Data { radius: 0.4, rows, plot: ctx.link(&stem.with_extension("svg")) })
+        let settings = super::context::settings_of(extractors.iter().map(|e| &**e));
+        ctx.write_data(NAME, &Data { settings, radius: 0.4, rows, plot: ctx.link(&stem.with_extension("svg")) })
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
@@ -105,6 +109,7 @@ impl Experiment for SphereConvergence {
             data.radius
         ));
         s.push_str(&reading(&data.rows));
+        s.push_str(&super::context::options_as_run(&data.settings));
         let rows: Vec<Vec<String>> = data
             .rows
             .iter()

@@ -375,13 +375,8 @@ impl Experiment for TerrainEdit {
             data.runs.iter().map(|r| format!("`{}` {}", r.algorithm, chunk_reads(&r.algorithm))).collect::<Vec<_>>().join("; "),
         ));
         md.push_str(&reading(&data));
-        if data.runs.iter().any(|r| !r.settings.is_empty()) {
-            md.push_str("Options as run (each extractor's defaults):\n\n");
-            for r in data.runs.iter().filter(|r| !r.settings.is_empty()) {
-                md.push_str(&format!("- `{}`: {}\n", r.algorithm, r.settings));
-            }
-            md.push('\n');
-        }
+        let settings: Vec<(String, String)> = data.runs.iter().map(|r| (r.algorithm.clone(), r.settings.clone())).collect();
+        md.push_str(&super::context::options_as_run(&settings));
         let body: Vec<Vec<String>> = data
             .runs
             .iter()

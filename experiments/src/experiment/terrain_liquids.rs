@@ -92,6 +92,9 @@ struct Data {
     edit_scene: [usize; 3],
     picture: String,
     gif: String,
+    /// Each extractor's options as it ran (absent from runs before they were recorded).
+    #[serde(default)]
+    settings: Vec<(String, String)>,
 }
 
 /// The page's opening reading: who keeps the layers clean with the rule, what the naive two
@@ -290,7 +293,9 @@ impl Experiment for TerrainLiquids {
         let mut refused = Vec::new();
         // Every registered surface extractor: those with edge vertices take the rule, the others
         // are refused by extract_layers (listed with its reason).
+        let mut settings = Vec::new();
         for extractor in extractors::registry().into_iter().filter(|e| !e.produces_volume()) {
+            settings.push((extractor.name().to_owned(), extractor.settings()));
             let mut times = Vec::new();
             let mut layers = Layers::default();
             for _ in 0..RUNS {
@@ -334,7 +339,7 @@ impl Experiment for TerrainLiquids {
         render::save_gif(&path, &frames, 40)?;
         let gif = ctx.link(&path);
         let edit_scene = lake_and_cave(EDIT_SCENE).grid().dims;
-        ctx.write_data(NAME, &Data { scene: phases.grid().dims, rows, naive, refused, edits, edit_scene, picture, gif })
+        ctx.write_data(NAME, &Data { scene: phases.grid().dims, rows, naive, refused, edits, edit_scene, picture, gif, settings })
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
@@ -354,6 +359,7 @@ impl Experiment for TerrainLiquids {
              one run.\n\n"
         );
         md.push_str(&reading(&d));
+        md.push_str(&super::context::options_as_run(&d.settings));
         let yes = |b: bool| if b { "yes" } else { "**no**" }.to_owned();
         let rows: Vec<Vec<String>> = d
             .rows
@@ -526,6 +532,7 @@ mod tests {
             edit_scene: [1, 1, 1],
             picture: String::new(),
             gif: String::new(),
+            settings: Vec::new(),
         };
         assert_eq!(reading(&d), "");
         d.rows = vec![row("mc", 0, 6), row("mt", 0, 0)];

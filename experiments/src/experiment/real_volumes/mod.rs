@@ -130,6 +130,9 @@ pub(crate) struct Data {
     /// The second volume, of another kind (absent from runs before it was added).
     #[serde(default)]
     pub(crate) second: Option<second::SecondVolume>,
+    /// Each of our extractors' options as it ran (absent from runs before they were recorded).
+    #[serde(default)]
+    pub(crate) settings: Vec<(String, String)>,
 }
 
 /// The iso-values: Otsu of all voxels, then Otsu of the voxels above the first.
@@ -244,6 +247,9 @@ impl Experiment for RealVolumes {
         let voxel_volume = data.spacing.iter().product::<f64>();
         let surface: Vec<_> =
             extractors::INFOS.iter().filter(|i| extractors::by_name(i.name).is_some_and(|e| !e.produces_volume())).collect();
+        data.settings = super::context::settings_of(
+            surface.iter().filter_map(|i| extractors::by_name(i.name)).collect::<Vec<_>>().iter().map(|e| &**e),
+        );
         let peers = [("vtk-flying-edges", "vtkFlyingEdges3D"), ("skimage-lewiner", "scikit-image (Lewiner)")];
         let mut peer_runners: Vec<PythonPeer> = peers.iter().map(|(name, _)| PythonPeer::new(&server, name)).collect();
         let mut end_to_end_peer = PythonPeer::new(&server, "vtk-flying-edges");
@@ -447,6 +453,7 @@ impl Experiment for RealVolumes {
              against CGAL, pymeshlab and VTK (golden values in `tests/reference/golden/`).\n\n",
             data.repeats, data.threads, data.data_type, data.spacing[0]
         ));
+        s.push_str(&super::context::options_as_run(&data.settings));
         for level in &data.levels {
             s.push_str(&format!("**{} (iso {:.1})**\n\n", level.name, level.iso));
             let rows: Vec<Vec<String>> = data

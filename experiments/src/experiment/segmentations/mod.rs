@@ -354,6 +354,13 @@ fn section(data: &Data, pictures: bool) -> String {
         two = THREADS[1]
     ));
     md.push_str(&reading::reading(data));
+    let sn = isolab_algorithms::labels::surface_nets::LabelSnOptions::default();
+    md.push_str(&format!(
+        "Our options (the label extractors' defaults in this commit): `surface-nets` smoothing constrained, {} iterations, \
+         relaxation {}, border closed; `isolab surface-nets unsmoothed` is `smoothing=none`; `marching-tetrahedra` has no \
+         smoothing. VTK SurfaceNets3D runs with its own defaults, and unsmoothed with its smoothing off.\n\n",
+        sn.iterations, sn.relaxation
+    ));
     md.push_str(&format!(
         "Rounds: {}. Versions: {}.\n\n",
         data.repeats,

@@ -67,6 +67,9 @@ struct Data {
     rows: Vec<Row>,
     #[serde(default)]
     like_for_like: Vec<LikeRow>,
+    /// Each extractor's options as it ran (absent from runs before they were recorded).
+    #[serde(default)]
+    settings: Vec<(String, String)>,
 }
 
 /// The paper's sizes on the paper's field: its unshared marching cubes and ours, alternating, on
@@ -313,7 +316,8 @@ impl Experiment for SvobodaTiming {
         };
         plot::xy(&dir.join("time"), &chart).map_err(ExperimentError::Figure)?;
         let like_for_like = like_for_like()?;
-        ctx.write_data(NAME, &Data { rows, like_for_like })
+        let settings = super::context::settings_of(built.iter().map(|e| &**e));
+        ctx.write_data(NAME, &Data { rows, like_for_like, settings })
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
@@ -344,6 +348,7 @@ impl Experiment for SvobodaTiming {
              of {runs}. Sampling is parallel and listed apart, as the paper samples once at start-up.\n\n",
         ));
         md.push_str(&reading(&data));
+        md.push_str(&super::context::options_as_run(&data.settings));
         let sizes: Vec<usize> = SIZES.to_vec();
         let body: Vec<Vec<String>> = sizes
             .iter()
@@ -400,7 +405,7 @@ mod tests {
 
     #[test]
     fn the_reading_follows_the_rows() {
-        let mut data = Data { rows: Vec::new(), like_for_like: Vec::new() };
+        let mut data = Data { rows: Vec::new(), like_for_like: Vec::new(), settings: Vec::new() };
         assert_eq!(reading(&data), "");
         let row = |algorithm: &str, ms: f64| Row {
             algorithm: algorithm.into(),

@@ -35,13 +35,7 @@ pub(super) fn page(d: &Data) -> String {
         ours.iter().map(|i| format!("`{i}`")).collect::<Vec<_>>().join(", "),
     ));
     md.push_str(&reading(d));
-    if !d.options.is_empty() {
-        md.push_str("Options as run (each extractor's defaults):\n\n");
-        for (name, settings) in &d.options {
-            md.push_str(&format!("- `{name}`: {settings}\n"));
-        }
-        md.push('\n');
-    }
+    md.push_str(&super::super::context::options_as_run(&d.options));
     let count = |n: Option<usize>| n.map_or("-".to_string(), |n| n.to_string());
     let body: Vec<Vec<String>> = d
         .rows

@@ -129,6 +129,23 @@ fn every_page_opens_with_a_reading() {
 }
 
 #[test]
+fn no_page_has_an_accidental_code_block() {
+    // Four leading spaces outside a fenced block make Markdown a code block: in generated prose,
+    // a string continuation that kept its indentation.
+    let tmp = assembled();
+    for e in all() {
+        let page = std::fs::read_to_string(tmp.path().join(format!("{}.md", e.name()))).expect("assembled page");
+        let mut fenced = false;
+        for (k, line) in page.lines().enumerate() {
+            if line.starts_with("```") {
+                fenced = !fenced;
+            }
+            assert!(fenced || !line.starts_with("    "), "{}.md line {}: indented as code: {line}", e.name(), k + 1);
+        }
+    }
+}
+
+#[test]
 fn every_paper_page_lists_where_we_differ() {
     let tmp = assembled();
     let names: Vec<&str> = all().iter().map(|e| e.name()).collect();

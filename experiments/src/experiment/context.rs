@@ -270,3 +270,19 @@ pub fn options_as_run(settings: &[(String, String)]) -> String {
 pub fn settings_of<'a>(extractors: impl IntoIterator<Item = &'a dyn isolab_algorithms::Extractor>) -> Vec<(String, String)> {
     extractors.into_iter().map(|e| (e.name().to_owned(), e.settings())).collect()
 }
+
+/// The options of the registered extractors `names` as this commit builds them by default, for
+/// pages whose data does not record them (the experiment runs each with its defaults): a list, or
+/// empty when no name is registered.
+pub fn default_options(names: &[&str]) -> String {
+    let settings: Vec<(String, String)> = names
+        .iter()
+        .filter_map(|n| isolab_algorithms::extractors::by_name(n))
+        .map(|e| (e.name().to_owned(), e.settings()))
+        .collect();
+    options_as_run(&settings).replacen(
+        "Options as run (each extractor's defaults)",
+        "Options (each extractor's defaults in this commit)",
+        1,
+    )
+}

@@ -170,6 +170,7 @@ impl Experiment for LargeWorld {
         ));
         let volume: Option<VolumeData> = ctx.data_path(VOLUME_DATA).exists().then(|| ctx.read_data(VOLUME_DATA)).transpose()?;
         md.push_str(&reading(&runs, volume.as_ref()));
+        md.push_str(&super::context::default_options(&[d.algorithm.as_str()]));
         let headers: Vec<String> = std::iter::once("measure".to_owned())
             .chain(runs.iter().map(|r| format!("{}×{}×{} samples", r.dims[0], r.dims[1], r.dims[2])))
             .collect();

@@ -357,6 +357,7 @@ fn section(data: &Data) -> String {
         data.libigl
     ));
     md.push_str(&reading(data));
+    md.push_str(&super::context::default_options(&["marching-cubes"]));
     let body: Vec<Vec<String>> = data
         .rows
         .iter()

@@ -211,6 +211,8 @@ impl Experiment for Viewer {
             MESH_BUDGET_BYTES as f64 / 1e6,
         ));
         md.push_str(&reading(&data));
+        let names: Vec<&str> = crate::report::first_seen(data.meshes.iter().map(|m| m.algorithm.as_str()));
+        md.push_str(&super::context::default_options(&names));
         if !data.left_out.is_empty() {
             md.push_str(&format!(
                 "Left out by the budget: {}.\n\n",

@@ -568,9 +568,12 @@ fn differences(rows: &[Row], removed_ours: &str, removed_paper: &str) -> String 
     }
     md.push_str(&format!(
         "- **Objects**: our asteroid and our bunny's distance field are ours, not the paper's; the sphere matches its \
-         counts only at the iso-value of *Matching the paper's sphere*.\n         - **The collapse threshold**: the paper gives none; ours is the post-process's default, {} h, which removes \
-         {removed_ours} of our asteroid's triangles against the paper's {removed_paper}.\n         - **Pass times**: another machine and implementation; the verdicts and their correction for the protocol's own \
-         bias are under *Section 4.1's pass times*.\n         - **The questionnaire**: its raw answers have {columns} answer columns where it states {participants} \
+         counts only at the iso-value of *Matching the paper's sphere*.\n\
+         - **The collapse threshold**: the paper gives none; ours is the post-process's default, {} h, which removes \
+         {removed_ours} of our asteroid's triangles against the paper's {removed_paper}.\n\
+         - **Pass times**: another machine and implementation; the verdicts and their correction for the protocol's own \
+         bias are under *Section 4.1's pass times*.\n\
+         - **The questionnaire**: its raw answers have {columns} answer columns where it states {participants} \
          participants (under *The questionnaire*).\n\n",
         isolab_algorithms::post::edge_collapse::DEFAULT_THRESHOLD
     ));

@@ -222,7 +222,8 @@ fn differences(data: &Data) -> String {
     }
     md.push_str(&format!(
         "- **The field**: the paper's noise scale and iso-value are unstated; ours are zoom {} and iso-value {} (our \
-         choice), and the main table meshes our `terrain` field instead, so triangle counts are not the paper's.\n         - **The smallest grid**: Table 1 gives {}³ as \"< {}\" ms, an upper bound, so no ratio is taken there.\n\n",
+         choice), and the main table meshes our `terrain` field instead, so triangle counts are not the paper's.\n\
+         - **The smallest grid**: Table 1 gives {}³ as \"< {}\" ms, an upper bound, so no ratio is taken there.\n\n",
         paper::ZOOM,
         paper::ISO,
         PAPER[0].0,

@@ -21,6 +21,8 @@
 //! ground, or below it and the cave floor, from their column heights and the noise bound; those
 //! chunks are skipped unsampled ([`isolab_algorithms::field::Field::block_side`]).
 
+mod reading;
+
 use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, BarChart, BarSeries};
 use crate::figures::series_color;
@@ -28,6 +30,7 @@ use crate::report::{markdown_table, Spread};
 use isolab_algorithms::chunks::stream_chunked;
 use isolab_algorithms::{extractors, fields, Grid};
 use isolab_io::PlyStream;
+use reading::reading;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -227,52 +230,6 @@ impl Experiment for LargeWorld {
         md.push_str(&volume_section(ctx)?);
         Ok(md)
     }
-}
-
-/// The page's opening reading: each world's time and peak memory against its dense grid, the
-/// streamed volume's peak against its file, and streaming against meshing in memory.
-fn reading(runs: &[&Data], volume: Option<&VolumeData>) -> String {
-    let mut lines: Vec<String> = runs
-        .iter()
-        .map(|r| {
-            format!(
-                "The {:.1} G-sample world ({:.1} GiB as a dense grid) was meshed in {:.0} s into {} triangles{}.",
-                r.samples as f64 / 1e9,
-                r.dense_gib,
-                r.seconds,
-                r.triangles,
-                r.peak_rss_mib.map_or(String::new(), |m| format!(
-                    ", its peak resident memory {m:.0} MiB, {:.2} % of the dense grid",
-                    100.0 * m / (r.dense_gib * 1024.0)
-                ))
-            )
-        })
-        .collect();
-    if let Some(v) = volume {
-        if let Some(peak) = v.streamed.peak_rss_mib {
-            lines.push(format!(
-                "The {}³ volume file ({:.2} GiB) streamed in {:.1} s at a peak of {peak:.0} MiB, {:.2}× the file.",
-                v.side,
-                v.file_gib,
-                v.streamed.seconds,
-                peak / (v.file_gib * 1024.0)
-            ));
-        }
-        let same = if v.compare_triangles[0] == v.compare_triangles[1] { "the same" } else { "different" };
-        lines.push(format!(
-            "At {}³, streaming takes {:.2}× the time of meshing in memory at {:.2}× its peak memory (medians), with {same} \
-             triangle counts ({} and {}).",
-            v.compare_side,
-            v.stream_seconds.median / v.memory_seconds.median,
-            v.stream_peak_mib.median / v.memory_peak_mib.median,
-            v.compare_triangles[0],
-            v.compare_triangles[1]
-        ));
-    }
-    if lines.is_empty() {
-        return String::new();
-    }
-    format!("**Reading.** {}\n\n", lines.join(" "))
 }
 
 /// The data file of the streamed volume file.
@@ -637,58 +594,4 @@ fn memory_figure(ctx: &Context, runs: &[&Data]) -> Result<String, ExperimentErro
     let stem = ctx.figure_dir(NAME)?.join("memory");
     plot::bars(&stem, &chart).map_err(ExperimentError::Figure)?;
     Ok(format!("\n![peak memory against the grid]({})\n", ctx.link(&stem.with_extension("png"))))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_reading_follows_the_data() {
-        assert_eq!(reading(&[], None), "");
-        let world: Data = serde_json::from_value(serde_json::json!({
-            "dims": [1, 1, 1], "chunk": 32, "algorithm": "marching-cubes", "samples": 2_000_000_000u64, "dense_gib": 8.0,
-            "machine_gib": null, "seconds": 90.0, "samples_per_second": 1.0, "triangles_per_second": 1.0, "vertices": 1,
-            "triangles": 7, "welded": 0, "chunks": [1, 1, 1], "meshed": 1, "empty": 0, "full": 0, "file_gib": 0.1,
-            "rss_before_mib": null, "peak_rss_mib": 512.0, "peak_reset": true, "peak_keys": 1, "peak_slab_mib": 1.0
-        }))
-        .unwrap();
-        let run = StreamedRun {
-            seconds: 9.0,
-            threshold_seconds: 4.0,
-            peak_rss_mib: Some(512.0),
-            peak_reset: true,
-            vertices: 1,
-            triangles: 1,
-            output_mib: 1.0,
-            iso: 1.0,
-            iso_from: None,
-        };
-        let mut volume = VolumeData {
-            side: 1024,
-            file_gib: 1.0,
-            in_memory_need_mib: 1,
-            available_mib: None,
-            chunk: 64,
-            algorithm: "marching-cubes".into(),
-            streamed: run,
-            zarr: None,
-            compare_side: 513,
-            compare_iso: 100.0,
-            memory_seconds: Spread::of(vec![2.0]),
-            memory_peak_mib: Spread::of(vec![400.0]),
-            stream_seconds: Spread::of(vec![3.0]),
-            stream_peak_mib: Spread::of(vec![100.0]),
-            compare_triangles: [5, 5],
-        };
-        let r = reading(&[&world], Some(&volume));
-        assert!(r.contains("The 2.0 G-sample world (8.0 GiB as a dense grid) was meshed in 90 s into 7 triangles, its peak resident memory 512 MiB, 6.25 % of the dense grid."), "{r}");
-        assert!(r.contains("streamed in 9.0 s at a peak of 512 MiB, 0.50× the file"), "{r}");
-        assert!(
-            r.contains("streaming takes 1.50× the time of meshing in memory at 0.25× its peak memory (medians), with the same"),
-            "{r}"
-        );
-        volume.compare_triangles = [5, 6];
-        assert!(reading(&[&world], Some(&volume)).contains("with different triangle counts (5 and 6)"));
-    }
 }

@@ -26,6 +26,20 @@ pub fn markdown_table(header: &[&str], rows: &[Vec<String>]) -> String {
     s
 }
 
+/// `items` joined by commas, or `none` when there are none (a reading's lists).
+pub fn listed_or<S: AsRef<str>>(items: &[S], none: &str) -> String {
+    if items.is_empty() {
+        none.to_owned()
+    } else {
+        items.iter().map(AsRef::as_ref).collect::<Vec<_>>().join(", ")
+    }
+}
+
+/// [`listed_or`] with "none".
+pub fn listed<S: AsRef<str>>(items: &[S]) -> String {
+    listed_or(items, "none")
+}
+
 /// The distinct items of `items`, each once, in the order first seen (unlike `Vec::dedup`,
 /// which only drops adjacent repeats).
 pub fn first_seen<T: PartialEq>(items: impl IntoIterator<Item = T>) -> Vec<T> {
@@ -78,6 +92,13 @@ mod tests {
         assert_eq!(median(vec![d(3), d(1), d(2)]), d(2));
         assert_eq!(median(vec![d(4), d(1), d(2), d(3)]), Duration::from_micros(2500));
         assert_eq!(median(vec![]), Duration::ZERO);
+    }
+
+    #[test]
+    fn lists_say_none_when_empty() {
+        assert_eq!(listed(&["mc", "sn"]), "mc, sn");
+        assert_eq!(listed::<&str>(&[]), "none");
+        assert_eq!(listed_or::<String>(&[], "no grid"), "no grid");
     }
 
     #[test]

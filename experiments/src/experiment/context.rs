@@ -258,12 +258,17 @@ pub fn corner_distances_h(mesh: &isolab_algorithms::TriMesh, spacing: f32) -> Ve
 /// The options each extractor ran with, as recorded in an experiment's data (name, its
 /// `Extractor::settings()`): a list for the page, empty when none were recorded.
 pub fn options_as_run(settings: &[(String, String)]) -> String {
+    options_list("Options as run (each extractor's defaults)", settings)
+}
+
+/// `settings` as a list under `heading`, empty when none is given.
+fn options_list(heading: &str, settings: &[(String, String)]) -> String {
     let listed: Vec<String> =
         settings.iter().filter(|(_, s)| !s.is_empty()).map(|(name, s)| format!("- `{name}`: {s}\n")).collect();
     if listed.is_empty() {
         return String::new();
     }
-    format!("Options as run (each extractor's defaults):\n\n{}\n", listed.concat())
+    format!("{heading}:\n\n{}\n", listed.concat())
 }
 
 /// Each extractor's name and `settings()`, to record in an experiment's data as it runs.
@@ -280,9 +285,5 @@ pub fn default_options(names: &[&str]) -> String {
         .filter_map(|n| isolab_algorithms::extractors::by_name(n))
         .map(|e| (e.name().to_owned(), e.settings()))
         .collect();
-    options_as_run(&settings).replacen(
-        "Options as run (each extractor's defaults)",
-        "Options (each extractor's defaults in this commit)",
-        1,
-    )
+    options_list("Options (each extractor's defaults in this commit)", &settings)
 }

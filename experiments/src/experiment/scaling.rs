@@ -331,13 +331,12 @@ fn reading(data: &Data) -> String {
         };
         bands[band].push(format!("{name} {s:.2}"));
     }
-    let said = |v: &[String]| if v.is_empty() { "none".to_owned() } else { v.join(", ") };
     let mut lines = vec![format!(
         "One-thread slopes of log time against log cells: with the cells (from {CELLS_SLOPE_FROM}): {}; with the surface \
          ({SURFACE_SLOPE_FROM} to {CELLS_SLOPE_FROM}): {}; hardly driven by the grid: {}.",
-        said(&bands[0]),
-        said(&bands[1]),
-        said(&bands[2])
+        crate::report::listed(&bands[0]),
+        crate::report::listed(&bands[1]),
+        crate::report::listed(&bands[2])
     )];
     let largest = data.rows.iter().map(|r| r.n).max().unwrap_or(0);
     for (k, t) in data.threads.iter().enumerate() {

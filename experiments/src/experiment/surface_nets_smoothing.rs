@@ -124,12 +124,13 @@ fn reading(data: &Data) -> String {
     format!("**Reading.** {} Where we differ from the post is listed at the end.\n\n", lines.join(" "))
 }
 
-/// Whether the post's feature-retention claim holds at every size (`None` without data).
-fn retention_claim_holds(data: &Data) -> Option<bool> {
+/// Per size with data, the implicit matrix's worst `csg` corner and the best other smoothing's,
+/// in `h` (the post's feature-retention claim, measured).
+fn retention_by_size(data: &Data) -> Vec<(usize, f64, f64)> {
     let corner = |c: usize, m: &str| {
         data.rows.iter().find(|r| r.field == FEATURE_FIELD && r.cells == c && r.method == m).and_then(|r| r.worst_corner_h)
     };
-    let claim: Vec<bool> = CHUNKS
+    CHUNKS
         .iter()
         .filter_map(|&c| {
             let implicit = corner(c, "implicit")?;
@@ -138,10 +139,15 @@ fn retention_claim_holds(data: &Data) -> Option<bool> {
                 .filter(|(m, _)| *m != "implicit" && *m != "none")
                 .filter_map(|(m, _)| corner(c, m))
                 .reduce(f64::min)?;
-            Some(implicit <= other)
+            Some((c, implicit, other))
         })
-        .collect();
-    (!claim.is_empty()).then(|| claim.iter().all(|&b| b))
+        .collect()
+}
+
+/// Whether the post's feature-retention claim holds at every size (`None` without data).
+fn retention_claim_holds(data: &Data) -> Option<bool> {
+    let compared = retention_by_size(data);
+    (!compared.is_empty()).then(|| compared.iter().all(|&(_, i, o)| i <= o))
 }
 
 /// Where we differ from the post, each with its reason or "unexplained" (empty without rows).
@@ -237,18 +243,7 @@ fn feature_retention(data: &Data) -> String {
     }
     // The verdict on the post's claim: is the implicit matrix's worst corner the nearest of the
     // smoothings' at every size?
-    let compared: Vec<(usize, f64, f64)> = CHUNKS
-        .iter()
-        .filter_map(|&c| {
-            let implicit = at(c, "implicit")?;
-            let best_other = METHODS
-                .iter()
-                .filter(|(m, _)| *m != "implicit" && *m != "none")
-                .filter_map(|(m, _)| at(c, m))
-                .reduce(f64::min)?;
-            Some((c, implicit, best_other))
-        })
-        .collect();
+    let compared = retention_by_size(data);
     let verdict = if compared.is_empty() {
         String::new()
     } else if compared.iter().all(|&(_, i, o)| i <= o) {

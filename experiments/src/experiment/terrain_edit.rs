@@ -103,12 +103,7 @@ pub(crate) struct Data {
 
 /// Names, or "none".
 fn names<'a>(v: impl Iterator<Item = &'a str>) -> String {
-    let v: Vec<&str> = v.collect();
-    if v.is_empty() {
-        "none".to_owned()
-    } else {
-        v.join(", ")
-    }
+    crate::report::listed(&v.collect::<Vec<_>>())
 }
 
 /// The page's opening reading: who keeps every edit within a frame, the median edits, who leaves
@@ -127,7 +122,7 @@ fn reading(data: &Data) -> String {
     let mut lines = vec![format!(
         "Every edit within a {FRAME_MS:.1} ms frame: {}; not every one: {}.",
         names(data.runs.iter().filter(|r| within(r) == r.edit_ms.len()).map(|r| r.algorithm.as_str())),
-        if missed.is_empty() { "none".to_owned() } else { missed.join(", ") }
+        crate::report::listed(&missed)
     )];
     let mut by_median: Vec<&Run> = data.runs.iter().collect();
     by_median.sort_by(|a, b| a.median_ms.total_cmp(&b.median_ms));

@@ -104,7 +104,7 @@ fn reading(d: &Data) -> String {
         return String::new();
     }
     let clean = |c: &LayerContact| c.unshared == 0 && c.crossing_pairs == 0 && c.liquid_inside_solid == 0;
-    let said = |v: Vec<String>| if v.is_empty() { "none".to_owned() } else { v.join(", ") };
+    let said = |v: Vec<String>| crate::report::listed(&v);
     let mut lines = vec![format!(
         "With the shared-vertex rule, layers that share every contact vertex, never cross and hold no liquid inside the \
          solid: {}; layers that cross: {}.",

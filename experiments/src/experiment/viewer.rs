@@ -286,12 +286,8 @@ fn reading(data: &Data) -> String {
         count(&|m| m.closed),
         count(&|m| m.manifold),
         count(&|m| m.intersecting_pairs > 0),
-        if coarser.is_empty() { "none".to_owned() } else { coarser.join(", ") },
-        if data.left_out.is_empty() {
-            "none".to_owned()
-        } else {
-            data.left_out.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ")
-        }
+        crate::report::listed(&coarser),
+        crate::report::listed(&data.left_out.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>())
     )
 }
 

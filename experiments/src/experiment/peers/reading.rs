@@ -4,7 +4,7 @@
 
 use super::{label, one_shot_ratios, scaling_columns, time_of, Column, Data};
 use crate::peers::Protocol;
-use crate::report::Spread;
+use crate::report::{listed_or, Spread};
 
 /// A ratio column over `grids`: the median, fastest and slowest ratio (peer time over ours) and
 /// the grids where it is below one, or `None` where no grid has both.
@@ -28,14 +28,6 @@ fn said(s: &Spread) -> String {
     format!("{:.2}× ({:.2}–{:.2})", s.median, s.min, s.max)
 }
 
-fn grids_said(below: &[String], none: &str) -> String {
-    if below.is_empty() {
-        none.to_owned()
-    } else {
-        below.join(", ")
-    }
-}
-
 /// Three to six lines: the fast peers' columns one-shot and steady, the slow peers' medians, and
 /// the second thread (empty without timings).
 pub(super) fn reading(data: &Data, grids: &[(String, usize)]) -> String {
@@ -46,7 +38,7 @@ pub(super) fn reading(data: &Data, grids: &[(String, usize)]) -> String {
             .iter()
             .filter_map(|c| {
                 let (s, below) = column(data, grids, protocol, c)?;
-                Some(format!("{} {} (the peer faster on {})", c.0, said(&s), grids_said(&below, "no grid")))
+                Some(format!("{} {} (the peer faster on {})", c.0, said(&s), listed_or(&below, "no grid")))
             })
             .collect();
         if !parts.is_empty() {
@@ -64,7 +56,7 @@ pub(super) fn reading(data: &Data, grids: &[(String, usize)]) -> String {
         .iter()
         .filter_map(|c| {
             let (s, below) = column(data, grids, Protocol::OneShot, c)?;
-            Some(format!("{} {} (slower with it on {})", c.0, said(&s), grids_said(&below, "no grid")))
+            Some(format!("{} {} (slower with it on {})", c.0, said(&s), listed_or(&below, "no grid")))
         })
         .collect();
     if !second.is_empty() {

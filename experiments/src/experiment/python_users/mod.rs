@@ -250,13 +250,12 @@ fn reading(data: &Data) -> String {
             mixed.push(peer);
         }
     }
-    let said = |v: &[&str]| if v.is_empty() { "none".to_owned() } else { v.join(", ") };
     lines.push(format!(
         "Over all {} inputs on one thread, faster than ours on every one: {}; slower on every one: {}; either, by input: {}.",
         all.len(),
-        said(&faster),
-        said(&slower),
-        said(&mixed)
+        crate::report::listed(&faster),
+        crate::report::listed(&slower),
+        crate::report::listed(&mixed)
     ));
     let second: Vec<f64> = all
         .iter()

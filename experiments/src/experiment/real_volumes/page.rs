@@ -49,12 +49,7 @@ pub(super) fn reading(data: &Data) -> String {
         let here: Vec<&Row> = data.rows.iter().filter(|r| r.level == level.name).collect();
         let Some(fastest) = here.iter().min_by(|a, b| a.time_1.median.total_cmp(&b.time_1.median)) else { continue };
         let names = |keep: &dyn Fn(&Row) -> bool| {
-            let v: Vec<&str> = here.iter().filter(|r| keep(r)).map(|r| r.implementation.as_str()).collect();
-            if v.is_empty() {
-                "none".to_owned()
-            } else {
-                v.join(", ")
-            }
+            crate::report::listed(&here.iter().filter(|r| keep(r)).map(|r| r.implementation.as_str()).collect::<Vec<_>>())
         };
         lines.push(format!(
             "At the {} level (iso {:.1}), fastest on one thread: {} ({} ms); not closed and manifold: {}; with \

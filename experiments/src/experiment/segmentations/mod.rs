@@ -331,12 +331,9 @@ fn interface_sentences(data: &Data) -> Vec<String> {
                 .iter()
                 .filter(|r| &r.input == input && r.threads == THREADS[0] && r.unmatched_interface_triangles.is_some())
                 .partition(|r| r.unmatched_interface_triangles == Some(0));
-            let names = |rows: &[&Row]| rows.iter().map(|r| r.implementation.clone()).collect::<Vec<_>>().join(", ");
-            format!(
-                "{input}: no unmatched interface triangle in {}; some in {}.",
-                if clean.is_empty() { "none".into() } else { names(&clean) },
-                if gaps.is_empty() { "none".into() } else { names(&gaps) }
-            )
+            let names =
+                |rows: &[&Row]| crate::report::listed(&rows.iter().map(|r| r.implementation.as_str()).collect::<Vec<_>>());
+            format!("{input}: no unmatched interface triangle in {}; some in {}.", names(&clean), names(&gaps))
         })
         .collect()
 }

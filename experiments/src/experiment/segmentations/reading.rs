@@ -3,6 +3,7 @@
 //! peers' outputs show that nobody explained.
 
 use super::{against_target, find, inputs, spread, Data, Row, TARGET, TARGETS, THREADS};
+use crate::report::listed as list;
 
 /// Three to six lines that say what the rows show (empty without rows).
 pub(super) fn reading(data: &Data) -> String {
@@ -86,14 +87,6 @@ pub(super) fn reading(data: &Data) -> String {
         lines.push(format!("Open label meshes or zero-area triangles, unexplained: {}.", defects.join("; ")));
     }
     format!("**Reading.** {}\n\n", lines.join(" "))
-}
-
-fn list(items: &[impl AsRef<str>]) -> String {
-    if items.is_empty() {
-        "none".into()
-    } else {
-        items.iter().map(AsRef::as_ref).collect::<Vec<_>>().join(", ")
-    }
 }
 
 #[cfg(test)]

@@ -208,26 +208,29 @@ impl LabelSurface {
                 || vec![NONE; positions.len()],
                 |map, k| {
                     let mine = &bucket[start[k]..start[k + 1]];
-                    let mut out = TriMesh { triangles: Vec::with_capacity(mine.len()), ..TriMesh::default() };
+                    // A closed mesh has about half as many vertices as triangles.
+                    let mut out = TriMesh {
+                        triangles: Vec::with_capacity(mine.len()),
+                        positions: Vec::with_capacity(mine.len() / 2 + 8),
+                        ..TriMesh::default()
+                    };
+                    let mut used = Vec::with_capacity(mine.len() / 2 + 8);
                     for &(t, reversed) in mine {
                         let [a, b, c] = triangles[t as usize];
                         let order = if reversed { [a, c, b] } else { [a, b, c] };
-                        let mut tri = [0u32; 3];
-                        for (slot, v) in tri.iter_mut().zip(order) {
+                        out.triangles.push(order.map(|v| {
                             let m = &mut map[v as usize];
                             if *m == NONE {
-                                *m = out.positions.len() as u32;
-                                out.positions.push(positions[v as usize]);
+                                *m = used.len() as u32;
+                                used.push(v);
                             }
-                            *slot = *m;
-                        }
-                        out.triangles.push(tri);
+                            *m
+                        }));
                     }
+                    out.positions.extend(used.iter().map(|&v| positions[v as usize]));
                     // Reset only what this label touched, for the next label on this thread.
-                    for &(t, _) in mine {
-                        for v in triangles[t as usize] {
-                            map[v as usize] = NONE;
-                        }
+                    for &v in &used {
+                        map[v as usize] = NONE;
                     }
                     if !self.mesh.normals.is_empty() {
                         out.compute_face_weighted_normals();

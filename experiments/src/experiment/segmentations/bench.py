@@ -18,7 +18,10 @@ Inputs:
 
 Implementations (each a function from the label map to one (vertices, faces) pair per label,
 in index coordinates, with every conversion inside the timed call; one-shot: a new filter or
-mesher each call):
+mesher each call). Each also reports its meshing step alone, timed inside the call (`core_ms`):
+isolab's `extract_ms` (the extraction, timed in Rust, without the per-label meshes and the
+conversions), VTK's `Update()`, zmesh's `mesh()`; scikit-image has no such step apart. The rest
+of a call is building each label's mesh and handing arrays to Python:
 - `isolab surface-nets` (smoothed, the default), `isolab surface-nets unsmoothed`,
   `isolab marching-tetrahedra`: `isolab.mesh_labels`, per-label meshes built by it;
 - `VTK SurfaceNets3D` (smoothed, its defaults) and `VTK SurfaceNets3D unsmoothed`: the label
@@ -46,7 +49,7 @@ against and along its normal) is an interface triangle, and it should appear, wi
 those that do not are counted as unmatched (gaps and overlaps between neighbours).
 
 Writes {"versions", "notes", "inputs", "rows": [{"implementation", "input", "threads", "ms",
-"labels", "triangles", ...checks}]} to OUT.json.
+"core_ms", "labels", "triangles", ...checks}]} to OUT.json.
 """
 import argparse
 import importlib.metadata
@@ -96,7 +99,7 @@ def isolab_impl(algorithm, smoothing):
     def run(seg, labels, threads):
         kwargs = {} if smoothing is None else {"smoothing": smoothing}
         meshes = isolab.mesh_labels(seg, algorithm=algorithm, threads=threads, **kwargs)
-        return {label: (m.vertices, m.faces) for label, m in meshes.items()}
+        return {label: (m.vertices, m.faces) for label, m in meshes.items()}, meshes.extract_ms
     return run
 
 
@@ -118,7 +121,9 @@ def vtk_impl(smoothing):
             nets.SetLabel(i, float(label))
         nets.SetSmoothing(smoothing)
         nets.SetOutputMeshTypeToTriangles()
+        start = time.perf_counter()
         nets.Update()
+        core_ms = (time.perf_counter() - start) * 1e3
         out = nets.GetOutput()
         points = numpy_support.vtk_to_numpy(out.GetPoints().GetData()).astype(np.float32)
         cells = numpy_support.vtk_to_numpy(out.GetPolys().GetConnectivityArray()).reshape(-1, 3).astype(np.int32)
@@ -126,19 +131,21 @@ def vtk_impl(smoothing):
         # Each label's triangles (reversed where it is the second of the pair), over the
         # filter's one point array (compacted only for the untimed checks).
         return {label: (points, np.concatenate([cells[pairs[:, 0] == label], cells[pairs[:, 1] == label][:, ::-1]]))
-                for label in labels}
+                for label in labels}, core_ms
     return run
 
 
 def zmesh_impl(seg, labels, threads):
     mesher = zmesh.Mesher((1, 1, 1))
+    start = time.perf_counter()
     mesher.mesh(seg, close=True)  # closed where labels touch the border, as the others
+    core_ms = (time.perf_counter() - start) * 1e3
     meshes = {}
     for label in mesher.ids():
         m = mesher.get(label, normals=False)
         meshes[int(label)] = (np.asarray(m.vertices, dtype=np.float32), np.asarray(m.faces, dtype=np.int32))
     mesher.clear()
-    return meshes
+    return meshes, core_ms
 
 
 def skimage_impl(seg, labels, threads):
@@ -151,7 +158,7 @@ def skimage_impl(seg, labels, threads):
         box = np.pad(box, 1).astype(np.float32)  # closed where the label touches the map's border
         v, f, _, _ = measure.marching_cubes(box, 0.5, method="lewiner")
         meshes[label] = ((v + lo - 1).astype(np.float32), f.astype(np.int32))
-    return meshes
+    return meshes, None
 
 
 def implementations(threads):
@@ -258,19 +265,23 @@ def time_input(name, seg, repeats, rows):
     for threads in THREADS:
         impls = implementations(threads)
         times = {label: [] for label, _ in impls}
+        cores = {label: [] for label, _ in impls}
         last = {}
         for r in range(repeats + 1):
             k = r % len(impls)
             for label, fn in impls[k:] + impls[:k]:
                 t = time.perf_counter()
-                out = fn(seg, labels, threads)
+                out, core_ms = fn(seg, labels, threads)
                 ms = (time.perf_counter() - t) * 1e3
                 if r > 0:
                     times[label].append(ms)
+                    if core_ms is not None:
+                        cores[label].append(core_ms)
                 last[label] = out
         for label, _ in impls:
             out = last[label]
             row = {"implementation": label, "input": name, "threads": threads, "ms": times[label],
+                   "core_ms": cores[label] or None,
                    "labels": len([1 for v, f in out.values() if len(f)]),
                    "triangles": int(sum(len(f) for v, f in out.values()))}
             if threads == THREADS[0]:

@@ -99,6 +99,7 @@ mod tests {
             input: input.into(),
             threads: 1,
             ms: vec![ms],
+            core_ms: None,
             labels: 3,
             triangles: 100,
             labels_closed: Some(closed),
@@ -145,5 +146,29 @@ mod tests {
             (against_target(1.497), against_target(1.5), against_target(1.42)),
             ("1.497".into(), "1.50".into(), "1.42".into())
         );
+    }
+
+    #[test]
+    fn the_target_sentences_give_the_meshing_step_where_both_have_one() {
+        let mut rows = vec![
+            row("isolab surface-nets", "m", 100.0, 0, 2, 3),
+            row("isolab surface-nets unsmoothed", "m", 40.0, 0, 2, 3),
+            row("VTK SurfaceNets3D", "m", 120.0, 4, 1, 1),
+            row("zmesh", "m", 80.0, 9, 3, 3),
+        ];
+        rows[0].core_ms = Some(vec![50.0, 60.0, 70.0]);
+        rows[2].core_ms = Some(vec![90.0]);
+        let s = super::super::target_sentences(&data(rows.clone())).join(" ");
+        assert!(
+            s.contains(
+                "VTK SurfaceNets3D takes 1.20× the time of `isolab surface-nets` (missed), its meshing step alone 1.50× ours;"
+            ),
+            "{s}"
+        );
+        // zmesh's row has a meshing step, ours unsmoothed none: the verdict alone.
+        assert!(s.contains("zmesh takes 2.00× the time of `isolab surface-nets unsmoothed` (met)."), "{s}");
+        rows[0].core_ms = None;
+        let s = super::super::target_sentences(&data(rows)).join(" ");
+        assert!(!s.contains("meshing step"), "{s}");
     }
 }

@@ -159,6 +159,87 @@ fn every_pattern_of_one_cell_with_up_to_four_labels() {
     }
 }
 
+/// Whether surface nets' splits ([`labels::surface_nets::split`]) resolve every cell of `map`
+/// (closed border): no piece left pinched or bridged, no `a, b, a, b` face (whose ring rule may
+/// change a cell's faces), and no face of four labels whose two cells split different labels.
+fn splits_resolve_every_cell(dims: [usize; 3], map: &[u8]) -> bool {
+    use labels::cell::{cell_pieces, checkered_faces, larger_label_flips, FACES, NONE};
+    use labels::surface_nets::split::split_reporting;
+    let at = |s: [isize; 3]| -> u8 {
+        if (0..3).any(|a| s[a] < 1 || s[a] > dims[a] as isize) {
+            0
+        } else {
+            map[(s[0] - 1) as usize + dims[0] * ((s[1] - 1) as usize + dims[1] * (s[2] - 1) as usize)]
+        }
+    };
+    let cell = |c: [isize; 3]| -> [u8; 8] {
+        std::array::from_fn(|i| at([c[0] + (i & 1) as isize, c[1] + (i >> 1 & 1) as isize, c[2] + (i >> 2 & 1) as isize]))
+    };
+    let walls = |l: &[u8; 8]| {
+        let flips = larger_label_flips(l);
+        split_reporting(l, &cell_pieces(l, flips), flips)
+    };
+    for z in 0..=dims[2] as isize {
+        for y in 0..=dims[1] as isize {
+            for x in 0..=dims[0] as isize {
+                let l = cell([x, y, z]);
+                let (split, unresolved) = walls(&l);
+                if unresolved || checkered_faces(&l) != 0 {
+                    return false;
+                }
+                let Some(split) = split else { continue };
+                for f in 0..6 {
+                    let w = split.walls[f];
+                    let face = FACES[f].corners.map(|c| l[c as usize]);
+                    if w == NONE || (0..4).any(|i| (i + 1..4).any(|j| face[i] == face[j])) {
+                        continue;
+                    }
+                    let mut n = [x, y, z];
+                    n[f / 2] += if f % 2 == 1 { 1 } else { -1 };
+                    let theirs = cell(n);
+                    if let (Some(s), _) = walls(&theirs) {
+                        let wn = s.walls[f ^ 1];
+                        if wn != NONE && theirs[wn as usize] != l[w as usize] {
+                            return false;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    true
+}
+
+#[test]
+fn surface_nets_is_manifold_wherever_its_splits_resolve_every_cell() {
+    // Every one-cell map of up to four labels whose cells the splits resolve: every label's mesh
+    // is manifold (and closed, outward, holding its samples, as everywhere), smoothed or not.
+    let resolved: Vec<Vec<u8>> = (0..4u32.pow(8))
+        .map(|code| (0..8).map(|i| (code >> (2 * i) & 3) as u8).collect::<Vec<u8>>())
+        .filter(|map| splits_resolve_every_cell([2, 2, 2], map))
+        .collect();
+    // Most maps qualify, among them many with three and four labels in a cell.
+    let three_or_more = resolved.iter().filter(|m| (1..4u8).filter(|l| m.contains(l)).count() >= 2).count();
+    assert!(
+        resolved.len() > 40_000 && three_or_more > 20_000,
+        "{} maps, {three_or_more} of three labels or more",
+        resolved.len()
+    );
+    for smoothing in ["none", "constrained"] {
+        let mut o = Options::new();
+        o.set("smoothing", smoothing);
+        let e = labels::build("surface-nets", &o).unwrap().unwrap();
+        let pinched: usize = resolved
+            .par_iter()
+            .map(|map| {
+                let what = || format!("surface-nets ({smoothing}) on one-cell map {map:?}");
+                check_map(&*e, LabelMap::new([2, 2, 2], map).unwrap(), true, &what).unwrap_or_else(|m| panic!("{m}"))
+            })
+            .sum();
+        assert_eq!(pinched, 0, "surface-nets ({smoothing}): labels pinched where every cell is resolved");
+    }
+}
+
 #[test]
 fn every_pattern_of_two_cells_with_two_labels_is_manifold() {
     // Two labels (the background and one more): every entry is manifold, whatever it claims for

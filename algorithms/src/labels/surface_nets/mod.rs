@@ -30,18 +30,31 @@
 //! two labels is the same triangles in both labels' meshes (one mesh, tagged: see [`super`]).
 //! Each label's mesh is closed, encloses its samples and no other, and is consistently wound
 //! where it is manifold. With two labels in every cell (a label and the background, say) it is
-//! manifold: every pattern of two cells is tested.
+//! manifold: every pattern of two cells is tested. With more, it is manifold wherever the splits
+//! below resolve every cell.
 //!
-//! **Non-guarantees.** Where three or more labels meet in a cell, one vertex per piece can join
-//! two separate boundary loops of one label (a pinched vertex), or a label's bridge across an
-//! `a, x, a, y` face collapses to one net edge (four of its triangles on one edge): that label's
-//! mesh is not manifold there. Frisken's net, and VTK's, has one vertex per cell; resolving these
-//! needs more than one vertex per piece, joined inside the cell. `tests/tests/labels.rs` counts
-//! the cell patterns where it happens; `marching-tetrahedra` ([`super::marching_tetrahedra`]) is
-//! the entry that is manifold for every map.
+//! **Pinches and bridges split** (`split`; beyond Frisken, whose net and VTK's keep one vertex
+//! per cell). Where one piece carries two separate boundary loops of one label (a pinched
+//! vertex), or a label's bridge across an `a, x, a, y` face would put four of its triangles on
+//! one net edge, the piece gets one vertex per loop (*cap*) of the label concerned and one for
+//! the rest, and each face point where a cap's sheets meet other sheets gets a wall: a triangle
+//! or quad between the cap's vertex, the rest's and the vertex across the face, an interface of
+//! the two labels beside the split one there (where both cells across a face of three labels
+//! split different labels, two walls around a tetrahedron given to the third). Smoothing moves
+//! a cap's vertex by the move of its rest's vertex (kept in the cell), so the walls keep their
+//! shape instead of folding as the two follow different neighbours. A cell splits only on its
+//! own pattern and its neighbours' patterns, so blocks and slabs mesh it as the whole map does.
 //!
-//! **Files.** This one (the sweep, the net, the triangles) and `smoothing` (Frisken's
-//! constrained smoothing).
+//! **Non-guarantees.** A piece where two labels pinch, a cell whose ring rule changed its faces,
+//! and two cells across a face of four labels that would split different labels stay as
+//! Frisken's net has them: one vertex, and that label's mesh not manifold there.
+//! `tests/tests/labels.rs` checks that every one-cell map whose cells are all resolved is
+//! manifold for every label, and counts the maps that are not; `marching-tetrahedra`
+//! ([`super::marching_tetrahedra`]) is the entry that is manifold for every map.
+//!
+//! **Files.** This one (the net, the triangles), `sweep` (cells in layers, quads and walls),
+//! `split` (which pieces split, and the walls) and `smoothing` (Frisken's constrained
+//! smoothing).
 //!
 //! **Costs.** One read of every sample (a copy of each layer, padded), work proportional to the
 //! surface cells (each cell's pieces looked up by its pattern), and `iterations` passes over the
@@ -66,6 +79,7 @@
 use glam::Vec3;
 
 mod smoothing;
+pub mod split;
 mod sweep;
 
 use super::blocks::{LabelBlock, LabelFragment};
@@ -76,7 +90,7 @@ use smoothing::smooth;
 
 /// One line for listings.
 pub const DESCRIPTION: &str =
-    "Frisken 2022: one vertex per piece of interface in a cell, a quad per edge between two labels, smoothing that keeps junctions sharp";
+    "Frisken 2022: one vertex per piece of interface in a cell (pinched labels split apart), a quad per edge between two labels, smoothing that keeps junctions sharp";
 
 /// Option names for [`from_options`].
 pub const OPTION_NAMES: &[&str] = &["smoothing", "iterations", "relaxation", "border"];
@@ -183,11 +197,16 @@ struct Net {
     positions: Vec<Vec3>,
     /// The padded cell of each vertex.
     cells: Vec<[u32; 3]>,
+    /// Of a cap's vertex (`split`), the vertex of the rest of its piece; `u32::MAX` for others.
+    anchors: Vec<u32>,
     /// Each vertex's labels (sorted): `labels[label_start[v]..label_start[v + 1]]`.
     label_start: Vec<u32>,
     labels: Vec<u32>,
     quads: Vec<[u32; 4]>,
     pairs: Vec<[u32; 2]>,
+    /// The walls of split cells that are triangles (`split`), wound as quads are.
+    tris: Vec<[u32; 3]>,
+    tri_pairs: Vec<[u32; 2]>,
 }
 
 fn extract<T: Label>(map: LabelMap<'_, T>, o: &LabelSnOptions, out: &mut LabelSurface) -> Result<(), ExtractError> {
@@ -210,9 +229,8 @@ fn extract<T: Label>(map: LabelMap<'_, T>, o: &LabelSnOptions, out: &mut LabelSu
 fn extract_block<T: Label>(block: &LabelBlock<'_, T>, o: &LabelSnOptions, out: &mut LabelFragment) {
     let (net, active_cells) = smoothed_net(block, o);
     let owned = &block.cells;
-    let owner_owned = |q: &[u32; 4]| {
-        (0..3).all(|a| owned[a].contains(&(q.iter().map(|&v| net.cells[v as usize][a]).max().unwrap_or(0) as usize)))
-    };
+    let owner_owned =
+        |q: &[u32]| (0..3).all(|a| owned[a].contains(&(q.iter().map(|&v| net.cells[v as usize][a]).max().unwrap_or(0) as usize)));
     let sizes = block.map_dims.map(|n| n + 2);
     // Each vertex's weld key: its padded cell and its place among the cell's pieces.
     let mut keys = Vec::with_capacity(net.positions.len());
@@ -224,22 +242,30 @@ fn extract_block<T: Label>(block: &LabelBlock<'_, T>, o: &LabelSnOptions, out: &
     let mut local = vec![u32::MAX; net.positions.len()];
     let surface = &mut out.surface;
     surface.active_cells = active_cells;
+    let mut local_of = |v: u32, surface: &mut LabelSurface| {
+        let m = &mut local[v as usize];
+        if *m == u32::MAX {
+            *m = surface.mesh.positions.len() as u32;
+            surface.mesh.positions.push(net.positions[v as usize] - Vec3::ONE);
+            out.keys.push(keys[v as usize]);
+        }
+        *m
+    };
     for (q, pair) in net.quads.iter().zip(&net.pairs) {
         if !owner_owned(q) {
             continue;
         }
-        let halves = split(q.map(|v| net.positions[v as usize]));
-        let q = q.map(|v| {
-            let m = &mut local[v as usize];
-            if *m == u32::MAX {
-                *m = surface.mesh.positions.len() as u32;
-                surface.mesh.positions.push(net.positions[v as usize] - Vec3::ONE);
-                out.keys.push(keys[v as usize]);
-            }
-            *m
-        });
+        let halves = split_quad(q.map(|v| net.positions[v as usize]));
+        let q = q.map(|v| local_of(v, surface));
         surface.mesh.triangles.extend(halves.map(|t| t.map(|k| q[k])));
         surface.pairs.extend([*pair, *pair]);
+    }
+    for (t, pair) in net.tris.iter().zip(&net.tri_pairs) {
+        if owner_owned(t) {
+            let t = t.map(|v| local_of(v, surface));
+            surface.mesh.triangles.push(t);
+            surface.pairs.push(*pair);
+        }
     }
 }
 
@@ -264,18 +290,20 @@ fn smoothed_net<T: Label>(block: &LabelBlock<'_, T>, o: &LabelSnOptions) -> (Net
 
 /// Quads to triangles along their shorter diagonal, positions from padded to map coordinates.
 fn triangulate(net: Net, out: &mut LabelSurface) {
-    let Net { positions, quads, pairs, .. } = net;
-    out.mesh.triangles.reserve(quads.len() * 2);
-    out.pairs.reserve(quads.len() * 2);
+    let Net { positions, quads, pairs, tris, tri_pairs, .. } = net;
+    out.mesh.triangles.reserve(quads.len() * 2 + tris.len());
+    out.pairs.reserve(quads.len() * 2 + tris.len());
     for (q, pair) in quads.iter().zip(&pairs) {
-        out.mesh.triangles.extend(split(q.map(|v| positions[v as usize])).map(|t| t.map(|k| q[k])));
+        out.mesh.triangles.extend(split_quad(q.map(|v| positions[v as usize])).map(|t| t.map(|k| q[k])));
         out.pairs.extend([*pair, *pair]);
     }
+    out.mesh.triangles.extend_from_slice(&tris);
+    out.pairs.extend_from_slice(&tri_pairs);
     out.mesh.positions = positions.into_iter().map(|p| p - Vec3::ONE).collect();
 }
 
 /// A quad with corners at `p` as two triangles (of corner slots) along its shorter diagonal.
-fn split(p: [Vec3; 4]) -> [[usize; 3]; 2] {
+fn split_quad(p: [Vec3; 4]) -> [[usize; 3]; 2] {
     if p[0].distance_squared(p[2]) <= p[1].distance_squared(p[3]) {
         [[0, 1, 2], [0, 2, 3]]
     } else {

@@ -10,7 +10,22 @@ use rayon::prelude::*;
 /// followed neighbours, in SIMD-width positions (a vertex with no neighbour to follow keeps its
 /// place in both buffers).
 pub(super) fn smooth(net: &mut Net, iterations: usize, relaxation: f32) {
-    let (start, next) = followed_neighbours(net);
+    let (mut start, mut next) = followed_neighbours(net);
+    // A cap's vertex (`split`) does not follow neighbours: it keeps its place beside the rest of
+    // its piece and moves with it, so the walls between them keep their shape.
+    if net.anchors.iter().any(|&a| a != u32::MAX) {
+        let mut kept = Vec::with_capacity(next.len());
+        let mut from = 0;
+        for v in 0..net.positions.len() {
+            let around = &next[from..start[v + 1] as usize];
+            from = start[v + 1] as usize;
+            if net.anchors[v] == u32::MAX {
+                kept.extend_from_slice(around);
+            }
+            start[v + 1] = kept.len() as u32;
+        }
+        next = kept;
+    }
     let rule = Rule {
         start: &start,
         next: &next,
@@ -22,8 +37,19 @@ pub(super) fn smooth(net: &mut Net, iterations: usize, relaxation: f32) {
     let mut odd = even.clone();
     passes(&rule, &mut even, &mut odd, iterations);
     let last = if iterations % 2 == 0 { &even } else { &odd };
-    for (p, q) in net.positions.iter_mut().zip(last) {
-        *p = Vec3::from(*q);
+    // Caps move by their rest's move, from the places both had before smoothing.
+    for v in 0..net.positions.len() {
+        let a = net.anchors[v];
+        if a != u32::MAX {
+            let moved = Vec3A::from(net.positions[v]) + last[a as usize] - Vec3A::from(net.positions[a as usize]);
+            let lo = rule.lows[v];
+            net.positions[v] = Vec3::from(moved.clamp(lo, lo + rule.width));
+        }
+    }
+    for (v, p) in net.positions.iter_mut().enumerate() {
+        if net.anchors[v] == u32::MAX {
+            *p = Vec3::from(last[v]);
+        }
     }
 }
 
@@ -80,10 +106,8 @@ fn followed_neighbours(net: &Net) -> (Vec<u32>, Vec<u32>) {
     // Every quad gives each of its corners its two sides' other ends; duplicates (a side shared
     // by two or more quads) are removed per vertex.
     let mut count = vec![0u32; n + 1];
-    for q in &net.quads {
-        for &v in q {
-            count[v as usize + 1] += 2;
-        }
+    for &v in net.quads.iter().flatten().chain(net.tris.iter().flatten()) {
+        count[v as usize + 1] += 2;
     }
     for i in 0..n {
         count[i + 1] += count[i];
@@ -95,6 +119,14 @@ fn followed_neighbours(net: &Net) -> (Vec<u32>, Vec<u32>) {
             let v = q[k] as usize;
             all[fill[v] as usize] = q[(k + 3) % 4];
             all[fill[v] as usize + 1] = q[(k + 1) % 4];
+            fill[v] += 2;
+        }
+    }
+    for t in &net.tris {
+        for k in 0..3 {
+            let v = t[k] as usize;
+            all[fill[v] as usize] = t[(k + 2) % 3];
+            all[fill[v] as usize + 1] = t[(k + 1) % 3];
             fill[v] += 2;
         }
     }
@@ -136,6 +168,11 @@ mod tests {
         for q in &net.quads {
             for k in 0..4 {
                 around[q[k] as usize].extend([q[(k + 1) % 4], q[(k + 3) % 4]]);
+            }
+        }
+        for t in &net.tris {
+            for k in 0..3 {
+                around[t[k] as usize].extend([t[(k + 1) % 3], t[(k + 2) % 3]]);
             }
         }
         let labels_of = |v: usize| &net.labels[net.label_start[v] as usize..net.label_start[v + 1] as usize];

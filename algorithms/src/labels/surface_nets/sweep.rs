@@ -3,8 +3,11 @@
 //! slabs joined in order into the net the parent module smooths and triangulates.
 
 use super::super::blocks::LabelBlock;
-use super::super::cell::{cell_pieces, checkered_faces, edge_index, is_ring_face, larger_label_flips, CellPieces, EDGES};
+use super::super::cell::{
+    cell_pieces, checkered_faces, edge_index, is_ring_face, larger_label_flips, CellPieces, EDGES, FACES, NONE,
+};
 use super::super::Label;
+use super::split::{split, walls_of_face};
 use super::Net;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -82,6 +85,12 @@ impl<T: Label> Window<'_, '_, T> {
 struct PieceCache {
     index: FxHashMap<u32, u32>,
     pieces: Vec<CellPieces>,
+    /// Per table: the table with its pinched labels split ([`split`]), or `u32::MAX`.
+    split_of: Vec<u32>,
+    /// Per table: per face, a corner of the label whose walls lie on it, or [`NONE`].
+    walls: Vec<[u8; 6]>,
+    /// Per table: per vertex, the rest's vertex a cap was split from, or [`NONE`].
+    rests: Vec<[u8; 12]>,
     /// Cells of two labels, by the corners holding the larger: their pieces with the default
     /// face rule ([`larger_label_flips`] is a function of that mask).
     two: Vec<u32>,
@@ -121,11 +130,28 @@ impl PieceCache {
             key |= (rank as u32) << (3 * i);
         }
         key |= u32::from(flips) << 24;
-        let pieces = &mut self.pieces;
-        *self.index.entry(key).or_insert_with(|| {
-            pieces.push(cell_pieces(labels, flips));
-            (pieces.len() - 1) as u32
+        let PieceCache { index, pieces, split_of, walls, rests, .. } = self;
+        *index.entry(key).or_insert_with(|| {
+            let plain = cell_pieces(labels, flips);
+            let at = pieces.len() as u32;
+            pieces.push(plain);
+            walls.push([NONE; 6]);
+            rests.push([NONE; 12]);
+            split_of.push(u32::MAX);
+            if let Some(s) = split(labels, &plain, flips) {
+                split_of[at as usize] = at + 1;
+                pieces.push(s.pieces);
+                walls.push(s.walls);
+                rests.push(s.rest);
+                split_of.push(u32::MAX);
+            }
+            at
         })
+    }
+
+    /// Whether table `t` is a split one (it has walls).
+    fn has_walls(&self, t: u32) -> bool {
+        self.walls[t as usize] != [NONE; 6]
     }
 }
 
@@ -184,12 +210,15 @@ fn join(parts: Vec<Slab>) -> (Net, usize) {
         active_cells += part.active_cells;
         net.positions.extend_from_slice(&part.net.positions);
         net.cells.extend_from_slice(&part.net.cells);
+        net.anchors.extend(part.net.anchors.iter().map(|&a| if a == u32::MAX { a } else { a + offset }));
         net.labels.extend_from_slice(&part.net.labels);
         net.label_start.extend(part.net.label_start[1..].iter().map(|&s| s + label_offset));
         let below = previous_last_layer;
         net.quads
             .extend(part.net.quads.iter().map(|q| q.map(|v| if v & BELOW != 0 { below + (v & !BELOW) } else { offset + v })));
         net.pairs.extend_from_slice(&part.net.pairs);
+        net.tris.extend(part.net.tris.iter().map(|t| t.map(|v| if v & BELOW != 0 { below + (v & !BELOW) } else { offset + v })));
+        net.tri_pairs.extend_from_slice(&part.net.tri_pairs);
         previous_last_layer = offset + part.last_layer_start;
     }
     (net, active_cells)
@@ -214,6 +243,8 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
     for (k, layer) in layers.iter_mut().enumerate().skip(1) {
         window.fill_layer(first as isize + k as isize - 2, layer);
     }
+    let mut prev_split: Vec<SplitCell<T>> = Vec::new();
+    let mut cur_split: Vec<SplitCell<T>> = Vec::new();
     let mut prev = CellLayer { first: Vec::new(), table: Vec::new() };
     let mut cur = CellLayer { first: Vec::new(), table: Vec::new() };
     let in_range = |c: [isize; 3]| (0..3).all(|d| c[d] >= frame.all[d].0 && c[d] < frame.all[d].1);
@@ -224,6 +255,8 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
         window.fill_layer(cz as isize + 2, &mut layers[3]);
         std::mem::swap(&mut prev, &mut cur);
         cur.reset(layer_cells);
+        std::mem::swap(&mut prev_split, &mut cur_split);
+        cur_split.clear();
         let px = p[0];
         let at = |layer: &Vec<T>, x: usize, y: usize| layer[x + px * y];
         // The labels of the cell at (x, y) whose lower layer is `layers[k]`.
@@ -280,7 +313,45 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
                         flips ^= 1 << f;
                     }
                 }
-                let t = if flips == base { plain } else { cache.get(&labels, flips) };
+                let mut t = if flips == base { plain } else { cache.get(&labels, flips) };
+                // A pinched label is split where the cell's faces are its plain ones and no
+                // neighbour's own split puts another label's walls on a face of its walls.
+                let split_table = cache.split_of[t as usize];
+                if flips == base && split_table != u32::MAX {
+                    let mut clash = false;
+                    let walls = cache.walls[split_table as usize];
+                    for (f, &w) in walls.iter().enumerate() {
+                        if w == NONE {
+                            continue;
+                        }
+                        let (d, side) = (f / 2, f % 2);
+                        let mut n = [cx as isize, cy as isize, cz as isize];
+                        n[d] += if side == 1 { 1 } else { -1 };
+                        if !in_range(n) {
+                            continue;
+                        }
+                        let theirs = cell_labels((n[2] - cz as isize + 1) as usize, n[0] as usize, n[1] as usize);
+                        let (tn, _) = cache.plain(&theirs);
+                        let sn = cache.split_of[tn as usize];
+                        if sn != u32::MAX {
+                            let wn = cache.walls[sn as usize][f ^ 1];
+                            // Two labels split onto one point of three labels meet at a
+                            // tetrahedron (`walls_of_face`); of four, they clash.
+                            let face = FACES[f].corners.map(|c| labels[c as usize]);
+                            let four = (0..4).all(|i| (i + 1..4).all(|j| face[i] != face[j]));
+                            if wn != NONE && theirs[wn as usize] != labels[w as usize] && four {
+                                clash = true;
+                                break;
+                            }
+                        }
+                    }
+                    if !clash {
+                        t = split_table;
+                    }
+                }
+                if cache.has_walls(t) {
+                    cur_split.push(SplitCell { x: cx, y: cy, flips, labels });
+                }
                 let pieces = &cache.pieces[t as usize];
                 let c = cx + cells_x * cy;
                 cur.table[c] = t;
@@ -290,7 +361,7 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
                 } else {
                     cur.first[c] = net.positions.len() as u32;
                     let o = frame.origin;
-                    add_vertices(&mut net, pieces, &labels, [cx + o[0], cy + o[1], cz + o[2]]);
+                    add_vertices(&mut net, pieces, &cache.rests[t as usize], &labels, [cx + o[0], cy + o[1], cz + o[2]]);
                 }
             }
         }
@@ -300,6 +371,56 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
         };
         if below {
             continue;
+        }
+        // The walls of split cells, each face once: this layer's split cells on their faces in
+        // the layer (shared with a split cell: by the first of the two) and below, and the
+        // layer below's split cells on their faces above (shared with a cell not split).
+        let face_vertices = |layer: &CellLayer, cx: usize, cy: usize, f: usize| -> Option<[u32; 4]> {
+            let c = cx + cells_x * cy;
+            let first = *layer.first.get(c)?;
+            (first != u32::MAX).then(|| {
+                let piece = &cache.pieces[layer.table[c] as usize].piece;
+                FACES[f].edges.map(|e| first.wrapping_add(u32::from(piece[e as usize])))
+            })
+        };
+        let split_at = |layer: &CellLayer, cx: usize, cy: usize| {
+            let c = cx + cells_x * cy;
+            layer.first[c] != u32::MAX && cache.has_walls(layer.table[c])
+        };
+        for s in &cur_split {
+            for f in 0..5 {
+                let (d, side) = (f / 2, f % 2);
+                let (mut nx, mut ny) = (s.x as isize, s.y as isize);
+                match d {
+                    0 => nx += if side == 1 { 1 } else { -1 },
+                    1 => ny += if side == 1 { 1 } else { -1 },
+                    _ if cz == first => continue,
+                    _ => {}
+                }
+                if nx < lo[0] as isize || ny < lo[1] as isize || nx >= hi[0] as isize || ny >= hi[1] as isize {
+                    continue;
+                }
+                let (nx, ny) = (nx as usize, ny as usize);
+                let layer = if d == 2 { &prev } else { &cur };
+                if d < 2 && split_at(layer, nx, ny) && (ny, nx) < (s.y, s.x) {
+                    continue;
+                }
+                let (Some(here), Some(there)) = (face_vertices(&cur, s.x, s.y, f), face_vertices(layer, nx, ny, f ^ 1)) else {
+                    continue;
+                };
+                push_walls(&mut net, f, &s.labels, s.flips, here, there);
+            }
+        }
+        if cz > first {
+            for s in &prev_split {
+                if split_at(&cur, s.x, s.y) {
+                    continue;
+                }
+                let (Some(here), Some(there)) = (face_vertices(&prev, s.x, s.y, 5), face_vertices(&cur, s.x, s.y, 4)) else {
+                    continue;
+                };
+                push_walls(&mut net, 5, &s.labels, s.flips, here, there);
+            }
         }
         // z edges from sample layer cz to cz + 1: their four cells are in layer cz.
         for y in (lo[1] + 1)..hi[1] {
@@ -357,11 +478,67 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
     Slab { net, last_layer_start, active_cells }
 }
 
+/// A cell whose pinched labels were split, for its walls.
+struct SplitCell<T> {
+    x: usize,
+    y: usize,
+    flips: u8,
+    labels: [T; 8],
+}
+
+/// The walls ([`walls_of_face`]) on face `f` of a split cell with corner labels `labels` and
+/// face flips `flips`: `here[k]` is its vertex of the face's edge slot `k`, `there[k]` the vertex
+/// of the cell across the face. Each is wound outward for its larger label, as quads are.
+fn push_walls<T: Label>(net: &mut Net, f: usize, labels: &[T; 8], flips: u8, here: [u32; 4], there: [u32; 4]) {
+    let l = FACES[f].corners.map(|c| labels[c as usize]);
+    for w in walls_of_face(f, l, flips >> f & 1 == 1, here, there) {
+        // Whether the label after the slot, going round its quad outward, runs from the cell
+        // across the face into this one: the quad of an edge along axis t runs through the
+        // cells at (p, q) offsets (-1, -1), (0, -1), (0, 0), (-1, 0) from the edge's lower
+        // sample (p, q the axes after t), wound outward for the lower sample's label.
+        let (a, b) = EDGES[FACES[f].edges[w.slot] as usize];
+        let t = (a ^ b).trailing_zeros() as usize;
+        let (p, q) = ((t + 1) % 3, (t + 2) % 3);
+        let here_at = [-i32::from(a >> p & 1), -i32::from(a >> q & 1)];
+        let mut there_at = here_at;
+        let step = if f % 2 == 1 { 1 } else { -1 };
+        there_at[usize::from(f / 2 == q)] += step;
+        let place = |o: [i32; 2]| [[-1, -1], [0, -1], [0, 0], [-1, 0]].iter().position(|&c| c == o).unwrap_or(0);
+        let forward = place(here_at) == (place(there_at) + 1) % 4;
+        let x_low = labels[a as usize] == w.x;
+        let [s1, n1, n2, s2] = w.polygon;
+        let mut polygon = if forward == x_low { vec![s1, n1, n2, s2] } else { vec![s2, n2, n1, s1] };
+        polygon.dedup();
+        if polygon.first() == polygon.last() {
+            polygon.pop();
+        }
+        let (x, z) = (w.x.id(), w.z.id());
+        if x < z {
+            polygon.reverse();
+        }
+        let pair = [x.max(z), x.min(z)];
+        match polygon[..] {
+            [a, b, c] => {
+                net.tris.push([a, b, c]);
+                net.tri_pairs.push(pair);
+            }
+            [a, b, c, d] => {
+                net.quads.push([a, b, c, d]);
+                net.pairs.push(pair);
+            }
+            _ => {}
+        }
+    }
+}
+
 /// The vertices of one surface cell at padded cell `c`: per piece, the mean of its crossing
 /// edges' midpoints, with the labels the piece separates.
-fn add_vertices<T: Label>(net: &mut Net, pieces: &CellPieces, labels: &[T; 8], c: [usize; 3]) {
+fn add_vertices<T: Label>(net: &mut Net, pieces: &CellPieces, rest: &[u8; 12], labels: &[T; 8], c: [usize; 3]) {
     let base = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
+    let first = net.positions.len() as u32;
     for piece in 0..pieces.count {
+        let r = rest[piece as usize];
+        net.anchors.push(if r == NONE { u32::MAX } else { first + u32::from(r) });
         let mut sum = Vec3::ZERO;
         let mut n = 0.0;
         let start = net.labels.len();

@@ -430,9 +430,10 @@ fn section(data: &Data, pictures: bool) -> String {
         "\nThe tissue map is the MNI152 T1 template nilearn ships, split by a three-class Otsu threshold of its non-zero \
          voxels (scikit-image's `threshold_multiotsu`) into darker, middle and brighter tissue; the Voronoi maps give every \
          sample the label of its nearest of twice as many random seeds as labels, so labels meet in many triple junctions. \
-         Surface nets' non-manifold places are where three or more labels meet in a cell (the `algorithms::labels` \
-         documentation says why one vertex per piece cannot resolve them); marching tetrahedra is manifold for every map \
-         by construction, with more triangles.\n\n",
+         Surface nets' non-manifold places, where there are any, are where three or more labels meet in a cell and its \
+         splits (which give a pinched label's loops their own vertices) do not resolve it (the \
+         `algorithms::labels::surface_nets` documentation lists when); marching tetrahedra is manifold for every map by \
+         construction, with more triangles.\n\n",
     );
     if pictures {
         md.push_str(&format!(

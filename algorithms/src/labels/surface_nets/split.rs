@@ -52,7 +52,7 @@ fn touches<T: PartialEq + Copy>(labels: &[T; 8], e: usize, l: T) -> bool {
 
 /// The sectors of a face point (slots `slots` of face `f`, in cyclic order): the corner between
 /// each slot and the next.
-pub fn sector_corners(f: usize, slots: &[u8]) -> Vec<u8> {
+fn sector_corners(f: usize, slots: &[u8]) -> Vec<u8> {
     slots.iter().map(|&k| FACES[f].corners[(k as usize + 1) % 4]).collect()
 }
 
@@ -220,14 +220,14 @@ fn cap_walls<T: PartialEq + Copy>(labels: &[T; 8], points: &[(usize, Vec<u8>)], 
     flanks.iter().all(|f| f.iter().all(|&(_, n)| n <= 2)).then_some(faces)
 }
 
-/// The walls on face `f` of a cell between this cell's vertices (`here[k]`, the vertex of the
+/// The walls on a face of a cell between this cell's vertices (`here[k]`, the vertex of the
 /// face's edge slot `k`) and the cell across the face's (`there[k]`), with the face's corner
-/// labels `l` in the face's cyclic order and its flip bit: for each face point whose sheets end
-/// on two different segments, one polygon (three or four distinct vertices), given as the slot
-/// `k` whose sheet it continues, the labels on its two sides `(x, z)` (`x` the sector after slot
-/// `k`), and its corners in order around `x`'s outward normal once `x_forward` (whether `x`'s
-/// orientation of slot `k`'s quad runs from the cell across the face to this one) is known.
-pub fn walls_of_face<T: PartialEq + Copy>(f: usize, l: [T; 4], flip: bool, here: [u32; 4], there: [u32; 4]) -> Vec<Wall<T>> {
+/// labels `l` in the face's cyclic order and its flip bit. For each face point whose sheets end
+/// on two segments, one wall between the two sectors where they change; on three (two labels
+/// split, one on each side), two walls around a tetrahedron given to the third label. Each is
+/// given as the slot whose sheet it continues, the labels on its two sides, and its corners
+/// (see [`Wall`]; the caller winds it).
+pub fn walls_of_face<T: PartialEq + Copy>(l: [T; 4], flip: bool, here: [u32; 4], there: [u32; 4]) -> Vec<Wall<T>> {
     let points = face_points(l, flip);
     let mut out = Vec::new();
     for g in 0..2 {
@@ -239,7 +239,7 @@ pub fn walls_of_face<T: PartialEq + Copy>(f: usize, l: [T; 4], flip: bool, here:
         let wall = |i: usize, z: T| {
             let (s1, n1) = seg(i);
             let (s2, n2) = seg((i + 1) % m);
-            Wall { slot: slots[i] as usize, x: l[corner(i)], z, face: f, polygon: [s1, n1, n2, s2] }
+            Wall { slot: slots[i] as usize, x: l[corner(i)], z, polygon: [s1, n1, n2, s2] }
         };
         match changes[..] {
             // One label split (on either side or both): the two sectors flanking it close on
@@ -274,8 +274,6 @@ pub struct Wall<T> {
     pub x: T,
     /// The label on the wall's other side.
     pub z: T,
-    /// The face.
-    pub face: usize,
     /// `[s1, n1, n2, s2]`: this cell's vertex of the slot, the vertex across the face, then the
     /// same two of the next slot; wound outward for `x` when `x`'s orientation of the slot's
     /// quad runs from `n1` to `s1`, reversed otherwise.

@@ -292,6 +292,12 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
                 if !below && owned([cx, cy, cz]) {
                     active_cells += 1;
                 }
+                // The labels of the cell across face `f`, if the map has it.
+                let across = |f: usize| {
+                    let mut n = [cx as isize, cy as isize, cz as isize];
+                    n[f / 2] += if f % 2 == 1 { 1 } else { -1 };
+                    in_range(n).then(|| cell_labels((n[2] - cz as isize + 1) as usize, n[0] as usize, n[1] as usize))
+                };
                 let (plain, base) = cache.plain(&labels);
                 let mut flips = base;
                 let mut checkered = checkered_faces(&labels);
@@ -301,13 +307,7 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
                     if !is_ring_face(&labels, &cache.pieces[plain as usize], f) {
                         continue;
                     }
-                    let (d, side) = (f / 2, f % 2);
-                    let mut n = [cx as isize, cy as isize, cz as isize];
-                    n[d] += if side == 1 { 1 } else { -1 };
-                    if !in_range(n) {
-                        continue;
-                    }
-                    let theirs = cell_labels((n[2] - cz as isize + 1) as usize, n[0] as usize, n[1] as usize);
+                    let Some(theirs) = across(f) else { continue };
                     let (t, _) = cache.plain(&theirs);
                     if is_ring_face(&theirs, &cache.pieces[t as usize], f ^ 1) {
                         flips ^= 1 << f;
@@ -324,13 +324,7 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
                         if w == NONE {
                             continue;
                         }
-                        let (d, side) = (f / 2, f % 2);
-                        let mut n = [cx as isize, cy as isize, cz as isize];
-                        n[d] += if side == 1 { 1 } else { -1 };
-                        if !in_range(n) {
-                            continue;
-                        }
-                        let theirs = cell_labels((n[2] - cz as isize + 1) as usize, n[0] as usize, n[1] as usize);
+                        let Some(theirs) = across(f) else { continue };
                         let (tn, _) = cache.plain(&theirs);
                         let sn = cache.split_of[tn as usize];
                         if sn != u32::MAX {
@@ -491,7 +485,7 @@ struct SplitCell<T> {
 /// of the cell across the face. Each is wound outward for its larger label, as quads are.
 fn push_walls<T: Label>(net: &mut Net, f: usize, labels: &[T; 8], flips: u8, here: [u32; 4], there: [u32; 4]) {
     let l = FACES[f].corners.map(|c| labels[c as usize]);
-    for w in walls_of_face(f, l, flips >> f & 1 == 1, here, there) {
+    for w in walls_of_face(l, flips >> f & 1 == 1, here, there) {
         // Whether the label after the slot, going round its quad outward, runs from the cell
         // across the face into this one: the quad of an edge along axis t runs through the
         // cells at (p, q) offsets (-1, -1), (0, -1), (0, 0), (-1, 0) from the edge's lower

@@ -197,8 +197,9 @@ struct Net {
     positions: Vec<Vec3>,
     /// The padded cell of each vertex.
     cells: Vec<[u32; 3]>,
-    /// Of a cap's vertex (`split`), the vertex of the rest of its piece; `u32::MAX` for others.
-    anchors: Vec<u32>,
+    /// `[cap, rest]`: each cap's vertex (`split`) and the vertex of the rest of its piece, in
+    /// increasing order of the cap.
+    caps: Vec<[u32; 2]>,
     /// Each vertex's labels (sorted): `labels[label_start[v]..label_start[v + 1]]`.
     label_start: Vec<u32>,
     labels: Vec<u32>,

@@ -13,13 +13,14 @@ pub(super) fn smooth(net: &mut Net, iterations: usize, relaxation: f32) {
     let (mut start, mut next) = followed_neighbours(net);
     // A cap's vertex (`split`) does not follow neighbours: it keeps its place beside the rest of
     // its piece and moves with it, so the walls between them keep their shape.
-    if net.anchors.iter().any(|&a| a != u32::MAX) {
+    if !net.caps.is_empty() {
         let mut kept = Vec::with_capacity(next.len());
         let mut from = 0;
+        let mut caps = net.caps.iter().map(|c| c[0]).peekable();
         for v in 0..net.positions.len() {
             let around = &next[from..start[v + 1] as usize];
             from = start[v + 1] as usize;
-            if net.anchors[v] == u32::MAX {
+            if caps.next_if_eq(&(v as u32)).is_none() {
                 kept.extend_from_slice(around);
             }
             start[v + 1] = kept.len() as u32;
@@ -38,18 +39,20 @@ pub(super) fn smooth(net: &mut Net, iterations: usize, relaxation: f32) {
     passes(&rule, &mut even, &mut odd, iterations);
     let last = if iterations % 2 == 0 { &even } else { &odd };
     // Caps move by their rest's move, from the places both had before smoothing.
-    for v in 0..net.positions.len() {
-        let a = net.anchors[v];
-        if a != u32::MAX {
-            let moved = Vec3A::from(net.positions[v]) + last[a as usize] - Vec3A::from(net.positions[a as usize]);
-            let lo = rule.lows[v];
-            net.positions[v] = Vec3::from(moved.clamp(lo, lo + rule.width));
-        }
+    let moved: Vec<Vec3> = net
+        .caps
+        .iter()
+        .map(|&[cap, rest]| {
+            let (cap, rest) = (cap as usize, rest as usize);
+            let p = Vec3A::from(net.positions[cap]) + last[rest] - Vec3A::from(net.positions[rest]);
+            Vec3::from(p.clamp(rule.lows[cap], rule.lows[cap] + rule.width))
+        })
+        .collect();
+    for (p, q) in net.positions.iter_mut().zip(last) {
+        *p = Vec3::from(*q);
     }
-    for (v, p) in net.positions.iter_mut().enumerate() {
-        if net.anchors[v] == u32::MAX {
-            *p = Vec3::from(last[v]);
-        }
+    for (&[cap, _], &p) in net.caps.iter().zip(&moved) {
+        net.positions[cap as usize] = p;
     }
 }
 

@@ -210,7 +210,7 @@ fn join(parts: Vec<Slab>) -> (Net, usize) {
         active_cells += part.active_cells;
         net.positions.extend_from_slice(&part.net.positions);
         net.cells.extend_from_slice(&part.net.cells);
-        net.anchors.extend(part.net.anchors.iter().map(|&a| if a == u32::MAX { a } else { a + offset }));
+        net.caps.extend(part.net.caps.iter().map(|c| c.map(|v| v + offset)));
         net.labels.extend_from_slice(&part.net.labels);
         net.label_start.extend(part.net.label_start[1..].iter().map(|&s| s + label_offset));
         let below = previous_last_layer;
@@ -315,35 +315,10 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
                 }
                 let mut t = if flips == base { plain } else { cache.get(&labels, flips) };
                 // A pinched label is split where the cell's faces are its plain ones and no
-                // neighbour's own split puts another label's walls on a face of its walls.
+                // neighbour's own split clashes with it.
                 let split_table = cache.split_of[t as usize];
-                if flips == base && split_table != u32::MAX {
-                    let mut clash = false;
-                    let walls = cache.walls[split_table as usize];
-                    for (f, &w) in walls.iter().enumerate() {
-                        if w == NONE {
-                            continue;
-                        }
-                        let Some(theirs) = across(f) else { continue };
-                        let (tn, _) = cache.plain(&theirs);
-                        let sn = cache.split_of[tn as usize];
-                        if sn != u32::MAX {
-                            let wn = cache.walls[sn as usize][f ^ 1];
-                            // Two labels split onto one point of three labels meet at a
-                            // tetrahedron (`walls_of_face`); of four, they clash.
-                            let face = FACES[f].corners.map(|c| labels[c as usize]);
-                            let four = (0..4).all(|i| (i + 1..4).all(|j| face[i] != face[j]));
-                            if wn != NONE && theirs[wn as usize] != labels[w as usize] && four {
-                                clash = true;
-                                break;
-                            }
-                        }
-                    }
-                    if !clash {
-                        t = split_table;
-                    }
-                }
-                if cache.has_walls(t) {
+                if flips == base && split_table != u32::MAX && !clashes(&mut cache, split_table, &labels, &across) {
+                    t = split_table;
                     cur_split.push(SplitCell { x: cx, y: cy, flips, labels });
                 }
                 let pieces = &cache.pieces[t as usize];
@@ -472,6 +447,33 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
     Slab { net, last_layer_start, active_cells }
 }
 
+/// Whether a cell with corner labels `labels` and split table `split` has a neighbour (its
+/// labels `across(f)` across face `f`) whose own split puts another label's walls on a face of
+/// four labels where it has walls: two labels split onto one point of three labels meet at a
+/// tetrahedron ([`walls_of_face`]), of four they clash. Out of the sweep's hot loop: few cells
+/// split.
+#[inline(never)]
+fn clashes<T: Label>(cache: &mut PieceCache, split: u32, labels: &[T; 8], across: &dyn Fn(usize) -> Option<[T; 8]>) -> bool {
+    let walls = cache.walls[split as usize];
+    for (f, &w) in walls.iter().enumerate() {
+        let face = FACES[f].corners.map(|c| labels[c as usize]);
+        let four = (0..4).all(|i| (i + 1..4).all(|j| face[i] != face[j]));
+        if w == NONE || !four {
+            continue;
+        }
+        let Some(theirs) = across(f) else { continue };
+        let (tn, _) = cache.plain(&theirs);
+        let sn = cache.split_of[tn as usize];
+        if sn != u32::MAX {
+            let wn = cache.walls[sn as usize][f ^ 1];
+            if wn != NONE && theirs[wn as usize] != labels[w as usize] {
+                return true;
+            }
+        }
+    }
+    false
+}
+
 /// A cell whose pinched labels were split, for its walls.
 struct SplitCell<T> {
     x: usize,
@@ -532,7 +534,9 @@ fn add_vertices<T: Label>(net: &mut Net, pieces: &CellPieces, rest: &[u8; 12], l
     let first = net.positions.len() as u32;
     for piece in 0..pieces.count {
         let r = rest[piece as usize];
-        net.anchors.push(if r == NONE { u32::MAX } else { first + u32::from(r) });
+        if r != NONE {
+            net.caps.push([first + u32::from(piece), first + u32::from(r)]);
+        }
         let mut sum = Vec3::ZERO;
         let mut n = 0.0;
         let start = net.labels.len();

@@ -158,88 +158,120 @@ impl LabelSurface {
         out
     }
 
-    /// Every label's mesh ([`Self::label_mesh`]), by label: one pass over the tags to bucket the
-    /// triangles by label, then the labels in parallel, each with its own vertex map.
+    /// Every label's mesh ([`Self::label_mesh`]), by label. The labels are dealt to one group
+    /// per thread; each group is one pass over the triangles, each triangle going to the meshes
+    /// of its labels in the group, each vertex numbered in a mesh where it is first used there.
     pub fn label_meshes(&self) -> BTreeMap<u32, TriMesh> {
         use rayon::prelude::*;
         let labels = self.labels();
-        // Each triangle's two slots (its labels' places in `labels`; NONE for the background).
-        const NONE: u32 = u32::MAX;
-        let slots: Vec<[u32; 2]> = {
-            let max = labels.last().copied().unwrap_or(0) as usize;
-            if max < 1 << 20 {
-                let mut table = vec![NONE; max + 1];
-                for (k, &l) in labels.iter().enumerate() {
-                    table[l as usize] = k as u32;
-                }
-                self.pairs.iter().map(|p| [table[p[0] as usize], if p[1] == 0 { NONE } else { table[p[1] as usize] }]).collect()
-            } else {
-                let find = |l: u32| labels.binary_search(&l).map_or(NONE, |k| k as u32);
-                self.pairs.iter().map(|p| [find(p[0]), find(p[1])]).collect()
-            }
-        };
-        // Triangles of each label, compressed by counting: `(triangle, reversed)`.
-        let mut start = vec![0usize; labels.len() + 1];
-        for s in &slots {
-            for &k in s {
-                if k != NONE {
-                    start[k as usize + 1] += 1;
-                }
-            }
-        }
-        for k in 0..labels.len() {
-            start[k + 1] += start[k];
-        }
-        let mut fill = start.clone();
-        let mut bucket = vec![(0u32, false); start[labels.len()]];
-        for (t, s) in slots.iter().enumerate() {
-            for (side, &k) in s.iter().enumerate() {
-                if k != NONE {
-                    bucket[fill[k as usize]] = (t as u32, side == 1);
-                    fill[k as usize] += 1;
-                }
-            }
-        }
-        let positions = &self.mesh.positions;
-        let triangles = &self.mesh.triangles;
-        let meshes: Vec<TriMesh> = (0..labels.len())
+        let groups = rayon::current_num_threads().clamp(1, labels.len().max(1));
+        let mut meshes: Vec<(usize, TriMesh)> = (0..groups)
             .into_par_iter()
-            .map_init(
-                || vec![NONE; positions.len()],
-                |map, k| {
-                    let mine = &bucket[start[k]..start[k + 1]];
-                    // A closed mesh has about half as many vertices as triangles.
-                    let mut out = TriMesh {
-                        triangles: Vec::with_capacity(mine.len()),
-                        positions: Vec::with_capacity(mine.len() / 2 + 8),
-                        ..TriMesh::default()
-                    };
-                    let mut used = Vec::with_capacity(mine.len() / 2 + 8);
-                    for &(t, reversed) in mine {
-                        let [a, b, c] = triangles[t as usize];
-                        let order = if reversed { [a, c, b] } else { [a, b, c] };
-                        out.triangles.push(order.map(|v| {
-                            let m = &mut map[v as usize];
-                            if *m == NONE {
-                                *m = used.len() as u32;
-                                used.push(v);
-                            }
-                            *m
-                        }));
-                    }
-                    out.positions.extend(used.iter().map(|&v| positions[v as usize]));
-                    // Reset only what this label touched, for the next label on this thread.
-                    for &v in &used {
-                        map[v as usize] = NONE;
-                    }
-                    if !self.mesh.normals.is_empty() {
-                        out.compute_face_weighted_normals();
-                    }
-                    out
-                },
-            )
+            .flat_map_iter(|g| {
+                let mine: Vec<u32> = labels.iter().copied().skip(g).step_by(groups).collect();
+                let places: Vec<usize> = (g..labels.len()).step_by(groups).collect();
+                places.into_iter().zip(self.meshes_of(&mine))
+            })
             .collect();
-        labels.into_iter().zip(meshes).collect()
+        meshes.sort_unstable_by_key(|(k, _)| *k);
+        labels.into_iter().zip(meshes.into_iter().map(|(_, m)| m)).collect()
+    }
+
+    /// The meshes of `mine` (sorted labels, the background not among them), in its order: one
+    /// pass over the triangles (and one over their pairs, to allocate each mesh once).
+    fn meshes_of(&self, mine: &[u32]) -> Vec<TriMesh> {
+        const NONE: u32 = u32::MAX;
+        // Each label's place in `mine`, by a table when the labels are small.
+        let max = mine.last().copied().unwrap_or(0) as usize;
+        let table: Option<Vec<u32>> = (max < 1 << 20).then(|| {
+            let mut table = vec![NONE; max + 1];
+            for (k, &l) in mine.iter().enumerate() {
+                table[l as usize] = k as u32;
+            }
+            table
+        });
+        // (The background and the run counter's start are in no slot.)
+        let slot = |l: u32| match &table {
+            Some(t) => t.get(l as usize).copied().unwrap_or(NONE),
+            None => mine.binary_search(&l).map_or(NONE, |k| k as u32),
+        };
+        // Each mesh's triangles, counted a run of one pair at a time, to allocate once.
+        let mut counts = vec![0usize; mine.len()];
+        let mut run = ([NONE; 2], 0usize);
+        for pair in self.pairs.iter().chain([&[NONE; 2]]) {
+            if *pair != run.0 {
+                for k in run.0.map(slot) {
+                    if k != NONE {
+                        counts[k as usize] += run.1;
+                    }
+                }
+                run = (*pair, 0);
+            }
+            run.1 += 1;
+        }
+        // A closed mesh has about half as many vertices as triangles.
+        let mut out: Vec<TriMesh> = counts
+            .iter()
+            .map(|&n| TriMesh {
+                triangles: Vec::with_capacity(n),
+                positions: Vec::with_capacity(n / 2 + 8),
+                ..TriMesh::default()
+            })
+            .collect();
+        // Each vertex's number in the first two meshes it is used in, `[slot, number, slot,
+        // number]`; in any further one (a junction of three or more of `mine`) by a map.
+        let mut numbers = vec![[NONE; 4]; self.mesh.positions.len()];
+        let mut more: rustc_hash::FxHashMap<(u32, u32), u32> = rustc_hash::FxHashMap::default();
+        let positions = &self.mesh.positions;
+        let mut last_pair = [NONE; 2];
+        let mut sides = [NONE; 2];
+        for (t, pair) in self.mesh.triangles.iter().zip(&self.pairs) {
+            if *pair != last_pair {
+                last_pair = *pair;
+                sides = pair.map(slot);
+            }
+            for (side, &k) in sides.iter().enumerate() {
+                if k == NONE {
+                    continue;
+                }
+                let [a, b, c] = *t;
+                let order = if side == 1 { [a, c, b] } else { [a, b, c] };
+                let mesh = &mut out[k as usize];
+                let tri = order.map(|v| {
+                    let n = &mut numbers[v as usize];
+                    if n[0] == k {
+                        return n[1];
+                    }
+                    if n[2] == k {
+                        return n[3];
+                    }
+                    let full = n[2] != NONE;
+                    if full {
+                        if let Some(&m) = more.get(&(v, k)) {
+                            return m;
+                        }
+                    }
+                    let m = mesh.positions.len() as u32;
+                    mesh.positions.push(positions[v as usize]);
+                    if n[0] == NONE {
+                        *n = [k, m, NONE, NONE];
+                    } else if !full {
+                        n[2] = k;
+                        n[3] = m;
+                    } else {
+                        more.insert((v, k), m);
+                    }
+                    m
+                });
+                mesh.triangles.push(tri);
+            }
+        }
+        if !self.mesh.normals.is_empty() {
+            for mesh in &mut out {
+                mesh.compute_face_weighted_normals();
+            }
+        }
+        out
     }
 
     fn triangles_of(&self, label: u32) -> impl Iterator<Item = ([u32; 3], [u32; 2])> + '_ {
@@ -329,14 +361,19 @@ mod tests {
     #[test]
     fn all_label_meshes_at_once_equal_each_alone() {
         let mut random = crate::random::Random::new(5);
-        let map: Vec<u8> = (0..7 * 6 * 5).map(|_| (random.next_u64() % 4) as u8).collect();
-        for info in LABEL_INFOS {
-            let mut out = LabelSurface::default();
-            (info.make)(&Options::new()).unwrap().extract_u8(LabelMap::new([7, 6, 5], &map).unwrap(), &mut out).unwrap();
-            let all = out.label_meshes();
-            assert_eq!(all.keys().copied().collect::<Vec<_>>(), out.labels());
-            for (&l, mesh) in &all {
-                assert_eq!(*mesh, out.label_mesh(l), "{} label {l}", info.name);
+        // Six labels: vertices where three or more of one thread's labels meet (numbered by the
+        // map, not the two slots), on one thread and on three (labels dealt to groups).
+        let map: Vec<u8> = (0..7 * 6 * 5).map(|_| (random.next_u64() % 7) as u8).collect();
+        for threads in [1, 3] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            for info in LABEL_INFOS {
+                let mut out = LabelSurface::default();
+                (info.make)(&Options::new()).unwrap().extract_u8(LabelMap::new([7, 6, 5], &map).unwrap(), &mut out).unwrap();
+                let all = pool.install(|| out.label_meshes());
+                assert_eq!(all.keys().copied().collect::<Vec<_>>(), out.labels());
+                for (&l, mesh) in &all {
+                    assert_eq!(*mesh, out.label_mesh(l), "{} label {l}, {threads} threads", info.name);
+                }
             }
         }
     }

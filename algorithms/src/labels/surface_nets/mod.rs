@@ -195,12 +195,13 @@ impl LabelExtractor for LabelSurfaceNets {
 #[derive(Default)]
 struct Net {
     positions: Vec<Vec3>,
-    /// The padded cell of each vertex.
+    /// The padded cell of each vertex (empty unless smoothing or blocks need it).
     cells: Vec<[u32; 3]>,
     /// `[cap, rest]`: each cap's vertex (`split`) and the vertex of the rest of its piece, in
     /// increasing order of the cap.
     caps: Vec<[u32; 2]>,
-    /// Each vertex's labels (sorted): `labels[label_start[v]..label_start[v + 1]]`.
+    /// Each vertex's labels (sorted): `labels[label_start[v]..label_start[v + 1]]` (only
+    /// `[0]` unless smoothing needs them).
     label_start: Vec<u32>,
     labels: Vec<u32>,
     quads: Vec<[u32; 4]>,
@@ -208,6 +209,8 @@ struct Net {
     /// The walls of split cells that are triangles (`split`), wound as quads are.
     tris: Vec<[u32; 3]>,
     tri_pairs: Vec<[u32; 2]>,
+    /// The padded cells the net covers, per axis.
+    cell_box: [std::ops::Range<u32>; 3],
 }
 
 fn extract<T: Label>(map: LabelMap<'_, T>, o: &LabelSnOptions, out: &mut LabelSurface) -> Result<(), ExtractError> {
@@ -220,7 +223,7 @@ fn extract<T: Label>(map: LabelMap<'_, T>, o: &LabelSnOptions, out: &mut LabelSu
         cells: std::array::from_fn(|a| all_cells(map.dims[a], o.border)),
         apron: 0,
     };
-    let (net, active_cells) = smoothed_net(&whole, o);
+    let (net, active_cells) = smoothed_net(&whole, o, false);
     out.active_cells = active_cells;
     triangulate(net, out);
     Ok(())
@@ -228,7 +231,7 @@ fn extract<T: Label>(map: LabelMap<'_, T>, o: &LabelSnOptions, out: &mut LabelSu
 
 /// Block `block`'s fragment: the whole map's triangles on the edges the block owns.
 fn extract_block<T: Label>(block: &LabelBlock<'_, T>, o: &LabelSnOptions, out: &mut LabelFragment) {
-    let (net, active_cells) = smoothed_net(block, o);
+    let (net, active_cells) = smoothed_net(block, o, true);
     let owned = &block.cells;
     let owner_owned =
         |q: &[u32]| (0..3).all(|a| owned[a].contains(&(q.iter().map(|&v| net.cells[v as usize][a]).max().unwrap_or(0) as usize)));
@@ -279,11 +282,14 @@ fn all_cells(n: usize, border: Border) -> std::ops::Range<usize> {
 }
 
 /// The net of `block`'s computed cells (its owned cells and apron), smoothed as `o` says, and
-/// the number of owned surface cells.
-fn smoothed_net<T: Label>(block: &LabelBlock<'_, T>, o: &LabelSnOptions) -> (Net, usize) {
+/// the number of owned surface cells; its vertices' cells kept if `cells` (or smoothing needs
+/// them).
+fn smoothed_net<T: Label>(block: &LabelBlock<'_, T>, o: &LabelSnOptions, cells: bool) -> (Net, usize) {
     let all: [std::ops::Range<usize>; 3] = std::array::from_fn(|a| all_cells(block.map_dims[a], o.border));
-    let (mut net, active_cells) = sweep::net(block, &all);
-    if o.smoothing == LabelSmoothing::Constrained {
+    let smoothing = o.smoothing == LabelSmoothing::Constrained;
+    let needs = sweep::Needs { labels: smoothing, cells: cells || smoothing };
+    let (mut net, active_cells) = sweep::net(block, &all, needs);
+    if smoothing {
         smooth(&mut net, o.iterations, o.relaxation);
     }
     (net, active_cells)

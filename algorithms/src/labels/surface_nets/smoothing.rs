@@ -10,31 +10,17 @@ use rayon::prelude::*;
 /// followed neighbours, in SIMD-width positions (a vertex with no neighbour to follow keeps its
 /// place in both buffers).
 pub(super) fn smooth(net: &mut Net, iterations: usize, relaxation: f32) {
-    let (mut start, mut next) = followed_neighbours(net);
-    // A cap's vertex (`split`) does not follow neighbours: it keeps its place beside the rest of
-    // its piece and moves with it, so the walls between them keep their shape.
-    if !net.caps.is_empty() {
-        let mut kept = Vec::with_capacity(next.len());
-        let mut from = 0;
-        let mut caps = net.caps.iter().map(|c| c[0]).peekable();
-        for v in 0..net.positions.len() {
-            let around = &next[from..start[v + 1] as usize];
-            from = start[v + 1] as usize;
-            if caps.next_if_eq(&(v as u32)).is_none() {
-                kept.extend_from_slice(around);
-            }
-            start[v + 1] = kept.len() as u32;
-        }
-        next = kept;
-    }
+    // A cap's vertex (`split`) follows no neighbour: it keeps its place beside the rest of its
+    // piece and moves with it, so the walls between them keep their shape.
+    let around = followed_neighbours(net);
     let rule = Rule {
-        start: &start,
-        next: &next,
+        around,
         lows: net.cells.iter().map(|c| Vec3A::new(c[0] as f32, c[1] as f32, c[2] as f32) + MARGIN).collect(),
         relaxation,
         width: Vec3A::splat(1.0 - 2.0 * MARGIN),
     };
-    let mut even: Vec<Vec3A> = net.positions.iter().map(|&p| Vec3A::from(p)).collect();
+    // Both buffers end with the rows' padding vertex, at the origin.
+    let mut even: Vec<Vec3A> = net.positions.iter().map(|&p| Vec3A::from(p)).chain([Vec3A::ZERO]).collect();
     let mut odd = even.clone();
     passes(&rule, &mut even, &mut odd, iterations);
     let last = if iterations % 2 == 0 { &even } else { &odd };
@@ -57,31 +43,76 @@ pub(super) fn smooth(net: &mut Net, iterations: usize, relaxation: f32) {
 }
 
 /// One vertex's move: toward the mean of its followed neighbours, kept in its cell's box.
-struct Rule<'a> {
-    start: &'a [u32],
-    next: &'a [u32],
+struct Rule {
+    around: Around,
     /// The low corner of each vertex's box.
     lows: Vec<Vec3A>,
     relaxation: f32,
     width: Vec3A,
 }
 
-impl Rule<'_> {
+/// Neighbours a row of a vertex holds; most vertices of a net have three to six.
+const ROW: usize = 6;
+
+/// Each vertex's followed neighbours laid out for the passes: the first [`ROW`] in a row padded
+/// with a vertex at the origin (index: the number of vertices), so a vertex's sum is one read of
+/// the row without a loop; the rest (rare) in `more[more_start[v]..more_start[v + 1]]`.
+struct Around {
+    rows: Vec<[u32; ROW]>,
+    count: Vec<u32>,
+    more_start: Vec<u32>,
+    more: Vec<u32>,
+}
+
+impl Around {
+    fn with_capacity(n: usize) -> Self {
+        Self { rows: Vec::with_capacity(n), count: Vec::with_capacity(n), more_start: vec![0], more: Vec::new() }
+    }
+
+    /// Appends the next vertex's neighbours; `pad` is the padding vertex.
+    fn push(&mut self, all: &[u32], pad: u32) {
+        let mut row = [pad; ROW];
+        let k = all.len().min(ROW);
+        row[..k].copy_from_slice(&all[..k]);
+        self.rows.push(row);
+        self.count.push(all.len() as u32);
+        self.more.extend_from_slice(&all[k..]);
+        self.more_start.push(self.more.len() as u32);
+    }
+
+    /// Vertex `v`'s neighbours, in order.
+    #[cfg(test)]
+    fn of(&self, v: usize) -> Vec<u32> {
+        let k = (self.count[v] as usize).min(ROW);
+        let more = &self.more[self.more_start[v] as usize..self.more_start[v + 1] as usize];
+        self.rows[v][..k].iter().chain(more).copied().collect()
+    }
+}
+
+impl Rule {
     /// One pass over vertices `first..first + to.len()`, reading `from` (every vertex's positions
-    /// after the previous pass); a vertex with no neighbour to follow is left as it is in `to`.
+    /// after the previous pass, and the padding vertex); a vertex with no neighbour to follow is
+    /// left as it is in `to`. The sum runs over the neighbours in order, then the padding (adding
+    /// zeros), as a loop over the neighbours alone would.
     #[inline]
     fn pass(&self, from: &[Vec3A], to: &mut [Vec3A], first: usize) {
+        let a = &self.around;
         for (i, m) in to.iter_mut().enumerate() {
             let v = first + i;
-            let around = &self.next[self.start[v] as usize..self.start[v + 1] as usize];
-            if around.is_empty() {
+            let n = a.count[v];
+            if n == 0 {
                 continue;
             }
             let mut sum = Vec3A::ZERO;
-            for &w in around {
+            for &w in &a.rows[v] {
                 sum += from[w as usize];
             }
-            let step = self.relaxation / around.len() as f32;
+            if n as usize > ROW {
+                for &w in &a.more[a.more_start[v] as usize..a.more_start[v + 1] as usize] {
+                    sum += from[w as usize];
+                }
+            }
+            let step = self.relaxation / n as f32;
             let lo = self.lows[v];
             *m = (from[v] * (1.0 - self.relaxation) + sum * step).clamp(lo, lo + self.width);
         }
@@ -92,64 +123,85 @@ impl Rule<'_> {
 const CHUNK: usize = 4096;
 
 /// The passes one after the other, each over all vertices in parallel chunks; pass `k` reads
-/// `even` and writes `odd` when `k` is odd, the other way round when it is even.
-fn passes(rule: &Rule<'_>, even: &mut [Vec3A], odd: &mut [Vec3A], iterations: usize) {
+/// `even` and writes `odd` when `k` is odd, the other way round when it is even (the padding
+/// vertex, last in both, is never written).
+fn passes(rule: &Rule, even: &mut [Vec3A], odd: &mut [Vec3A], iterations: usize) {
+    let n = even.len() - 1;
     for k in 1..=iterations {
-        let (from, to) = if k % 2 == 1 { (&*even, &mut *odd) } else { (&*odd, &mut *even) };
+        let (from, to) = if k % 2 == 1 { (&*even, &mut odd[..n]) } else { (&*odd, &mut even[..n]) };
         to.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| rule.pass(from, out, c * CHUNK));
     }
 }
 
 /// Each vertex's net neighbours (the vertices it shares a quad side with) whose labels include
-/// all of its own, compressed: `next[start[v]..start[v + 1]]`. A vertex of two labels follows
+/// all of its own, in increasing order; none for a cap's vertex. A vertex of two labels follows
 /// every neighbour: each quad at it separates its two labels, and each corner of the quad has
 /// them both.
-fn followed_neighbours(net: &Net) -> (Vec<u32>, Vec<u32>) {
+///
+/// Such a vertex also needs only the side after it in each quad: its quads are all in both its
+/// labels' meshes, wound alike, and a label's mesh is closed, so each side at the vertex runs
+/// out of it in as many quads as into it. That holds where all its quads are in the net: not in
+/// the cells on the border of the net's box (a block's, or the map's with `border=open`), whose
+/// vertices take both sides.
+fn followed_neighbours(net: &Net) -> Around {
     let n = net.positions.len();
-    // Every quad gives each of its corners its two sides' other ends; duplicates (a side shared
-    // by two or more quads) are removed per vertex.
+    let b = &net.cell_box;
+    let inside = |c: [u32; 3]| (0..3).all(|a| c[a] > b[a].start && c[a] + 1 < b[a].end);
+    let one_side: Vec<bool> = (0..n).map(|v| net.label_start[v + 1] - net.label_start[v] == 2 && inside(net.cells[v])).collect();
+    // Every quad gives each of its corners the sides' other ends (a side shared by two or more
+    // quads gives them more than once).
     let mut count = vec![0u32; n + 1];
     for &v in net.quads.iter().flatten().chain(net.tris.iter().flatten()) {
-        count[v as usize + 1] += 2;
+        count[v as usize + 1] += if one_side[v as usize] { 1 } else { 2 };
     }
     for i in 0..n {
         count[i + 1] += count[i];
     }
     let mut fill = count.clone();
     let mut all = vec![0u32; count[n] as usize];
+    let mut give = |v: u32, before: u32, after: u32| {
+        let v = v as usize;
+        let at = fill[v] as usize;
+        if one_side[v] {
+            all[at] = after;
+            fill[v] += 1;
+        } else {
+            all[at] = before;
+            all[at + 1] = after;
+            fill[v] += 2;
+        }
+    };
     for q in &net.quads {
         for k in 0..4 {
-            let v = q[k] as usize;
-            all[fill[v] as usize] = q[(k + 3) % 4];
-            all[fill[v] as usize + 1] = q[(k + 1) % 4];
-            fill[v] += 2;
+            give(q[k], q[(k + 3) % 4], q[(k + 1) % 4]);
         }
     }
     for t in &net.tris {
         for k in 0..3 {
-            let v = t[k] as usize;
-            all[fill[v] as usize] = t[(k + 2) % 3];
-            all[fill[v] as usize + 1] = t[(k + 1) % 3];
-            fill[v] += 2;
+            give(t[k], t[(k + 2) % 3], t[(k + 1) % 3]);
         }
     }
     let labels_of = |v: usize| &net.labels[net.label_start[v] as usize..net.label_start[v + 1] as usize];
-    let mut start = vec![0u32; n + 1];
-    let mut next = Vec::with_capacity(all.len() / 2);
+    let mut out = Around::with_capacity(n);
+    let mut caps = net.caps.iter().map(|c| c[0]).peekable();
+    let mut kept = Vec::new();
     for v in 0..n {
-        let around = &mut all[count[v] as usize..count[v + 1] as usize];
-        around.sort_unstable();
-        let mine = labels_of(v);
-        let mut last = u32::MAX;
-        for &w in around.iter() {
-            if w != last && (mine.len() == 2 || mine.iter().all(|l| labels_of(w as usize).contains(l))) {
-                next.push(w);
+        kept.clear();
+        if caps.next_if_eq(&(v as u32)).is_none() {
+            let around = &mut all[count[v] as usize..count[v + 1] as usize];
+            around.sort_unstable();
+            let mine = labels_of(v);
+            let mut last = u32::MAX;
+            for &w in around.iter() {
+                if w != last && (mine.len() == 2 || mine.iter().all(|l| labels_of(w as usize).contains(l))) {
+                    kept.push(w);
+                }
+                last = w;
             }
-            last = w;
         }
-        start[v + 1] = next.len() as u32;
+        out.push(&kept, n as u32);
     }
-    (start, next)
+    out
 }
 
 /// How far smoothing keeps a vertex from its cell's faces, in samples: a label of one sample has
@@ -189,14 +241,17 @@ mod tests {
     }
 
     #[test]
-    fn followed_neighbours_are_those_the_rule_names() {
+    fn followed_neighbours_are_those_the_rule_names_with_either_border() {
         let mut random = crate::random::Random::new(11);
         let dims = [6, 5, 4];
         let (mut two, mut more) = (0, 0);
-        for round in 0..40 {
+        // Half the rounds with `border=open`: the net is open at its box, where a vertex of two
+        // labels needs both sides of its quads.
+        for round in 0..80 {
             let labels = 2 + round % 4;
             let map: Vec<u8> = (0..dims.iter().product()).map(|_| (random.next_u64() % labels) as u8).collect();
-            let cells = dims.map(|n| 0..n + 1);
+            let open = round % 8 >= 4;
+            let cells = dims.map(|n| if open { 1..n } else { 0..n + 1 });
             let block = LabelBlock {
                 samples: &map,
                 window_lo: [0; 3],
@@ -205,10 +260,11 @@ mod tests {
                 cells: cells.clone(),
                 apron: 0,
             };
-            let (net, _) = sweep::net(&block, &cells);
-            let (start, next) = followed_neighbours(&net);
+            let (net, _) = sweep::net(&block, &cells, sweep::Needs { labels: true, cells: true });
+            let around = followed_neighbours(&net);
             for (v, expected) in by_the_rule(&net).iter().enumerate() {
-                assert_eq!(next[start[v] as usize..start[v + 1] as usize], expected[..], "vertex {v} of round {round}");
+                let expected = if net.caps.iter().any(|c| c[0] == v as u32) { Vec::new() } else { expected.clone() };
+                assert_eq!(around.of(v), expected, "vertex {v} of round {round}");
                 if net.label_start[v + 1] - net.label_start[v] == 2 {
                     two += 1;
                 } else {

@@ -3,9 +3,7 @@
 //! slabs joined in order into the net the parent module smooths and triangulates.
 
 use super::super::blocks::LabelBlock;
-use super::super::cell::{
-    cell_pieces, checkered_faces, edge_index, is_ring_face, larger_label_flips, CellPieces, EDGES, FACES, NONE,
-};
+use super::super::cell::{cell_pieces, edge_index, is_ring_face, larger_label_flips, CellPieces, EDGES, FACES, NONE};
 use super::super::Label;
 use super::split::{split, walls_of_face};
 use super::Net;
@@ -15,7 +13,7 @@ use rustc_hash::FxHashMap;
 
 /// The unsmoothed net of `block`'s computed cells (its owned cells and apron; `all` the map's
 /// cells per axis, padded), and the number of owned surface cells.
-pub(super) fn net<T: Label>(block: &LabelBlock<'_, T>, all: &[std::ops::Range<usize>; 3]) -> (Net, usize) {
+pub(super) fn net<T: Label>(block: &LabelBlock<'_, T>, all: &[std::ops::Range<usize>; 3], needs: Needs) -> (Net, usize) {
     let computed: [std::ops::Range<usize>; 3] = std::array::from_fn(|a| block.computed(a, &all[a]));
     // The local frame starts one sample before the first computed cell (or at the padding).
     let origin = computed.clone().map(|r| r.start.saturating_sub(1));
@@ -36,8 +34,10 @@ pub(super) fn net<T: Label>(block: &LabelBlock<'_, T>, all: &[std::ops::Range<us
     let layers = hi.saturating_sub(lo);
     let slabs = rayon::current_num_threads().min(layers / SLAB_LAYERS).max(1);
     let bounds: Vec<usize> = (0..=slabs).map(|k| lo + layers * k / slabs).collect();
-    let parts: Vec<Slab> = (0..slabs).into_par_iter().map(|k| sweep(&window, &frame, bounds[k]..bounds[k + 1])).collect();
-    join(parts)
+    let parts: Vec<Slab> = (0..slabs).into_par_iter().map(|k| sweep(&window, &frame, bounds[k]..bounds[k + 1], needs)).collect();
+    let (mut net, active_cells) = join(parts);
+    net.cell_box = computed.map(|r| r.start as u32..r.end as u32);
+    (net, active_cells)
 }
 
 /// The samples one sweep reads, in a local frame: local padded sample `s` is padded sample
@@ -91,13 +91,52 @@ struct PieceCache {
     walls: Vec<[u8; 6]>,
     /// Per table: per vertex, the rest's vertex a cap was split from, or [`NONE`].
     rests: Vec<[u8; 12]>,
+    /// Per table: its faces that are rings ([`is_ring_face`]).
+    rings: Vec<u8>,
+    /// Per table: where its vertices' [`VertexPlace`]s start in `places` (and end: the next).
+    place_start: Vec<u32>,
+    places: Vec<VertexPlace>,
     /// Cells of two labels, by the corners holding the larger: their pieces with the default
-    /// face rule ([`larger_label_flips`] is a function of that mask).
-    two: Vec<u32>,
+    /// face rule and its flips ([`larger_label_flips`] is a function of that mask).
+    two: Vec<(u32, u8)>,
+}
+
+/// Where a vertex of a cell's piece starts, and which labels it separates, from the cell's
+/// pattern alone.
+#[derive(Clone, Copy)]
+struct VertexPlace {
+    /// The mean of its crossing edges' midpoints, from the cell's low corner.
+    offset: Vec3,
+    /// One corner of each label the piece separates (bit per corner).
+    label_corners: u8,
+}
+
+/// The places of the vertices of `pieces` in a cell with corner labels `labels`.
+fn vertex_places<'a, T: Label>(pieces: &'a CellPieces, labels: &'a [T; 8]) -> impl Iterator<Item = VertexPlace> + 'a {
+    (0..pieces.count).map(move |piece| {
+        let mut sum = Vec3::ZERO;
+        let mut n = 0.0;
+        let mut label_corners = 0u8;
+        for (e, &(a, b)) in EDGES.iter().enumerate() {
+            if pieces.piece[e] != piece {
+                continue;
+            }
+            sum += (corner_offset(a) + corner_offset(b)) * 0.5;
+            n += 1.0;
+            for c in [a, b] {
+                let seen = (0..8).any(|k| label_corners >> k & 1 == 1 && labels[k] == labels[c as usize]);
+                if !seen {
+                    label_corners |= 1 << c;
+                }
+            }
+        }
+        VertexPlace { offset: sum / n, label_corners }
+    })
 }
 
 impl PieceCache {
     /// The pieces of a cell with the default face rule, and the rule's flips.
+    #[inline]
     fn plain<T: Label>(&mut self, labels: &[T; 8]) -> (u32, u8) {
         let l0 = labels[0];
         let other = labels.iter().copied().find(|&l| l != l0).unwrap_or(l0);
@@ -105,13 +144,13 @@ impl PieceCache {
             let hi = if other.id() > l0.id() { other } else { l0 };
             let mask = labels.iter().enumerate().fold(0usize, |m, (i, &l)| m | usize::from(l == hi) << i);
             if self.two.is_empty() {
-                self.two = vec![u32::MAX; 256];
+                self.two = vec![(u32::MAX, 0); 256];
             }
-            let flips = larger_label_flips(labels);
-            if self.two[mask] == u32::MAX {
-                self.two[mask] = self.get(labels, flips);
+            if self.two[mask].0 == u32::MAX {
+                let flips = larger_label_flips(labels);
+                self.two[mask] = (self.get(labels, flips), flips);
             }
-            return (self.two[mask], flips);
+            return self.two[mask];
         }
         let flips = larger_label_flips(labels);
         (self.get(labels, flips), flips)
@@ -130,23 +169,39 @@ impl PieceCache {
             key |= (rank as u32) << (3 * i);
         }
         key |= u32::from(flips) << 24;
-        let PieceCache { index, pieces, split_of, walls, rests, .. } = self;
-        *index.entry(key).or_insert_with(|| {
-            let plain = cell_pieces(labels, flips);
-            let at = pieces.len() as u32;
-            pieces.push(plain);
-            walls.push([NONE; 6]);
-            rests.push([NONE; 12]);
-            split_of.push(u32::MAX);
-            if let Some(s) = split(labels, &plain, flips) {
-                split_of[at as usize] = at + 1;
-                pieces.push(s.pieces);
-                walls.push(s.walls);
-                rests.push(s.rest);
-                split_of.push(u32::MAX);
-            }
-            at
-        })
+        if let Some(&t) = self.index.get(&key) {
+            return t;
+        }
+        let plain = cell_pieces(labels, flips);
+        let at = self.pieces.len() as u32;
+        self.index.insert(key, at);
+        self.push_table(labels, plain, [NONE; 6], [NONE; 12]);
+        if let Some(s) = split(labels, &plain, flips) {
+            self.split_of[at as usize] = at + 1;
+            self.push_table(labels, s.pieces, s.walls, s.rest);
+        }
+        at
+    }
+
+    /// Appends a table (`pieces` of a cell with corner labels `labels`, its walls and rests) and
+    /// what the sweep reads of it per cell: its ring faces and its vertices' places.
+    fn push_table<T: Label>(&mut self, labels: &[T; 8], pieces: CellPieces, walls: [u8; 6], rest: [u8; 12]) {
+        self.pieces.push(pieces);
+        self.walls.push(walls);
+        self.rests.push(rest);
+        self.split_of.push(u32::MAX);
+        self.rings.push((0..6).fold(0, |m, f| m | u8::from(is_ring_face(labels, &pieces, f)) << f));
+        if self.place_start.is_empty() {
+            self.place_start.push(0);
+        }
+        self.places.extend(vertex_places(&pieces, labels));
+        self.place_start.push(self.places.len() as u32);
+    }
+
+    /// The vertex places of table `t`.
+    #[inline]
+    fn places(&self, t: u32) -> &[VertexPlace] {
+        &self.places[self.place_start[t as usize] as usize..self.place_start[t as usize + 1] as usize]
     }
 
     /// Whether table `t` is a split one (it has walls).
@@ -200,10 +255,11 @@ struct Slab {
 /// The slabs' nets in order as one: vertex indices offset by the slabs before, [`BELOW`]
 /// vertices resolved to the previous slab's last layer.
 fn join(parts: Vec<Slab>) -> (Net, usize) {
-    let mut net = Net::default();
-    net.label_start.push(0);
-    let mut previous_last_layer = 0u32;
-    let mut active_cells = 0;
+    let mut parts = parts.into_iter();
+    let Some(first) = parts.next() else { return (Net { label_start: vec![0], ..Net::default() }, 0) };
+    let mut net = first.net;
+    let mut previous_last_layer = first.last_layer_start;
+    let mut active_cells = first.active_cells;
     for part in parts {
         let offset = net.positions.len() as u32;
         let label_offset = net.labels.len() as u32;
@@ -226,7 +282,7 @@ fn join(parts: Vec<Slab>) -> (Net, usize) {
 
 /// The sweep over cell layers `layers_range` (the vertex layer below the first one is recomputed
 /// to name its vertices, not kept).
-fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std::ops::Range<usize>) -> Slab {
+fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std::ops::Range<usize>, needs: Needs) -> Slab {
     let p = window.p;
     let (lo, hi) = (frame.lo, frame.hi);
     let cells_x = p[0] - 1;
@@ -300,16 +356,13 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
                 };
                 let (plain, base) = cache.plain(&labels);
                 let mut flips = base;
-                let mut checkered = checkered_faces(&labels);
-                while checkered != 0 {
-                    let f = checkered.trailing_zeros() as usize;
-                    checkered &= checkered - 1;
-                    if !is_ring_face(&labels, &cache.pieces[plain as usize], f) {
-                        continue;
-                    }
+                let mut rings = cache.rings[plain as usize];
+                while rings != 0 {
+                    let f = rings.trailing_zeros() as usize;
+                    rings &= rings - 1;
                     let Some(theirs) = across(f) else { continue };
                     let (t, _) = cache.plain(&theirs);
-                    if is_ring_face(&theirs, &cache.pieces[t as usize], f ^ 1) {
+                    if cache.rings[t as usize] >> (f ^ 1) & 1 == 1 {
                         flips ^= 1 << f;
                     }
                 }
@@ -330,7 +383,8 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
                 } else {
                     cur.first[c] = net.positions.len() as u32;
                     let o = frame.origin;
-                    add_vertices(&mut net, pieces, &cache.rests[t as usize], &labels, [cx + o[0], cy + o[1], cz + o[2]]);
+                    let c = [cx + o[0], cy + o[1], cz + o[2]];
+                    add_vertices(&mut net, cache.places(t), &cache.rests[t as usize], &labels, c, needs);
                 }
             }
         }
@@ -527,36 +581,40 @@ fn push_walls<T: Label>(net: &mut Net, f: usize, labels: &[T; 8], flips: u8, her
     }
 }
 
-/// The vertices of one surface cell at padded cell `c`: per piece, the mean of its crossing
-/// edges' midpoints, with the labels the piece separates.
-fn add_vertices<T: Label>(net: &mut Net, pieces: &CellPieces, rest: &[u8; 12], labels: &[T; 8], c: [usize; 3]) {
+/// The vertices of one surface cell at padded cell `c` (its pieces' `places`), with the labels
+/// each separates and its cell as `needs` says.
+#[inline]
+fn add_vertices<T: Label>(net: &mut Net, places: &[VertexPlace], rest: &[u8; 12], labels: &[T; 8], c: [usize; 3], needs: Needs) {
     let base = Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
     let first = net.positions.len() as u32;
-    for piece in 0..pieces.count {
-        let r = rest[piece as usize];
+    for (piece, place) in places.iter().enumerate() {
+        let r = rest[piece];
         if r != NONE {
-            net.caps.push([first + u32::from(piece), first + u32::from(r)]);
+            net.caps.push([first + piece as u32, first + u32::from(r)]);
         }
-        let mut sum = Vec3::ZERO;
-        let mut n = 0.0;
-        let start = net.labels.len();
-        for (e, &(a, b)) in EDGES.iter().enumerate() {
-            if pieces.piece[e] != piece {
-                continue;
-            }
-            sum += (corner_offset(a) + corner_offset(b)) * 0.5;
-            n += 1.0;
-            for l in [labels[a as usize].id(), labels[b as usize].id()] {
-                if !net.labels[start..].contains(&l) {
-                    net.labels.push(l);
-                }
-            }
+        net.positions.push(base + place.offset);
+        if needs.cells {
+            net.cells.push(c.map(|v| v as u32));
         }
-        net.labels[start..].sort_unstable();
-        net.label_start.push(net.labels.len() as u32);
-        net.positions.push(base + sum / n);
-        net.cells.push(c.map(|v| v as u32));
+        if needs.labels {
+            let start = net.labels.len();
+            let mut corners = place.label_corners;
+            while corners != 0 {
+                net.labels.push(labels[corners.trailing_zeros() as usize].id());
+                corners &= corners - 1;
+            }
+            net.labels[start..].sort_unstable();
+            net.label_start.push(net.labels.len() as u32);
+        }
     }
+}
+
+/// What the net's vertices carry besides their positions: their labels (for smoothing) and
+/// their cells (for smoothing and blocks).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Needs {
+    pub labels: bool,
+    pub cells: bool,
 }
 
 fn corner_offset(i: u8) -> Vec3 {

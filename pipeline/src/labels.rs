@@ -260,7 +260,7 @@ pub fn outcome(
 /// included): one pass over the tags.
 pub fn neighbours(surface: &LabelSurface) -> BTreeMap<u32, BTreeMap<u32, usize>> {
     // Triangles come in runs of one pair (a quad's two, a cell layer's interface): count runs.
-    let mut pairs: std::collections::HashMap<[u32; 2], usize> = std::collections::HashMap::new();
+    let mut pairs: rustc_hash::FxHashMap<[u32; 2], usize> = rustc_hash::FxHashMap::default();
     let mut run: Option<([u32; 2], usize)> = None;
     for &p in &surface.pairs {
         match &mut run {

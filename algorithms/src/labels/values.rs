@@ -107,3 +107,27 @@ impl LabelSamples<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_are_each_labels_samples() {
+        let mut random = crate::random::Random::new(3);
+        for round in 0..60usize {
+            // Runs of random lengths, maps of any length.
+            let mut v: Vec<u16> = Vec::new();
+            while v.len() < round * 7 {
+                let label = (random.next_u64() % 5) as u16;
+                let run = 1 + (random.next_u64() % 40) as usize;
+                v.extend(std::iter::repeat_n(label, run));
+            }
+            let mut expected = BTreeMap::new();
+            for &l in &v {
+                *expected.entry(u32::from(l)).or_insert(0usize) += 1;
+            }
+            assert_eq!(LabelSamples::counts_of(&v), expected, "round {round}");
+        }
+    }
+}

@@ -13,12 +13,7 @@ pub(super) fn smooth(net: &mut Net, iterations: usize, relaxation: f32) {
     // A cap's vertex (`split`) follows no neighbour: it keeps its place beside the rest of its
     // piece and moves with it, so the walls between them keep their shape.
     let around = followed_neighbours(net);
-    let rule = Rule {
-        around,
-        lows: net.cells.iter().map(|c| Vec3A::new(c[0] as f32, c[1] as f32, c[2] as f32) + MARGIN).collect(),
-        relaxation,
-        width: Vec3A::splat(1.0 - 2.0 * MARGIN),
-    };
+    let rule = Rule { around, cells: &net.cells, relaxation, width: Vec3A::splat(1.0 - 2.0 * MARGIN) };
     // Both buffers end with the rows' padding vertex, at the origin.
     let mut even: Vec<Vec3A> = net.positions.iter().map(|&p| Vec3A::from(p)).chain([Vec3A::ZERO]).collect();
     let mut odd = even.clone();
@@ -31,7 +26,8 @@ pub(super) fn smooth(net: &mut Net, iterations: usize, relaxation: f32) {
         .map(|&[cap, rest]| {
             let (cap, rest) = (cap as usize, rest as usize);
             let p = Vec3A::from(net.positions[cap]) + last[rest] - Vec3A::from(net.positions[rest]);
-            Vec3::from(p.clamp(rule.lows[cap], rule.lows[cap] + rule.width))
+            let lo = rule.low(cap);
+            Vec3::from(p.clamp(lo, lo + rule.width))
         })
         .collect();
     for (p, q) in net.positions.iter_mut().zip(last) {
@@ -43,10 +39,10 @@ pub(super) fn smooth(net: &mut Net, iterations: usize, relaxation: f32) {
 }
 
 /// One vertex's move: toward the mean of its followed neighbours, kept in its cell's box.
-struct Rule {
+struct Rule<'a> {
     around: Around,
-    /// The low corner of each vertex's box.
-    lows: Vec<Vec3A>,
+    /// Each vertex's cell.
+    cells: &'a [[u32; 3]],
     relaxation: f32,
     width: Vec3A,
 }
@@ -89,7 +85,14 @@ impl Around {
     }
 }
 
-impl Rule {
+impl Rule<'_> {
+    /// The low corner of vertex `v`'s box.
+    #[inline]
+    fn low(&self, v: usize) -> Vec3A {
+        let c = self.cells[v];
+        Vec3A::new(c[0] as f32, c[1] as f32, c[2] as f32) + MARGIN
+    }
+
     /// One pass over vertices `first..first + to.len()`, reading `from` (every vertex's positions
     /// after the previous pass, and the padding vertex); a vertex with no neighbour to follow is
     /// left as it is in `to`. The sum runs over the neighbours in order, then the padding (adding
@@ -113,7 +116,7 @@ impl Rule {
                 }
             }
             let step = self.relaxation / n as f32;
-            let lo = self.lows[v];
+            let lo = self.low(v);
             *m = (from[v] * (1.0 - self.relaxation) + sum * step).clamp(lo, lo + self.width);
         }
     }
@@ -125,7 +128,7 @@ const CHUNK: usize = 4096;
 /// The passes one after the other, each over all vertices in parallel chunks; pass `k` reads
 /// `even` and writes `odd` when `k` is odd, the other way round when it is even (the padding
 /// vertex, last in both, is never written).
-fn passes(rule: &Rule, even: &mut [Vec3A], odd: &mut [Vec3A], iterations: usize) {
+fn passes(rule: &Rule<'_>, even: &mut [Vec3A], odd: &mut [Vec3A], iterations: usize) {
     let n = even.len() - 1;
     for k in 1..=iterations {
         let (from, to) = if k % 2 == 1 { (&*even, &mut odd[..n]) } else { (&*odd, &mut even[..n]) };

@@ -597,13 +597,19 @@ fn add_vertices<T: Label>(net: &mut Net, places: &[VertexPlace], rest: &[u8; 12]
             net.cells.push(c.map(|v| v as u32));
         }
         if needs.labels {
-            let start = net.labels.len();
-            let mut corners = place.label_corners;
-            while corners != 0 {
-                net.labels.push(labels[corners.trailing_zeros() as usize].id());
-                corners &= corners - 1;
+            let corners = place.label_corners;
+            if corners.count_ones() == 2 {
+                let (a, b) = (labels[corners.trailing_zeros() as usize].id(), labels[7 - corners.leading_zeros() as usize].id());
+                net.labels.extend([a.min(b), a.max(b)]);
+            } else {
+                let start = net.labels.len();
+                let mut rest = corners;
+                while rest != 0 {
+                    net.labels.push(labels[rest.trailing_zeros() as usize].id());
+                    rest &= rest - 1;
+                }
+                net.labels[start..].sort_unstable();
             }
-            net.labels[start..].sort_unstable();
             net.label_start.push(net.labels.len() as u32);
         }
     }

@@ -45,9 +45,10 @@
 //! shape instead of folding as the two follow different neighbours. A cell splits only on its
 //! own pattern and its neighbours' patterns, so blocks and slabs mesh it as the whole map does.
 //!
-//! **Non-guarantees.** A piece where two labels pinch, a cell whose ring rule changed its faces,
-//! and two cells across a face of four labels that would split different labels stay as
-//! Frisken's net has them: one vertex, and that label's mesh not manifold there.
+//! **Non-guarantees.** A piece where two labels pinch, two cells across a face of four labels
+//! that would split different labels, and a cell whose ring rule changed its faces that would
+//! put walls on a face of four labels stay as Frisken's net has them: one vertex, and that
+//! label's mesh not manifold there.
 //! `tests/tests/labels.rs` checks that every one-cell map whose cells are all resolved is
 //! manifold for every label, and counts the maps that are not; `marching-tetrahedra`
 //! ([`super::marching_tetrahedra`]) is the entry that is manifold for every map.

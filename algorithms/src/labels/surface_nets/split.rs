@@ -10,11 +10,12 @@
 //! A split is local: a cell splits a piece when exactly one of its labels is pinched there (or,
 //! with none pinched, to part a bridge) and every other label meets each cap along one run of
 //! its rim (so the walls keep that label's mesh manifold too). The sweep leaves it whole when
-//! the cell across a face of four labels with walls would put another label's walls there, or
-//! when the cell's ring rule changed its faces; across a face of three labels, two splits of
-//! different labels meet at a tetrahedron given to the third label ([`walls_of_face`]). Both
-//! rules read only the neighbours' own patterns, so a block meshes a cell as the whole map
-//! does.
+//! the cell across a face of four labels with walls would put another label's walls there, or,
+//! for a cell whose ring rule changed its faces (whose neighbours' splits their own patterns do
+//! not tell), when it has walls on a face of four labels; across a face of three labels, two
+//! splits of different labels meet at a tetrahedron given to the third label
+//! ([`walls_of_face`]). Both rules read only the neighbours' own patterns, so a block meshes a
+//! cell as the whole map does.
 
 use super::super::cell::{face_points, CellPieces, EDGES, FACES, NONE};
 

@@ -367,10 +367,20 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
                     }
                 }
                 let mut t = if flips == base { plain } else { cache.get(&labels, flips) };
-                // A pinched label is split where the cell's faces are its plain ones and no
-                // neighbour's own split clashes with it.
+                // A pinched label is split where no neighbour's own split clashes with it: where
+                // the cell's faces are its plain ones, no neighbour's plain split puts another
+                // label's walls on a face of four labels where it has walls; where the ring rule
+                // changed them (its neighbours' splits unknown here), it has no walls on such
+                // a face.
                 let split_table = cache.split_of[t as usize];
-                if flips == base && split_table != u32::MAX && !clashes(&mut cache, split_table, &labels, &across) {
+                let clear = |cache: &mut PieceCache| {
+                    if flips == base {
+                        !clashes(cache, split_table, &labels, &across)
+                    } else {
+                        !walls_on_four_labels(cache, split_table, &labels)
+                    }
+                };
+                if split_table != u32::MAX && clear(&mut cache) {
                     t = split_table;
                     cur_split.push(SplitCell { x: cx, y: cy, flips, labels });
                 }
@@ -526,6 +536,16 @@ fn clashes<T: Label>(cache: &mut PieceCache, split: u32, labels: &[T; 8], across
         }
     }
     false
+}
+
+/// Whether split table `split` of a cell with corner labels `labels` has walls on a face of four
+/// labels.
+#[inline(never)]
+fn walls_on_four_labels<T: Label>(cache: &PieceCache, split: u32, labels: &[T; 8]) -> bool {
+    cache.walls[split as usize].iter().enumerate().any(|(f, &w)| {
+        let face = FACES[f].corners.map(|c| labels[c as usize]);
+        w != NONE && (0..4).all(|i| (i + 1..4).all(|j| face[i] != face[j]))
+    })
 }
 
 /// A cell whose pinched labels were split, for its walls.

@@ -54,8 +54,8 @@
 //! ([`super::marching_tetrahedra`]) is the entry that is manifold for every map.
 //!
 //! **Files.** This one (the net, the triangles), `sweep` (cells in layers, quads and walls),
-//! `split` (which pieces split, and the walls) and `smoothing` (Frisken's constrained
-//! smoothing).
+//! `pieces` (each cell pattern's tables, once per pattern), `split` (which pieces split, and
+//! the walls) and `smoothing` (Frisken's constrained smoothing).
 //!
 //! **Costs.** One read of every sample (a copy of each layer, padded), work proportional to the
 //! surface cells (each cell's pieces looked up by its pattern), and `iterations` passes over the
@@ -79,6 +79,7 @@
 
 use glam::Vec3;
 
+mod pieces;
 mod smoothing;
 pub mod split;
 mod sweep;

@@ -68,10 +68,33 @@ impl LabelSamples<'_> {
     /// Every label's sample count (background included).
     pub fn counts(&self) -> BTreeMap<u32, usize> {
         match self {
-            Self::U8(v) => Self::counts_of(v),
+            Self::U8(v) => Self::counts_of_bytes(v),
             Self::U16(v) => Self::counts_of(v),
             Self::U32(v) => Self::counts_of(v),
         }
+    }
+
+    /// Every byte label's count in `v`: eight samples at a time where they are all the label of
+    /// the eight before (long runs, the background's above all), one at a time elsewhere.
+    pub fn counts_of_bytes(v: &[u8]) -> BTreeMap<u32, usize> {
+        let mut table = [0usize; 256];
+        let mut words = v.chunks_exact(8);
+        let mut last = u64::MAX;
+        for word in &mut words {
+            let w = u64::from_le_bytes(word.try_into().unwrap_or([0; 8]));
+            if w == last {
+                table[usize::from(word[0])] += 8;
+                continue;
+            }
+            for &l in word {
+                table[usize::from(l)] += 1;
+            }
+            last = if word.iter().all(|&l| l == word[0]) { w } else { u64::MAX };
+        }
+        for &l in words.remainder() {
+            table[usize::from(l)] += 1;
+        }
+        table.iter().enumerate().filter(|(_, &n)| n > 0).map(|(l, &n)| (l as u32, n)).collect()
     }
 
     /// Every label's count in `v`, counted a run of equal labels at a time.
@@ -128,6 +151,8 @@ mod tests {
                 *expected.entry(u32::from(l)).or_insert(0usize) += 1;
             }
             assert_eq!(LabelSamples::counts_of(&v), expected, "round {round}");
+            let bytes: Vec<u8> = v.iter().map(|&l| l as u8).collect();
+            assert_eq!(LabelSamples::counts_of_bytes(&bytes), expected, "round {round}, bytes");
         }
     }
 }

@@ -13,7 +13,8 @@ pub(super) fn smooth(net: &mut Net, iterations: usize, relaxation: f32) {
     // A cap's vertex (`split`) follows no neighbour: it keeps its place beside the rest of its
     // piece and moves with it, so the walls between them keep their shape.
     let around = followed_neighbours(net);
-    let rule = Rule { around, cells: &net.cells, relaxation, width: Vec3A::splat(1.0 - 2.0 * MARGIN) };
+    let steps = std::array::from_fn(|n| relaxation / n as f32);
+    let rule = Rule { around, cells: &net.cells, relaxation, steps, width: Vec3A::splat(1.0 - 2.0 * MARGIN) };
     // Both buffers end with the rows' padding vertex, at the origin.
     let mut even: Vec<Vec3A> = net.positions.iter().map(|&p| Vec3A::from(p)).chain([Vec3A::ZERO]).collect();
     let mut odd = even.clone();
@@ -44,6 +45,8 @@ struct Rule<'a> {
     /// Each vertex's cell.
     cells: &'a [[u32; 3]],
     relaxation: f32,
+    /// `relaxation / n` for `n` neighbours up to a row's.
+    steps: [f32; ROW + 1],
     width: Vec3A,
 }
 
@@ -115,7 +118,7 @@ impl Rule<'_> {
                     sum += from[w as usize];
                 }
             }
-            let step = self.relaxation / n as f32;
+            let step = if n as usize <= ROW { self.steps[n as usize] } else { self.relaxation / n as f32 };
             let lo = self.low(v);
             *m = (from[v] * (1.0 - self.relaxation) + sum * step).clamp(lo, lo + self.width);
         }

@@ -303,8 +303,13 @@ fn triangulate(net: Net, out: &mut LabelSurface) {
     out.mesh.triangles.reserve(quads.len() * 2 + tris.len());
     out.pairs.reserve(quads.len() * 2 + tris.len());
     for (q, pair) in quads.iter().zip(&pairs) {
-        out.mesh.triangles.extend(split_quad(q.map(|v| positions[v as usize])).map(|t| t.map(|k| q[k])));
-        out.pairs.extend([*pair, *pair]);
+        let [a, b, c, d] = *q;
+        let p = |v: u32| positions[v as usize];
+        let halves = if shorter_first(p(a), p(b), p(c), p(d)) { [[a, b, c], [a, c, d]] } else { [[a, b, d], [b, c, d]] };
+        out.mesh.triangles.push(halves[0]);
+        out.mesh.triangles.push(halves[1]);
+        out.pairs.push(*pair);
+        out.pairs.push(*pair);
     }
     out.mesh.triangles.extend_from_slice(&tris);
     out.pairs.extend_from_slice(&tri_pairs);
@@ -313,9 +318,15 @@ fn triangulate(net: Net, out: &mut LabelSurface) {
 
 /// A quad with corners at `p` as two triangles (of corner slots) along its shorter diagonal.
 fn split_quad(p: [Vec3; 4]) -> [[usize; 3]; 2] {
-    if p[0].distance_squared(p[2]) <= p[1].distance_squared(p[3]) {
+    if shorter_first(p[0], p[1], p[2], p[3]) {
         [[0, 1, 2], [0, 2, 3]]
     } else {
         [[0, 1, 3], [1, 2, 3]]
     }
+}
+
+/// Whether quad `a, b, c, d`'s diagonal `a c` is no longer than `b d`.
+#[inline]
+fn shorter_first(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> bool {
+    a.distance_squared(c) <= b.distance_squared(d)
 }

@@ -103,14 +103,15 @@ impl Rule<'_> {
     #[inline]
     fn pass(&self, from: &[Vec3A], to: &mut [Vec3A], first: usize) {
         let a = &self.around;
-        for (i, m) in to.iter_mut().enumerate() {
-            let v = first + i;
-            let n = a.count[v];
+        let span = first..first + to.len();
+        let (rows, counts, cells) = (&a.rows[span.clone()], &a.count[span.clone()], &self.cells[span]);
+        for (i, (((m, row), &n), c)) in to.iter_mut().zip(rows).zip(counts).zip(cells).enumerate() {
             if n == 0 {
                 continue;
             }
+            let v = first + i;
             let mut sum = Vec3A::ZERO;
-            for &w in &a.rows[v] {
+            for &w in row {
                 sum += from[w as usize];
             }
             if n as usize > ROW {
@@ -119,7 +120,7 @@ impl Rule<'_> {
                 }
             }
             let step = if n as usize <= ROW { self.steps[n as usize] } else { self.relaxation / n as f32 };
-            let lo = self.low(v);
+            let lo = Vec3A::new(c[0] as f32, c[1] as f32, c[2] as f32) + MARGIN;
             *m = (from[v] * (1.0 - self.relaxation) + sum * step).clamp(lo, lo + self.width);
         }
     }

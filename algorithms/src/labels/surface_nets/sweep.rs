@@ -107,6 +107,9 @@ struct Frame {
     origin: [usize; 3],
 }
 
+/// Cells (or edges) skipped at once where a run of samples shows none.
+const SKIP: usize = 16;
+
 /// Fewest cell layers a slab task takes.
 const SLAB_LAYERS: usize = 16;
 
@@ -192,7 +195,6 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
         // Vertices of cell layer cz (below the slab: only their places in the layer).
         last_layer_start = net.positions.len() as u32;
         let mut named = 0u32;
-        const SKIP: usize = 16;
         for cy in lo[1]..hi[1] {
             let rows = [&s0[px * cy..][..px], &s0[px * (cy + 1)..][..px], &s1[px * cy..][..px], &s1[px * (cy + 1)..][..px]];
             let mut cx = lo[0];
@@ -329,8 +331,17 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
             if s0[px * y..][..px] == s1[px * y..][..px] {
                 continue;
             }
-            for x in (lo[0] + 1)..hi[0] {
-                let (a, b) = (at(s0, x, y), at(s1, x, y));
+            let (r0, r1) = (&s0[px * y..][..px], &s1[px * y..][..px]);
+            let mut ex = lo[0] + 1;
+            while ex < hi[0] {
+                // Skip a run where the two layers agree.
+                if ex + SKIP <= hi[0] && r0[ex..ex + SKIP] == r1[ex..ex + SKIP] {
+                    ex += SKIP;
+                    continue;
+                }
+                let x = ex;
+                ex += 1;
+                let (a, b) = (r0[x], r1[x]);
                 if a != b {
                     let q = [
                         vertex(&cur, x - 1, y - 1, 2, 3),
@@ -349,7 +360,19 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
                 if row.iter().all(|&l| l == row[0]) && s0[px * (y + 1)..][..px] == *row {
                     continue;
                 }
-                for x in lo[0]..hi[0] {
+                let next = &s0[px * (y + 1)..][..px];
+                let mut ex = lo[0];
+                while ex < hi[0] {
+                    // Skip a run of one label (no x edge) that the next row repeats (no y edge).
+                    if ex + SKIP < px && ex + SKIP <= hi[0] {
+                        let run = &row[ex..=ex + SKIP];
+                        if run.iter().all(|&l| l == run[0]) && next[ex..ex + SKIP] == run[..SKIP] {
+                            ex += SKIP;
+                            continue;
+                        }
+                    }
+                    let x = ex;
+                    ex += 1;
                     let a = at(s0, x, y);
                     // x edge (x, y) - (x + 1, y): cells (x, y - 1 ..= y, cz - 1 ..= cz).
                     let b = at(s0, x + 1, y);
@@ -489,7 +512,8 @@ fn add_vertices<T: Label>(net: &mut Net, places: &[VertexPlace], rest: &[u8; 12]
             let corners = place.label_corners;
             if corners.count_ones() == 2 {
                 let (a, b) = (labels[corners.trailing_zeros() as usize].id(), labels[7 - corners.leading_zeros() as usize].id());
-                net.labels.extend([a.min(b), a.max(b)]);
+                net.labels.push(a.min(b));
+                net.labels.push(a.max(b));
             } else {
                 let start = net.labels.len();
                 let mut rest = corners;

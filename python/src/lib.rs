@@ -21,12 +21,6 @@ use pyo3::types::PyDict;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-/// mimalloc, not the system's malloc: the module's large buffers (nets, meshes handed to numpy)
-/// come from memory it keeps, where glibc's maps and faults fresh pages for each; see the
-/// `segmentations` experiment for what it changes.
-#[global_allocator]
-static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
-
 mod arrays;
 mod blocks;
 mod label_blocks;

@@ -384,8 +384,7 @@ fn section(data: &Data, pictures: bool) -> String {
          smoothed surface nets against VTK's smoothed SurfaceNets3D, our unsmoothed surface nets against zmesh (unsmoothed \
          marching cubes). Each verdict is on the whole call; beside it, the meshing step alone (isolab's extraction timed \
          in Rust, VTK's `Update()`, zmesh's `mesh()`, each timed inside the call; the tables' \"of which meshing\" column): \
-         the rest of a call is building each label's mesh and handing the arrays to Python. isolab's Python module \
-         allocates with mimalloc; the peers with whatever their wheels were built with.\n\n"
+         the rest of a call is building each label's mesh and handing the arrays to Python.\n\n"
     ));
     for s in target_sentences(data) {
         md.push_str(&format!("- {s}\n"));

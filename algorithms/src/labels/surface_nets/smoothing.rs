@@ -27,7 +27,7 @@ pub(super) fn smooth(net: &mut Net, iterations: usize, relaxation: f32) {
         .map(|&[cap, rest]| {
             let (cap, rest) = (cap as usize, rest as usize);
             let p = Vec3A::from(net.positions[cap]) + last[rest] - Vec3A::from(net.positions[rest]);
-            let lo = rule.low(cap);
+            let lo = box_low(net.cells[cap]);
             Vec3::from(p.clamp(lo, lo + rule.width))
         })
         .collect();
@@ -89,13 +89,6 @@ impl Around {
 }
 
 impl Rule<'_> {
-    /// The low corner of vertex `v`'s box.
-    #[inline]
-    fn low(&self, v: usize) -> Vec3A {
-        let c = self.cells[v];
-        Vec3A::new(c[0] as f32, c[1] as f32, c[2] as f32) + MARGIN
-    }
-
     /// One pass over vertices `first..first + to.len()`, reading `from` (every vertex's positions
     /// after the previous pass, and the padding vertex); a vertex with no neighbour to follow is
     /// left as it is in `to`. The sum runs over the neighbours in order, then the padding (adding
@@ -120,10 +113,16 @@ impl Rule<'_> {
                 }
             }
             let step = if n as usize <= ROW { self.steps[n as usize] } else { self.relaxation / n as f32 };
-            let lo = Vec3A::new(c[0] as f32, c[1] as f32, c[2] as f32) + MARGIN;
+            let lo = box_low(*c);
             *m = (from[v] * (1.0 - self.relaxation) + sum * step).clamp(lo, lo + self.width);
         }
     }
+}
+
+/// The low corner of the box of a vertex in cell `c`: [`MARGIN`] inside the cell.
+#[inline]
+fn box_low(c: [u32; 3]) -> Vec3A {
+    Vec3A::new(c[0] as f32, c[1] as f32, c[2] as f32) + MARGIN
 }
 
 /// Vertices per parallel task of a pass.

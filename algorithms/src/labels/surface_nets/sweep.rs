@@ -244,14 +244,13 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
                 // changed them (its neighbours' splits unknown here), it has no walls on such
                 // a face.
                 let split_table = cache.split_of[t as usize];
-                let clear = |cache: &mut PieceCache| {
-                    if flips == base {
-                        !clashes(cache, split_table, &labels, &across)
+                let clear = split_table != u32::MAX
+                    && if flips == base {
+                        !clashes(&mut cache, split_table, &labels, &across)
                     } else {
-                        !walls_on_four_labels(cache, split_table, &labels)
-                    }
-                };
-                if split_table != u32::MAX && clear(&mut cache) {
+                        !walls_on_four_labels(&cache, split_table, &labels)
+                    };
+                if clear {
                     t = split_table;
                     cur_split.push(SplitCell { x: cx, y: cy, flips, labels });
                 }
@@ -364,7 +363,8 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
                 let mut ex = lo[0];
                 while ex < hi[0] {
                     // Skip a run of one label (no x edge) that the next row repeats (no y edge).
-                    if ex + SKIP < px && ex + SKIP <= hi[0] {
+                    // (`hi[0] < px`: the run's last sample is in the row.)
+                    if ex + SKIP <= hi[0] {
                         let run = &row[ex..=ex + SKIP];
                         if run.iter().all(|&l| l == run[0]) && next[ex..ex + SKIP] == run[..SKIP] {
                             ex += SKIP;
@@ -412,9 +412,7 @@ fn sweep<T: Label>(window: &Window<'_, '_, T>, frame: &Frame, layers_range: std:
 fn clashes<T: Label>(cache: &mut PieceCache, split: u32, labels: &[T; 8], across: &dyn Fn(usize) -> Option<[T; 8]>) -> bool {
     let walls = cache.walls[split as usize];
     for (f, &w) in walls.iter().enumerate() {
-        let face = FACES[f].corners.map(|c| labels[c as usize]);
-        let four = (0..4).all(|i| (i + 1..4).all(|j| face[i] != face[j]));
-        if w == NONE || !four {
+        if w == NONE || !four_labels(labels, f) {
             continue;
         }
         let Some(theirs) = across(f) else { continue };
@@ -434,10 +432,13 @@ fn clashes<T: Label>(cache: &mut PieceCache, split: u32, labels: &[T; 8], across
 /// labels.
 #[inline(never)]
 fn walls_on_four_labels<T: Label>(cache: &PieceCache, split: u32, labels: &[T; 8]) -> bool {
-    cache.walls[split as usize].iter().enumerate().any(|(f, &w)| {
-        let face = FACES[f].corners.map(|c| labels[c as usize]);
-        w != NONE && (0..4).all(|i| (i + 1..4).all(|j| face[i] != face[j]))
-    })
+    cache.walls[split as usize].iter().enumerate().any(|(f, &w)| w != NONE && four_labels(labels, f))
+}
+
+/// Whether face `f` of a cell with corner labels `labels` has four different labels.
+fn four_labels<T: Label>(labels: &[T; 8], f: usize) -> bool {
+    let face = FACES[f].corners.map(|c| labels[c as usize]);
+    (0..4).all(|i| (i + 1..4).all(|j| face[i] != face[j]))
 }
 
 /// A cell whose pinched labels were split, for its walls.

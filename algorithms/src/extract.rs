@@ -69,6 +69,9 @@ pub struct Extraction {
     pub stats: Stats,
     /// Where each vertex comes from, when asked ([`Chunking::Apron`] extractors only).
     pub origins: Origins,
+    /// A value per surface vertex, when the extractor was asked for one (marching cubes'
+    /// [`crate::extractors::marching_cubes::VertexValues`]); empty otherwise.
+    pub vertex_values: Vec<f32>,
 }
 
 impl Extraction {
@@ -78,6 +81,7 @@ impl Extraction {
         self.volume.clear();
         self.stats = Stats::default();
         self.origins.vertices.clear();
+        self.vertex_values.clear();
     }
 
     /// Fills the counts and buffer bytes from the meshes (`scratch_bytes` is what the extractor
@@ -86,7 +90,8 @@ impl Extraction {
         self.stats.vertices = self.surface.positions.len();
         self.stats.triangles = self.surface.triangles.len();
         self.stats.tetrahedra = self.volume.tetrahedra.len();
-        self.stats.buffer_bytes = self.surface.capacity_bytes() + self.volume.capacity_bytes() + scratch_bytes;
+        self.stats.buffer_bytes =
+            self.surface.capacity_bytes() + self.volume.capacity_bytes() + 4 * self.vertex_values.capacity() + scratch_bytes;
     }
 }
 
@@ -225,6 +230,32 @@ pub struct ExtractorInfo {
     /// What it promises with its default options, as data: the registry-wide contract test
     /// (`tests/tests/contract.rs`) checks every promise of every registered extractor.
     pub guarantees: Guarantees,
+    /// How it reads a caller's borrowed samples ([`Samples::borrowed`]): in place, or from a
+    /// copy, and why (`tests/tests/borrowed.rs` holds it to its word and to the same mesh).
+    pub samples: SampleAccess,
+}
+
+/// How an extractor reads borrowed samples ([`Samples::borrowed`]: a numpy array, a
+/// memory-mapped file, a block of a larger volume).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SampleAccess {
+    /// In place, in their own type and memory order (its loops compiled for each sample type),
+    /// checking that they are finite as it reads them.
+    Borrowed,
+    /// From their conversion into `f32` samples in isolab's order (one copy, made once per
+    /// [`Samples`] and checked finite by [`Extractor::extract`] before the extractor runs); the
+    /// reason it cannot read them in place.
+    Copies(&'static str),
+}
+
+impl SampleAccess {
+    /// `"borrowed"` or `"copies: REASON"`, as listings show it.
+    pub fn describe(&self) -> String {
+        match self {
+            SampleAccess::Borrowed => "borrowed".to_owned(),
+            SampleAccess::Copies(why) => format!("copies: {why}"),
+        }
+    }
 }
 
 /// What an extractor promises, for any finite samples none of which equals the iso-value
@@ -337,8 +368,9 @@ pub trait Extractor: Send + Sync {
 
     /// Extracts from `samples` into `out`: the bookkeeping every extractor shares around its
     /// [`Extractor::extract_into`] (clear the output keeping capacity, copy the sampling time,
-    /// refuse a lattice its `INFO`'s guarantees do not declare, and fill the counts and buffer
-    /// sizes with [`Extraction::finish_counts`]).
+    /// refuse a lattice its `INFO`'s guarantees do not declare, convert and check borrowed
+    /// samples for an extractor that [`SampleAccess::Copies`] them, and fill the counts and
+    /// buffer sizes with [`Extraction::finish_counts`]).
     fn extract(&self, samples: &Samples, out: &mut Extraction) -> Result<(), ExtractError> {
         out.clear();
         out.stats.times.sampling = samples.sampling_time();
@@ -353,6 +385,9 @@ pub trait Extractor: Send + Sync {
                 lattice: samples.lattice().kind(),
                 supported: if guarantees.cubic { "cubic" } else { "bcc" },
             });
+        }
+        if samples.is_borrowed() && self.info().samples != SampleAccess::Borrowed {
+            samples.check_converted()?;
         }
         let scratch = self.extract_into(samples, out)?;
         out.finish_counts(scratch);

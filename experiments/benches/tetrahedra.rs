@@ -12,7 +12,7 @@ use isolab_experiments::peers::ferreus_rmt::FerreusRmt;
 use isolab_experiments::peers::{seeds_from, Job, Peer, Protocol};
 use std::time::{Duration, Instant};
 
-fn asteroid_bcc() -> Samples {
+fn asteroid_bcc() -> Samples<'static> {
     let field = fields::builtin("asteroid", Default::default()).unwrap();
     let grid = Grid::with_dims(&field.domain(), [51, 51, 51]).unwrap();
     Samples::sample(field, Lattice::Bcc(grid), 0.0).unwrap()

@@ -200,7 +200,7 @@ pub fn lattice_for(field: &dyn Field, config: &RunConfig) -> Result<Lattice, Run
 pub struct RunOutcome {
     /// The samples it extracted from (for a volume on its own grid: in voxel index coordinates
     /// unless the voxels are world-aligned cubes).
-    pub samples: Samples,
+    pub samples: Samples<'static>,
     /// What the extractor produced, in world coordinates.
     pub extraction: Extraction,
     /// Each surface vertex's material (with `materials`), else empty.
@@ -221,7 +221,7 @@ pub struct RunOutcome {
 
 /// The samples a run extracts from, and the map from their coordinates to the world.
 struct Sampled {
-    samples: Samples,
+    samples: Samples<'static>,
     to_world: Option<DAffine3>,
     notes: Vec<String>,
 }
@@ -235,7 +235,7 @@ pub fn volume_samples(
     lattice: LatticeKind,
     inside: Inside,
     iso: f32,
-) -> Result<(Samples, Option<DAffine3>), RunError> {
+) -> Result<(Samples<'static>, Option<DAffine3>), RunError> {
     let start = Instant::now();
     let v = &file.volume;
     let sign = if inside == Inside::Above { -1.0f32 } else { 1.0 };

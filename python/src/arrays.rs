@@ -1,6 +1,8 @@
-//! numpy arrays in: a 3-D array of any numeric dtype as isolab's float32 samples, read in place
-//! in whichever memory order it has (C: the last axis is isolab's x; Fortran: the first is), a
-//! strided view (or every `step`-th sample) read through its strides; mesh arrays as meshes.
+//! numpy arrays in, where they are copied: a 3-D array of any numeric dtype converted into
+//! isolab's float32 samples (read in place in whichever memory order it has, C: the last axis is
+//! isolab's x; Fortran: the first is; a strided view, or every `step`-th sample, through its
+//! strides), for what cannot read an array where it lies ([`crate::views`]); mesh arrays as
+//! meshes.
 
 use glam::{DAffine3, DMat3, DVec3, Vec3};
 use isolab_algorithms::{TetMesh, TriMesh};
@@ -29,12 +31,6 @@ pub struct VolumeArray {
     pub layout: Layout,
     /// The array's dtype name.
     pub dtype: &'static str,
-    /// Smallest and largest of `values` (NaN is skipped).
-    pub min: f32,
-    /// See `min`.
-    pub max: f32,
-    /// Whether every value is finite (no NaN, no infinity).
-    pub finite: bool,
 }
 
 /// A number numpy stores that isolab reads as a float32 sample.
@@ -104,77 +100,41 @@ fn read_typed<T: Sample>(
     let shape = [array.shape()[0], array.shape()[1], array.shape()[2]];
     let fortran = !array.is_c_contiguous() && array.is_fortran_contiguous();
     let contiguous = if step == 1 { readonly.as_slice().ok() } else { None };
-    let (values, dims, layout, range) = if let Some(slice) = contiguous {
-        let (values, range) = py.allow_threads(|| crate::pools::install(pool, || convert(slice, sign)));
+    let (values, dims, layout) = if let Some(slice) = contiguous {
+        let values = py.allow_threads(|| crate::pools::install(pool, || convert(slice, sign)));
         if fortran {
-            (values, shape, Layout::Fortran, range)
+            (values, shape, Layout::Fortran)
         } else {
-            (values, [shape[2], shape[1], shape[0]], Layout::C, range)
+            (values, [shape[2], shape[1], shape[0]], Layout::C)
         }
     } else {
         let view: ArrayViewD<'_, T> = readonly.as_array();
         let every = view.slice_each_axis(|_| Slice::new(0, None, step as isize));
         let m = [every.shape()[0], every.shape()[1], every.shape()[2]];
         let values: Vec<f32> = py.allow_threads(|| every.iter().map(|&x| sign * x.to_f32()).collect());
-        let range = py.allow_threads(|| {
-            crate::pools::install(pool, || values.par_chunks(CHUNK).map(Range::of).reduce(Range::empty, Range::join))
-        });
-        (values, [m[2], m[1], m[0]], Layout::C, range)
+        (values, [m[2], m[1], m[0]], Layout::C)
     };
     if dims.iter().any(|&n| n < 2) {
         return Err(PyValueError::new_err(format!(
             "step_size {step} leaves fewer than 2 samples along an axis of a {shape:?} volume"
         )));
     }
-    Ok(VolumeArray { values, dims, layout, dtype: T::NAME, min: range.min, max: range.max, finite: range.finite })
+    Ok(VolumeArray { values, dims, layout, dtype: T::NAME })
 }
 
 /// Samples per task of the conversion pass.
 const CHUNK: usize = 1 << 16;
 
-/// The smallest and largest value of some samples, and whether all are finite.
-#[derive(Clone, Copy)]
-struct Range {
-    min: f32,
-    max: f32,
-    finite: bool,
-}
-
-impl Range {
-    fn empty() -> Range {
-        Range { min: f32::INFINITY, max: f32::NEG_INFINITY, finite: true }
-    }
-
-    fn of(values: &[f32]) -> Range {
-        let (mut min, mut max, mut finite) = (f32::INFINITY, f32::NEG_INFINITY, true);
-        for &v in values {
-            min = min.min(v);
-            max = max.max(v);
-            finite &= v.is_finite();
-        }
-        Range { min, max, finite }
-    }
-
-    fn join(a: Range, b: Range) -> Range {
-        Range { min: a.min.min(b.min), max: a.max.max(b.max), finite: a.finite && b.finite }
-    }
-}
-
-/// `sign * x` as float32 for every sample, and their range, in one pass over the array.
-fn convert<T: Sample>(slice: &[T], sign: f32) -> (Vec<f32>, Range) {
+/// `sign * x` as float32 for every sample, in one parallel pass over the array.
+fn convert<T: Sample>(slice: &[T], sign: f32) -> Vec<f32> {
     // Zeroed memory comes from fresh pages: no pass of its own before the conversion writes it.
     let mut values = vec![0.0f32; slice.len()];
-    let range = values
-        .par_chunks_mut(CHUNK)
-        .zip(slice.par_chunks(CHUNK))
-        .map(|(out, input)| {
-            for (o, &x) in out.iter_mut().zip(input) {
-                *o = sign * x.to_f32();
-            }
-            Range::of(out)
-        })
-        .reduce(Range::empty, Range::join);
-    (values, range)
+    values.par_chunks_mut(CHUNK).zip(slice.par_chunks(CHUNK)).for_each(|(out, input)| {
+        for (o, &x) in out.iter_mut().zip(input) {
+            *o = sign * x.to_f32();
+        }
+    });
+    values
 }
 
 /// A boolean mask of the volume's shape, read as the volume was (every `step`-th sample, in

@@ -9,9 +9,7 @@
 //! Errors are the pipeline's messages (the CLI prints the same), raised as `ValueError` (bad
 //! names, options or data), `OSError` (files) or `MemoryError`; nothing here panics on user input.
 
-use isolab_algorithms::{
-    extractors, fields as builtin_fields, Extraction, Extractor, Grid, Lattice, Options, Samples, TetMesh, TriMesh,
-};
+use isolab_algorithms::{extractors, fields as builtin_fields, Options, TetMesh, TriMesh};
 use isolab_io::volume::Inside;
 use isolab_pipeline::{measure, run, run_input, Input, LatticeKind, Measure, RunConfig, RunError, Truth, VolumeGrid};
 use numpy::PyUntypedArray;
@@ -23,12 +21,14 @@ use std::path::Path;
 
 mod arrays;
 mod blocks;
+mod drop_in;
 mod label_blocks;
 mod labels;
 mod out;
 mod pools;
+mod views;
 
-use arrays::{read_volume, Layout, VolumeArray};
+use arrays::{read_volume, VolumeArray};
 
 /// A pipeline error as the Python exception a user expects, with the CLI's message.
 pub(crate) fn run_error(e: RunError) -> PyErr {
@@ -63,6 +63,8 @@ fn algorithms(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
         g.set_item("intersection_free", e.guarantees.intersection_free)?;
         g.set_item("trilinear_topology", e.guarantees.trilinear_topology)?;
         d.set_item("guarantees", g)?;
+        // How it reads a numpy array: in place ("borrowed"), or "copies: REASON".
+        d.set_item("samples", e.samples.describe())?;
         // How it meshes in blocks (isolab.dask, chunk=) with its default options.
         let chunking = extractors::build(e.name, &Options::new()).ok().flatten().map(|x| x.chunking());
         let (kind, apron) = match chunking {
@@ -132,15 +134,14 @@ pub(crate) fn options_from(options: Option<BTreeMap<String, String>>) -> Options
     o
 }
 
-/// The scikit-image-compatible marching cubes core: the volume's values negated (the object is
-/// above `level`, inside is below in isolab), meshed on their own grid by `marching-cubes` with
-/// `faces` (lorensen, decider) and `on_iso` (exact, separate), vertex normals from the samples'
-/// central differences. Returns vertices in numpy index order times `spacing * step`, faces
-/// wound as scikit-image winds them (`ascent` reverses), unit normals toward decreasing values,
-/// and each vertex's value (see [`out::cell_ranges`]).
+/// The scikit-image-compatible marching cubes core ([`drop_in`]): the volume meshed where it
+/// lies by `marching-cubes` with `faces` (separate, trilinear) and `on_iso` (exact, separate).
+/// Returns vertices in numpy index order times `spacing * step`, faces wound as scikit-image
+/// winds them (`ascent` reverses), unit normals toward decreasing values, and each vertex's value
+/// ([`isolab_algorithms::extractors::marching_cubes::VertexValues::CellRange`]).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (volume, level, spacing, step, faces, on_iso, ascent, mask, threads))]
+#[pyo3(signature = (volume, level, spacing, step, faces, on_iso, ascent, allow_degenerate, mask, threads))]
 fn marching_cubes<'py>(
     py: Python<'py>,
     volume: &Bound<'py, PyUntypedArray>,
@@ -150,75 +151,24 @@ fn marching_cubes<'py>(
     faces: &str,
     on_iso: &str,
     ascent: bool,
+    allow_degenerate: bool,
     mask: Option<&Bound<'py, PyUntypedArray>>,
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let mut options = Options::new();
-    options.set("faces", faces).set("on-iso", on_iso).set("normals", "samples");
-    if threads == Some(1) {
-        options.set("parallelism", "serial");
-    }
-    let extractor = extractors::build("marching-cubes", &options).map_err(value_error)?.expect("registered");
-    let pool = pools::pool(threads)?;
-    let array = read_volume(py, volume, step, -1.0, pool.as_deref())?;
-    let mask = mask.map(|m| arrays::read_mask(py, m, step, array.layout, pool.as_deref())).transpose()?;
-    let layout = array.layout;
-    let scale = spacing.map(|s| (s * step as f64) as f32);
-    // Our winding turns toward decreasing values in isolab's (x, y, z); C order mirrors it into
-    // numpy's (i, j, k), where scikit-image's descent winds toward increasing values.
-    let flip = (layout == Layout::Fortran) != ascent;
-    let extracted = py.allow_threads(|| {
-        pools::install(pool.as_deref(), || {
-            let (mut mesh, values) = mc_core(array, level, extractor.as_ref(), mask.as_deref())?;
-            out::to_numpy_order(&mut mesh, layout, scale, flip);
-            Ok::<_, PyErr>((mesh, values))
-        })
-    });
-    let (mesh, values) = extracted?;
-    let d = PyDict::new(py);
-    d.set_item("vertices", out::vec3_array(py, mesh.positions)?)?;
-    d.set_item("faces", out::faces_array(py, mesh.triangles)?)?;
-    d.set_item("normals", out::vec3_array(py, mesh.normals)?)?;
-    d.set_item("values", numpy::PyArray1::from_vec(py, values))?;
-    Ok(d)
-}
-
-/// Checks the level, meshes, applies the mask, computes the vertex values.
-fn mc_core(
-    array: VolumeArray,
-    level: Option<f64>,
-    extractor: &dyn Extractor,
-    mask: Option<&[bool]>,
-) -> PyResult<(TriMesh, Vec<f32>)> {
-    if !array.finite {
-        let at = array.values.iter().position(|v| !v.is_finite()).unwrap_or(0);
-        let [nx, ny, _] = array.dims;
-        let xyz = [at % nx, at / nx % ny, at / (nx * ny)];
-        let ijk = if array.layout == Layout::C { [xyz[2], xyz[1], xyz[0]] } else { xyz };
-        return Err(PyValueError::new_err(format!(
-            "volume{ijk:?} is {}: every sample must be finite",
-            if array.values[at].is_nan() { "NaN" } else { "infinite" }
-        )));
-    }
-    // The values are negated: the volume's minimum is minus their maximum.
-    let (lo, hi) = (-array.max, -array.min);
-    let level = match level {
-        None => 0.5f32 * (lo + hi),
-        Some(l) if (l as f32) < lo || (l as f32) > hi => {
-            return Err(PyValueError::new_err("Surface level must be within volume data range."))
-        }
-        Some(l) => l as f32,
+    use isolab_algorithms::extractors::marching_cubes::{FaceResolution, OnIsoSamples};
+    let faces = match faces {
+        "separate" => FaceResolution::SeparateInside,
+        "decider" => FaceResolution::AsymptoticDecider,
+        "trilinear" => FaceResolution::Trilinear,
+        other => return Err(value_error(format!("faces must be separate, decider or trilinear, not {other:?}"))),
     };
-    let grid = Grid { origin: glam::Vec3::ZERO, spacing: 1.0, dims: array.dims };
-    let samples = Samples::from_values(Lattice::Cubic(grid), array.values, -level).map_err(value_error)?;
-    let mut extraction = Extraction::default();
-    extractor.extract(&samples, &mut extraction).map_err(value_error)?;
-    let mut mesh = std::mem::take(&mut extraction.surface);
-    if let Some(mask) = mask {
-        out::keep_masked_cells(&mut mesh, &grid, mask);
-    }
-    let values = out::cell_ranges(&mesh, &grid, samples.values(), -level, mask.is_some());
-    Ok((mesh, values))
+    let on_iso = match on_iso {
+        "exact" => OnIsoSamples::Exact,
+        "separate" => OnIsoSamples::Separate,
+        other => return Err(value_error(format!("on_iso must be exact or separate, not {other:?}"))),
+    };
+    let call = drop_in::Call { level, spacing, step, faces, on_iso, ascent, allow_degenerate, threads };
+    drop_in::marching_cubes(py, volume, mask, &call)
 }
 
 /// A finished run, kept for its true surface (what `Mesh.metrics()` measures against) and its

@@ -5,28 +5,6 @@ use glam::{DAffine3, Vec3};
 use isolab_algorithms::{Grid, TriMesh};
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
-use rayon::prelude::*;
-
-/// Positions and normals from isolab's (x, y, z) to numpy's (i, j, k) (a swap of x and z for a
-/// C-ordered volume), positions scaled per numpy axis by `scale`, and every triangle's winding
-/// reversed when `flip`. Normals are not rescaled, as scikit-image leaves them.
-pub fn to_numpy_order(mesh: &mut TriMesh, layout: crate::arrays::Layout, scale: [f32; 3], flip: bool) {
-    let scale = Vec3::from(scale);
-    let swap = layout == crate::arrays::Layout::C;
-    let reorder = |p: &mut Vec3| {
-        if swap {
-            *p = Vec3::new(p.z, p.y, p.x);
-        }
-    };
-    mesh.positions.par_iter_mut().with_min_len(1 << 14).for_each(|p| {
-        reorder(p);
-        *p *= scale;
-    });
-    mesh.normals.par_iter_mut().with_min_len(1 << 14).for_each(reorder);
-    if flip {
-        mesh.triangles.par_iter_mut().with_min_len(1 << 14).for_each(|t| t.swap(1, 2));
-    }
-}
 
 /// Vectors as an N x 3 float32 array over the same buffer (no copy).
 pub fn vec3_array<'py>(py: Python<'py>, v: Vec<Vec3>) -> PyResult<Bound<'py, PyArray2<f32>>> {
@@ -85,53 +63,13 @@ pub fn affine_rows(a: &DAffine3) -> [[f64; 4]; 4] {
 /// on a lattice plane is a triangle lying in a face of its cell, and isolab's tables draw those
 /// only on a cell's upper faces (`isolab_algorithms::tables::marching_cubes`): its cell is the
 /// one below the plane.
-fn triangle_cell(mesh: &TriMesh, t: [u32; 3], grid: &Grid) -> [usize; 3] {
+pub fn triangle_cell(mesh: &TriMesh, t: [u32; 3], grid: &Grid) -> [usize; 3] {
     let c = (mesh.positions[t[0] as usize] + mesh.positions[t[1] as usize] + mesh.positions[t[2] as usize]) / 3.0;
     let at = |v: f32, n: usize| {
         let below = if v.fract() == 0.0 { v - 1.0 } else { v.floor() };
         (below.max(0.0) as usize).min(n.saturating_sub(2))
     };
     [at(c.x, grid.dims[0]), at(c.y, grid.dims[1]), at(c.z, grid.dims[2])]
-}
-
-/// The largest cell range among the up to four cells around the lattice edge from `base` along
-/// `axis`. The cells share columns (two samples along `axis`): the 3 x 3 columns around the edge
-/// are each read once, 18 samples for the four cells' 32 corners.
-fn edge_cells_range(values: &[f32], dims: [usize; 3], strides: [usize; 3], base: [usize; 3], axis: usize, iso: f32) -> f32 {
-    let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
-    let at = base[0] + strides[1] * base[1] + strides[2] * base[2];
-    // columns[du][dw]: (min, max) of the column at base + (du - 1) e_u + (dw - 1) e_w.
-    let mut columns = [[(f32::INFINITY, f32::NEG_INFINITY); 3]; 3];
-    let inside = |coord: usize, d: usize, n: usize| coord + d >= 1 && coord + d < n + 1;
-    for (du, row) in columns.iter_mut().enumerate() {
-        if !inside(base[u], du, dims[u]) {
-            continue;
-        }
-        for (dw, column) in row.iter_mut().enumerate() {
-            if !inside(base[w], dw, dims[w]) {
-                continue;
-            }
-            let i = at + du * strides[u] + dw * strides[w] - strides[u] - strides[w];
-            let (a, b) = (values[i], values[i + strides[axis]]);
-            *column = (a.min(b), a.max(b));
-        }
-    }
-    let mut best = 0.0f32;
-    for cu in 0..2 {
-        for cw in 0..2 {
-            // The cell whose lowest corner is base + (cu - 1) e_u + (cw - 1) e_w.
-            if base[u] + cu < 1 || base[u] + cu >= dims[u] || base[w] + cw < 1 || base[w] + cw >= dims[w] {
-                continue;
-            }
-            let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-            for column in [columns[cu][cw], columns[cu + 1][cw], columns[cu][cw + 1], columns[cu + 1][cw + 1]] {
-                lo = lo.min(column.0);
-                hi = hi.max(column.1);
-            }
-            best = best.max((hi - iso).max(0.0) - (lo - iso).min(0.0));
-        }
-    }
-    best
 }
 
 fn cell_index(cell: [usize; 3], grid: &Grid) -> usize {
@@ -163,79 +101,4 @@ pub fn keep_masked_cells(mesh: &mut TriMesh, grid: &Grid, mask: &[bool]) {
         mesh.normals = kept(&mesh.normals);
     }
     mesh.triangles = keep.into_iter().map(|t| t.map(|v| new_index[v as usize])).collect();
-}
-
-/// scikit-image's `values`: for each vertex, the largest value range, `max(0, max - iso) -
-/// min(0, min - iso)` over the eight corners, among the cells around it: the up to four cells
-/// around its edge for a vertex on an edge (two integer coordinates), the up to eight cells
-/// around its sample for a vertex at a sample. Symmetric in the sign of the values, so negated
-/// samples give the volume's own ranges. With a mask, a vertex reads the cells whose triangles
-/// use it (zero for a vertex no triangle uses).
-pub fn cell_ranges(mesh: &TriMesh, grid: &Grid, values: &[f32], iso: f32, masked: bool) -> Vec<f32> {
-    let [nx, ny, nz] = grid.dims;
-    let cell_range = |[x, y, z]: [usize; 3]| {
-        let (mut lo, mut hi) = (0.0f32, 0.0f32);
-        for dz in 0..2 {
-            for dy in 0..2 {
-                let row = x + nx * ((y + dy) + ny * (z + dz));
-                for v in &values[row..row + 2] {
-                    lo = lo.min(v - iso);
-                    hi = hi.max(v - iso);
-                }
-            }
-        }
-        hi - lo
-    };
-    let dims = [nx, ny, nz];
-    let strides = [1, nx, nx * ny];
-    // A vertex at a sample (its value at the iso-value) reads every cell around that sample, as
-    // scikit-image does (tested on level sets, where such vertices occur).
-    let sample_cells_range = |at: [usize; 3]| {
-        let mut best = 0.0f32;
-        for corner in 0..8 {
-            let d = [corner & 1, (corner >> 1) & 1, (corner >> 2) & 1];
-            if (0..3).all(|k| at[k] >= d[k] && at[k] - d[k] + 1 < dims[k]) {
-                best = best.max(cell_range([at[0] - d[0], at[1] - d[1], at[2] - d[2]]));
-            }
-        }
-        best
-    };
-    // NaN marks a vertex whose cells are found from its triangles.
-    let mut out: Vec<f32> = mesh
-        .positions
-        .par_iter()
-        .with_min_len(1 << 12)
-        .map(|p| {
-            let c = p.to_array();
-            let axis = match c.map(|v| v.fract() != 0.0) {
-                [true, false, false] => 0,
-                [false, true, false] => 1,
-                [false, false, true] => 2,
-                [false, false, false] if !masked => return sample_cells_range(c.map(|v| v as usize)),
-                _ => return f32::NAN,
-            };
-            if masked {
-                return f32::NAN;
-            }
-            edge_cells_range(values, dims, strides, c.map(|v| v.floor() as usize), axis, iso)
-        })
-        .collect();
-    if out.iter().any(|v| v.is_nan()) {
-        let mut from_triangles = vec![0.0f32; out.len()];
-        for &t in &mesh.triangles {
-            if t.iter().any(|&v| out[v as usize].is_nan()) {
-                let range = cell_range(triangle_cell(mesh, t, grid));
-                for v in t {
-                    let slot = &mut from_triangles[v as usize];
-                    *slot = slot.max(range);
-                }
-            }
-        }
-        for (v, t) in out.iter_mut().zip(from_triangles) {
-            if v.is_nan() {
-                *v = t;
-            }
-        }
-    }
-    out
 }

@@ -19,7 +19,7 @@ pub fn object_field(name: &str) -> std::sync::Arc<dyn isolab_algorithms::Field> 
 }
 
 /// Samples on a unit-spaced cubic grid of `dims`, from a closure of the integer coordinates.
-pub fn grid_samples(dims: [usize; 3], mut value: impl FnMut(usize, usize, usize) -> f32) -> Samples {
+pub fn grid_samples(dims: [usize; 3], mut value: impl FnMut(usize, usize, usize) -> f32) -> Samples<'static> {
     let grid = Grid { origin: Vec3::ZERO, spacing: 1.0, dims };
     let mut values = Vec::with_capacity(grid.len());
     for z in 0..dims[2] {
@@ -35,7 +35,7 @@ pub fn grid_samples(dims: [usize; 3], mut value: impl FnMut(usize, usize, usize)
 /// Samples on a unit-spaced cubic grid (`bcc = false`) or BCC lattice (`bcc = true`: the corner
 /// grid of `dims` plus its cell centres) from a closure of **doubled** integer coordinates: corner
 /// `(x, y, z)` is `(2x, 2y, 2z)`, the centre of cell `(x, y, z)` is `(2x+1, 2y+1, 2z+1)`.
-pub fn lattice_samples(bcc: bool, dims: [usize; 3], mut value: impl FnMut([i32; 3]) -> f32) -> Samples {
+pub fn lattice_samples(bcc: bool, dims: [usize; 3], mut value: impl FnMut([i32; 3]) -> f32) -> Samples<'static> {
     let grid = Grid { origin: Vec3::ZERO, spacing: 1.0, dims };
     let mut values = Vec::new();
     let mut fill = |g: &Grid, odd: i32| {
@@ -59,7 +59,7 @@ pub fn lattice_samples(bcc: bool, dims: [usize; 3], mut value: impl FnMut([i32; 
 /// cube, outside on the border: the boundary samples and, on a BCC lattice, the centres of the
 /// boundary cells (the BCC tetrahedra do not reach past them, so the surface stays inside the
 /// tetrahedralised region).
-pub fn unit_cube_samples(bcc: bool, n: usize, mut value: impl FnMut(Vec3) -> f32) -> Samples {
+pub fn unit_cube_samples(bcc: bool, n: usize, mut value: impl FnMut(Vec3) -> f32) -> Samples<'static> {
     let last = 2 * (n as i32 - 1);
     lattice_samples(bcc, [n, n, n], |d| {
         if d.iter().any(|&c| c <= 1 || c >= last - 1) {
@@ -71,7 +71,7 @@ pub fn unit_cube_samples(bcc: bool, n: usize, mut value: impl FnMut(Vec3) -> f32
 
 /// Gaussian blobs `(centre, radius)` in the unit cube on either lattice ([`unit_cube_samples`]):
 /// inside where their summed density exceeds `threshold`.
-pub fn lattice_blobs(bcc: bool, n: usize, blobs: &[(Vec3, f32)], threshold: f32) -> Samples {
+pub fn lattice_blobs(bcc: bool, n: usize, blobs: &[(Vec3, f32)], threshold: f32) -> Samples<'static> {
     unit_cube_samples(bcc, n, |p| {
         threshold - blobs.iter().map(|&(c, r)| (-(p - c).length_squared() / (r * r)).exp()).sum::<f32>()
     })
@@ -144,7 +144,7 @@ pub fn assert_closed_manifold_with(mesh: &TriMesh, what: &str, orientation: Orie
 /// A smooth random field on an `n^3` unit grid: Gaussian blobs `(x, y, z, radius)` in `[0, 1]^3`
 /// summed and subtracted from `threshold` (inside where the blobs are dense), forced outside on the
 /// border so the surface is closed.
-pub fn blob_field(n: usize, blobs: &[(f32, f32, f32, f32)], threshold: f32) -> Samples {
+pub fn blob_field(n: usize, blobs: &[(f32, f32, f32, f32)], threshold: f32) -> Samples<'static> {
     grid_samples([n, n, n], |x, y, z| {
         if x == 0 || y == 0 || z == 0 || x == n - 1 || y == n - 1 || z == n - 1 {
             return 1.0;
@@ -158,7 +158,7 @@ pub fn blob_field(n: usize, blobs: &[(f32, f32, f32, f32)], threshold: f32) -> S
 
 /// A 4x4x4 grid whose inner 2x2x2 block carries cube pattern `case` (bit `c` set: table corner `c`
 /// inside) with values from `value(corner, inside)`, and whose outer layer is outside.
-pub fn embedded_case(case: u8, value: impl Fn(usize, bool) -> f32) -> Samples {
+pub fn embedded_case(case: u8, value: impl Fn(usize, bool) -> f32) -> Samples<'static> {
     grid_samples([4, 4, 4], |x, y, z| {
         let inner = (1..=2).contains(&x) && (1..=2).contains(&y) && (1..=2).contains(&z);
         if !inner {
@@ -184,7 +184,7 @@ pub fn shipped_models() -> Vec<String> {
 /// [`embedded_case`] with one of three value sets per corner (`variant` 0: all 1; 1 and 2:
 /// varying per corner), so vertices are not all at cell centres and a quadric has something to
 /// solve.
-pub fn varied_case(case: u8, variant: usize) -> Samples {
+pub fn varied_case(case: u8, variant: usize) -> Samples<'static> {
     embedded_case(case, |corner, inside| {
         let m = [1.0, 0.1 + 0.13 * corner as f32, 7.0 - 0.5 * corner as f32][variant];
         if inside {
@@ -222,7 +222,7 @@ pub fn trilinear(g: &[f32; 8], [x, y, z]: [f32; 3]) -> f32 {
 }
 
 /// One cell (2 x 2 x 2 samples) with corner values `g`.
-pub fn cell_samples(g: &[f32; 8]) -> Samples {
+pub fn cell_samples(g: &[f32; 8]) -> Samples<'static> {
     use isolab_algorithms::tables::marching_cubes::CORNERS;
     grid_samples([2, 2, 2], |x, y, z| {
         let c = CORNERS.iter().position(|c| c.map(usize::from) == [x, y, z]).expect("a corner");

@@ -12,7 +12,7 @@ static GLOBAL: &StatsAlloc<System> = &INSTRUMENTED_SYSTEM;
 /// The counts are process-wide: tests take turns.
 static TURN: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
-fn chunk_samples(seed: i32) -> Samples {
+fn chunk_samples(seed: i32) -> Samples<'static> {
     let field = isolab_algorithms::fields::builtin("terrain", isolab_algorithms::fields::FieldParams { seed }).unwrap();
     let grid = Grid::with_dims(&field.domain(), [33, 33, 33]).unwrap();
     Samples::sample(field, Lattice::Cubic(grid), 0.0).unwrap()

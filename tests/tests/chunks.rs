@@ -10,7 +10,7 @@ use isolab_metrics::{signed_volume, surface_area, topology};
 use isolab_tests::{blob_field, object_field};
 use proptest::prelude::*;
 
-fn sampled(name: &str, n: usize, bcc: bool) -> Samples {
+fn sampled(name: &str, n: usize, bcc: bool) -> Samples<'static> {
     let field = object_field(name);
     let grid = Grid::with_dims(&field.domain(), [n, n, n]).unwrap();
     Samples::sample(field, if bcc { Lattice::Bcc(grid) } else { Lattice::Cubic(grid) }, 0.0).unwrap()

@@ -34,12 +34,12 @@ use isolab_tests::{
 use proptest::prelude::*;
 
 /// [`isolab_tests::unit_cube_samples`] under the name the tests here use.
-fn field_samples(bcc: bool, n: usize, value: impl FnMut(Vec3) -> f32) -> Samples {
+fn field_samples(bcc: bool, n: usize, value: impl FnMut(Vec3) -> f32) -> Samples<'static> {
     unit_cube_samples(bcc, n, value)
 }
 
 /// Gaussian blobs `(centre, radius)` in the unit cube: inside where they are dense.
-fn blobs(bcc: bool, n: usize, blobs: &[(Vec3, f32)], threshold: f32) -> Samples {
+fn blobs(bcc: bool, n: usize, blobs: &[(Vec3, f32)], threshold: f32) -> Samples<'static> {
     lattice_blobs(bcc, n, blobs, threshold)
 }
 
@@ -64,7 +64,7 @@ fn white_noise(seed: u64) -> impl FnMut() -> f32 {
 }
 
 /// A white-noise sign field from a seed, outside on the border ([`white_noise`]).
-fn noise(bcc: bool, n: usize, seed: u64) -> Samples {
+fn noise(bcc: bool, n: usize, seed: u64) -> Samples<'static> {
     let mut value = white_noise(seed);
     field_samples(bcc, n, |_| value())
 }
@@ -237,7 +237,7 @@ fn boundary_edges_off_the_border(mesh: &isolab_algorithms::TriMesh, samples: &Sa
 /// White noise on the whole lattice, its border included: the surface leaves the lattice
 /// everywhere, through every kind of boundary cell (faces, edges and corners of the domain, and
 /// ambiguous faces on the border).
-fn open_noise(bcc: bool, n: usize, seed: u64) -> Samples {
+fn open_noise(bcc: bool, n: usize, seed: u64) -> Samples<'static> {
     let mut value = white_noise(seed);
     lattice_samples(bcc, [n, n, n], |_| value())
 }
@@ -313,7 +313,7 @@ fn extract_on_cell(e: &dyn Extractor, g: &[f32; 8]) -> isolab_algorithms::TriMes
 }
 
 /// Random values in {-1, 0, 1} (a third of them exactly at the iso-value), outside on the border.
-fn on_iso(bcc: bool, n: usize, seed: u64) -> Samples {
+fn on_iso(bcc: bool, n: usize, seed: u64) -> Samples<'static> {
     let mut random = isolab_algorithms::random::Random::new(seed);
     field_samples(bcc, n, |_| (random.unit() * 3.0).floor().min(2.0) as f32 - 1.0)
 }

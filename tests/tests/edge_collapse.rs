@@ -11,7 +11,7 @@ use isolab_metrics::{self_intersections, topology};
 use isolab_tests::{assert_closed_manifold, assert_closed_manifold_for, extract, lattice_blobs};
 use proptest::prelude::*;
 
-fn sampled(name: &str, bcc: bool, dims: [usize; 3]) -> Samples {
+fn sampled(name: &str, bcc: bool, dims: [usize; 3]) -> Samples<'static> {
     let field = isolab_tests::object_field(name);
     let grid = Grid::with_dims(&field.domain(), dims).unwrap();
     Samples::sample(field, if bcc { Lattice::Bcc(grid) } else { Lattice::Cubic(grid) }, 0.0).unwrap()

@@ -13,7 +13,7 @@ const BIG: (Vec3, f32) = (Vec3::new(12.0, 14.0, 15.0), 8.5);
 const SMALL: (Vec3, f32) = (Vec3::new(30.0, 28.0, 27.0), 4.2);
 
 /// Distance to the nearer of `spheres`, on an `N³` grid of unit spacing.
-fn spheres(spheres: &[(Vec3, f32)]) -> Samples {
+fn spheres(spheres: &[(Vec3, f32)]) -> Samples<'static> {
     grid_samples([N, N, N], |x, y, z| {
         let p = Vec3::new(x as f32, y as f32, z as f32);
         spheres.iter().map(|&(c, r)| (p - c).length() - r).fold(f32::INFINITY, f32::min)

@@ -12,7 +12,7 @@ fn serial() -> MarchingCubes {
     MarchingCubes::new(McOptions { parallelism: Parallelism::Serial, ..Default::default() })
 }
 
-fn embedded_case(case: u8, magnitude: impl Fn(usize) -> f32) -> Samples {
+fn embedded_case(case: u8, magnitude: impl Fn(usize) -> f32) -> Samples<'static> {
     isolab_tests::embedded_case(case, |corner, inside| if inside { -magnitude(corner) } else { magnitude(corner) })
 }
 
@@ -111,7 +111,7 @@ fn parallel_slabs_join_without_cracks_on_white_noise() {
 /// would show here.
 #[test]
 fn kept_extractors_mesh_each_new_grid_as_a_fresh_one_does() {
-    let grids: Vec<Samples> = ["sphere", "gyroid", "asteroid", "sphere"]
+    let grids: Vec<Samples<'static>> = ["sphere", "gyroid", "asteroid", "sphere"]
         .iter()
         .zip([40, 57, 66, 71])
         .map(|(name, n)| {

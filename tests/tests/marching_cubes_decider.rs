@@ -46,7 +46,7 @@ fn all_256_cube_patterns_among_random_neighbours_are_closed_and_manifold() {
 
 /// Two columns of inside samples along z, diagonal to each other across the central cell's
 /// faces; `strength` is how far inside they are against how far outside the other diagonal is.
-fn diagonal_columns(inside: f32, outside: f32) -> isolab_algorithms::Samples {
+fn diagonal_columns(inside: f32, outside: f32) -> isolab_algorithms::Samples<'static> {
     grid_samples([4, 4, 5], |x, y, z| {
         if x == 0 || y == 0 || z == 0 || x == 3 || y == 3 || z == 4 {
             return 1.0;

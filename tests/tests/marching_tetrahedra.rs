@@ -19,7 +19,7 @@ fn paper_rmt() -> RegularisedMarchingTetrahedra {
 
 /// A lattice where one sample (at doubled `centre`) and its 14 neighbours carry `pattern` (bit 0:
 /// the sample, bit 1 + k: neighbour k inside) and every other sample is outside.
-fn star_pattern(bcc: bool, pattern: u16) -> Samples {
+fn star_pattern(bcc: bool, pattern: u16) -> Samples<'static> {
     let kind = if bcc { TetKind::Bcc } else { TetKind::Kuhn };
     let dirs = topology(kind).directions;
     // BCC: the centre of cell (2, 2, 2) in a 6^3 corner grid; Kuhn: corner (2, 2, 2) of a 5^3 grid.
@@ -52,7 +52,7 @@ fn every_star_pattern_gives_a_closed_manifold_outward_surface() {
     }
 }
 
-fn blob_lattice(bcc: bool, n: usize, blobs: &[(f32, f32, f32, f32)], threshold: f32) -> Samples {
+fn blob_lattice(bcc: bool, n: usize, blobs: &[(f32, f32, f32, f32)], threshold: f32) -> Samples<'static> {
     let max = 2 * (n as i32 - 1);
     lattice_samples(bcc, [n, n, n], |q| {
         if q.iter().any(|&c| c <= 1 || c >= max - 1) {
@@ -93,7 +93,7 @@ proptest! {
     }
 }
 
-fn sampled(name: &str, bcc: bool, dims: Option<[usize; 3]>, resolution: usize) -> Samples {
+fn sampled(name: &str, bcc: bool, dims: Option<[usize; 3]>, resolution: usize) -> Samples<'static> {
     let field = isolab_tests::object_field(name);
     let grid = match dims {
         Some(d) => Grid::with_dims(&field.domain(), d).unwrap(),

@@ -8,7 +8,7 @@ use isolab_algorithms::materials::{self, vertex_materials, CLAY};
 use isolab_algorithms::{extractors, Extraction, Grid, Lattice, Samples};
 
 /// A sphere of radius 10 samples in a 33³ grid, material 1 where x < 16, 2 elsewhere.
-fn sphere() -> (Samples, Vec<u8>) {
+fn sphere() -> (Samples<'static>, Vec<u8>) {
     let samples = isolab_tests::grid_samples([33, 33, 33], |x, y, z| {
         (Vec3::new(x as f32, y as f32, z as f32) - Vec3::splat(16.0)).length() - 10.0
     });

@@ -14,7 +14,7 @@ fn nets(smoothing: Smoothing) -> SurfaceNets {
     SurfaceNets::new(SnOptions { smoothing, ..Default::default() })
 }
 
-fn embedded_case(case: u8) -> Samples {
+fn embedded_case(case: u8) -> Samples<'static> {
     isolab_tests::embedded_case(
         case,
         |corner, inside| if inside { -1.0 - 0.1 * corner as f32 } else { 1.0 + 0.07 * corner as f32 },

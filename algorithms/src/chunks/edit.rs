@@ -252,7 +252,7 @@ impl ChunkedVolume {
     }
 
     /// The current samples, as a whole volume (to compare with a whole-volume extraction).
-    pub fn samples(&self) -> Result<Samples, ExtractError> {
+    pub fn samples(&self) -> Result<Samples<'static>, ExtractError> {
         Ok(Samples::from_values(
             Lattice::Cubic(self.grid),
             self.values.clone(),

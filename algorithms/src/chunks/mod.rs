@@ -225,7 +225,7 @@ pub struct ChunkSlot {
     /// Chunk index per axis.
     pub id: [usize; 3],
     block: Block,
-    samples: Samples,
+    samples: Samples<'static>,
     /// The chunk's mesh (world space), valid when `state` is `Meshed`.
     pub mesh: Extraction,
     /// Per vertex: its weld key (position bits or lattice key), or `None` for vertices no other

@@ -88,6 +88,9 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
         intersection_free: false,
         trilinear_topology: false,
     },
+    samples: crate::extract::SampleAccess::Copies(
+        "the dual engine reads f32 samples by flat index (its QEF gathers and gradients); not yet ported to typed views",
+    ),
 };
 
 /// Builds dual contouring from named options.

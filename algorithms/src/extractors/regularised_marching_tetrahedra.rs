@@ -161,6 +161,7 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
         intersection_free: false,
         trilinear_topology: false,
     },
+    samples: crate::extract::SampleAccess::Copies("the tetrahedral engine, shared with BCC lattices (whose centre samples no array holds), reads f32 samples by flat lattice index"),
 };
 
 /// Builds it from options.

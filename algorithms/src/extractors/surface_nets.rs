@@ -100,6 +100,9 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
         intersection_free: false,
         trilinear_topology: false,
     },
+    samples: crate::extract::SampleAccess::Copies(
+        "the dual engine reads f32 samples by flat index (its vertex placement and smoothing); not yet ported to typed views",
+    ),
 };
 
 /// Builds surface nets from named options.

@@ -292,7 +292,7 @@ impl Phases {
 
     /// Samples of one density for an extractor: inside (below 0) where the density exceeds
     /// half the maximum.
-    fn samples(&self, density: &[f32]) -> Result<Samples, ExtractError> {
+    fn samples(&self, density: &[f32]) -> Result<Samples<'static>, ExtractError> {
         let iso = self.max / 2.0;
         Ok(Samples::from_values(Lattice::Cubic(self.grid), density.iter().map(|&d| iso - d).collect(), 0.0)?)
     }

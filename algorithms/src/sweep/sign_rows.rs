@@ -5,6 +5,7 @@
 //! sample packed 64 to a word ([`LayerSigns`]), so that crossing edges and surface cells are found
 //! by word operations over 64 samples at a time and only those are visited one by one.
 
+use crate::samples::{GridView, Sample};
 use rayon::prelude::*;
 
 /// Sign-change summary of one x-row of samples.
@@ -66,6 +67,8 @@ pub struct LayerSigns {
     held: [usize; 2],
     rows: Vec<Row>,
     bits: Vec<u64>,
+    /// The first row `(y, z)` classified since the last reset with a sample that is not finite.
+    non_finite: Option<(usize, usize)>,
 }
 
 impl LayerSigns {
@@ -76,27 +79,42 @@ impl LayerSigns {
         self.held = [usize::MAX; 2];
         self.rows.resize(2 * ny, Row::default());
         self.bits.resize(2 * ny * self.words, 0);
+        self.non_finite = None;
     }
 
     /// Classifies sample layer `z` of `values` (`dims` samples, x fastest) into its slot, unless
     /// already held.
     pub fn classify(&mut self, values: &[f32], dims: [usize; 3], iso: f32, z: usize) {
+        let [nx, ny, _] = dims;
+        let view = GridView::strided(values, dims, 0, [1, nx as isize, (nx * ny) as isize])
+            .unwrap_or_else(|e| panic!("sign rows: the values do not hold the grid: {e}"));
+        self.classify_view(&view, iso, z);
+    }
+
+    /// Classifies sample layer `z` of a view into its slot, unless already held, noting the
+    /// first row with a sample that is not finite ([`LayerSigns::non_finite`]).
+    #[inline]
+    pub fn classify_view<T: Sample>(&mut self, values: &GridView<'_, T>, iso: f32, z: usize) {
         let slot = z & 1;
         if self.held[slot] == z {
             return;
         }
-        let [nx, ny, _] = dims;
+        let [nx, ny, _] = values.dims();
         let words = self.words;
-        let layer = &values[z * nx * ny..(z + 1) * nx * ny];
         let rows = &mut self.rows[slot * ny..(slot + 1) * ny];
         let bits = &mut self.bits[slot * ny * words..(slot + 1) * ny * words];
-        for ((row, out), v) in rows.iter_mut().zip(bits.chunks_exact_mut(words)).zip(layer.chunks_exact(nx)) {
-            for (word, chunk) in out.iter_mut().zip(v.chunks(64)) {
-                *word = inside_bits(chunk, iso);
+        for (y, (row, out)) in rows.iter_mut().zip(bits.chunks_exact_mut(words)).enumerate() {
+            if !values.pack_row(y, z, iso, out) && self.non_finite.is_none() {
+                self.non_finite = Some((y, z));
             }
             *row = row_from_bits(out, nx);
         }
         self.held[slot] = z;
+    }
+
+    /// The first row `(y, z)` classified since the last reset that holds a NaN or an infinity.
+    pub fn non_finite(&self) -> Option<(usize, usize)> {
+        self.non_finite
     }
 
     /// The summary of row `(y, z)`; layer `z` must be held.
@@ -384,15 +402,31 @@ pub fn count_crossing_edges(
     z1: usize,
     bottom: bool,
 ) -> usize {
+    let [nx, ny, _] = dims;
+    let view = GridView::strided(values, dims, 0, [1, nx as isize, (nx * ny) as isize])
+        .unwrap_or_else(|e| panic!("sign rows: the values do not hold the grid: {e}"));
+    count_crossing_edges_in(signs, &view, iso, z0, z1, bottom)
+}
+
+/// [`count_crossing_edges`] of a view (its non-finite rows noted in `signs`).
+pub fn count_crossing_edges_in<T: Sample>(
+    signs: &mut LayerSigns,
+    values: &GridView<'_, T>,
+    iso: f32,
+    z0: usize,
+    z1: usize,
+    bottom: bool,
+) -> usize {
+    let dims = values.dims();
     signs.reset(dims[0], dims[1]);
-    signs.classify(values, dims, iso, z0);
+    signs.classify_view(values, iso, z0);
     let mut n = 0;
     let mut count = |_: usize, _: usize, lo: usize, hi: usize, word: &dyn Fn(usize) -> u64| n += count_bits(lo, hi, word);
     if bottom {
         layer_edge_words(signs, dims, z0, &mut count);
     }
     for z in z0..z1 {
-        signs.classify(values, dims, iso, z + 1);
+        signs.classify_view(values, iso, z + 1);
         z_edge_words(signs, dims, z, &mut count);
         layer_edge_words(signs, dims, z + 1, &mut count);
     }

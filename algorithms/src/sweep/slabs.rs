@@ -37,12 +37,51 @@ const MIN_CELLS_PER_SLAB: usize = 32 * 32 * 32;
 pub const MIN_VERTICES_PER_TASK: usize = 8192;
 
 /// How many slabs to cut `layers` cell layers of `cells` cells into: one when serial or small,
-/// otherwise up to four per rayon thread.
+/// otherwise up to four per thread of the pool the slabs run on.
 pub fn task_count(parallelism: Parallelism, cells: usize, layers: usize) -> usize {
     match parallelism {
         Parallelism::Serial => 1,
-        Parallelism::Rayon => (cells / MIN_CELLS_PER_SLAB).clamp(1, 4 * rayon::current_num_threads()).min(layers).max(1),
+        Parallelism::Rayon => (cells / MIN_CELLS_PER_SLAB).clamp(1, 4 * slab_threads()).min(layers).max(1),
     }
+}
+
+thread_local! {
+    /// The pool [`on_pool`] named for slab tasks started from this (non-pool) thread.
+    static SLAB_POOL: std::cell::RefCell<Option<std::sync::Arc<rayon::ThreadPool>>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Runs `f` on the calling thread, with the slab tasks it starts ([`for_each_slab`]) broadcast
+/// to `pool`'s threads as they are to the global pool's from outside any pool: the caller sleeps
+/// while every thread of the pool starts at once. (`pool.install(f)` would run `f` on a thread
+/// of the pool, from where slab tasks are handed out by work stealing, which wakes the other
+/// threads one at a time; see [`for_each_slab`].) Other parallel work inside `f` runs on the
+/// global pool. `None` runs `f` as it is.
+pub fn on_pool<R>(pool: Option<&std::sync::Arc<rayon::ThreadPool>>, f: impl FnOnce() -> R) -> R {
+    let Some(pool) = pool else { return f() };
+    let previous = SLAB_POOL.with(|p| p.replace(Some(pool.clone())));
+    // Restored even if `f` unwinds.
+    struct Restore(Option<std::sync::Arc<rayon::ThreadPool>>);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            let previous = self.0.take();
+            SLAB_POOL.with(|p| *p.borrow_mut() = previous);
+        }
+    }
+    let _restore = Restore(previous);
+    f()
+}
+
+/// The pool [`on_pool`] set for this thread, outside any pool.
+fn slab_pool() -> Option<std::sync::Arc<rayon::ThreadPool>> {
+    if rayon::current_thread_index().is_some() {
+        return None;
+    }
+    SLAB_POOL.with(|p| p.borrow().clone())
+}
+
+/// The threads slab tasks started here run on.
+fn slab_threads() -> usize {
+    slab_pool().map_or_else(rayon::current_num_threads, |p| p.current_num_threads())
 }
 
 /// The first global vertex index of each slab when slabs of `counts` vertices are joined in
@@ -179,13 +218,17 @@ where
 {
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Mutex;
-    if items.len() < 2 || rayon::current_num_threads() < 2 || rayon::current_thread_index().is_some() {
-        return items.par_iter_mut().enumerate().map(|(t, item)| task(t, item)).collect();
+    let pool = slab_pool();
+    if items.len() < 2 || slab_threads() < 2 || rayon::current_thread_index().is_some() {
+        return match pool {
+            Some(pool) => pool.install(|| items.par_iter_mut().enumerate().map(|(t, item)| task(t, item)).collect()),
+            None => items.par_iter_mut().enumerate().map(|(t, item)| task(t, item)).collect(),
+        };
     }
     let count = items.len();
     let cells: Vec<Mutex<&mut S>> = items.iter_mut().map(Mutex::new).collect();
     let claimed: Vec<AtomicBool> = (0..count).map(|_| AtomicBool::new(false)).collect();
-    let per_thread: Vec<Vec<(usize, R)>> = rayon::broadcast(|ctx| {
+    let each = |ctx: rayon::BroadcastContext<'_>| {
         let own = ctx.index() * count / ctx.num_threads()..(ctx.index() + 1) * count / ctx.num_threads();
         let others = (0..count).rev().filter(|t| !own.contains(t));
         let mut done = Vec::new();
@@ -196,7 +239,11 @@ where
             }
         }
         done
-    });
+    };
+    let per_thread: Vec<Vec<(usize, R)>> = match pool {
+        Some(pool) => pool.broadcast(each),
+        None => rayon::broadcast(each),
+    };
     let mut results: Vec<(usize, R)> = per_thread.into_iter().flatten().collect();
     results.sort_unstable_by_key(|(t, _)| *t);
     results.into_iter().map(|(_, r)| r).collect()
@@ -247,6 +294,11 @@ mod tests {
                 // From inside `pool`.
                 let inside = pool.install(|| check(&mut vec![0u32; count]));
                 assert!(inside.iter().all(|r| r.1.is_some_and(|k| k < threads)));
+                // From outside, on `pool` (its threads, never the caller's).
+                let pool = std::sync::Arc::new(rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap());
+                let on = on_pool(Some(&pool), || check(&mut vec![0u32; count]));
+                assert!(on.iter().all(|r| r.1.is_some_and(|k| k < threads)), "{threads} threads, {count} items");
+                assert_eq!(on_pool(Some(&pool), || task_count(Parallelism::Rayon, 1 << 30, 1000)), 4 * threads);
             }
         }
     }

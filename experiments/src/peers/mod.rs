@@ -66,7 +66,7 @@ pub enum Job<'a> {
     /// format (raw f32 + JSON), for peers in another process.
     Grid {
         /// The samples.
-        samples: &'a Samples,
+        samples: &'a Samples<'static>,
         /// The same samples on disk.
         file: &'a Path,
         /// Threads the peer may use.

@@ -62,14 +62,17 @@ def marching_cubes(volume: np.ndarray, level: Optional[float] = None, *, spacing
     Parameters
     ----------
     volume : (M, N, P) array
-        Any numeric dtype (bool, 8- to 64-bit integers, float32, float64), C or Fortran order, or
-        a strided view. The values are converted once into isolab's float32 samples (scikit-image
-        makes a float32 C-ordered copy too); C and Fortran order are read in place, a view
-        through its strides. Other dtypes (float16, ...) are converted with ``astype(float32)``
-        first, one more copy.
+        Meshed where it lies, with no copy, in its own dtype (bool, 8- to 32-bit integers,
+        float32, float64: the sweep is compiled for each) and memory order (C, Fortran, or any
+        strided view of an array of the same dtype, ``step_size`` included). Each sample is read
+        as float32, as scikit-image's ``astype(float32)`` converts it. 64-bit integers, other
+        dtypes (float16, ...) and views over another dtype's memory are converted into float32
+        first (one copy).
     level : float, optional
-        The iso-value; by default the middle of the data range, ``(min + max) / 2``. A level
-        outside the range raises ``ValueError``.
+        The iso-value; by default the middle of the data range, ``(min + max) / 2`` (one pass
+        over the samples). A sample is inside where it is above the level compared as a float64,
+        as scikit-image compares. A level outside the range raises ``ValueError`` (checked only
+        when nothing was meshed, as only such a level meshes nothing).
     spacing : 3 floats
         Voxel spacing along each axis; the vertices are scaled by it (the normals are not, as in
         scikit-image).
@@ -79,7 +82,9 @@ def marching_cubes(volume: np.ndarray, level: Optional[float] = None, *, spacing
     step_size : int
         Mesh every ``step_size``-th sample along each axis (a coarser mesh).
     allow_degenerate : bool
-        With False, triangles of zero area are removed (and the vertices they alone used).
+        With False, as in scikit-image, every triangle with two vertices at one position is
+        removed and those vertices are merged (samples at the level are then interpolated
+        exactly, for both methods); vertices no triangle uses are dropped as well.
     method : 'lewiner' or 'lorensen'
         'lorensen' gives scikit-image's ``method='lorensen'`` vertices (linear interpolation on
         every crossing edge, within float32 rounding) and triangle count: isolab's
@@ -145,23 +150,12 @@ def marching_cubes(volume: np.ndarray, level: Optional[float] = None, *, spacing
         mask = np.asarray(mask, dtype=bool)
     volume = _as_volume(volume)
     out = _isolab.marching_cubes(volume, None if level is None else float(level), tuple(float(s) for s in spacing),
-                                 step_size, faces_rule, on_iso, gradient_direction == "ascent", mask, threads)
+                                 step_size, faces_rule, on_iso, gradient_direction == "ascent", bool(allow_degenerate),
+                                 mask, threads)
     verts, faces, normals, values = out["vertices"], out["faces"], out["normals"], out["values"]
     if not len(verts):
         raise RuntimeError("No surface found at the given iso value.")
-    if not allow_degenerate:
-        verts, faces, normals, values = _remove_degenerate(verts, faces, normals, values)
     return verts, faces, normals, values
-
-
-def _remove_degenerate(verts, faces, normals, values):
-    a, b, c = verts[faces[:, 0]], verts[faces[:, 1]], verts[faces[:, 2]]
-    keep = np.any(np.cross(b - a, c - a) != 0, axis=1)
-    faces = faces[keep]
-    used = np.zeros(len(verts), dtype=bool)
-    used[faces.ravel()] = True
-    renumber = np.cumsum(used, dtype=np.int64) - 1
-    return verts[used], renumber[faces].astype(np.int32), normals[used], values[used]
 
 
 def _index_to_world(affine: Optional[np.ndarray], spacing: Optional[Sequence[float]]) -> Optional[List[List[float]]]:
@@ -471,11 +465,15 @@ def algorithms() -> List[Dict[str, Any]]:
     self-intersections, as the contract test checks); for extractors also ``chunking``, how they
     mesh in blocks (``chunk=``, :mod:`isolab.dask`) with their default options: 'cell-local'
     (blocks share their boundary samples), 'apron' (blocks also read ``apron`` samples of their
-    neighbours) or 'unsupported'.
+    neighbours) or 'unsupported'; and ``samples``, how they read a numpy array: 'borrowed' (where
+    it lies, in its own dtype and memory order, no copy) or 'copies: REASON' (converted once into
+    float32 samples, and why).
 
     >>> import isolab
     >>> [(a["chunking"], a["apron"]) for a in isolab.algorithms() if a["name"] == "marching-cubes"]
     [('cell-local', 0)]
+    >>> [a["samples"] for a in isolab.algorithms() if a["name"] == "marching-cubes-33"]
+    ['borrowed']
     """
     return _isolab.algorithms()
 

@@ -203,6 +203,9 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
         intersection_free: false,
         trilinear_topology: false,
     },
+    // On a cubic grid with no surface mesh, its input surface is marching cubes' of the samples,
+    // which reads them in place.
+    samples: crate::extract::SampleAccess::Borrowed,
 };
 
 /// Builds `bcc-sculpt` from named options.

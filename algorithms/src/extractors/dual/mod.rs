@@ -470,7 +470,7 @@ mod tests {
     use crate::lattice::Grid;
     use crate::sweep::sign_rows::count_crossing_edges;
 
-    fn samples(name: &str, n: usize) -> Samples {
+    fn samples(name: &str, n: usize) -> Samples<'static> {
         let f = fields::builtin(name, Default::default()).unwrap();
         Samples::sample_cubic(f.clone(), Grid::covering(&f.domain(), n).unwrap(), 0.0).unwrap()
     }

@@ -56,13 +56,26 @@
 //! exactly at the iso-value would give coincident vertices; by default vertices keep 1e-4 of the
 //! spacing from the edge ends instead ([`OnIsoSamples`]), so no triangle has zero area.
 //!
-//! **Why one file of about 900 lines.** The sweep's vertex pass, geometry pass, counting pass, slab
-//! join and normals share one set of per-layer index arrays; split apart they would pass those arrays
-//! through half a dozen signatures. It is one algorithm that reads best whole.
+//! **Samples where they lie.** The sweep is generic over the sample type and reads a
+//! [`GridView`]: owned `f32` samples, or a caller's array borrowed in its own type (bool, 8- to
+//! 32-bit integers, `f32`, `f64`) and memory order through its strides, each loop compiled for
+//! each type ([`crate::samples::view`]). It checks that the samples are finite as it packs their
+//! signs. A [`Frame`] writes the vertices in the caller's axis order and scale and winds the
+//! triangles its way, and [`VertexValues`] gives each vertex a value (scikit-image's `values`:
+//! an edge vertex's is raised by every surface cell around its edge as the cells are meshed), so
+//! a caller that wants its arrays in another frame gets them written once (the Python package's
+//! scikit-image drop-in).
 //!
-//! **Costs.** One read of every sample to pack its sign (two on the one-shot parallel path: the
-//! count and the sweep), then work proportional to the crossing edges and surface cells. Memory: five `nx * ny` index layers and two layers of sign bits per
-//! slab task, plus the output.
+//! **Why one file of about 1100 lines.** The sweep's vertex pass, geometry pass, counting pass, slab
+//! join, normals and values share one set of per-layer index arrays; split apart they would pass
+//! those arrays through half a dozen signatures. It is one algorithm that reads best whole (the
+//! frame and the cell ranges, which need none of them, are in `output.rs`).
+//!
+//! **Costs.** One read of every sample to pack its sign (on one thread into a fresh output, plus 32
+//! sampled cell layers to estimate its size on grids of over 4 Mi samples; on the one-shot parallel
+//! path two: the count and the sweep), then work proportional to the crossing edges and surface
+//! cells; normals read ten samples a vertex, values eight a surface cell. Memory: five `nx * ny`
+//! index layers and two layers of sign bits per slab task, plus the output.
 //!
 //! ```
 //! use isolab_algorithms::{extractors::MarchingCubes, fields, Extraction, Extractor, Grid, Samples};
@@ -74,16 +87,17 @@
 //! assert!(out.surface.positions.iter().all(|p| (p.length() - 0.4).abs() < 2e-3));
 //! ```
 
-use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees, LevelsOfDetail};
-use crate::geometry::{normalize_all, trilinear_gradient};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInfo, Guarantees, LevelsOfDetail, SampleAccess};
+use crate::geometry::trilinear_gradient;
 use crate::lattice::{Grid, Lattice};
 use crate::mesh::TriMesh;
-use crate::samples::Samples;
+use crate::samples::{GridView, Sample, SampleError, Samples};
 use crate::sweep::sign_rows::{
-    count_bits, count_crossing_edges, for_each_bit, for_each_surface_cell, layer_edge_words, span, z_edge_words, LayerSigns,
+    count_bits, count_crossing_edges_in, for_each_bit, for_each_surface_cell, layer_edge_words, span, z_edge_words, LayerSigns,
 };
 use crate::sweep::slabs::{
-    for_each_slab, grow_zeroed, join_parts, mesh_pieces, slab_offsets, split_slab_time, Parallelism, ScratchPool, EXTERN,
+    for_each_slab, grow_zeroed, join_parts, mesh_pieces, resize_zeroed, slab_offsets, split_pieces, split_slab_time, Parallelism,
+    ScratchPool, EXTERN,
 };
 use crate::tables::marching_cubes::{
     decider_joins_inside, Case, AMBIGUOUS_FACES, CORNERS, EDGES, FACES, FACE_CHOICE_TABLE, TABLE,
@@ -92,6 +106,10 @@ use crate::tables::marching_cubes_33;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
+
+mod output;
+use output::is_whole;
+pub use output::{cell_range, cell_range_at, is_at_sample, larger, range_of_corners, sample_value, smaller, Frame, VertexValues};
 
 /// Where vertex normals come from.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -121,7 +139,10 @@ pub enum OnIsoSamples {
     /// edge, as if such samples were a hair above the iso-value (default).
     #[default]
     Separate,
-    /// Interpolate exactly, as VTK and scikit-image do (for side-by-side equivalence tests).
+    /// Interpolate exactly, as VTK and scikit-image do (for side-by-side equivalence tests). An
+    /// ambiguous face whose outside corners are both at the iso-value then joins its inside
+    /// corners (with the default face rule), so no two triangles lie back to back on the same
+    /// three samples (tested on every pattern of a cell's corners at the iso-value).
     Exact,
 }
 
@@ -146,7 +167,7 @@ pub enum FaceResolution {
 }
 
 /// Options for [`MarchingCubes`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct McOptions {
     /// Vertex normals (default [`NormalSource::Auto`]).
     pub normals: NormalSource,
@@ -156,6 +177,10 @@ pub struct McOptions {
     pub on_iso: OnIsoSamples,
     /// Ambiguous faces (default [`FaceResolution::SeparateInside`]).
     pub faces: FaceResolution,
+    /// The frame vertices are written in (default: the lattice's own).
+    pub frame: Frame,
+    /// A value per vertex (default none).
+    pub values: VertexValues,
 }
 
 /// One line for listings.
@@ -182,6 +207,7 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
         intersection_free: true,
         trilinear_topology: false,
     },
+    samples: SampleAccess::Borrowed,
 };
 
 /// Nielson & Hamann 1991: marching cubes whose ambiguous faces follow the trilinear interpolant.
@@ -199,6 +225,7 @@ pub const DECIDER_INFO: ExtractorInfo = ExtractorInfo {
         intersection_free: true,
         trilinear_topology: false,
     },
+    samples: SampleAccess::Borrowed,
 };
 
 /// Chernyaev 1995 (marching cubes 33): every cell meshed with the topology of the trilinear
@@ -217,6 +244,7 @@ pub const MC33_INFO: ExtractorInfo = ExtractorInfo {
         intersection_free: false,
         trilinear_topology: true,
     },
+    samples: SampleAccess::Borrowed,
 };
 
 /// One line for listings of marching cubes 33.
@@ -273,7 +301,7 @@ fn build(
         ],
     )?;
     r.finish()?;
-    Ok(Box::new(MarchingCubes::new(McOptions { normals, parallelism, on_iso, faces })))
+    Ok(Box::new(MarchingCubes::new(McOptions { normals, parallelism, on_iso, faces, ..McOptions::default() })))
 }
 
 /// Marching cubes on a cubic grid. Keeps its scratch buffers between calls, so re-meshing the same
@@ -304,6 +332,8 @@ struct Scratch {
     signs: LayerSigns,
     /// The slab's own output, when slabs are joined afterwards (a reused output).
     mesh: TriMesh,
+    /// The slab's own vertex values, likewise.
+    values: Vec<f32>,
     vertex_time: Duration,
     geometry_time: Duration,
     active_cells: usize,
@@ -323,6 +353,7 @@ impl Scratch {
         4 * (self.x_lo.capacity() + self.y_lo.capacity() + self.x_hi.capacity() + self.y_hi.capacity() + self.z_mid.capacity())
             + self.signs.capacity_bytes()
             + self.mesh.capacity_bytes()
+            + 4 * self.values.capacity()
     }
 }
 
@@ -342,26 +373,47 @@ enum Bottom {
 /// Where a slab task writes its vertices and triangles: the output mesh itself (one slab), or
 /// its own pieces of the output, counted beforehand (parallel slabs).
 trait Sink {
-    /// Adds a vertex (and its normal, when normals are made) and returns its global index.
-    fn vertex(&mut self, p: Vec3, normal: Option<Vec3>) -> u32;
+    /// Adds a vertex (and its normal and value, when made) and returns its global index.
+    fn vertex(&mut self, p: Vec3, normal: Option<Vec3>, value: Option<f32>) -> u32;
     /// Adds a triangle of global indices.
     fn triangle(&mut self, t: [u32; 3]);
+    /// Raises the value of vertex `id` to `value` if it is below, when the vertex is this
+    /// sink's own (not one of the slab below's, which that slab made exact).
+    fn raise(&mut self, id: u32, value: f32);
 }
 
-impl Sink for TriMesh {
+/// A mesh and its vertex values that grow as the sweep makes them.
+struct Grow<'a> {
+    mesh: &'a mut TriMesh,
+    values: &'a mut Vec<f32>,
+}
+
+impl Sink for Grow<'_> {
     #[inline(always)]
-    fn vertex(&mut self, p: Vec3, normal: Option<Vec3>) -> u32 {
-        let index = self.positions.len() as u32;
-        self.positions.push(p);
+    fn vertex(&mut self, p: Vec3, normal: Option<Vec3>, value: Option<f32>) -> u32 {
+        let index = self.mesh.positions.len() as u32;
+        self.mesh.positions.push(p);
         if let Some(n) = normal {
-            self.normals.push(n);
+            self.mesh.normals.push(n);
+        }
+        if let Some(v) = value {
+            self.values.push(v);
         }
         index
     }
 
     #[inline(always)]
     fn triangle(&mut self, t: [u32; 3]) {
-        self.triangles.push(t);
+        self.mesh.triangles.push(t);
+    }
+
+    #[inline(always)]
+    fn raise(&mut self, id: u32, value: f32) {
+        // Tagged indices name the slab below's vertices.
+        if id & EXTERN == 0 {
+            let slot = &mut self.values[id as usize];
+            *slot = larger(*slot, value);
+        }
     }
 }
 
@@ -371,6 +423,8 @@ struct Pieces<'a> {
     positions: &'a mut [Vec3],
     /// Empty when no normals are made.
     normals: &'a mut [Vec3],
+    /// Empty when no vertex values are made.
+    values: &'a mut [f32],
     triangles: &'a mut [[u32; 3]],
     base: u32,
     vertices: usize,
@@ -379,11 +433,14 @@ struct Pieces<'a> {
 
 impl Sink for Pieces<'_> {
     #[inline(always)]
-    fn vertex(&mut self, p: Vec3, normal: Option<Vec3>) -> u32 {
+    fn vertex(&mut self, p: Vec3, normal: Option<Vec3>, value: Option<f32>) -> u32 {
         let i = self.vertices;
         self.positions[i] = p;
         if let Some(n) = normal {
             self.normals[i] = n;
+        }
+        if let Some(v) = value {
+            self.values[i] = v;
         }
         self.vertices += 1;
         self.base + i as u32
@@ -393,6 +450,14 @@ impl Sink for Pieces<'_> {
     fn triangle(&mut self, t: [u32; 3]) {
         self.triangles[self.triangles_written] = t;
         self.triangles_written += 1;
+    }
+
+    #[inline(always)]
+    fn raise(&mut self, id: u32, value: f32) {
+        // Indices below `base` are the slab below's.
+        if let Some(slot) = self.values.get_mut(id.wrapping_sub(self.base) as usize) {
+            *slot = larger(*slot, value);
+        }
     }
 }
 
@@ -406,9 +471,9 @@ struct SlabCount {
     before_top: usize,
 }
 
-/// Read-only inputs of a slab task.
-struct Ctx<'a> {
-    values: &'a [f32],
+/// Read-only inputs of a slab task: the samples where they lie, in their own type `T`.
+struct Ctx<'a, T> {
+    values: GridView<'a, T>,
     grid: Grid,
     iso: f32,
     sample_normals: bool,
@@ -416,56 +481,130 @@ struct Ctx<'a> {
     t_min: f32,
     /// How ambiguous faces (and, for marching cubes 33, cell interiors) are resolved.
     faces: FaceResolution,
+    /// The frame vertices are written in.
+    frame: Frame,
+    /// Whether each vertex gets its [`VertexValues::CellRange`].
+    cell_ranges: bool,
+    /// Element offsets of a cell's eight corners (marching cubes' corner order) from its first.
+    corner_offsets: [isize; 8],
 }
 
-impl Ctx<'_> {
-    /// Gradient of the samples at grid point `(x, y, z)` (central differences, one-sided at
-    /// the boundary).
-    fn sample_gradient(&self, x: usize, y: usize, z: usize) -> Vec3 {
-        let g = &self.grid;
-        let c = [x, y, z];
+impl<'a, T: Sample> Ctx<'a, T> {
+    fn new(values: GridView<'a, T>, grid: Grid, iso: f32, sample_normals: bool, t_min: f32, options: &McOptions) -> Self {
+        let [sx, sy, sz] = values.strides();
+        Ctx {
+            values,
+            grid,
+            iso,
+            sample_normals,
+            t_min,
+            faces: options.faces,
+            frame: options.frame,
+            cell_ranges: options.values == VertexValues::CellRange,
+            corner_offsets: [0, sx, sx + sy, sy, sz, sx + sz, sx + sy + sz, sy + sz],
+        }
+    }
+
+    /// Gradient of the samples at grid point `c` (central differences, one-sided at the
+    /// boundary), whose element is `at`.
+    #[inline(always)]
+    fn sample_gradient(&self, c: [usize; 3], at: usize) -> Vec3 {
+        let dims = self.grid.dims;
+        let s = self.values.strides();
+        if (0..3).all(|a| c[a] > 0 && c[a] + 1 < dims[a]) {
+            // Inside the grid: a central difference along each axis.
+            let diff = |a: usize| {
+                (self.values.read(at.wrapping_add_signed(s[a])) - self.values.read(at.wrapping_add_signed(-s[a]))) / 2.0
+            };
+            return Vec3::new(diff(0), diff(1), diff(2));
+        }
         let mut out = [0.0f32; 3];
         for a in 0..3 {
-            let (mut lo, mut hi) = (c, c);
+            let (mut lo, mut hi) = (at, at);
+            let mut steps = 0.0f32;
             if c[a] > 0 {
-                lo[a] -= 1;
+                lo = lo.wrapping_add_signed(-s[a]);
+                steps += 1.0;
             }
-            if c[a] + 1 < g.dims[a] {
-                hi[a] += 1;
+            if c[a] + 1 < dims[a] {
+                hi = hi.wrapping_add_signed(s[a]);
+                steps += 1.0;
             }
-            let steps = (hi[a] - lo[a]) as f32;
-            out[a] = (self.values[g.index(hi[0], hi[1], hi[2])] - self.values[g.index(lo[0], lo[1], lo[2])]) / steps;
+            out[a] = (self.values.read(hi) - self.values.read(lo)) / steps;
         }
         Vec3::from(out)
     }
 
     /// Creates the vertex on the edge from sample `a` to the next sample along `axis`.
     #[inline(always)]
-    fn push_vertex(&self, sink: &mut impl Sink, a: [usize; 3], axis: usize) -> u32 {
+    fn push_vertex<const AXIS: usize>(&self, sink: &mut impl Sink, a: [usize; 3], exact: bool) -> u32 {
+        let axis = AXIS;
         let g = &self.grid;
-        let i = g.index(a[0], a[1], a[2]);
-        let stride = [1, g.dims[0], g.dims[0] * g.dims[1]][axis];
-        let (va, vb) = (self.values[i], self.values[i + stride]);
+        let i = self.values.offset(a[0], a[1], a[2]);
+        let stride = self.values.strides()[axis];
+        let (va, vb) = (self.values.read(i), self.values.read(i.wrapping_add_signed(stride)));
         let t = ((self.iso - va) / (vb - va)).clamp(self.t_min, 1.0 - self.t_min);
         let mut p = g.position(a[0], a[1], a[2]);
         p[axis] += t * g.spacing;
-        let normal = self.sample_normals.then(|| {
-            let mut b = a;
-            b[axis] += 1;
-            let ga = self.sample_gradient(a[0], a[1], a[2]);
-            let gb = self.sample_gradient(b[0], b[1], b[2]);
-            // Normalised after the sweep ([`normalize_all`]).
-            ga.lerp(gb, t)
+        let normal = self.sample_normals.then(|| self.vertex_normal::<AXIS>(a, i, [va, vb], t));
+        let value = self.cell_ranges.then(|| {
+            if exact || is_whole(a[axis] as f32 + t) {
+                cell_range_at(&self.values, a, axis, t, self.iso)
+            } else {
+                // Raised to the largest range of the cells around the edge as they are meshed.
+                0.0
+            }
         });
-        sink.vertex(p, normal)
+        sink.vertex(self.frame.place(p), normal, value)
+    }
+
+    /// The unit normal of the vertex at `t` along the edge from sample `a` (element `i`) along
+    /// `axis`, whose ends hold `ends`: the samples' gradients at the edge's ends (central
+    /// differences), interpolated. Away from the grid's boundary the gradients' reads are the
+    /// four columns of two samples beside the edge and the samples beyond its ends.
+    #[inline(always)]
+    fn vertex_normal<const AXIS: usize>(&self, a: [usize; 3], i: usize, ends: [f32; 2], t: f32) -> Vec3 {
+        let dims = self.grid.dims;
+        let axis = AXIS;
+        let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
+        let inner =
+            a[u] >= 1 && a[u] + 1 < dims[u] && a[w] >= 1 && a[w] + 1 < dims[w] && a[axis] >= 1 && a[axis] + 2 < dims[axis];
+        if !inner {
+            return self.boundary_normal(a, axis, i, t);
+        }
+        let s = self.values.strides();
+        let (sa, su, sw) = (s[axis], s[u], s[w]);
+        let v = &self.values;
+        let read2 = |k: usize| [v.read(k), v.read(k.wrapping_add_signed(sa))];
+        let (u_lo, u_hi) = (read2(i.wrapping_add_signed(-su)), read2(i.wrapping_add_signed(su)));
+        let (w_lo, w_hi) = (read2(i.wrapping_add_signed(-sw)), read2(i.wrapping_add_signed(sw)));
+        let before = v.read(i.wrapping_add_signed(-sa));
+        let beyond = v.read(i.wrapping_add_signed(2 * sa));
+        let ga = along::<AXIS>((ends[1] - before) / 2.0, (u_hi[0] - u_lo[0]) / 2.0, (w_hi[0] - w_lo[0]) / 2.0);
+        let gb = along::<AXIS>((beyond - ends[0]) / 2.0, (u_hi[1] - u_lo[1]) / 2.0, (w_hi[1] - w_lo[1]) / 2.0);
+        self.frame.turn(ga.lerp(gb, t).normalize_or_zero())
+    }
+
+    /// [`Ctx::vertex_normal`] of an edge at the grid's boundary (one-sided differences there).
+    #[inline(never)]
+    fn boundary_normal(&self, a: [usize; 3], axis: usize, i: usize, t: f32) -> Vec3 {
+        let mut b = a;
+        b[axis] += 1;
+        let ga = self.sample_gradient(a, i);
+        let gb = self.sample_gradient(b, i.wrapping_add_signed(self.values.strides()[axis]));
+        self.frame.turn(ga.lerp(gb, t).normalize_or_zero())
     }
 
     /// Vertices on the x- and y-edges of sample layer `z`.
-    fn layer_vertices(&self, signs: &LayerSigns, z: usize, xs: &mut [u32], ys: &mut [u32], sink: &mut impl Sink) {
+    fn layer_vertices(&self, signs: &LayerSigns, z: usize, top: bool, xs: &mut [u32], ys: &mut [u32], sink: &mut impl Sink) {
         let nx = self.grid.dims[0];
         layer_edge_words(signs, self.grid.dims, z, |y, axis, lo, hi, word| {
             let ids = if axis == 0 { &mut *xs } else { &mut *ys };
-            for_each_bit(lo, hi, word, |x| ids[x + nx * y] = self.push_vertex(sink, [x, y, z], axis));
+            if axis == 0 {
+                for_each_bit(lo, hi, word, |x| ids[x + nx * y] = self.push_vertex::<0>(sink, [x, y, z], top));
+            } else {
+                for_each_bit(lo, hi, word, |x| ids[x + nx * y] = self.push_vertex::<1>(sink, [x, y, z], top));
+            }
         });
     }
 
@@ -493,8 +632,8 @@ impl Ctx<'_> {
     /// Vertices on the z-edges between sample layers `z` and `z + 1`.
     fn z_vertices(&self, signs: &LayerSigns, z: usize, zs: &mut [u32], sink: &mut impl Sink) {
         let nx = self.grid.dims[0];
-        z_edge_words(signs, self.grid.dims, z, |y, axis, lo, hi, word| {
-            for_each_bit(lo, hi, word, |x| zs[x + nx * y] = self.push_vertex(sink, [x, y, z], axis));
+        z_edge_words(signs, self.grid.dims, z, |y, _, lo, hi, word| {
+            for_each_bit(lo, hi, word, |x| zs[x + nx * y] = self.push_vertex::<2>(sink, [x, y, z], false));
         });
     }
 
@@ -503,15 +642,15 @@ impl Ctx<'_> {
     #[inline(always)]
     fn for_each_surface_cell(&self, signs: &LayerSigns, z: usize, mut visit: impl FnMut(usize, usize, usize, [usize; 8])) {
         let [nx, ny, _] = self.grid.dims;
-        let layer = nx * ny;
+        let sx = self.values.strides()[0];
         for y in 0..ny - 1 {
             let rows = [signs.row(y, z), signs.row(y + 1, z), signs.row(y, z + 1), signs.row(y + 1, z + 1)];
             let Some((lo, hi)) = span(&rows, nx) else { continue };
-            let base = self.grid.index(0, y, z);
+            let base = self.values.offset(0, y, z);
             let bits = [signs.bits(y, z), signs.bits(y + 1, z), signs.bits(y, z + 1), signs.bits(y + 1, z + 1)];
             for_each_surface_cell(bits, lo.saturating_sub(1), hi.min(nx - 2), |x, case| {
-                let i = base + x;
-                let corners = [i, i + 1, i + 1 + nx, i + nx, i + layer, i + 1 + layer, i + 1 + nx + layer, i + nx + layer];
+                let i = base.wrapping_add_signed(x as isize * sx);
+                let corners = self.corner_offsets.map(|d| i.wrapping_add_signed(d));
                 visit(x, y, case as usize, corners);
             });
         }
@@ -521,11 +660,17 @@ impl Ctx<'_> {
     /// the ambiguous faces whose inside corners the trilinear interpolant joins.
     #[inline(always)]
     fn entry(&self, case: usize, corners: &[usize; 8]) -> &'static Case {
-        let ambiguous = if self.faces == FaceResolution::SeparateInside { 0 } else { AMBIGUOUS_FACES[case] };
+        let ambiguous = AMBIGUOUS_FACES[case];
+        if self.faces == FaceResolution::SeparateInside {
+            if ambiguous == 0 || self.t_min > 0.0 {
+                return &TABLE[case];
+            }
+            return self.tie_entry(case, ambiguous, corners);
+        }
         if ambiguous == 0 && (self.faces != FaceResolution::Trilinear || !marching_cubes_33::may_tunnel(case as u8)) {
             return &TABLE[case];
         }
-        let g = corners.map(|k| f64::from(self.values[k]) - f64::from(self.iso));
+        let g = corners.map(|k| f64::from(self.values.read(k)) - f64::from(self.iso));
         let mut joins = 0usize;
         for (f, (cycle, _)) in FACES.iter().enumerate() {
             if ambiguous >> f & 1 == 1 {
@@ -534,6 +679,23 @@ impl Ctx<'_> {
         }
         if self.faces == FaceResolution::Trilinear {
             return marching_cubes_33::entry(case as u8, joins as u8, &g);
+        }
+        &FACE_CHOICE_TABLE[case * 64 + joins]
+    }
+
+    /// The default table's entry, except that an ambiguous face whose two outside corners are
+    /// both at the iso-value joins its inside corners (interpolated exactly, `on-iso=exact`).
+    /// Joined across such a face, the outside corners would make a tube of no thickness: with
+    /// three of them in a cell, two triangles on the same three corners, back to back (the
+    /// duplicate faces scikit-image's classic table makes, its issue #8109). Both cells of a face
+    /// decide from its four values, so the surface stays closed.
+    #[cold]
+    fn tie_entry(&self, case: usize, ambiguous: u8, corners: &[usize; 8]) -> &'static Case {
+        let mut joins = 0usize;
+        for (f, (cycle, _)) in FACES.iter().enumerate() {
+            let outside_at_iso =
+                cycle.iter().filter(|&&k| case >> k & 1 == 0).all(|&k| self.values.read(corners[k as usize]) == self.iso);
+            joins |= usize::from(ambiguous >> f & 1 == 1 && outside_at_iso) << f;
         }
         &FACE_CHOICE_TABLE[case * 64 + joins]
     }
@@ -570,10 +732,21 @@ impl Ctx<'_> {
             if entry.interior != 0 {
                 self.interior_vertices(entry, &corners, [x, y, z], &mut ids, sink);
             }
+            if self.cell_ranges {
+                // The cell's range raises its edges' vertices' values (every cell around a
+                // crossing edge is a surface cell, so each edge vertex sees all of its cells).
+                let range = range_of_corners(&corners.map(|k| self.values.read(k)), self.iso);
+                let mut edges = entry.edge_mask & 0xFFF;
+                while edges != 0 {
+                    let edge = edges.trailing_zeros() as usize;
+                    edges &= edges - 1;
+                    sink.raise(ids[edge], range);
+                }
+            }
             for t in entry.triangles() {
                 // Element by element: `t.map(..)` builds the triple on the stack and reads it back
                 // wider than it was written (a store-forwarding stall per triangle).
-                sink.triangle([ids[t[0] as usize], ids[t[1] as usize], ids[t[2] as usize]]);
+                sink.triangle(self.frame.wind([ids[t[0] as usize], ids[t[1] as usize], ids[t[2] as usize]]));
             }
         });
         active
@@ -583,7 +756,7 @@ impl Ctx<'_> {
     /// faces only): the mean of the polygon's edge crossings, stored in `ids[12 + polygon]`; for
     /// marching cubes 33, Lewiner et al.'s centre ([`marching_cubes_33::lewiner_centre`]).
     fn interior_vertices(&self, entry: &Case, corners: &[usize; 8], cell: [usize; 3], ids: &mut [u32; 16], sink: &mut impl Sink) {
-        let values = corners.map(|i| self.values[i]);
+        let values = corners.map(|i| self.values.read(i));
         for piece in 0..entry.polygons {
             if entry.interior >> piece & 1 == 0 {
                 continue;
@@ -593,9 +766,11 @@ impl Ctx<'_> {
             } else {
                 self.crossings_mean(entry, piece, &values)
             };
-            let normal = self.sample_normals.then(|| trilinear_gradient(&values, local));
-            ids[12 + piece as usize] =
-                sink.vertex(self.grid.position(cell[0], cell[1], cell[2]) + local * self.grid.spacing, normal);
+            let normal = self.sample_normals.then(|| self.frame.turn(trilinear_gradient(&values, local).normalize_or_zero()));
+            // A vertex inside the cell: its own cell's range.
+            let value = self.cell_ranges.then(|| cell_range(&self.values, cell, self.iso));
+            let p = self.grid.position(cell[0], cell[1], cell[2]) + local * self.grid.spacing;
+            ids[12 + piece as usize] = sink.vertex(self.frame.place(p), normal, value);
         }
     }
 
@@ -627,7 +802,7 @@ impl Ctx<'_> {
     fn count(&self, z0: usize, z1: usize, bottom: bool, signs: &mut LayerSigns) -> SlabCount {
         let dims = self.grid.dims;
         signs.reset(dims[0], dims[1]);
-        signs.classify(self.values, dims, self.iso, z0);
+        signs.classify_view(&self.values, self.iso, z0);
         let layer_edges = |signs: &LayerSigns, z: usize| {
             let mut n = 0;
             layer_edge_words(signs, dims, z, |_, _, lo, hi, word| n += count_bits(lo, hi, word));
@@ -636,7 +811,7 @@ impl Ctx<'_> {
         let mut vertices = if bottom { layer_edges(signs, z0) } else { 0 };
         let (mut before_top, mut triangles) = (0, 0);
         for z in z0..z1 {
-            signs.classify(self.values, dims, self.iso, z + 1);
+            signs.classify_view(&self.values, self.iso, z + 1);
             z_edge_words(signs, dims, z, |_, _, lo, hi, word| vertices += count_bits(lo, hi, word));
             if z + 1 == z1 {
                 before_top = vertices;
@@ -661,18 +836,25 @@ impl Ctx<'_> {
         let mut signs = std::mem::take(&mut s.signs);
         let start = Instant::now();
         signs.reset(nx, ny);
-        signs.classify(self.values, self.grid.dims, self.iso, z0);
+        signs.classify_view(&self.values, self.iso, z0);
         match bottom {
-            Bottom::Make => self.layer_vertices(&signs, z0, &mut s.x_lo, &mut s.y_lo, sink),
+            Bottom::Make => self.layer_vertices(&signs, z0, false, &mut s.x_lo, &mut s.y_lo, sink),
             Bottom::Numbered(first) => self.number_layer(&signs, z0, Some(first), &mut s.x_lo, &mut s.y_lo),
             Bottom::Tagged => self.number_layer(&signs, z0, None, &mut s.x_lo, &mut s.y_lo),
         }
         s.vertex_time += start.elapsed();
+        let reads_ahead = self.sample_normals || self.cell_ranges;
         for z in z0..z1 {
             let t0 = Instant::now();
-            signs.classify(self.values, self.grid.dims, self.iso, z + 1);
+            if reads_ahead && z + 2 < self.grid.dims[2] {
+                // Normals and values read a layer beyond the one classified next.
+                self.values.touch_layer(z + 2);
+            }
+            signs.classify_view(&self.values, self.iso, z + 1);
             self.z_vertices(&signs, z, &mut s.z_mid, sink);
-            self.layer_vertices(&signs, z + 1, &mut s.x_hi, &mut s.y_hi, sink);
+            // The slab's top layer's vertices have cells above that the slab above meshes:
+            // their values are made whole here.
+            self.layer_vertices(&signs, z + 1, z + 1 == z1, &mut s.x_hi, &mut s.y_hi, sink);
             let t1 = Instant::now();
             s.active_cells += self.cells(&signs, z, s, sink);
             s.geometry_time += t1.elapsed();
@@ -688,28 +870,73 @@ impl Ctx<'_> {
 /// vertices) and the triangles they usually make: a closed surface of genus `g` has
 /// `2 V + 4 (g - 1)` triangles, so `2 V` plus a margin for high genus (the gyroid); an open one
 /// fewer. Capacity never written is never touched, so the margin costs no time.
-fn reserve_for(mesh: &mut TriMesh, vertices: usize, normals: bool) {
+fn reserve_for(out: &mut Extraction, vertices: usize, normals: bool, values: bool) {
     let positions = vertices + vertices / 64 + 16;
-    mesh.positions.reserve_exact(positions);
+    out.surface.positions.reserve_exact(positions);
     if normals {
-        mesh.normals.reserve_exact(positions);
+        out.surface.normals.reserve_exact(positions);
     }
-    mesh.triangles.reserve_exact(2 * vertices + vertices / 8 + 64);
+    if values {
+        out.vertex_values.reserve_exact(positions);
+    }
+    out.surface.triangles.reserve_exact(2 * vertices + vertices / 8 + 64);
 }
 
-/// Copies the slabs' meshes into `surface` in parallel, resolving each slab's tagged references
-/// to the slab below's top layer.
+/// The vector whose component `AXIS` is `a`, the next (cyclically) `b`, the one after `c`.
+#[inline(always)]
+fn along<const AXIS: usize>(a: f32, b: f32, c: f32) -> Vec3 {
+    match AXIS {
+        0 => Vec3::new(a, b, c),
+        1 => Vec3::new(c, a, b),
+        _ => Vec3::new(b, c, a),
+    }
+}
+
+/// The crossing edges of a grid (marching cubes' vertices): counted on grids of up to
+/// [`COUNT_ALL_SAMPLES`] samples, else estimated from [`ESTIMATE_LAYERS`] cell layers spread
+/// evenly through the grid, scaled to all of them.
+fn estimate_crossing_edges<T: Sample>(signs: &mut LayerSigns, values: &GridView<'_, T>, iso: f32) -> usize {
+    let [nx, ny, nz] = values.dims();
+    let layers = nz - 1;
+    if nx * ny * nz <= COUNT_ALL_SAMPLES || layers <= 2 * ESTIMATE_LAYERS {
+        return count_crossing_edges_in(signs, values, iso, 0, layers, true);
+    }
+    let counted: usize = (0..ESTIMATE_LAYERS)
+        .map(|k| {
+            // The middle cell layer of stratum k: its z-edges and its top layer's x- and y-edges.
+            let z = (2 * k + 1) * layers / (2 * ESTIMATE_LAYERS);
+            count_crossing_edges_in(signs, values, iso, z, z + 1, false)
+        })
+        .sum();
+    counted * layers / ESTIMATE_LAYERS
+}
+
+/// Grids of up to this many samples have their crossing edges counted, not estimated, before a
+/// fresh output is reserved (a pass over 16 MB of float samples, which caches hold).
+const COUNT_ALL_SAMPLES: usize = 1 << 22;
+
+/// Cell layers counted to estimate a larger grid's crossing edges.
+const ESTIMATE_LAYERS: usize = 32;
+
+/// Copies the slabs' meshes (and vertex values) into `out` in parallel, resolving each slab's
+/// tagged references to the slab below's top layer.
 fn join_slab_meshes(
     scratches: &[Scratch],
     normals: bool,
-    surface: &mut TriMesh,
+    values: bool,
+    out: &mut Extraction,
     algorithm: &'static str,
 ) -> Result<(), ExtractError> {
     let offsets = slab_offsets(scratches.iter().map(|s| s.mesh.positions.len()), algorithm)?;
     let copy = |_: usize, part: &[Vec3], piece: &mut [Vec3]| piece.copy_from_slice(part);
+    let surface = &mut out.surface;
     join_parts(&mut surface.positions, &scratches.iter().map(|s| &s.mesh.positions[..]).collect::<Vec<_>>(), copy);
     if normals {
         join_parts(&mut surface.normals, &scratches.iter().map(|s| &s.mesh.normals[..]).collect::<Vec<_>>(), copy);
+    }
+    if values {
+        let parts = scratches.iter().map(|s| &s.values[..]).collect::<Vec<_>>();
+        join_parts(&mut out.vertex_values, &parts, |_, part, piece| piece.copy_from_slice(part));
     }
     let triangles: Vec<&[[u32; 3]]> = scratches.iter().map(|s| &s.mesh.triangles[..]).collect();
     join_parts(&mut surface.triangles, &triangles, |t, part, piece| {
@@ -780,13 +1007,35 @@ impl Extractor for MarchingCubes {
                 supported: "cubic",
             });
         };
+        crate::with_view!(samples.view(), values => self.extract_view(values, samples, grid, out))
+    }
+}
+
+impl MarchingCubes {
+    /// [`Extractor::extract_into`] on the samples where they lie, compiled for their type.
+    fn extract_view<T: Sample>(
+        &self,
+        values: GridView<'_, T>,
+        samples: &Samples,
+        grid: Grid,
+        out: &mut Extraction,
+    ) -> Result<usize, ExtractError> {
         let nz = grid.dims[2];
+        let framed = self.options.frame != Frame::default();
+        if !self.options.frame.is_valid() {
+            return Err(ExtractError::BadInput {
+                algorithm: self.name(),
+                reason: format!("frame axes {:?} are not a permutation of 0, 1, 2", self.options.frame.axes),
+            });
+        }
+        // The field's gradient is taken at a vertex's lattice position, which a frame moves.
         let field = samples.field().filter(|f| match self.options.normals {
-            NormalSource::Auto => f.has_analytic_gradient(),
-            NormalSource::FieldGradient => true,
+            NormalSource::Auto => f.has_analytic_gradient() && !framed,
+            NormalSource::FieldGradient => !framed,
             _ => false,
         });
         let sample_normals = field.is_none() && matches!(self.options.normals, NormalSource::Auto | NormalSource::SampleGradient);
+        let cell_ranges = self.options.values == VertexValues::CellRange;
 
         let start = Instant::now();
         let mut held = self.scratch.take();
@@ -795,9 +1044,8 @@ impl Extractor for MarchingCubes {
             OnIsoSamples::Separate => MIN_EDGE_FRACTION,
             OnIsoSamples::Exact => 0.0,
         };
-        let ctx = Ctx { values: samples.values(), grid, iso: samples.iso(), sample_normals, t_min, faces: self.options.faces };
+        let ctx = Ctx::new(values, grid, samples.iso(), sample_normals, t_min, &self.options);
         let setup_time = start.elapsed();
-
         let slab_cells = nz - 1;
         let tasks = crate::sweep::slabs::task_count(self.options.parallelism, grid.cell_count(), slab_cells);
         while pool.len() < tasks {
@@ -810,13 +1058,14 @@ impl Extractor for MarchingCubes {
         if tasks == 1 {
             let s = &mut scratches[0];
             if out.surface.positions.capacity() == 0 {
-                // A fresh output (one-shot): count the vertices and allocate once, instead of
-                // growing the vectors by doubling, which copies them and touches twice the pages.
-                let vertices = count_crossing_edges(&mut s.signs, ctx.values, grid.dims, ctx.iso, 0, slab_cells, true);
-                reserve_for(&mut out.surface, vertices, sample_normals);
+                // A fresh output (one-shot): reserve for the vertices estimated from a sample of
+                // the layers, so the vectors rarely grow (a growth copies them), without a
+                // counting pass over every sample (which, on a volume larger than the caches,
+                // costs as much as the sweep's own read).
+                let vertices = estimate_crossing_edges(&mut s.signs, &ctx.values, ctx.iso);
+                reserve_for(out, vertices + vertices / 8, sample_normals, cell_ranges);
             }
-            ctx.slab(0, slab_cells, Bottom::Make, s, &mut out.surface);
-            normalize_all(&mut out.surface.normals);
+            ctx.slab(0, slab_cells, Bottom::Make, s, &mut Grow { mesh: &mut out.surface, values: &mut out.vertex_values });
             if out.surface.positions.len() >= EXTERN as usize {
                 return Err(ExtractError::TooLarge { algorithm: self.name(), vertices: out.surface.positions.len() });
             }
@@ -826,14 +1075,15 @@ impl Extractor for MarchingCubes {
             // first would read them twice, which costs more than the copy once the buffers are warm.
             for_each_slab(scratches, |t, s| {
                 s.mesh.clear();
-                let mut mesh = std::mem::take(&mut s.mesh);
+                s.values.clear();
+                let (mut mesh, mut values) = (std::mem::take(&mut s.mesh), std::mem::take(&mut s.values));
                 let bottom = if t == 0 { Bottom::Make } else { Bottom::Tagged };
-                ctx.slab(t * slab_cells / tasks, (t + 1) * slab_cells / tasks, bottom, s, &mut mesh);
-                normalize_all(&mut mesh.normals);
-                s.mesh = mesh;
+                let mut sink = Grow { mesh: &mut mesh, values: &mut values };
+                ctx.slab(t * slab_cells / tasks, (t + 1) * slab_cells / tasks, bottom, s, &mut sink);
+                (s.mesh, s.values) = (mesh, values);
             });
             let t_join = Instant::now();
-            join_slab_meshes(scratches, sample_normals, &mut out.surface, self.name())?;
+            join_slab_meshes(scratches, sample_normals, cell_ranges, out, self.name())?;
             allocation_time = t_join.elapsed();
         } else {
             // A fresh output (one-shot), in flying edges' order: count every slab's output,
@@ -848,12 +1098,17 @@ impl Extractor for MarchingCubes {
             let offsets = slab_offsets(counts.iter().map(|(c, _)| c.vertices), self.name())?;
             let t_allocate = Instant::now();
             let sizes: Vec<(usize, usize)> = counts.iter().map(|(c, _)| (c.vertices, c.triangles)).collect();
+            let value_counts = sizes.iter().map(|c| if cell_ranges { c.0 } else { 0 });
+            resize_zeroed(&mut out.vertex_values, value_counts.clone().sum());
+            let value_pieces = split_pieces(&mut out.vertex_values, value_counts);
             let sinks: Vec<Pieces> = mesh_pieces(&mut out.surface, &sizes, sample_normals)
                 .into_iter()
+                .zip(value_pieces)
                 .enumerate()
-                .map(|(t, piece)| Pieces {
+                .map(|(t, (piece, values))| Pieces {
                     positions: piece.positions,
                     normals: piece.normals,
+                    values,
                     triangles: piece.triangles,
                     base: offsets[t] as u32,
                     vertices: 0,
@@ -867,7 +1122,6 @@ impl Extractor for MarchingCubes {
                 let bottom =
                     if t == 0 { Bottom::Make } else { Bottom::Numbered((offsets[t - 1] + counts[t - 1].0.before_top) as u32) };
                 ctx.slab(z0, z1, bottom, s, sink);
-                normalize_all(sink.normals);
                 s.vertex_time += counts[t].1;
                 // The count and the sweep read the same sign bits, so they agree; a piece left
                 // partly unwritten would be a silently wrong mesh, so this is checked always.
@@ -877,6 +1131,17 @@ impl Extractor for MarchingCubes {
                     "marching cubes: slab {t} wrote other counts than it counted"
                 );
             });
+        }
+        if let Some((y, z)) = scratches.iter().filter_map(|s| s.signs.non_finite()).min_by_key(|&(y, z)| (z, y)) {
+            let found = (0..grid.dims[0]).map(|x| [x, y, z]).find(|&[x, y, z]| !ctx.values.at(x, y, z).is_finite());
+            let [x, y, z] = found.unwrap_or([0, y, z]);
+            self.scratch.give(held);
+            return Err(ExtractError::Samples(SampleError::NonFinite {
+                field: "values".to_owned(),
+                position: grid.position(x, y, z).to_array(),
+                index: grid.index(x, y, z),
+                value: ctx.values.at(x, y, z),
+            }));
         }
         let slab_wall = t_slabs.elapsed() - allocation_time;
         let (cpu_v, cpu_g) =

@@ -1,15 +1,26 @@
-//! Field values taken once on a lattice, reusable by any number of extractors.
+//! Field values taken once on a lattice, reusable by any number of extractors: owned `f32`
+//! samples that isolab takes itself, or a caller's array borrowed where it lies, in its own type
+//! ([`view`]).
 //!
 //! Sampling runs in parallel (rayon, one z-slice per task) and its wall time is recorded on its
 //! own ([`Samples::sampling_time`]), so extraction times never include field evaluation: the
 //! control the RMT paper (Costen 2026, section 1.1) asks for.
+//!
+//! Borrowed samples ([`Samples::borrowed`]) are read in place by the extractors whose `INFO`
+//! says [`SampleAccess::Borrowed`](crate::extract::SampleAccess): generic over the sample type,
+//! they check finiteness as they read. For any other extractor, [`crate::Extractor::extract`]
+//! converts the view once into `f32` samples ([`Samples::values`], kept for later calls) and
+//! checks them first, so every extractor meshes borrowed samples as it meshes their copy.
+
+pub mod view;
 
 use crate::field::Field;
 use crate::lattice::{Grid, Lattice};
 use glam::Vec3;
 use rayon::prelude::*;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 use std::time::{Duration, Instant};
+pub use view::{f32_at_or_below, AnyView, GridView, Sample, ViewError, ViewRange};
 
 /// Errors taking samples.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -34,20 +45,39 @@ pub enum SampleError {
         /// Samples in the lattice.
         expected: usize,
     },
+    /// Borrowed samples need a cubic lattice of the view's dims.
+    #[error("a {view:?} view of samples cannot be a {lattice} lattice of {dims:?} samples")]
+    ViewMismatch {
+        /// The view's dims.
+        view: [usize; 3],
+        /// The lattice's kind.
+        lattice: &'static str,
+        /// The lattice's corner grid dims.
+        dims: [usize; 3],
+    },
 }
 
 /// Field values on a lattice, with the iso-value to extract and (optionally) the field itself, so
-/// extractors may ask for exact gradients.
+/// extractors may ask for exact gradients: owned, or borrowed for `'a` (module doc).
 #[derive(Clone)]
-pub struct Samples {
+pub struct Samples<'a> {
     lattice: Lattice,
-    values: Vec<f32>,
+    values: Values<'a>,
     iso: f32,
     field: Option<Arc<dyn Field>>,
     sampling_time: Duration,
 }
 
-impl std::fmt::Debug for Samples {
+/// Where the values are.
+#[derive(Clone)]
+enum Values<'a> {
+    /// Taken by isolab, in the lattice's order.
+    Owned(Vec<f32>),
+    /// The caller's, and their conversion once an extractor that cannot read them asked for it.
+    Borrowed { view: AnyView<'a>, copy: OnceLock<Vec<f32>> },
+}
+
+impl std::fmt::Debug for Samples<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Samples")
             .field("lattice", &self.lattice)
@@ -58,14 +88,14 @@ impl std::fmt::Debug for Samples {
     }
 }
 
-impl Samples {
+impl Samples<'static> {
     /// Samples `field` on a cubic grid.
-    pub fn sample_cubic(field: Arc<dyn Field>, grid: Grid, iso: f32) -> Result<Samples, SampleError> {
+    pub fn sample_cubic(field: Arc<dyn Field>, grid: Grid, iso: f32) -> Result<Samples<'static>, SampleError> {
         Self::sample(field, Lattice::Cubic(grid), iso)
     }
 
     /// Samples `field` on `lattice` in parallel and checks every value is finite.
-    pub fn sample(field: Arc<dyn Field>, lattice: Lattice, iso: f32) -> Result<Samples, SampleError> {
+    pub fn sample(field: Arc<dyn Field>, lattice: Lattice, iso: f32) -> Result<Samples<'static>, SampleError> {
         let start = Instant::now();
         let mut values = vec![0.0f32; lattice.sample_count()];
         let grid = *lattice.grid();
@@ -76,28 +106,86 @@ impl Samples {
         }
         let sampling_time = start.elapsed();
         check_finite(field.name(), &lattice, &values)?;
-        Ok(Samples { lattice, values, iso, field: Some(field), sampling_time })
+        Ok(Samples { lattice, values: Values::Owned(values), iso, field: Some(field), sampling_time })
     }
 
     /// Wraps values sampled elsewhere (a file, a peer, a test). They must be finite.
-    pub fn from_values(lattice: Lattice, values: Vec<f32>, iso: f32) -> Result<Samples, SampleError> {
+    pub fn from_values(lattice: Lattice, values: Vec<f32>, iso: f32) -> Result<Samples<'static>, SampleError> {
         if values.len() != lattice.sample_count() {
             return Err(SampleError::WrongLength { given: values.len(), expected: lattice.sample_count() });
         }
         check_finite("values", &lattice, &values)?;
-        Ok(Samples { lattice, values, iso, field: None, sampling_time: Duration::ZERO })
+        Ok(Samples { lattice, values: Values::Owned(values), iso, field: None, sampling_time: Duration::ZERO })
+    }
+}
+
+impl<'a> Samples<'a> {
+    /// Borrows a caller's samples where they lie, on `grid` (the view's dims), with no copy.
+    /// Their finiteness is checked as they are meshed (module doc): an extraction from a view
+    /// with a NaN or an infinity fails with [`SampleError::NonFinite`] naming the sample.
+    pub fn borrowed(grid: Grid, view: impl Into<AnyView<'a>>, iso: f32) -> Result<Samples<'a>, SampleError> {
+        let view = view.into();
+        if view.dims() != grid.dims {
+            return Err(SampleError::ViewMismatch { view: view.dims(), lattice: "cubic", dims: grid.dims });
+        }
+        Ok(Samples {
+            lattice: Lattice::Cubic(grid),
+            values: Values::Borrowed { view, copy: OnceLock::new() },
+            iso,
+            field: None,
+            sampling_time: Duration::ZERO,
+        })
+    }
+
+    /// The corner grid's samples as a view: the borrowed view, or the owned values' (`f32`, in
+    /// isolab's order), which generic extractors read through the same code.
+    pub fn view(&self) -> AnyView<'_> {
+        match &self.values {
+            Values::Owned(v) => {
+                let grid = self.lattice.grid();
+                // The corner grid is the first `grid.len()` values, in isolab's order.
+                let dims = grid.dims;
+                AnyView::F32(
+                    GridView::strided(&v[..grid.len()], dims, 0, [1, dims[0] as isize, (dims[0] * dims[1]) as isize])
+                        .unwrap_or_else(|_| unreachable!("values of length grid.len() hold the corner grid")),
+                )
+            }
+            Values::Borrowed { view, .. } => *view,
+        }
+    }
+
+    /// Whether the values are borrowed (and not yet converted by an extractor that needed them
+    /// as `f32`, when `converted` is false).
+    pub fn is_borrowed(&self) -> bool {
+        matches!(self.values, Values::Borrowed { .. })
+    }
+
+    /// Whether borrowed values have been converted into `f32` samples (by [`Samples::values`]).
+    pub fn was_converted(&self) -> bool {
+        matches!(&self.values, Values::Borrowed { copy, .. } if copy.get().is_some())
+    }
+
+    /// Checks that borrowed values are finite, converting them once (what
+    /// [`crate::Extractor::extract`] does before an extractor that cannot read them in place).
+    pub fn check_converted(&self) -> Result<(), SampleError> {
+        if let Values::Borrowed { view, .. } = &self.values {
+            if view.is_float() {
+                check_finite("values", &self.lattice, self.values())?;
+            }
+        }
+        Ok(())
     }
 
     /// Attaches the field these values were taken from (so extractors may ask it for exact
     /// gradients); the caller vouches that the values are the field's.
-    pub fn with_field(mut self, field: Arc<dyn Field>) -> Samples {
+    pub fn with_field(mut self, field: Arc<dyn Field>) -> Samples<'a> {
         self.field = Some(field);
         self
     }
 
     /// Records how long taking these values took (for values wrapped by [`Samples::from_values`]
     /// after converting a file's voxels, say).
-    pub fn with_sampling_time(mut self, time: Duration) -> Samples {
+    pub fn with_sampling_time(mut self, time: Duration) -> Samples<'a> {
         self.sampling_time = time;
         self
     }
@@ -112,14 +200,26 @@ impl Samples {
         self.lattice.grid()
     }
 
-    /// All values in the documented order ([`crate::lattice`]).
+    /// All values in the documented order ([`crate::lattice`]) as `f32`; borrowed values are
+    /// converted on the first call (a copy, kept for later calls).
     pub fn values(&self) -> &[f32] {
-        &self.values
+        match &self.values {
+            Values::Owned(v) => v,
+            Values::Borrowed { view, copy } => copy.get_or_init(|| view.to_vec()),
+        }
     }
 
-    /// Mutable values, for editing (terrain brushes). Callers must keep them finite.
+    /// Mutable values, for editing (terrain brushes); borrowed values become owned (a copy).
+    /// Callers must keep them finite.
     pub fn values_mut(&mut self) -> &mut [f32] {
-        &mut self.values
+        if let Values::Borrowed { view, copy } = &mut self.values {
+            let owned = copy.take().unwrap_or_else(|| view.to_vec());
+            self.values = Values::Owned(owned);
+        }
+        match &mut self.values {
+            Values::Owned(v) => v,
+            Values::Borrowed { .. } => &mut [],
+        }
     }
 
     /// The iso-value: inside is `f < iso`.
@@ -137,9 +237,13 @@ impl Samples {
         self.sampling_time
     }
 
-    /// Bytes held by the values.
+    /// Bytes held by the values (none for borrowed values until converted).
     pub fn bytes(&self) -> usize {
-        self.values.len() * std::mem::size_of::<f32>()
+        let held = match &self.values {
+            Values::Owned(v) => v.len(),
+            Values::Borrowed { copy, .. } => copy.get().map_or(0, Vec::len),
+        };
+        held * std::mem::size_of::<f32>()
     }
 }
 

@@ -57,14 +57,19 @@ pub fn classify_rows(values: &[f32], nx: usize, iso: f32, rows: &mut Vec<Row>) {
 
 /// The row summaries and inside bits (`value < iso`, one bit per sample, 64 to a word) of the two
 /// sample layers a sweep along z is between, classified as the sweep reaches each layer, so the
-/// layer's samples are still in cache when the surface near them is built. Each bit row has one
-/// word past its samples that is always zero, so a row can be read one word past its end.
+/// layer's samples are still in cache when the surface near them is built; or, after
+/// [`LayerSigns::reset_span`], of every layer of a slab, so a counting pass and the sweep that
+/// follows it classify each sample once. Each bit row has one word past its samples that is always
+/// zero, so a row can be read one word past its end.
 #[derive(Clone, Debug, Default)]
 pub struct LayerSigns {
     ny: usize,
     words: usize,
-    /// The layer each of the two slots holds (`usize::MAX`: none).
-    held: [usize; 2],
+    /// The first layer of a span ([`LayerSigns::reset_span`]); `usize::MAX` for two slots taken
+    /// in turn.
+    first: usize,
+    /// The layer each slot holds (`usize::MAX`: none).
+    held: Vec<usize>,
     rows: Vec<Row>,
     bits: Vec<u64>,
     /// The first row `(y, z)` classified since the last reset with a sample that is not finite.
@@ -72,14 +77,43 @@ pub struct LayerSigns {
 }
 
 impl LayerSigns {
-    /// Forgets the held layers and sizes the slots for rows of `nx` samples, `ny` rows a layer.
+    /// Forgets the held layers and sizes two slots, taken in turn, for rows of `nx` samples,
+    /// `ny` rows a layer.
     pub fn reset(&mut self, nx: usize, ny: usize) {
+        self.resize(nx, ny, 2);
+        self.first = usize::MAX;
+    }
+
+    /// Forgets the held layers and sizes a slot for each of the layers `z0..=z1`, kept until the
+    /// next reset.
+    pub fn reset_span(&mut self, nx: usize, ny: usize, z0: usize, z1: usize) {
+        self.resize(nx, ny, z1 - z0 + 1);
+        self.first = z0;
+    }
+
+    /// Whether the layers `z0..=z1` are held (classified since a [`LayerSigns::reset_span`]).
+    pub fn holds_span(&self, z0: usize, z1: usize) -> bool {
+        self.first == z0 && self.held.len() == z1 - z0 + 1 && self.held.iter().enumerate().all(|(k, &z)| z == z0 + k)
+    }
+
+    fn resize(&mut self, nx: usize, ny: usize, slots: usize) {
         self.ny = ny;
         self.words = nx.div_ceil(64) + 1;
-        self.held = [usize::MAX; 2];
-        self.rows.resize(2 * ny, Row::default());
-        self.bits.resize(2 * ny * self.words, 0);
+        self.held.clear();
+        self.held.resize(slots, usize::MAX);
+        self.rows.resize(slots * ny, Row::default());
+        self.bits.resize(slots * ny * self.words, 0);
         self.non_finite = None;
+    }
+
+    /// The slot of layer `z`.
+    #[inline(always)]
+    fn slot(&self, z: usize) -> usize {
+        if self.first == usize::MAX {
+            z & 1
+        } else {
+            z - self.first
+        }
     }
 
     /// Classifies sample layer `z` of `values` (`dims` samples, x fastest) into its slot, unless
@@ -95,7 +129,7 @@ impl LayerSigns {
     /// first row with a sample that is not finite ([`LayerSigns::non_finite`]).
     #[inline]
     pub fn classify_view<T: Sample>(&mut self, values: &GridView<'_, T>, iso: f32, z: usize) {
-        let slot = z & 1;
+        let slot = self.slot(z);
         if self.held[slot] == z {
             return;
         }
@@ -120,15 +154,15 @@ impl LayerSigns {
     /// The summary of row `(y, z)`; layer `z` must be held.
     #[inline]
     pub fn row(&self, y: usize, z: usize) -> Row {
-        debug_assert_eq!(self.held[z & 1], z, "layer {z} is not classified");
-        self.rows[(z & 1) * self.ny + y]
+        debug_assert_eq!(self.held[self.slot(z)], z, "layer {z} is not classified");
+        self.rows[self.slot(z) * self.ny + y]
     }
 
     /// The inside bits of row `(y, z)`; layer `z` must be held.
     #[inline]
     pub fn bits(&self, y: usize, z: usize) -> &[u64] {
-        debug_assert_eq!(self.held[z & 1], z, "layer {z} is not classified");
-        let r = (z & 1) * self.ny + y;
+        debug_assert_eq!(self.held[self.slot(z)], z, "layer {z} is not classified");
+        let r = self.slot(z) * self.ny + y;
         &self.bits[r * self.words..(r + 1) * self.words]
     }
 

@@ -801,7 +801,9 @@ impl<'a, T: Sample> Ctx<'a, T> {
     /// the slab makes its bottom layer's x/y-edge vertices (the first slab).
     fn count(&self, z0: usize, z1: usize, bottom: bool, signs: &mut LayerSigns) -> SlabCount {
         let dims = self.grid.dims;
-        signs.reset(dims[0], dims[1]);
+        // Every layer's signs are kept for the sweep that follows, which reads them instead of
+        // the samples.
+        signs.reset_span(dims[0], dims[1], z0, z1);
         signs.classify_view(&self.values, self.iso, z0);
         let layer_edges = |signs: &LayerSigns, z: usize| {
             let mut n = 0;
@@ -835,7 +837,9 @@ impl<'a, T: Sample> Ctx<'a, T> {
         s.prepare(nx * ny);
         let mut signs = std::mem::take(&mut s.signs);
         let start = Instant::now();
-        signs.reset(nx, ny);
+        if !signs.holds_span(z0, z1) {
+            signs.reset(nx, ny);
+        }
         signs.classify_view(&self.values, self.iso, z0);
         match bottom {
             Bottom::Make => self.layer_vertices(&signs, z0, false, &mut s.x_lo, &mut s.y_lo, sink),

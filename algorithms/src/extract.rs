@@ -206,6 +206,22 @@ pub enum ExtractError {
         /// Vertices it would need.
         vertices: usize,
     },
+    /// The output would not fit the memory the caller allows (checked before it is allocated).
+    #[error(
+        "{algorithm}: the mesh would need about {} MiB ({vertices} vertices estimated), over the {} MiB allowed; \
+         mesh a coarser grid (step_size, --resolution), in blocks (--stream, isolab.dask), or allow more memory",
+        needed >> 20, limit >> 20
+    )]
+    OverMemory {
+        /// Algorithm name.
+        algorithm: &'static str,
+        /// Bytes the output and scratch would take, estimated.
+        needed: u64,
+        /// Bytes allowed.
+        limit: u64,
+        /// Vertices estimated.
+        vertices: usize,
+    },
     /// Sampling failed.
     #[error(transparent)]
     Samples(#[from] SampleError),

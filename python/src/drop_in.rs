@@ -21,7 +21,7 @@ use isolab_algorithms::samples::{f32_at_or_below, AnyView, GridView, SampleError
 use isolab_algorithms::sweep::slabs::{self, Parallelism};
 use isolab_algorithms::{ExtractError, Extraction, Extractor, Grid, Samples, TriMesh};
 use numpy::{PyUntypedArray, PyUntypedArrayMethods};
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyMemoryError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::sync::Arc;
@@ -45,6 +45,8 @@ pub struct Call {
     pub allow_degenerate: bool,
     /// Threads (`None`: the global pool).
     pub threads: Option<usize>,
+    /// Bytes the output may take (`None`: the memory available to the process).
+    pub memory_limit: Option<u64>,
 }
 
 /// Meshes `volume` (with `mask`, when given) and returns scikit-image's four arrays.
@@ -118,6 +120,7 @@ fn mesh_view<'py>(
         // With a mask, triangles are kept by cell in the lattice's frame, then placed.
         frame: if mask.is_some() { Frame::default() } else { frame },
         values: if mask.is_some() { VertexValues::None } else { VertexValues::CellRange },
+        memory_limit: call.memory_limit.or_else(isolab_pipeline::available_memory),
     };
     let iso = -f32_at_or_below(level);
     let samples = Samples::borrowed(grid, view, iso).map_err(crate::value_error)?;
@@ -140,6 +143,7 @@ fn mesh_view<'py>(
             let [nx, ny, _] = dims;
             return Err(non_finite([index % nx, index / nx % ny, index / (nx * ny)], -value, layout, step));
         }
+        Err(e @ ExtractError::OverMemory { .. }) => return Err(PyMemoryError::new_err(e.to_string())),
         Err(e) => return Err(crate::value_error(e)),
     };
     if extraction.surface.positions.is_empty() && call.level.is_some() {

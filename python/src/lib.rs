@@ -141,7 +141,7 @@ pub(crate) fn options_from(options: Option<BTreeMap<String, String>>) -> Options
 /// ([`isolab_algorithms::extractors::marching_cubes::VertexValues::CellRange`]).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (volume, level, spacing, step, faces, on_iso, ascent, allow_degenerate, mask, threads))]
+#[pyo3(signature = (volume, level, spacing, step, faces, on_iso, ascent, allow_degenerate, mask, threads, memory_limit))]
 fn marching_cubes<'py>(
     py: Python<'py>,
     volume: &Bound<'py, PyUntypedArray>,
@@ -154,6 +154,7 @@ fn marching_cubes<'py>(
     allow_degenerate: bool,
     mask: Option<&Bound<'py, PyUntypedArray>>,
     threads: Option<usize>,
+    memory_limit: Option<u64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     use isolab_algorithms::extractors::marching_cubes::{FaceResolution, OnIsoSamples};
     let faces = match faces {
@@ -167,7 +168,7 @@ fn marching_cubes<'py>(
         "separate" => OnIsoSamples::Separate,
         other => return Err(value_error(format!("on_iso must be exact or separate, not {other:?}"))),
     };
-    let call = drop_in::Call { level, spacing, step, faces, on_iso, ascent, allow_degenerate, threads };
+    let call = drop_in::Call { level, spacing, step, faces, on_iso, ascent, allow_degenerate, threads, memory_limit };
     drop_in::marching_cubes(py, volume, mask, &call)
 }
 

@@ -156,3 +156,20 @@ def test_no_surface_raises_runtime_error_as_scikit_image():
     vol[0, 0, 0] = 1.0
     with pytest.raises(RuntimeError, match="No surface"):
         isolab.marching_cubes(vol, 1.0)
+
+
+def test_an_output_over_the_memory_limit_is_a_memory_error_before_it_is_made(monkeypatch):
+    i, j, k = np.mgrid[-1:1:48j, -1:1:48j, -1:1:48j]
+    vol = (np.sin(6 * i) * np.cos(6 * j) + np.sin(6 * j) * np.cos(6 * k) + np.sin(6 * k) * np.cos(6 * i)).astype(np.float32)
+    verts, faces, normals, values = isolab.marching_cubes(vol, 0.0)
+    made = verts.nbytes + faces.nbytes + normals.nbytes + values.nbytes
+    for threads in (1, 2):
+        with pytest.raises(MemoryError, match="MiB allowed"):
+            isolab.marching_cubes(vol, 0.0, threads=threads, memory_limit=made // 2)
+        # Twice the output is enough (the estimate and the scratch fit).
+        v, f = isolab.marching_cubes(vol, 0.0, threads=threads, memory_limit=2 * made)[:2]
+        assert len(f) == len(faces)
+    # By default, the memory available: ISOLAB_MEMORY_MIB plays a smaller machine.
+    monkeypatch.setenv("ISOLAB_MEMORY_MIB", "0")
+    with pytest.raises(MemoryError):
+        isolab.marching_cubes(vol, 0.0)

@@ -240,3 +240,38 @@ fn marching_cubes_output_does_not_self_intersect_on_the_builtin_fields() {
         assert_eq!(si.count, 0, "{name}: {:?}", si.pairs);
     }
 }
+
+/// A fresh output over the memory limit fails before it is allocated, on one thread (from the
+/// estimate of sampled layers) and on the parallel path (from the exact counts); the bytes it
+/// names are close to what the mesh takes.
+#[test]
+fn an_output_over_the_memory_limit_fails_before_it_is_made() {
+    use isolab_algorithms::extractors::marching_cubes::VertexValues;
+    use isolab_algorithms::ExtractError;
+    let f = fields::builtin("gyroid", Default::default()).unwrap();
+    let samples = Samples::sample_cubic(f.clone(), Grid::covering(&f.domain(), 180).unwrap(), 0.0).unwrap();
+    for parallelism in [Parallelism::Serial, Parallelism::Rayon] {
+        let options = McOptions {
+            parallelism,
+            normals: NormalSource::SampleGradient,
+            values: VertexValues::CellRange,
+            ..Default::default()
+        };
+        let mut out = isolab_algorithms::Extraction::default();
+        MarchingCubes::new(options).extract(&samples, &mut out).unwrap();
+        let made = (out.surface.positions.len() * 28 + out.surface.triangles.len() * 12) as u64;
+        let tight = MarchingCubes::new(McOptions { memory_limit: Some(made / 2), ..options });
+        let mut fresh = isolab_algorithms::Extraction::default();
+        match tight.extract(&samples, &mut fresh) {
+            Err(ExtractError::OverMemory { needed, limit, .. }) => {
+                assert_eq!(limit, made / 2);
+                assert!(needed.abs_diff(made) * 5 < made, "{parallelism:?}: needed {needed} for {made}");
+            }
+            other => panic!("{parallelism:?}: {other:?}"),
+        }
+        assert_eq!(fresh.surface.positions.capacity(), 0, "{parallelism:?}: nothing allocated");
+        let roomy = MarchingCubes::new(McOptions { memory_limit: Some(2 * made), ..options });
+        roomy.extract(&samples, &mut fresh).unwrap();
+        assert_eq!(fresh.surface.triangles.len(), out.surface.triangles.len());
+    }
+}

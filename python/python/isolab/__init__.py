@@ -55,7 +55,8 @@ def _as_volume(volume: Any) -> np.ndarray:
 def marching_cubes(volume: np.ndarray, level: Optional[float] = None, *, spacing: Sequence[float] = (1.0, 1.0, 1.0),
                    gradient_direction: str = "descent", step_size: int = 1, allow_degenerate: bool = True,
                    method: str = "lewiner", mask: Optional[np.ndarray] = None,
-                   threads: Optional[int] = None) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                   threads: Optional[int] = None,
+                   memory_limit: Optional[int] = None) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Marching cubes with scikit-image's interface: ``skimage.measure.marching_cubes``'s
     arguments, return value, axis order, winding and errors.
 
@@ -105,6 +106,11 @@ def marching_cubes(volume: np.ndarray, level: Optional[float] = None, *, spacing
         meshed, the corner scikit-image reads the mask at.
     threads : int, optional
         Threads for this call (isolab's addition; None: every core).
+    memory_limit : int, optional
+        Bytes the returned arrays may take (isolab's addition). Before they are allocated, the
+        call estimates them (counting the crossing edges of a sample of the volume's layers) and
+        raises ``MemoryError``, having allocated nothing, when they would not fit. None: the
+        memory available to the process (``MemAvailable``, or ``ISOLAB_MEMORY_MIB`` when set).
 
     Returns
     -------
@@ -151,7 +157,7 @@ def marching_cubes(volume: np.ndarray, level: Optional[float] = None, *, spacing
     volume = _as_volume(volume)
     out = _isolab.marching_cubes(volume, None if level is None else float(level), tuple(float(s) for s in spacing),
                                  step_size, faces_rule, on_iso, gradient_direction == "ascent", bool(allow_degenerate),
-                                 mask, threads)
+                                 mask, threads, None if memory_limit is None else int(memory_limit))
     verts, faces, normals, values = out["vertices"], out["faces"], out["normals"], out["values"]
     if not len(verts):
         raise RuntimeError("No surface found at the given iso value.")

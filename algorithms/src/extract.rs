@@ -72,6 +72,11 @@ pub struct Extraction {
     /// A value per surface vertex, when the extractor was asked for one (marching cubes'
     /// [`crate::extractors::marching_cubes::VertexValues`]); empty otherwise.
     pub vertex_values: Vec<f32>,
+    /// Set by the caller: the bytes a fresh output may take. An extractor that can estimate its
+    /// output before allocating it (marching cubes) fails with [`ExtractError::OverMemory`], having
+    /// allocated nothing, when it would take more; others ignore it. Kept by
+    /// [`Extraction::clear`].
+    pub memory_limit: Option<u64>,
 }
 
 impl Extraction {
@@ -256,7 +261,9 @@ pub struct ExtractorInfo {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SampleAccess {
     /// In place, in their own type and memory order (its loops compiled for each sample type),
-    /// checking that they are finite as it reads them.
+    /// checking that they are finite as it reads them; a surface extractor that reads them in
+    /// place also keeps to [`Extraction::memory_limit`] (it is what a run that does not copy the
+    /// samples relies on to fit).
     Borrowed,
     /// From their conversion into `f32` samples in isolab's order (one copy, made once per
     /// [`Samples`] and checked finite by [`Extractor::extract`] before the extractor runs); the

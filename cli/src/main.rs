@@ -503,6 +503,13 @@ fn extract(
             );
             return stream_volume(config, output.as_deref().unwrap_or(std::path::Path::new("")), metrics.as_deref());
         }
+        Err(RunError::Extract(e @ isolab_algorithms::ExtractError::OverMemory { .. }))
+            if samples_out.is_none()
+                && output.as_ref().is_some_and(|o| isolab_pipeline::stream::check_streamable(config, o).is_ok()) =>
+        {
+            eprintln!("note: {e}: streaming it block by block instead (--stream)");
+            return stream_volume(config, output.as_deref().unwrap_or(std::path::Path::new("")), metrics.as_deref());
+        }
         other => other?,
     };
     for note in &outcome.notes {

@@ -210,7 +210,7 @@ fn a_volume_too_large_for_memory_streams_on_its_own() {
     assert_eq!(isolab_io::read_mesh(&out).unwrap().triangles.len() as u64, report["triangles"].as_u64().unwrap());
     let obj = dir.path().join("out.obj");
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_isolab"))
-        .args(["extract", "-a", "marching-cubes", "-f", f, "-o", obj.to_str().unwrap()])
+        .args(["extract", "-a", "marching-cubes", "-f", f, "--chunk", "8", "-o", obj.to_str().unwrap()])
         .envs(small)
         .output()
         .unwrap();
@@ -226,6 +226,61 @@ fn a_volume_too_large_for_memory_streams_on_its_own() {
     assert_eq!(run.status.code(), Some(1));
     assert!(stderr(&run).contains("lower --chunk"), "{}", stderr(&run));
     assert!(!out.exists());
+}
+
+/// Meshed on its own grid by marching cubes, a volume file's voxels are read in their stored type
+/// and meshed where they lie: the run needs the file's data and the mesh, not the samples as
+/// float32 and a generous guess (the check a copying extractor or `--chunk` still makes, which
+/// refuses the same volume on the same smaller machine). A mesh over the memory available is
+/// refused before it is made, naming its size; with a PLY output the run streams instead.
+#[test]
+fn a_volume_meshed_in_place_needs_its_data_and_its_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("scan.nrrd");
+    write_nrrd(&file, [129, 129, 129], "(1,0,0) (0,1,0) (0,0,1)", false);
+    let f = file.to_str().unwrap();
+    let obj = dir.path().join("out.obj");
+    // 4 MiB of uint16 data; as float32 samples and the old guess, about 85 MiB.
+    let smaller = [("ISOLAB_MEMORY_MIB", "24")];
+    let (report, _) = succeeds(&["extract", "-a", "marching-cubes", "-f", f, "-o", obj.to_str().unwrap()], &smaller);
+    assert!(report["triangles"].as_u64().unwrap() > 1000);
+    assert_eq!(isolab_io::read_mesh(&obj).unwrap().triangles.len() as u64, report["triangles"].as_u64().unwrap());
+    for refused in [vec!["-a", "surface-nets"], vec!["-a", "marching-cubes", "--chunk", "16"]] {
+        let mut args = vec!["extract", "-f", f, "-o", obj.to_str().unwrap()];
+        args.extend(refused.iter());
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_isolab")).args(&args).envs(smaller).output().unwrap();
+        assert_eq!(run.status.code(), Some(1), "{args:?}");
+        assert!(stderr(&run).contains("MiB"), "{args:?}: {}", stderr(&run));
+    }
+    // The data fits 5 MiB, the mesh does not: refused before it is made, or streamed to a PLY.
+    std::fs::remove_file(&obj).unwrap();
+    let tight = [("ISOLAB_MEMORY_MIB", "5")];
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_isolab"))
+        .args(["extract", "-a", "marching-cubes", "-f", f, "-o", obj.to_str().unwrap()])
+        .envs(tight)
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(1));
+    assert!(stderr(&run).contains("MiB allowed"), "{}", stderr(&run));
+    assert!(!stderr(&run).contains("panicked"), "{}", stderr(&run));
+    assert!(!obj.exists());
+    // A small volume of many surfaces: its mesh over the memory available, its stream not.
+    let busy = dir.path().join("busy.nrrd");
+    let n = 129;
+    let voxels: Vec<u8> = (0..n * n * n)
+        .map(|i| {
+            let [x, y, z] = [i % n, i / n % n, i / (n * n)].map(|c| (c as f32 * 1.7).sin());
+            (128.0 + 100.0 * x * y * z) as u8
+        })
+        .collect();
+    let header = format!("NRRD0004\ntype: uint8\ndimension: 3\nsizes: {n} {n} {n}\nencoding: raw\n\n");
+    std::fs::write(&busy, [header.as_bytes(), &voxels].concat()).unwrap();
+    let ply = dir.path().join("busy.ply");
+    let limit = [("ISOLAB_MEMORY_MIB", "16")];
+    let (report, err) =
+        succeeds(&["extract", "-a", "marching-cubes", "-f", busy.to_str().unwrap(), "-o", ply.to_str().unwrap()], &limit);
+    assert!(err.contains("MiB allowed") && err.contains("streaming it block by block instead"), "{err}");
+    assert!(report["triangles"].as_u64().unwrap() > 100_000, "{report}");
 }
 
 /// Streaming holds a layer of blocks, not the volume: the peak resident memory of a streamed

@@ -14,7 +14,7 @@ fuzz_target!(|data: &[u8]| {
     };
     if let Ok(file) = nrrd::parse_nrrd(data, path, VolumeOptions::default(), &sibling) {
         let v = &file.volume;
-        assert_eq!(v.values.len(), v.dims.iter().product::<usize>());
-        assert!(v.values.iter().all(|x| x.is_finite()));
+        assert_eq!(v.values().len(), v.dims.iter().product::<usize>());
+        assert!(v.values_f32().iter().all(|x| x.is_finite()));
     }
 });

@@ -85,7 +85,7 @@ impl LabelVolume {
     pub fn read(path: &Path, index: Option<usize>) -> Result<Self, RunError> {
         let file = isolab_io::volume::read_volume(path, isolab_io::volume::VolumeOptions { index })?;
         let v = &file.volume;
-        let mut out = Self::from_floats(&v.name, v.dims, &v.values, file.data_type, v.index_to_world)?;
+        let mut out = Self::from_floats(&v.name, v.dims, &v.values_f32(), file.data_type, v.index_to_world)?;
         out.notes.splice(0..0, file.notes.iter().cloned());
         out.anatomical = file.space == isolab_io::volume::Space::Ras;
         Ok(out)

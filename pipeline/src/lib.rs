@@ -226,10 +226,12 @@ struct Sampled {
     notes: Vec<String>,
 }
 
-/// A volume's own voxels as samples: values negated when inside is above (so that inside is
+/// A volume's own voxels as samples: read negated when inside is above (so that inside is
 /// `f < iso` as everywhere in isolab), on a grid in the world when the voxels are world-aligned
 /// cubes (no mapping needed), else in voxel index coordinates, with the affine that maps a mesh
-/// of them to the world. `iso` is in the volume's own values.
+/// of them to the world. `iso` is in the volume's own values. On a cubic lattice the samples are
+/// the volume's values in their stored type, shared (no copy; the caller checks the memory an
+/// extractor that copies them needs); a BCC lattice's are `f32`, with the cell centres.
 pub fn volume_samples(
     file: &isolab_io::volume::VolumeFile,
     lattice: LatticeKind,
@@ -247,19 +249,19 @@ pub fn volume_samples(
     } else {
         (Grid { origin: glam::Vec3::ZERO, spacing: 1.0, dims: v.dims }, Some(v.index_to_world))
     };
-    let lattice = match lattice {
-        LatticeKind::Cubic => Lattice::Cubic(grid),
-        LatticeKind::Bcc => Lattice::Bcc(grid),
+    let samples = match lattice {
+        LatticeKind::Cubic => Samples::stored(grid, v.values().clone(), inside == Inside::Above, sign * iso)?,
+        LatticeKind::Bcc => {
+            let lattice = Lattice::Bcc(grid);
+            check_memory(&lattice)?;
+            let mut values: Vec<f32> = Vec::with_capacity(lattice.sample_count());
+            values.par_extend(v.values_f32().par_iter().map(|&x| sign * x));
+            let centres = file.centres.clone().unwrap_or_else(|| v.cell_centres());
+            values.extend(centres.iter().map(|&x| sign * x));
+            Samples::from_values(lattice, values, sign * iso)?
+        }
     };
-    check_memory(&lattice)?;
-    let mut values: Vec<f32> = Vec::with_capacity(lattice.sample_count());
-    values.par_extend(v.values.par_iter().map(|&x| sign * x));
-    if let Lattice::Bcc(_) = lattice {
-        let centres = file.centres.clone().unwrap_or_else(|| v.cell_centres());
-        values.extend(centres.iter().map(|&x| sign * x));
-    }
-    let samples = Samples::from_values(lattice, values, sign * iso)?.with_sampling_time(start.elapsed());
-    Ok((samples, to_world))
+    Ok((samples.with_sampling_time(start.elapsed()), to_world))
 }
 
 fn native_samples(
@@ -268,6 +270,10 @@ fn native_samples(
     inside: Inside,
     iso: f32,
 ) -> Result<Sampled, RunError> {
+    if config.lattice == LatticeKind::Cubic && !memory::meshes_in_place(config) {
+        // The extractor copies the samples into f32: the old, generous check.
+        check_memory(&Lattice::Cubic(Grid { origin: glam::Vec3::ZERO, spacing: 1.0, dims: file.volume.dims }))?;
+    }
     let (samples, to_world) = volume_samples(file, config.lattice, inside, iso)?;
     let [a, b, c] = file.volume.dims;
     let note =
@@ -327,7 +333,8 @@ pub fn run_input(config: &RunConfig, input: Input) -> Result<RunOutcome, RunErro
     };
     let mut warnings = input.warnings.clone();
     warnings.extend(no_inside_warning(&samples, field.name(), iso, inside));
-    let mut extraction = Extraction::default();
+    // Extractors that can estimate their output refuse one the memory available cannot hold.
+    let mut extraction = Extraction { memory_limit: available_memory(), ..Extraction::default() };
     let chunks = match config.chunk {
         Some(n) => Some(ChunkReport::from((n, extract_chunked(extractor.as_ref(), &samples, n, &mut extraction)?))),
         None => {
@@ -504,7 +511,7 @@ fn choose_iso(input: &Input, given: Option<f32>) -> (f32, Option<&'static str>) 
             Some(iso) => (iso, Some(ISO_FROM_GRID)),
             None => match v.volume.otsu_threshold() {
                 Some(t) => (t, Some(ISO_FROM_OTSU)),
-                None => (v.volume.values[0], Some(ISO_FROM_CONSTANT)),
+                None => (v.volume.value(0), Some(ISO_FROM_CONSTANT)),
             },
         },
         None => (0.0, None),
@@ -515,8 +522,11 @@ fn choose_iso(input: &Input, given: Option<f32>) -> (f32, Option<&'static str>) 
 /// should hear why rather than get a silent empty file.
 fn no_inside_warning(samples: &Samples, name: &str, iso: f32, inside: Inside) -> Option<String> {
     let internal = samples.iso();
-    let inside_count = samples.values().par_iter().filter(|&&v| v < internal).count();
-    empty_mesh_warning(name, iso, inside, inside_count == 0, inside_count == samples.values().len())
+    // The lattice's corner grid (a BCC lattice's centres follow its corners' sign).
+    let view = samples.view();
+    let inside_count = view.count_below(internal);
+    let count = view.dims().iter().product::<usize>();
+    empty_mesh_warning(name, iso, inside, inside_count == 0, inside_count == count)
 }
 
 /// The warning of an empty mesh: no sample inside (`none`), or every one (`all`); shared with

@@ -44,10 +44,33 @@ fn check_memory_plus(lattice: &Lattice, extra: u64, available: Option<u64>) -> R
     }
 }
 
+/// Whether a run meshes a volume file's voxels where they lie, in their stored type, with an
+/// extractor that reads them in place and keeps its output to the memory available
+/// ([`isolab_algorithms::extract::SampleAccess::Borrowed`], a surface): the run then needs the
+/// file's data and the mesh only.
+pub(crate) fn meshes_in_place(config: &RunConfig) -> bool {
+    let in_place = isolab_algorithms::extractors::INFOS
+        .iter()
+        .find(|i| i.name == config.algorithm)
+        .is_some_and(|i| i.samples == isolab_algorithms::extract::SampleAccess::Borrowed);
+    let surface = isolab_algorithms::extractors::build(&config.algorithm, &config.options)
+        .ok()
+        .flatten()
+        .is_some_and(|e| !e.produces_volume());
+    in_place
+        && surface
+        && config.lattice == LatticeKind::Cubic
+        && config.volume_grid == VolumeGrid::Native
+        && config.post.is_empty()
+        && !config.materials
+        && config.chunk.is_none()
+}
+
 /// Refuses a volume file meshed on its own grid that cannot fit in memory, from its header,
 /// before its data is read (a file whose header does not say plainly is left to the reader).
-/// Besides the lattice and its output, a run holds the file's data and its values as f32 while
-/// the samples are made.
+/// The file's data is read in its stored type; an extractor that meshes it in place needs only
+/// that (its output it checks itself, before allocating it); any other also needs the samples as
+/// f32 and a generous estimate of its output.
 pub(crate) fn check_volume_size(config: &RunConfig) -> Result<(), RunError> {
     if config.volume_grid != VolumeGrid::Native || !input::is_file_spec(&config.field) {
         return Ok(());
@@ -61,21 +84,32 @@ pub(crate) fn check_volume_size(config: &RunConfig) -> Result<(), RunError> {
         },
     };
     let grid = Grid { origin: glam::Vec3::ZERO, spacing: 1.0, dims };
+    let data = volume_reading_bytes(dims, data_bytes);
+    if meshes_in_place(config) {
+        let available = available_memory();
+        return match available {
+            Some(available) if data > available => {
+                Err(RunError::OutOfMemory { dims, lattice: "cubic", need_mib: data >> 20, available_mib: available >> 20 })
+            }
+            _ => Ok(()),
+        };
+    }
     let lattice = match config.lattice {
         LatticeKind::Cubic => Lattice::Cubic(grid),
         LatticeKind::Bcc => Lattice::Bcc(grid),
     };
-    check_memory_plus(&lattice, volume_reading_bytes(dims, data_bytes), available_memory())
+    check_memory_plus(&lattice, data, available_memory())
 }
 
-/// Bytes a run holds while it reads a volume file of `dims` voxels of `data_bytes` each (the
-/// file's data and its values as f32), besides the lattice.
+/// Bytes a run holds to read a volume file of `dims` voxels of `data_bytes` each: its data, in
+/// its stored type.
 fn volume_reading_bytes(dims: [usize; 3], data_bytes: u64) -> u64 {
-    dims.iter().map(|&n| n as u64).product::<u64>() * (4 + data_bytes)
+    dims.iter().map(|&n| n as u64).product::<u64>() * data_bytes
 }
 
 /// What the in-memory run's header check asks for to mesh a volume file of `dims` voxels of
-/// `data_bytes` each on its own cubic grid, bytes.
+/// `data_bytes` each on its own cubic grid with an extractor that copies the samples into f32,
+/// bytes (one that meshes them in place asks for the data alone).
 pub fn volume_file_need(dims: [usize; 3], data_bytes: u64) -> u64 {
     let lattice = Lattice::Cubic(Grid { origin: glam::Vec3::ZERO, spacing: 1.0, dims });
     lattice.sample_count() as u64 * 4 * 5 + volume_reading_bytes(dims, data_bytes)

@@ -9,7 +9,7 @@
 //! isolab's (x, y, z).
 
 use crate::arrays::{self, Layout, VolumeArray};
-use crate::{out, pools, run_error, value_error, Run};
+use crate::{out, pools, run_error, value_error, views, Run};
 use isolab_algorithms::chunks::{self, BlockPlan, ChunkState, Fragment};
 use isolab_algorithms::{extractors, Extraction, Extractor, TriMesh};
 use isolab_pipeline::RunError;
@@ -73,20 +73,40 @@ pub fn mesh_block<'py>(
     let plan = plan_for(e.as_ref(), dims, chunk)?;
     let sign = if above { -1.0 } else { 1.0 };
     let pool = pools::pool(threads)?;
-    let VolumeArray { values, dims: block_dims, layout, .. } = arrays::read_volume(py, block, 1, sign, pool.as_deref())?;
     let expected = plan.block(id).map(|b| b.dims);
-    if layout != Layout::C || Some(block_dims) != expected {
-        return Err(PyValueError::new_err(format!(
-            "block {id:?}: expected a C-ordered array of {:?} samples (numpy shape), got shape {:?}{}",
-            expected.map(|[x, y, z]| [z, y, x]),
-            block.shape(),
-            if layout == Layout::C { "" } else { " in Fortran order" }
-        )));
-    }
+    let wrong = |layout: Layout, dims: [usize; 3]| {
+        (layout != Layout::C || Some(dims) != expected).then(|| {
+            PyValueError::new_err(format!(
+                "block {id:?}: expected a C-ordered array of {:?} samples (numpy shape), got shape {:?}{}",
+                expected.map(|[x, y, z]| [z, y, x]),
+                block.shape(),
+                if layout == Layout::C { "" } else { " in Fortran order" }
+            ))
+        })
+    };
     let iso = sign * level as f32;
-    let fragment = py.allow_threads(|| {
-        pools::install(pool.as_deref(), || chunks::mesh_block(e.as_ref(), &plan, id, values, iso).map_err(value_error))
+    // The block where it lies, in its own dtype (no copy for an extractor that reads it in place).
+    let borrowed = views::with_borrowed(block, 1, |b| {
+        if let Some(err) = wrong(b.layout, b.view.dims()) {
+            return Err(err);
+        }
+        let view = if above { b.view.negated() } else { b.view };
+        py.allow_threads(|| {
+            pools::install(pool.as_deref(), || chunks::mesh_block_view(e.as_ref(), &plan, id, view, iso).map_err(value_error))
+        })
     })?;
+    let fragment = match borrowed {
+        Some(f) => f,
+        None => {
+            let VolumeArray { values, dims: block_dims, layout, .. } = arrays::read_volume(py, block, 1, sign, pool.as_deref())?;
+            if let Some(err) = wrong(layout, block_dims) {
+                return Err(err);
+            }
+            py.allow_threads(|| {
+                pools::install(pool.as_deref(), || chunks::mesh_block(e.as_ref(), &plan, id, values, iso).map_err(value_error))
+            })?
+        }
+    };
     fragment_dict(py, fragment)
 }
 

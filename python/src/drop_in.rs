@@ -120,14 +120,14 @@ fn mesh_view<'py>(
         // With a mask, triangles are kept by cell in the lattice's frame, then placed.
         frame: if mask.is_some() { Frame::default() } else { frame },
         values: if mask.is_some() { VertexValues::None } else { VertexValues::CellRange },
-        memory_limit: call.memory_limit.or_else(isolab_pipeline::available_memory),
     };
     let iso = -f32_at_or_below(level);
     let samples = Samples::borrowed(grid, view, iso).map_err(crate::value_error)?;
     let mc = MarchingCubes::new(options);
     // The slabs are broadcast to the pool's threads from this thread (see `slabs::on_pool`).
     let extracted = py.allow_threads(|| {
-        let mut extraction = Extraction::default();
+        let memory_limit = call.memory_limit.or_else(isolab_pipeline::available_memory);
+        let mut extraction = Extraction { memory_limit, ..Extraction::default() };
         slabs::on_pool(threads, || mc.extract(&samples, &mut extraction))?;
         if let Some(mask) = mask.as_deref() {
             pools::install(pool, || masked(&mut extraction, &grid, view, iso, mask, frame));

@@ -35,7 +35,9 @@ pub(crate) fn run_error(e: RunError) -> PyErr {
     match e {
         RunError::Io(isolab_io::IoError::UnknownFormat { .. }) => PyValueError::new_err(e.to_string()),
         RunError::Io(_) => PyOSError::new_err(e.to_string()),
-        RunError::OutOfMemory { .. } => PyMemoryError::new_err(e.to_string()),
+        RunError::OutOfMemory { .. } | RunError::Extract(isolab_algorithms::ExtractError::OverMemory { .. }) => {
+            PyMemoryError::new_err(e.to_string())
+        }
         _ => PyValueError::new_err(e.to_string()),
     }
 }
@@ -249,12 +251,30 @@ fn extract<'py>(
     let outcome = if let Ok(array) = data.downcast::<PyUntypedArray>() {
         // An array's iso-value is 0 unless given (not the Otsu threshold a scan file gets).
         config.iso = Some(config.iso.unwrap_or(0.0));
-        let volume = read_volume(py, array, 1, 1.0, pool.as_deref())?;
-        let to_world = arrays::index_to_world(affine, volume.layout).map_err(value_error)?;
+        // One copy at most: in the array's own dtype for an extractor that reads samples in
+        // place (the samples share it), as float32 for one that needs them so.
+        let in_place = extractors::INFOS
+            .iter()
+            .any(|i| i.name == config.algorithm && i.samples == isolab_algorithms::extract::SampleAccess::Borrowed);
+        let typed = if in_place {
+            views::with_borrowed(array, 1, |b| {
+                let (dims, dtype) = (b.view.dims(), b.view.dtype());
+                Ok((py.allow_threads(|| b.view.to_stored()), dims, b.layout, dtype))
+            })?
+        } else {
+            None
+        };
+        let (values, dims, layout, dtype) = match typed {
+            Some(t) => t,
+            None => {
+                let VolumeArray { values, dims, layout, dtype } = read_volume(py, array, 1, 1.0, pool.as_deref())?;
+                (values.into(), dims, layout, dtype)
+            }
+        };
+        let to_world = arrays::index_to_world(affine, layout).map_err(value_error)?;
         py.allow_threads(|| {
             pools::install(pool.as_deref(), || {
-                let VolumeArray { values, dims, dtype, .. } = volume;
-                let v = builtin_fields::Volume::new("array", dims, values, to_world).map_err(|e| run_error(e.into()))?;
+                let v = builtin_fields::Volume::stored("array", dims, values, to_world).map_err(|e| run_error(e.into()))?;
                 run_input(&config, Input::from_volume(v, "numpy", dtype, Inside::Below)).map_err(run_error)
             })
         })?
@@ -365,8 +385,8 @@ fn load<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, p
         let file = py
             .allow_threads(|| isolab_io::volume::read_volume_bytes(&bytes, &path, Default::default()))
             .map_err(|e| run_error(e.into()))?;
-        let volume = std::sync::Arc::try_unwrap(file.volume).unwrap_or_else(|shared| (*shared).clone());
-        let array = out::fortran_volume(py, volume.values, volume.dims)?;
+        let volume = &file.volume;
+        let array = out::fortran_volume(py, volume.values_f32().into_owned(), volume.dims)?;
         let affine = out::affine_rows(&volume.index_to_world);
         return ("volume", array, affine).into_pyobject(py);
     }

@@ -24,7 +24,8 @@ pub struct Borrowed<'a> {
 }
 
 /// Runs `f` on the array's samples where they lie (every `step`-th along each axis), or returns
-/// `Ok(None)` when its dtype or memory cannot be read in place (the caller copies). The GIL is
+/// `Ok(None)` when it is not 3-D or its dtype or memory cannot be read in place (the caller
+/// copies, or raises). The GIL is
 /// held while `f` builds its call; `f` may release it.
 pub fn with_borrowed<R>(
     array: &Bound<'_, PyUntypedArray>,
@@ -47,6 +48,9 @@ fn with_typed<T: Sample + Element, R>(
     step: usize,
     f: impl FnOnce(Borrowed<'_>) -> PyResult<R>,
 ) -> PyResult<Option<R>> {
+    if array.ndim() != 3 {
+        return Ok(None); // not a volume: the caller's conversion names what is wrong
+    }
     let Some((holder, origin)) = memory_of(array)? else { return Ok(None) };
     let data = holder.as_slice().map_err(|e| PyValueError::new_err(format!("the volume cannot be read: {e}")))?;
     let shape = array.shape();

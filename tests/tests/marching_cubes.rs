@@ -260,9 +260,9 @@ fn an_output_over_the_memory_limit_fails_before_it_is_made() {
         let mut out = isolab_algorithms::Extraction::default();
         MarchingCubes::new(options).extract(&samples, &mut out).unwrap();
         let made = (out.surface.positions.len() * 28 + out.surface.triangles.len() * 12) as u64;
-        let tight = MarchingCubes::new(McOptions { memory_limit: Some(made / 2), ..options });
-        let mut fresh = isolab_algorithms::Extraction::default();
-        match tight.extract(&samples, &mut fresh) {
+        let mc = MarchingCubes::new(options);
+        let mut fresh = isolab_algorithms::Extraction { memory_limit: Some(made / 2), ..Default::default() };
+        match mc.extract(&samples, &mut fresh) {
             Err(ExtractError::OverMemory { needed, limit, .. }) => {
                 assert_eq!(limit, made / 2);
                 assert!(needed.abs_diff(made) * 5 < made, "{parallelism:?}: needed {needed} for {made}");
@@ -270,8 +270,8 @@ fn an_output_over_the_memory_limit_fails_before_it_is_made() {
             other => panic!("{parallelism:?}: {other:?}"),
         }
         assert_eq!(fresh.surface.positions.capacity(), 0, "{parallelism:?}: nothing allocated");
-        let roomy = MarchingCubes::new(McOptions { memory_limit: Some(2 * made), ..options });
-        roomy.extract(&samples, &mut fresh).unwrap();
+        fresh.memory_limit = Some(2 * made);
+        mc.extract(&samples, &mut fresh).unwrap();
         assert_eq!(fresh.surface.triangles.len(), out.surface.triangles.len());
     }
 }

@@ -65,7 +65,7 @@ fn parse(name: &str, bytes: &[u8]) -> Result<(), IoError> {
             _ => Err(IoError::Read { path: file.into(), source: std::io::Error::from(std::io::ErrorKind::NotFound) }),
         }
     };
-    let check = |v: &Volume| assert!(v.values.iter().all(|x| x.is_finite()));
+    let check = |v: &Volume| assert!(v.values_f32().iter().all(|x| x.is_finite()));
     if name.ends_with(".nii") || name.ends_with(".nii.gz") {
         nifti::parse_nifti(bytes, path, VolumeOptions::default(), &no_files).map(|f| check(&f.volume))
     } else if name.ends_with(".nrrd") || name.ends_with(".nhdr") {

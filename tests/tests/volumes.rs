@@ -214,3 +214,45 @@ fn an_iso_value_with_no_inside_is_a_warning_not_a_silent_empty_mesh() {
         assert!(out.report.warnings.iter().any(|w| w.contains(needle)), "{iso}: {:?}", out.report.warnings);
     }
 }
+
+/// Volume files are read in their stored type (uncompressed ones straight from the file into
+/// that type, big-endian ones byte-swapped), and meshed on their own grid where their voxels lie:
+/// the mesh is the one their float32 conversion gives, bit for bit.
+#[test]
+fn volume_files_are_read_in_their_stored_type_and_meshed_where_they_lie() {
+    use isolab_algorithms::fields::Volume;
+    use isolab_pipeline::{run_input, Input};
+    // (file, the type its values are held in, whether read straight from the file): a scaled
+    // NIfTI (slope and intercept) is held as the float32 it scales to.
+    for (name, dtype, direct) in [
+        ("mni-small.nhdr", "uint16", true),
+        ("mni-small-qform.nii", "float32", false),
+        ("mni-small.nrrd", "uint8", false),
+        ("mni-small.mhd", "uint8", false),
+    ] {
+        let path = fixture(name);
+        let file = io::volume::read_volume(Path::new(&path), Default::default()).unwrap();
+        let stored = file.volume.values();
+        assert_eq!(stored.dtype(), dtype, "{name}: the file stores {}", file.data_type);
+        let straight = io::volume::read_stored(Path::new(&path), Default::default()).unwrap();
+        assert_eq!(straight.is_some(), direct, "{name}: read straight from the file");
+        let parsed = io::volume::read_volume_bytes(&std::fs::read(&path).unwrap(), Path::new(&path), Default::default()).unwrap();
+        assert_eq!(parsed.volume.values(), stored, "{name}: the parser's values");
+        // Meshed in place, and from the float32 conversion.
+        let config = scan_config("marching-cubes", name, 60.0);
+        let typed = run(&config).unwrap();
+        let v = &file.volume;
+        let floats = Volume::new(v.name.clone(), v.dims, v.values_f32().into_owned(), v.index_to_world).unwrap();
+        let mut input = Input::from_volume(floats, file.format, "float32", file.inside);
+        input.volume = Some(std::sync::Arc::new(io::volume::VolumeFile {
+            volume: input.volume.as_ref().unwrap().volume.clone(),
+            ..file.clone()
+        }));
+        let copied = run_input(&config, input).unwrap();
+        let bits = |m: &TriMesh| m.positions.iter().map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+        assert!(typed.extraction.surface.triangles.len() > 100, "{name}");
+        assert_eq!(typed.extraction.surface.triangles, copied.extraction.surface.triangles, "{name}");
+        assert_eq!(bits(&typed.extraction.surface), bits(&copied.extraction.surface), "{name}");
+        assert!(!typed.samples.was_converted(), "{name}: meshed where the voxels lie");
+    }
+}

@@ -13,6 +13,7 @@ use super::{apron_of, check_chunk_and_size, chunk_ids, weld, Block, ChunkSlot, C
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
 use crate::lattice::Grid;
 use crate::mesh::TriMesh;
+use crate::samples::{AnyView, GridView};
 use glam::Vec3;
 
 /// The samples one block reads, in the volume's sample indices (x fastest).
@@ -139,19 +140,42 @@ pub fn mesh_block(
             values.len()
         )));
     }
-    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-    for (i, &v) in values.iter().enumerate() {
-        if !v.is_finite() {
-            let [nx, ny, _] = bounds.dims;
-            let at = [bounds.lo[0] + i % nx, bounds.lo[1] + i / nx % ny, bounds.lo[2] + i / (nx * ny)];
-            return Err(bad(format!("sample {at:?} is {v}: every sample must be finite")));
-        }
-        lo = lo.min(v);
-        hi = hi.max(v);
+    let view = GridView::contiguous(&values, bounds.dims).map_err(|e| bad(e.to_string()))?;
+    mesh_block_view(extractor, plan, id, view.into(), iso)
+}
+
+/// [`mesh_block`] of samples where they lie (a block of a caller's array, in its own type and
+/// memory order, read with the view's sign), with no copy for an extractor that reads them in
+/// place.
+pub fn mesh_block_view(
+    extractor: &dyn Extractor,
+    plan: &BlockPlan,
+    id: [usize; 3],
+    values: AnyView<'_>,
+    iso: f32,
+) -> Result<Fragment, ExtractError> {
+    let algorithm = extractor.name();
+    let bad = |reason: String| ExtractError::BadInput { algorithm, reason };
+    let Some(bounds) = plan.block(id) else {
+        return Err(bad(format!("block {id:?} is outside the plan's {:?} blocks", plan.counts)));
+    };
+    if values.dims() != bounds.dims {
+        let [x, y, z] = bounds.dims;
+        return Err(bad(format!(
+            "block {id:?} needs {x}x{y}x{z} samples (from sample {:?}); it was given {:?}",
+            bounds.lo,
+            values.dims()
+        )));
+    }
+    let range = values.range();
+    if let Some(([x, y, z], v)) = range.non_finite {
+        let at = [bounds.lo[0] + x, bounds.lo[1] + y, bounds.lo[2] + z];
+        return Err(bad(format!("sample {at:?} is {v}: every sample must be finite")));
     }
     let grid = Grid { origin: Vec3::ZERO, spacing: 1.0, dims: plan.dims };
-    let mut slot = ChunkSlot::with_values(id, plan.inner(id), values, iso);
-    slot.mesh_loaded(extractor, plan.chunking, &grid, lo, hi)?;
+    let mut slot = ChunkSlot::with_view(id, plan.inner(id), values, iso)
+        .ok_or_else(|| bad(format!("block {id:?}: its samples do not fit its block")))?;
+    slot.mesh_loaded(extractor, plan.chunking, &grid, range.min, range.max)?;
     let stats = &slot.mesh.stats;
     Ok(Fragment {
         id,

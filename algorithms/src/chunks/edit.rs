@@ -67,7 +67,7 @@ pub struct ChunkedVolume {
     pub(super) counts: [usize; 3],
     /// One material id per sample, when given.
     pub(super) materials: Option<Vec<u8>>,
-    pub(super) slots: Vec<ChunkSlot>,
+    pub(super) slots: Vec<ChunkSlot<'static>>,
     pub(super) dirty: Vec<bool>,
 }
 
@@ -80,7 +80,7 @@ impl ChunkedVolume {
         let counts = chunk_counts(&grid, chunk, extractor.name())?;
         let iso = samples.iso();
         let apron = apron_of(chunking);
-        let slots: Vec<ChunkSlot> =
+        let slots: Vec<ChunkSlot<'static>> =
             chunk_ids(counts).map(|id| ChunkSlot::new(id, Block::new(id, chunk, apron, grid.dims), &grid, iso, None)).collect();
         let dirty = vec![true; slots.len()];
         Ok(Self { grid, values: samples.values().to_vec(), chunk, chunking, counts, materials: None, slots, dirty })
@@ -120,7 +120,7 @@ impl ChunkedVolume {
     }
 
     /// The chunks (their state and mesh).
-    pub fn slots(&self) -> &[ChunkSlot] {
+    pub fn slots(&self) -> &[ChunkSlot<'static>] {
         &self.slots
     }
 

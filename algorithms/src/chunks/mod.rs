@@ -220,12 +220,13 @@ fn lattice_key(o: [u32; 4], lo: [usize; 3]) -> u128 {
     g(0) | g(1) << 32 | g(2) << 64 | u128::from(o[3] & 0x7FFF_FFFF) << 96 | 1 << 127
 }
 
-/// One chunk's persistent buffers: its samples in index coordinates and its mesh in world space.
-pub struct ChunkSlot {
+/// One chunk's persistent buffers: its samples in index coordinates (its own, or for `'a` a
+/// caller's block read where it lies) and its mesh in world space.
+pub struct ChunkSlot<'a> {
     /// Chunk index per axis.
     pub id: [usize; 3],
     block: Block,
-    samples: Samples<'static>,
+    samples: Samples<'a>,
     /// The chunk's mesh (world space), valid when `state` is `Meshed`.
     pub mesh: Extraction,
     /// Per vertex: its weld key (position bits or lattice key), or `None` for vertices no other
@@ -237,7 +238,7 @@ pub struct ChunkSlot {
     pub state: ChunkState,
 }
 
-impl ChunkSlot {
+impl ChunkSlot<'static> {
     /// A slot for chunk `id` reading `block` of `world`'s samples; `field` is the world's field.
     fn new(id: [usize; 3], block: Block, world: &Grid, iso: f32, field: Option<&Arc<dyn Field>>) -> Self {
         let local = Grid {
@@ -252,17 +253,27 @@ impl ChunkSlot {
         }
         Self { id, block, samples, mesh: Extraction::default(), keys: Vec::new(), remap: Vec::new(), state: ChunkState::Empty }
     }
+}
 
-    /// A slot for chunk `id` holding `values`, its block's samples (index coordinates, no field).
-    fn with_values(id: [usize; 3], block: Block, values: Vec<f32>, iso: f32) -> Self {
+impl<'a> ChunkSlot<'a> {
+    /// A slot for chunk `id` reading its block's samples where they lie (index coordinates, no
+    /// field); `None` when the view is not the block's size.
+    fn with_view(id: [usize; 3], block: Block, values: crate::samples::AnyView<'a>, iso: f32) -> Option<Self> {
         let local = Grid {
             origin: Vec3::new(block.lo[0] as f32, block.lo[1] as f32, block.lo[2] as f32),
             spacing: 1.0,
             dims: block.dims,
         };
-        let samples =
-            Samples::from_values(Lattice::Cubic(local), values, iso).expect("the caller checked the count and finiteness");
-        Self { id, block, samples, mesh: Extraction::default(), keys: Vec::new(), remap: Vec::new(), state: ChunkState::Empty }
+        let samples = Samples::borrowed(local, values, iso).ok()?;
+        Some(Self {
+            id,
+            block,
+            samples,
+            mesh: Extraction::default(),
+            keys: Vec::new(),
+            remap: Vec::new(),
+            state: ChunkState::Empty,
+        })
     }
 
     /// What the weld reads of this slot.
@@ -454,7 +465,7 @@ pub fn extract_chunked(
     let counts = chunk_counts(&grid, chunk, extractor.name())?;
     let apron = apron_of(chunking);
     let start = Instant::now();
-    let mut slots: Vec<ChunkSlot> = chunk_ids(counts)
+    let mut slots: Vec<ChunkSlot<'static>> = chunk_ids(counts)
         .map(|id| ChunkSlot::new(id, Block::new(id, chunk, apron, grid.dims), &grid, samples.iso(), samples.field()))
         .collect();
     slots.par_iter_mut().try_for_each(|slot| slot.remesh(extractor, chunking, &grid, samples.values()))?;

@@ -1,14 +1,16 @@
 //! Volumes as fields: a grid of values read from a file (a CT or MRI scan, a voxel volume, a grid
 //! `--samples-out` wrote) with the affine that places each voxel in world coordinates.
 //!
-//! A [`Volume`] holds the voxel values in index order (x fastest, as everywhere in isolab) and
+//! A [`Volume`] holds the voxel values in index order (x fastest, as everywhere in isolab), in
+//! the type the file stores them in ([`StoredValues`]: a uint8 scan takes a byte a voxel), and
 //! the index-to-world affine from the file's header (spacing, origin and direction: the NIfTI
 //! sform/qform, NRRD's space directions, MetaImage's TransformMatrix). Extractors mesh it in two
 //! ways:
 //!
 //! - **on its own voxel grid** (the default): the values become [`crate::Samples`] on the grid of
-//!   index coordinates (origin 0, spacing 1), the extractor runs there, and the mesh is mapped to
-//!   world coordinates afterwards by [`Volume::index_to_world`] ([`crate::TriMesh::transform`]). No
+//!   index coordinates (origin 0, spacing 1), sharing the volume's memory
+//!   ([`crate::Samples::stored`]), the extractor runs there, and the mesh is mapped to world
+//!   coordinates afterwards by [`Volume::index_to_world`] ([`crate::TriMesh::transform`]). No
 //!   value is interpolated, so the mesh is what a peer meshing the same array gives.
 //! - **resampled** (`--resolution N`): [`VolumeField`] is the trilinear interpolant of the values
 //!   in world coordinates, a [`Field`] like any other, sampled on an isotropic grid over its
@@ -19,7 +21,9 @@
 
 use crate::field::{Field, FieldError};
 use crate::geometry::Aabb;
+use crate::samples::{Sample, StoredValues};
 use glam::{DAffine3, DMat3, DVec3, Vec3};
+use std::sync::Arc;
 
 /// Voxel values on a grid and the affine placing voxel `(i, j, k)` in world coordinates.
 #[derive(Clone, Debug, PartialEq)]
@@ -28,20 +32,47 @@ pub struct Volume {
     pub name: String,
     /// Voxels along i, j and k (at least 2 each).
     pub dims: [usize; 3],
-    /// Values, `i + ni * (j + nj * k)`; all finite.
-    pub values: Vec<f32>,
+    /// Values, `i + ni * (j + nj * k)`, in their stored type; all finite.
+    values: Arc<StoredValues>,
     /// Voxel index `(i, j, k)` to world position (millimetres for scans).
     pub index_to_world: DAffine3,
 }
 
+/// Runs `$body` with `$v` bound to the typed slice of a [`StoredValues`].
+macro_rules! with_values {
+    ($stored:expr, $v:ident => $body:expr) => {
+        match $stored {
+            StoredValues::Bool($v) => $body,
+            StoredValues::U8($v) => $body,
+            StoredValues::I8($v) => $body,
+            StoredValues::U16($v) => $body,
+            StoredValues::I16($v) => $body,
+            StoredValues::U32($v) => $body,
+            StoredValues::I32($v) => $body,
+            StoredValues::F32($v) => $body,
+            StoredValues::F64($v) => $body,
+        }
+    };
+}
+
 impl Volume {
-    /// Checks and wraps values read elsewhere: at least 2 voxels per axis, as many values as
-    /// voxels, every value finite (the first non-finite voxel is named), and an affine that is
-    /// finite with a non-zero determinant (zero or non-finite spacing is refused).
+    /// Checks and wraps `f32` values read elsewhere ([`Volume::stored`]).
     pub fn new(
         name: impl Into<String>,
         dims: [usize; 3],
         values: Vec<f32>,
+        index_to_world: DAffine3,
+    ) -> Result<Self, FieldError> {
+        Self::stored(name, dims, StoredValues::F32(values), index_to_world)
+    }
+
+    /// Checks and wraps values read elsewhere in their own type: at least 2 voxels per axis, as
+    /// many values as voxels, every value finite (the first non-finite voxel is named), and an
+    /// affine that is finite with a non-zero determinant (zero or non-finite spacing is refused).
+    pub fn stored(
+        name: impl Into<String>,
+        dims: [usize; 3],
+        values: StoredValues,
         index_to_world: DAffine3,
     ) -> Result<Self, FieldError> {
         let name = name.into();
@@ -56,18 +87,28 @@ impl Volume {
         if voxels != Some(values.len()) {
             return Err(bad(format!("{} values for a {} x {} x {} grid", values.len(), dims[0], dims[1], dims[2])));
         }
-        if let Some(at) = first_non_finite(&values) {
+        if let (_, _, Some((at, value))) = values.range() {
             let [ni, nj, _] = dims;
             return Err(bad(format!(
                 "voxel ({}, {}, {}) is {}; volumes must be finite",
                 at % ni,
                 (at / ni) % nj,
                 at / (ni * nj),
-                values[at]
+                value
             )));
         }
         check_affine(&index_to_world).map_err(bad)?;
-        Ok(Self { name, dims, values, index_to_world })
+        Ok(Self { name, dims, values: Arc::new(values), index_to_world })
+    }
+
+    /// The values, in their stored type (shared: [`crate::Samples::stored`] meshes them in place).
+    pub fn values(&self) -> &Arc<StoredValues> {
+        &self.values
+    }
+
+    /// The values as `f32`: borrowed when stored as `f32`, else converted (a copy).
+    pub fn values_f32(&self) -> std::borrow::Cow<'_, [f32]> {
+        self.values.as_f32()
     }
 
     /// The voxel edge lengths along i, j and k in world units (the affine's column lengths).
@@ -97,65 +138,70 @@ impl Volume {
 
     /// Smallest and largest value.
     pub fn range(&self) -> (f32, f32) {
-        self.values.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)))
+        let (lo, hi, _) = self.values.range();
+        (lo, hi)
+    }
+
+    /// Value `i` (`i + ni * (j + nj * k)`) as `f32`.
+    pub fn value(&self, i: usize) -> f32 {
+        self.values.get(i)
     }
 
     /// The value at fractional index coordinates, trilinear between the eight voxels around it;
     /// coordinates outside the grid are clamped to it (the nearest voxel's value).
     pub fn trilinear(&self, p: DVec3) -> f32 {
-        let [ni, nj, nk] = self.dims;
-        let clamp = |v: f64, n: usize| if v.is_nan() { 0.0 } else { v.clamp(0.0, (n - 1) as f64) };
-        let (x, y, z) = (clamp(p.x, ni), clamp(p.y, nj), clamp(p.z, nk));
-        let (i, j, k) = ((x as usize).min(ni - 2), (y as usize).min(nj - 2), (z as usize).min(nk - 2));
-        let (fx, fy, fz) = ((x - i as f64) as f32, (y - j as f64) as f32, (z - k as f64) as f32);
-        let at = |di: usize, dj: usize, dk: usize| self.values[(i + di) + ni * ((j + dj) + nj * (k + dk))];
-        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
-        let x00 = lerp(at(0, 0, 0), at(1, 0, 0), fx);
-        let x10 = lerp(at(0, 1, 0), at(1, 1, 0), fx);
-        let x01 = lerp(at(0, 0, 1), at(1, 0, 1), fx);
-        let x11 = lerp(at(0, 1, 1), at(1, 1, 1), fx);
-        lerp(lerp(x00, x10, fy), lerp(x01, x11, fy), fz)
+        with_values!(&*self.values, v => trilinear_in(v, self.dims, p))
     }
 
     /// Values at the cell centres of the voxel grid (the mean of each cell's eight voxels, which
     /// is the trilinear interpolant there): the centre half of a body-centred cubic lattice on
     /// the voxel grid.
     pub fn cell_centres(&self) -> Vec<f32> {
-        let [ni, nj, nk] = self.dims;
-        let mut out = Vec::with_capacity((ni - 1) * (nj - 1) * (nk - 1));
-        for k in 0..nk - 1 {
-            for j in 0..nj - 1 {
-                for i in 0..ni - 1 {
-                    let at = |di: usize, dj: usize, dk: usize| self.values[(i + di) + ni * ((j + dj) + nj * (k + dk))];
-                    let sum = at(0, 0, 0)
-                        + at(1, 0, 0)
-                        + at(0, 1, 0)
-                        + at(1, 1, 0)
-                        + at(0, 0, 1)
-                        + at(1, 0, 1)
-                        + at(0, 1, 1)
-                        + at(1, 1, 1);
-                    out.push(sum * 0.125);
-                }
-            }
-        }
-        out
+        with_values!(&*self.values, v => cell_centres_of(v, self.dims))
     }
 
     /// The iso-value that best separates the values into two classes (Otsu 1979, on a
     /// 256-bin histogram between the smallest and largest value): a default for scans whose user
     /// gave none. `None` when every value is the same.
     pub fn otsu_threshold(&self) -> Option<f32> {
-        otsu_threshold(&self.values)
+        let (lo, hi) = self.range();
+        let mut histogram = OtsuHistogram::new(lo, hi)?;
+        with_values!(&*self.values, v => histogram.add_values(v));
+        Some(histogram.threshold())
     }
 }
 
-/// The index of the first NaN or infinite value, checked in parallel blocks.
-fn first_non_finite(values: &[f32]) -> Option<usize> {
-    use rayon::prelude::*;
-    const BLOCK: usize = 1 << 16;
-    let block = values.par_chunks(BLOCK).position_first(|c| c.iter().fold(false, |bad, v| bad | !v.is_finite()))?;
-    values[block * BLOCK..].iter().position(|v| !v.is_finite()).map(|i| block * BLOCK + i)
+/// [`Volume::trilinear`] of values of one type.
+fn trilinear_in<T: Sample>(values: &[T], dims: [usize; 3], p: DVec3) -> f32 {
+    let [ni, nj, nk] = dims;
+    let clamp = |v: f64, n: usize| if v.is_nan() { 0.0 } else { v.clamp(0.0, (n - 1) as f64) };
+    let (x, y, z) = (clamp(p.x, ni), clamp(p.y, nj), clamp(p.z, nk));
+    let (i, j, k) = ((x as usize).min(ni - 2), (y as usize).min(nj - 2), (z as usize).min(nk - 2));
+    let (fx, fy, fz) = ((x - i as f64) as f32, (y - j as f64) as f32, (z - k as f64) as f32);
+    let at = |di: usize, dj: usize, dk: usize| values[(i + di) + ni * ((j + dj) + nj * (k + dk))].to_f32();
+    let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+    let x00 = lerp(at(0, 0, 0), at(1, 0, 0), fx);
+    let x10 = lerp(at(0, 1, 0), at(1, 1, 0), fx);
+    let x01 = lerp(at(0, 0, 1), at(1, 0, 1), fx);
+    let x11 = lerp(at(0, 1, 1), at(1, 1, 1), fx);
+    lerp(lerp(x00, x10, fy), lerp(x01, x11, fy), fz)
+}
+
+/// [`Volume::cell_centres`] of values of one type.
+fn cell_centres_of<T: Sample>(values: &[T], dims: [usize; 3]) -> Vec<f32> {
+    let [ni, nj, nk] = dims;
+    let mut out = Vec::with_capacity((ni - 1) * (nj - 1) * (nk - 1));
+    for k in 0..nk - 1 {
+        for j in 0..nj - 1 {
+            for i in 0..ni - 1 {
+                let at = |di: usize, dj: usize, dk: usize| values[(i + di) + ni * ((j + dj) + nj * (k + dk))].to_f32();
+                let sum =
+                    at(0, 0, 0) + at(1, 0, 0) + at(0, 1, 0) + at(1, 1, 0) + at(0, 0, 1) + at(1, 0, 1) + at(0, 1, 1) + at(1, 1, 1);
+                out.push(sum * 0.125);
+            }
+        }
+    }
+    out
 }
 
 /// Otsu's threshold of `values` (256 bins between their extremes): the bin boundary that
@@ -192,8 +238,13 @@ impl OtsuHistogram {
 
     /// Counts `values` (each within the extremes given).
     pub fn add(&mut self, values: &[f32]) {
+        self.add_values(values);
+    }
+
+    /// Counts `values` of any sample type, each read as `f32`.
+    pub fn add_values<T: Sample>(&mut self, values: &[T]) {
         for &v in values {
-            let bin = (((v as f64 - self.lo as f64) / self.width) as usize).min(Self::BINS - 1);
+            let bin = (((v.to_f32() as f64 - self.lo as f64) / self.width) as usize).min(Self::BINS - 1);
             self.counts[bin] += 1;
         }
         self.total += values.len() as u64;

@@ -12,6 +12,8 @@
 //! converts the view once into `f32` samples ([`Samples::values`], kept for later calls) and
 //! checks them first, so every extractor meshes borrowed samples as it meshes their copy.
 
+mod any_view;
+pub mod stored;
 pub mod view;
 
 use crate::field::Field;
@@ -20,6 +22,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::{Arc, OnceLock};
 use std::time::{Duration, Instant};
+pub use stored::StoredValues;
 pub use view::{f32_at_or_below, AnyView, GridView, Sample, ViewError, ViewRange};
 
 /// Errors taking samples.
@@ -75,6 +78,9 @@ enum Values<'a> {
     Owned(Vec<f32>),
     /// The caller's, and their conversion once an extractor that cannot read them asked for it.
     Borrowed { view: AnyView<'a>, copy: OnceLock<Vec<f32>> },
+    /// Held in their own type, shared (a volume file's voxels), read with a sign, and their
+    /// conversion once asked for.
+    Stored { values: Arc<StoredValues>, sign: f32, copy: OnceLock<Vec<f32>> },
 }
 
 impl std::fmt::Debug for Samples<'_> {
@@ -117,6 +123,23 @@ impl Samples<'static> {
         check_finite("values", &lattice, &values)?;
         Ok(Samples { lattice, values: Values::Owned(values), iso, field: None, sampling_time: Duration::ZERO })
     }
+
+    /// Values held in their own type on `grid` (as many as it has samples), shared with whoever
+    /// else holds them (a volume), read times -1 when `negated` (inside above the level). Their
+    /// holder vouches that they are finite ([`crate::fields::Volume::stored`] checks).
+    pub fn stored(grid: Grid, values: Arc<StoredValues>, negated: bool, iso: f32) -> Result<Samples<'static>, SampleError> {
+        if values.len() != grid.len() {
+            return Err(SampleError::WrongLength { given: values.len(), expected: grid.len() });
+        }
+        let sign = if negated { -1.0 } else { 1.0 };
+        Ok(Samples {
+            lattice: Lattice::Cubic(grid),
+            values: Values::Stored { values, sign, copy: OnceLock::new() },
+            iso,
+            field: None,
+            sampling_time: Duration::ZERO,
+        })
+    }
 }
 
 impl<'a> Samples<'a> {
@@ -151,18 +174,31 @@ impl<'a> Samples<'a> {
                 )
             }
             Values::Borrowed { view, .. } => *view,
+            Values::Stored { values, sign, .. } => {
+                let view = values
+                    .view(self.lattice.grid().dims)
+                    .unwrap_or_else(|| unreachable!("stored values hold the grid (checked when made)"));
+                if *sign < 0.0 {
+                    view.negated()
+                } else {
+                    view
+                }
+            }
         }
     }
 
-    /// Whether the values are borrowed (and not yet converted by an extractor that needed them
-    /// as `f32`, when `converted` is false).
+    /// Whether the values are borrowed (and so their finiteness is not yet checked).
     pub fn is_borrowed(&self) -> bool {
         matches!(self.values, Values::Borrowed { .. })
     }
 
-    /// Whether borrowed values have been converted into `f32` samples (by [`Samples::values`]).
+    /// Whether values not held as `f32` in isolab's order have been converted into `f32`
+    /// samples (by [`Samples::values`]).
     pub fn was_converted(&self) -> bool {
-        matches!(&self.values, Values::Borrowed { copy, .. } if copy.get().is_some())
+        match &self.values {
+            Values::Owned(_) => false,
+            Values::Borrowed { copy, .. } | Values::Stored { copy, .. } => copy.get().is_some(),
+        }
     }
 
     /// Checks that borrowed values are finite, converting them once (what
@@ -206,19 +242,28 @@ impl<'a> Samples<'a> {
         match &self.values {
             Values::Owned(v) => v,
             Values::Borrowed { view, copy } => copy.get_or_init(|| view.to_vec()),
+            Values::Stored { values, sign, .. } if *sign > 0.0 && matches!(**values, StoredValues::F32(_)) => match &**values {
+                StoredValues::F32(v) => v,
+                _ => unreachable!("matched as f32"),
+            },
+            Values::Stored { copy, .. } => copy.get_or_init(|| self.view().to_vec()),
         }
     }
 
     /// Mutable values, for editing (terrain brushes); borrowed values become owned (a copy).
     /// Callers must keep them finite.
     pub fn values_mut(&mut self) -> &mut [f32] {
-        if let Values::Borrowed { view, copy } = &mut self.values {
-            let owned = copy.take().unwrap_or_else(|| view.to_vec());
+        if !matches!(self.values, Values::Owned(_)) {
+            let owned = match &mut self.values {
+                Values::Borrowed { copy, .. } | Values::Stored { copy, .. } => copy.take(),
+                Values::Owned(_) => None,
+            };
+            let owned = owned.unwrap_or_else(|| self.view().to_vec());
             self.values = Values::Owned(owned);
         }
         match &mut self.values {
             Values::Owned(v) => v,
-            Values::Borrowed { .. } => &mut [],
+            _ => &mut [],
         }
     }
 
@@ -239,11 +284,11 @@ impl<'a> Samples<'a> {
 
     /// Bytes held by the values (none for borrowed values until converted).
     pub fn bytes(&self) -> usize {
-        let held = match &self.values {
-            Values::Owned(v) => v.len(),
-            Values::Borrowed { copy, .. } => copy.get().map_or(0, Vec::len),
-        };
-        held * std::mem::size_of::<f32>()
+        match &self.values {
+            Values::Owned(v) => v.len() * std::mem::size_of::<f32>(),
+            Values::Borrowed { copy, .. } => copy.get().map_or(0, Vec::len) * std::mem::size_of::<f32>(),
+            Values::Stored { values, copy, .. } => values.bytes() + copy.get().map_or(0, Vec::len) * std::mem::size_of::<f32>(),
+        }
     }
 }
 

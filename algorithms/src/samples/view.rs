@@ -10,9 +10,10 @@
 //! that reads the view gives the mesh it gives on the converted copy, bit for bit.
 //!
 //! Extractors that read views are generic over [`Sample`], so each sample type has its own
-//! compiled loops (no per-sample dispatch); [`AnyView`] is the view with its type as data, and
-//! [`with_view!`](crate::with_view) picks the monomorphised code once per call.
+//! compiled loops (no per-sample dispatch); [`AnyView`] (`any_view.rs`) is the view with its type
+//! as data, and [`with_view!`](crate::with_view) picks the monomorphised code once per call.
 
+pub use super::any_view::AnyView;
 use glam::Vec4;
 use rayon::prelude::*;
 
@@ -259,6 +260,24 @@ impl<'a, T: Sample> GridView<'a, T> {
         out
     }
 
+    /// The samples as they are stored, in their own type and isolab's order (x fastest), the
+    /// view's sign not applied: a copy a caller can keep.
+    pub fn to_vec_typed(&self) -> Vec<T> {
+        let [nx, ny, nz] = self.dims;
+        let mut out = Vec::with_capacity(nx * ny * nz);
+        for z in 0..nz {
+            for y in 0..ny {
+                let start = self.offset(0, y, z);
+                if self.strides[0] == 1 {
+                    out.extend_from_slice(&self.data[start..start + nx]);
+                } else {
+                    out.extend((0..nx).map(|x| self.data[start.wrapping_add_signed(x as isize * self.strides[0])]));
+                }
+            }
+        }
+        out
+    }
+
     /// The smallest and largest sample (NaN skipped; `(inf, -inf)` when every sample is NaN),
     /// and the first non-finite sample in isolab's order, in one parallel pass.
     pub fn range(&self) -> ViewRange {
@@ -281,6 +300,24 @@ impl<'a, T: Sample> GridView<'a, T> {
                 r
             })
             .reduce(|| ViewRange::EMPTY, ViewRange::join)
+    }
+
+    /// How many samples are below `iso` (inside), in parallel over z-slices.
+    pub fn count_below(&self, iso: f32) -> usize {
+        let [nx, ny, nz] = self.dims;
+        let words = nx.div_ceil(64);
+        (0..nz)
+            .into_par_iter()
+            .map(|z| {
+                let mut bits = vec![0u64; words];
+                (0..ny)
+                    .map(|y| {
+                        self.pack_row(y, z, iso, &mut bits);
+                        bits.iter().map(|w| w.count_ones() as usize).sum::<usize>()
+                    })
+                    .sum::<usize>()
+            })
+            .sum()
     }
 
     /// The first non-finite sample in isolab's order and its value (float types only).
@@ -357,102 +394,6 @@ fn inside_bits<T: Sample>(values: &[T], sign: f32, iso: f32, nan: &mut Vec4) -> 
         word |= u64::from(v < iso) << (done + k);
     }
     word
-}
-
-/// A [`GridView`] with its sample type as data; [`with_view!`](crate::with_view) gives the
-/// typed view to generic code.
-#[derive(Clone, Copy, Debug)]
-#[allow(missing_docs)]
-pub enum AnyView<'a> {
-    Bool(GridView<'a, bool>),
-    U8(GridView<'a, u8>),
-    I8(GridView<'a, i8>),
-    U16(GridView<'a, u16>),
-    I16(GridView<'a, i16>),
-    U32(GridView<'a, u32>),
-    I32(GridView<'a, i32>),
-    F32(GridView<'a, f32>),
-    F64(GridView<'a, f64>),
-}
-
-/// Runs `$body` with `$v` bound to the typed [`GridView`] inside an [`AnyView`]: one dispatch per
-/// call, each arm its own monomorphised code.
-#[macro_export]
-macro_rules! with_view {
-    ($any:expr, $v:ident => $body:expr) => {
-        match $any {
-            $crate::samples::AnyView::Bool($v) => $body,
-            $crate::samples::AnyView::U8($v) => $body,
-            $crate::samples::AnyView::I8($v) => $body,
-            $crate::samples::AnyView::U16($v) => $body,
-            $crate::samples::AnyView::I16($v) => $body,
-            $crate::samples::AnyView::U32($v) => $body,
-            $crate::samples::AnyView::I32($v) => $body,
-            $crate::samples::AnyView::F32($v) => $body,
-            $crate::samples::AnyView::F64($v) => $body,
-        }
-    };
-}
-
-impl<'a, T: Sample> From<GridView<'a, T>> for AnyView<'a> {
-    fn from(v: GridView<'a, T>) -> Self {
-        T::any_view(v)
-    }
-}
-
-impl<'a> AnyView<'a> {
-    /// Samples along x, y, z.
-    pub fn dims(&self) -> [usize; 3] {
-        crate::with_view!(self, v => v.dims())
-    }
-
-    /// The sample type's numpy name.
-    pub fn dtype(&self) -> &'static str {
-        fn name<T: Sample>(_: &GridView<'_, T>) -> &'static str {
-            T::DTYPE
-        }
-        crate::with_view!(self, v => name(v))
-    }
-
-    /// Whether the type's values may be non-finite.
-    pub fn is_float(&self) -> bool {
-        matches!(self, AnyView::F32(_) | AnyView::F64(_))
-    }
-
-    /// The same samples read with the opposite sign.
-    pub fn negated(self) -> Self {
-        crate::with_view!(self, v => AnyView::from(v.negated()))
-    }
-
-    /// See [`GridView::every`].
-    pub fn every(self, step: usize) -> Option<Self> {
-        crate::with_view!(self, v => v.every(step).map(AnyView::from))
-    }
-
-    /// See [`GridView::block`].
-    pub fn block(self, lo: [usize; 3], dims: [usize; 3]) -> Option<Self> {
-        crate::with_view!(self, v => v.block(lo, dims).map(AnyView::from))
-    }
-
-    /// See [`GridView::to_vec`].
-    pub fn to_vec(&self) -> Vec<f32> {
-        crate::with_view!(self, v => v.to_vec())
-    }
-
-    /// See [`GridView::range`].
-    pub fn range(&self) -> ViewRange {
-        crate::with_view!(self, v => v.range())
-    }
-
-    /// See [`GridView::first_non_finite`].
-    pub fn first_non_finite(&self) -> Option<([usize; 3], f32)> {
-        crate::with_view!(self, v => v.first_non_finite())
-    }
-
-    /// Sample `(x, y, z)`.
-    pub fn at(&self, x: usize, y: usize, z: usize) -> f32 {
-        crate::with_view!(self, v => v.at(x, y, z))
-    }
 }
 
 #[cfg(test)]

@@ -11,8 +11,8 @@
 //! it is converted to RAS.
 
 use super::{
-    check_size, data_path, decode, decode_text, inflate, pick_volume, volume, Compression, DataLayout, DataType, Inside, Space,
-    VolumeFile, VolumeHeader, VolumeOptions,
+    check_size, data_path, decode_stored, decode_text, inflate, pick_volume, stored_volume, Compression, DataLayout, DataType,
+    Inside, Space, StoredValues, VolumeFile, VolumeHeader, VolumeOptions,
 };
 use crate::IoError;
 use glam::{DAffine3, DMat3, DVec3};
@@ -221,7 +221,7 @@ pub fn parse_metaimage(
     };
     let nbytes = total.checked_mul(ty.size()).ok_or_else(|| bad(format!("shape {shape} is too large")))?;
     let decoded = if !binary {
-        decode_text(data, ty, total, path)?
+        StoredValues::F32(decode_text(data, ty, total, path)?)
     } else if compressed {
         let raw = inflate(data, Compression::Zlib, nbytes, path).map_err(|e| match e {
             IoError::Invalid { reason, .. } if reason.contains("decompresses to only") => {
@@ -229,7 +229,7 @@ pub fn parse_metaimage(
             }
             e => e,
         })?;
-        decode(&raw, ty, big_endian, total, 1.0, 0.0)
+        decode_stored(&raw, ty, big_endian, total, 1.0, 0.0)
     } else {
         let skip = if header_size == -1 {
             data.len()
@@ -239,13 +239,17 @@ pub fn parse_metaimage(
             usize::try_from(header_size).map_err(|_| bad(format!("HeaderSize {header_size}")))?
         };
         check_size(path, total, ty, skip, data.len())?;
-        decode(&data[skip..], ty, big_endian, total, 1.0, 0.0)
+        decode_stored(&data[skip..], ty, big_endian, total, 1.0, 0.0)
     };
     // Channels interleave fastest, the fourth axis is slowest.
     let (time, channel) = (pick / channels, pick % channels);
-    let values: Vec<f32> = (0..voxels).map(|v| decoded[(time * voxels + v) * channels + channel]).collect();
+    let values = if channels == 1 && time == 0 && decoded.len() == voxels {
+        decoded
+    } else {
+        decoded.gather(voxels, |v| (time * voxels + v) * channels + channel)
+    };
     Ok(VolumeFile {
-        volume: std::sync::Arc::new(volume(path, [sizes[0], sizes[1], sizes[2]], values, affine)?),
+        volume: std::sync::Arc::new(stored_volume(path, [sizes[0], sizes[1], sizes[2]], values, affine)?),
         format: "MetaImage",
         data_type: ty.name(),
         space: Space::Ras,
@@ -337,7 +341,7 @@ mod tests {
         let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
         z.write_all(&data).unwrap();
         let f = read(SITK.as_bytes(), &[("t.zraw", z.finish().unwrap())]).unwrap();
-        assert_eq!(f.volume.values[23], 23.0);
+        assert_eq!(f.volume.values_f32()[23], 23.0);
         // SimpleITK put index (1, 0, 0) at LPS (10, 21, 30): RAS (-10, -21, 30).
         assert_eq!(f.volume.to_world(DVec3::X), DVec3::new(-10.0, -21.0, 30.0));
         assert_eq!(f.volume.to_world(DVec3::Y), DVec3::new(-8.0, -20.0, 30.0));
@@ -349,7 +353,7 @@ mod tests {
             b"NDims = 3\nDimSize = 2 2 2\nElementType = MET_SHORT\nBinaryDataByteOrderMSB = True\nElementDataFile = LOCAL\n"
                 .to_vec();
         mha.extend((0..8i16).flat_map(|v| v.to_be_bytes()));
-        assert_eq!(read(&mha, &[]).unwrap().volume.values[3], 3.0);
+        assert_eq!(read(&mha, &[]).unwrap().volume.values_f32()[3], 3.0);
         let e = read(&mha[..mha.len() - 1], &[]).unwrap_err().to_string();
         assert!(e.contains("header and data disagree"), "{e}");
         let e = read(SITK.as_bytes(), &[("t.zraw", vec![0x78, 0x9c, 1, 2, 3])]).unwrap_err().to_string();

@@ -13,6 +13,7 @@
 //! negative pixdim or a qfac other than ±1). The three headers are short (a fixed binary layout,
 //! and two `key: value` texts); `flate2` does the decompression.
 
+mod data;
 pub mod metaimage;
 pub mod nifti;
 pub mod nrrd;
@@ -21,8 +22,10 @@ pub mod slabs;
 pub mod zarr;
 
 use super::IoError;
+pub use data::{decode, decode_stored, decode_text, gunzip_prefix, inflate, is_gzip, read_stored, Compression};
 use glam::DAffine3;
 use isolab_algorithms::fields::Volume;
+pub use isolab_algorithms::samples::StoredValues;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -221,133 +224,6 @@ impl DataType {
     }
 }
 
-/// `count` values of type `ty` from `bytes` (which must hold them), as f32 scaled by
-/// `slope * v + inter`; in parallel blocks (a scan is millions of voxels).
-pub fn decode(bytes: &[u8], ty: DataType, big_endian: bool, count: usize, slope: f64, inter: f64) -> Vec<f32> {
-    use rayon::prelude::*;
-    const BLOCK: usize = 1 << 16;
-    let size = ty.size();
-    let scaled = slope != 1.0 || inter != 0.0;
-    let mut out = vec![0.0f32; count];
-    macro_rules! run {
-        ($t:ty) => {{
-            out.par_chunks_mut(BLOCK).zip(bytes[..count * size].par_chunks(BLOCK * size)).for_each(|(out, raw)| {
-                for (o, chunk) in out.iter_mut().zip(raw.chunks_exact(size)) {
-                    let mut b = [0u8; std::mem::size_of::<$t>()];
-                    b.copy_from_slice(chunk);
-                    let v = if big_endian { <$t>::from_be_bytes(b) } else { <$t>::from_le_bytes(b) };
-                    *o = if scaled { (slope * v as f64 + inter) as f32 } else { v as f32 };
-                }
-            })
-        }};
-    }
-    match ty {
-        DataType::U8 => out.par_chunks_mut(BLOCK).zip(bytes[..count].par_chunks(BLOCK)).for_each(|(out, raw)| {
-            if scaled {
-                out.iter_mut().zip(raw).for_each(|(o, &v)| *o = (slope * v as f64 + inter) as f32);
-            } else {
-                out.iter_mut().zip(raw).for_each(|(o, &v)| *o = v as f32);
-            }
-        }),
-        DataType::I8 => run!(i8),
-        DataType::U16 => run!(u16),
-        DataType::I16 => run!(i16),
-        DataType::U32 => run!(u32),
-        DataType::I32 => run!(i32),
-        DataType::U64 => run!(u64),
-        DataType::I64 => run!(i64),
-        DataType::F32 => run!(f32),
-        DataType::F64 => run!(f64),
-    }
-    out
-}
-
-/// Numbers written as text (NRRD `ascii`, MetaImage `BinaryData = False`): `count` of them.
-pub fn decode_text(text: &[u8], ty: DataType, count: usize, path: &Path) -> Result<Vec<f32>, IoError> {
-    let mut out = Vec::with_capacity(count.min(text.len() / 2 + 1));
-    for word in text.split(|b| b.is_ascii_whitespace() || *b == b',').filter(|w| !w.is_empty()) {
-        if out.len() == count {
-            break;
-        }
-        let w = String::from_utf8_lossy(word);
-        let v: f64 = w.parse().map_err(|_| IoError::Invalid {
-            path: path.into(),
-            reason: format!("value {}: '{}' is not a number", out.len(), super::shown(&w)),
-        })?;
-        if ty.is_integer() && v.fract() != 0.0 {
-            return Err(IoError::Invalid { path: path.into(), reason: format!("value {}: '{w}' is not an integer", out.len()) });
-        }
-        out.push(v as f32);
-    }
-    if out.len() < count {
-        return Err(IoError::Invalid {
-            path: path.into(),
-            reason: format!("the data holds {} values, the header says {count}", out.len()),
-        });
-    }
-    Ok(out)
-}
-
-/// How compressed data is framed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Compression {
-    /// gzip (NIfTI `.nii.gz`, NRRD `gzip`).
-    Gzip,
-    /// zlib (MetaImage `CompressedData = True`).
-    Zlib,
-}
-
-/// Decompresses `bytes` into exactly `need` bytes, then reads the stream to its end so that a
-/// truncated or corrupt stream (a bad checksum) is an error even when the data came out whole.
-/// Trailing data past `need` is read and dropped, up to a bound.
-pub fn inflate(bytes: &[u8], compression: Compression, need: usize, path: &Path) -> Result<Vec<u8>, IoError> {
-    // Deflate expands at most about 1032 times: a header claiming more than that from a short
-    // stream gets no more memory than its data can fill (the stream then ends early, an error),
-    // instead of a reservation of whatever the header says (a 5 KB fuzzed file asked for 4 GB).
-    let plausible = bytes.len().saturating_mul(1032).saturating_add(1 << 20);
-    let mut out = Vec::new();
-    out.try_reserve_exact(need.min(plausible)).map_err(|_| IoError::Invalid {
-        path: path.into(),
-        reason: format!("the header asks for {need} bytes of data, more than this machine can hold"),
-    })?;
-    let mut reader: Box<dyn Read> = match compression {
-        Compression::Gzip => Box::new(flate2::read::MultiGzDecoder::new(bytes)),
-        Compression::Zlib => Box::new(flate2::read::ZlibDecoder::new(bytes)),
-    };
-    let corrupt = |e: std::io::Error| IoError::Invalid {
-        path: path.into(),
-        reason: format!(
-            "the {} data is corrupt or truncated ({e})",
-            if compression == Compression::Gzip { "gzip" } else { "zlib" }
-        ),
-    };
-    (&mut reader).take(need as u64).read_to_end(&mut out).map_err(corrupt)?;
-    if out.len() < need {
-        return Err(IoError::Invalid {
-            path: path.into(),
-            reason: format!("the header says {need} bytes, but the data decompresses to only {}", out.len()),
-        });
-    }
-    std::io::copy(&mut reader.take(1 << 26), &mut std::io::sink()).map_err(corrupt)?;
-    Ok(out)
-}
-
-/// Whether bytes start a gzip stream.
-pub fn is_gzip(bytes: &[u8]) -> bool {
-    bytes.starts_with(&[0x1f, 0x8b])
-}
-
-/// The first `n` decompressed bytes of a gzip stream (fewer if it is shorter); corrupt data is
-/// an error.
-pub fn gunzip_prefix(bytes: &[u8], n: usize, path: &Path) -> Result<Vec<u8>, IoError> {
-    let mut out = Vec::with_capacity(n);
-    flate2::read::MultiGzDecoder::new(bytes)
-        .take(n as u64)
-        .read_to_end(&mut out)
-        .map_err(|e| IoError::Invalid { path: path.into(), reason: format!("the gzip data is corrupt or truncated ({e})") })?;
-    Ok(out)
-}
-
 /// The volume formats.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum VolumeFormat {
@@ -395,10 +271,14 @@ pub struct VolumeOptions {
     pub index: Option<usize>,
 }
 
-/// Reads a volume file (or zarr store) of any format we read.
+/// Reads a volume file (or zarr store) of any format we read: uncompressed data straight into
+/// the stored type ([`read_stored`]), anything else parsed whole.
 pub fn read_volume(path: &Path, options: VolumeOptions) -> Result<VolumeFile, IoError> {
     if zarr::is_zarr(path) {
         return zarr::read_zarr(path, options);
+    }
+    if let Some(file) = read_stored(path, options)? {
+        return Ok(file);
     }
     read_volume_bytes(&super::read_bytes(path)?, path, options)
 }
@@ -470,8 +350,13 @@ pub fn check_size(path: &Path, count: usize, ty: DataType, offset: usize, availa
 
 /// Wraps values into a [`Volume`], naming the file in any error.
 pub fn volume(path: &Path, dims: [usize; 3], values: Vec<f32>, affine: DAffine3) -> Result<Volume, IoError> {
+    stored_volume(path, dims, StoredValues::F32(values), affine)
+}
+
+/// Wraps values in their stored type into a [`Volume`], naming the file in any error.
+pub fn stored_volume(path: &Path, dims: [usize; 3], values: StoredValues, affine: DAffine3) -> Result<Volume, IoError> {
     let name = stem(path);
-    Volume::new(name, dims, values, affine)
+    Volume::stored(name, dims, values, affine)
         .map_err(|e| IoError::Invalid { path: path.into(), reason: strip_name(&e.to_string()) })
 }
 
@@ -547,46 +432,6 @@ pub fn peek_dims(path: &Path) -> Option<[usize; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn decode_every_type_both_endians_with_scaling() {
-        let p = Path::new("d");
-        assert_eq!(decode(&[1, 255], DataType::U8, false, 2, 1.0, 0.0), vec![1.0, 255.0]);
-        assert_eq!(decode(&[255], DataType::I8, false, 1, 2.0, 1.0), vec![-1.0]);
-        assert_eq!(decode(&[1, 0], DataType::U16, true, 1, 1.0, 0.0), vec![256.0]);
-        assert_eq!(decode(&(-300i16).to_le_bytes(), DataType::I16, false, 1, 0.5, 0.0), vec![-150.0]);
-        assert_eq!(decode(&7u32.to_be_bytes(), DataType::U32, true, 1, 1.0, 0.0), vec![7.0]);
-        assert_eq!(decode(&(-7i32).to_le_bytes(), DataType::I32, false, 1, 1.0, 0.0), vec![-7.0]);
-        assert_eq!(decode(&9u64.to_le_bytes(), DataType::U64, false, 1, 1.0, 0.0), vec![9.0]);
-        assert_eq!(decode(&(-9i64).to_be_bytes(), DataType::I64, true, 1, 1.0, 0.0), vec![-9.0]);
-        assert_eq!(decode(&1.5f32.to_le_bytes(), DataType::F32, false, 1, 1.0, 0.0), vec![1.5]);
-        assert_eq!(decode(&2.5f64.to_be_bytes(), DataType::F64, true, 1, 1.0, 0.0), vec![2.5]);
-        assert_eq!(decode_text(b"1 2\n3,4", DataType::I16, 4, p).unwrap(), vec![1.0, 2.0, 3.0, 4.0]);
-        assert!(decode_text(b"1 2", DataType::I16, 3, p).unwrap_err().to_string().contains("holds 2 values"));
-        assert!(decode_text(b"1 2.5", DataType::I16, 2, p).unwrap_err().to_string().contains("not an integer"));
-    }
-
-    #[test]
-    fn inflate_refuses_truncated_and_corrupt_streams() {
-        use std::io::Write;
-        let data: Vec<u8> = (0..5000u32).map(|i| (i * 7 % 251) as u8).collect();
-        let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
-        gz.write_all(&data).unwrap();
-        let gz = gz.finish().unwrap();
-        let p = Path::new("v.nii.gz");
-        assert_eq!(inflate(&gz, Compression::Gzip, 5000, p).unwrap(), data);
-        // The data is whole, but the trailer (CRC, size) is cut: still an error.
-        let e = inflate(&gz[..gz.len() - 4], Compression::Gzip, 5000, p).unwrap_err().to_string();
-        assert!(e.contains("corrupt or truncated"), "{e}");
-        let e = inflate(&gz[..gz.len() / 2], Compression::Gzip, 5000, p).unwrap_err().to_string();
-        assert!(e.contains("corrupt or truncated") || e.contains("only"), "{e}");
-        let mut bad = gz.clone();
-        let mid = bad.len() / 2;
-        bad[mid] ^= 0x55;
-        assert!(inflate(&bad, Compression::Gzip, 5000, p).is_err());
-        let e = inflate(&gz, Compression::Gzip, 6000, p).unwrap_err().to_string();
-        assert!(e.contains("only 5000"), "{e}");
-    }
 
     #[test]
     fn four_d_files_need_a_volume_index() {

@@ -10,8 +10,8 @@
 //! converted to millimetres.
 
 use super::{
-    check_size, decode, inflate, is_gzip, pick_volume, volume, Compression, DataLayout, DataType, Inside, Space, VolumeFile,
-    VolumeHeader, VolumeOptions,
+    check_size, decode_stored, inflate, is_gzip, pick_volume, stored_volume, Compression, DataLayout, DataType, Inside, Space,
+    VolumeFile, VolumeHeader, VolumeOptions,
 };
 use crate::IoError;
 use glam::{DAffine3, DMat3, DVec3};
@@ -345,9 +345,9 @@ pub fn parse_nifti(
     }
     check_size(path, total, ty, offset, data.len())?;
     let start = offset + pick * voxels * ty.size();
-    let values = decode(&data[start..], ty, h.big_endian, voxels, slope, inter);
+    let values = decode_stored(&data[start..], ty, h.big_endian, voxels, slope, inter);
     Ok(VolumeFile {
-        volume: std::sync::Arc::new(volume(path, grid, values, affine)?),
+        volume: std::sync::Arc::new(stored_volume(path, grid, values, affine)?),
         format: if h.version == 1 { "NIfTI-1" } else { "NIfTI-2" },
         data_type: ty.name(),
         space: Space::Ras,
@@ -467,12 +467,12 @@ mod tests {
         for (code, bitpix, data) in cases {
             let f = read(&write::nifti1(&[2, 2, 2], code, bitpix, &data, ID, 2.0, -1.0)).unwrap();
             let want: Vec<f32> = (0..8).map(|v| 2.0 * v as f32 - 1.0).collect();
-            assert_eq!(f.volume.values, want, "datatype {code}");
+            assert_eq!(f.volume.values_f32(), want, "datatype {code}");
             assert_eq!(f.format, "NIfTI-1");
         }
         // A zero slope means no scaling.
         let f = read(&write::nifti1(&[2, 2, 2], 2, 8, &[5; 8], ID, 0.0, 3.0)).unwrap();
-        assert_eq!(f.volume.values, vec![5.0; 8]);
+        assert_eq!(f.volume.values_f32(), vec![5.0; 8]);
     }
 
     #[test]
@@ -506,7 +506,7 @@ mod tests {
             &|_| unreachable!(),
         )
         .unwrap();
-        assert_eq!(f.volume.values, (16..24).map(|v| v as f32).collect::<Vec<_>>());
+        assert_eq!(f.volume.values_f32(), (16..24).map(|v| v as f32).collect::<Vec<_>>());
     }
 
     #[test]

@@ -12,8 +12,8 @@
 //! Reference: <https://teem.sourceforge.net/nrrd/format.html>.
 
 use super::{
-    check_size, data_path, decode, decode_text, inflate, pick_volume, volume, Compression, DataLayout, DataType, Inside, Space,
-    VolumeFile, VolumeHeader, VolumeOptions,
+    check_size, data_path, decode_stored, decode_text, inflate, pick_volume, stored_volume, Compression, DataLayout, DataType,
+    Inside, Space, StoredValues, VolumeFile, VolumeHeader, VolumeOptions,
 };
 use crate::IoError;
 use glam::{DAffine3, DMat3, DVec3};
@@ -146,8 +146,7 @@ pub fn parse_nrrd(
             data = &data[p + 1..];
         }
     }
-    let values_all: Vec<f32>;
-    let decoded: &[f32] = match encoding.as_str() {
+    let decoded: StoredValues = match encoding.as_str() {
         "raw" | "gzip" | "gz" => {
             let nbytes = total.checked_mul(ty.size()).ok_or_else(|| bad(format!("shape {shape} is too large")))?;
             let raw_owned;
@@ -179,13 +178,9 @@ pub fn parse_nrrd(
                 })?;
                 &raw_owned
             };
-            values_all = decode(raw, ty, big_endian, total, 1.0, 0.0);
-            &values_all
+            decode_stored(raw, ty, big_endian, total, 1.0, 0.0)
         }
-        "ascii" | "text" | "txt" => {
-            values_all = decode_text(data, ty, total, path)?;
-            &values_all
-        }
+        "ascii" | "text" | "txt" => StoredValues::F32(decode_text(data, ty, total, path)?),
         "bzip2" | "bz2" => return Err(malformed(enc_line, "bzip2 encoding is not supported: re-save as gzip or raw".into())),
         "hex" => return Err(malformed(enc_line, "hex encoding is not supported: re-save as gzip or raw".into())),
         e => return Err(malformed(enc_line, format!("encoding '{e}' is not an NRRD encoding"))),
@@ -194,16 +189,16 @@ pub fn parse_nrrd(
     let dims = [sizes[spatial[0]], sizes[spatial[1]], sizes[spatial[2]]];
     let strides: Vec<usize> = (0..sizes.len()).map(|a| sizes[..a].iter().product()).collect();
     let base = extra_axis.map_or(0, |a| pick * strides[a]);
-    let mut values = Vec::with_capacity(dims.iter().product());
     let [s0, s1, s2] = [strides[spatial[0]], strides[spatial[1]], strides[spatial[2]]];
-    for k in 0..dims[2] {
-        for j in 0..dims[1] {
-            let row = base + j * s1 + k * s2;
-            values.extend((0..dims[0]).map(|i| decoded[row + i * s0]));
-        }
-    }
+    let count: usize = dims.iter().product();
+    let values = if base == 0 && s0 == 1 && s1 == dims[0] && s2 == dims[0] * dims[1] && decoded.len() == count {
+        decoded // already in isolab's order
+    } else {
+        let [d0, d1, _] = dims;
+        decoded.gather(count, |v| base + (v % d0) * s0 + (v / d0 % d1) * s1 + (v / (d0 * d1)) * s2)
+    };
     Ok(VolumeFile {
-        volume: std::sync::Arc::new(volume(path, dims, values, affine)?),
+        volume: std::sync::Arc::new(stored_volume(path, dims, values, affine)?),
         format: "NRRD",
         data_type: ty.name(),
         space,
@@ -491,7 +486,7 @@ mod tests {
             None,
         )
         .unwrap();
-        assert_eq!(f.volume.values, (0..8).map(|v| v as f32).collect::<Vec<_>>());
+        assert_eq!(f.volume.values_f32(), (0..8).map(|v| v as f32).collect::<Vec<_>>());
         let a = f.volume.index_to_world;
         assert_eq!(a.translation, DVec3::new(-10.0, -20.0, 30.0));
         assert_eq!(a.matrix3.x_axis, DVec3::new(-2.0, 0.0, 0.0));
@@ -507,11 +502,11 @@ mod tests {
         gz.write_all(&data).unwrap();
         let gz = gz.finish().unwrap();
         let header = "type: uchar\ndimension: 3\nsizes: 2 2 2\nspacings: 1 1 1\nencoding: gzip\n";
-        assert_eq!(read(&attached(header, &gz), &[], None).unwrap().volume.values[7], 7.0);
+        assert_eq!(read(&attached(header, &gz), &[], None).unwrap().volume.values_f32()[7], 7.0);
         let detached = "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\ndata file: v.raw\n";
-        assert_eq!(read(detached.as_bytes(), &[("v.raw", data.clone())], None).unwrap().volume.values[5], 5.0);
+        assert_eq!(read(detached.as_bytes(), &[("v.raw", data.clone())], None).unwrap().volume.values_f32()[5], 5.0);
         let ascii = attached("type: float\ndimension: 3\nsizes: 2 2 2\nencoding: ascii\n", b"0 1 2 3\n4 5 6 7.5\n");
-        assert_eq!(read(&ascii, &[], None).unwrap().volume.values[7], 7.5);
+        assert_eq!(read(&ascii, &[], None).unwrap().volume.values_f32()[7], 7.5);
         // Two components interleaved on the fastest axis (a vector field): pick one.
         let two: Vec<u8> = (0..16u8).collect();
         let header = "type: uchar\ndimension: 4\nsizes: 2 2 2 2\nkinds: vector domain domain domain\n\
@@ -519,7 +514,7 @@ mod tests {
         let e = read(&attached(header, &two), &[], None).unwrap_err().to_string();
         assert!(e.contains("2 x 2 x 2 x 2") && e.contains("--volume"), "{e}");
         let f = read(&attached(header, &two), &[], Some(1)).unwrap();
-        assert_eq!(f.volume.values, vec![1.0, 3.0, 5.0, 7.0, 9.0, 11.0, 13.0, 15.0]);
+        assert_eq!(f.volume.values_f32(), vec![1.0, 3.0, 5.0, 7.0, 9.0, 11.0, 13.0, 15.0]);
     }
 
     #[test]

@@ -400,7 +400,7 @@ mod tests {
     fn reads(path: &Path, options: VolumeOptions, want: &[f32]) -> VolumeFile {
         let file = read_volume(path, options).unwrap();
         assert_eq!(file.volume.dims, [SHAPE[2], SHAPE[1], SHAPE[0]]);
-        assert_eq!(file.volume.values, want, "{}", path.display());
+        assert_eq!(file.volume.values_f32(), want, "{}", path.display());
         let mut slabs = VolumeSlabs::open(path, options).unwrap();
         assert_eq!(slabs.header.affine, file.volume.index_to_world);
         for run in [1, 2, 3] {

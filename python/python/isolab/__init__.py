@@ -260,8 +260,9 @@ def extract(data: Union[np.ndarray, str, os.PathLike], level: Optional[float] = 
     ----------
     data : 3-D numpy array, str or path
         An array (any numeric dtype, C or Fortran order or strided; meshed on its own grid,
-        sample ``[i, j, k]`` at index ``(i, j, k)``; read once into isolab's float32 volume and
-        copied once more into the extractor's samples), a built-in field name (``"sphere"``,
+        sample ``[i, j, k]`` at index ``(i, j, k)``; copied once, in its own dtype for an
+        extractor that reads samples where they lie (``isolab.algorithms()``' ``samples``), as
+        float32 for one that copies them anyway), a built-in field name (``"sphere"``,
         ``"torus"``, ``"gyroid"``, ... ``isolab.fields()``) sampled at ``resolution``, or a path
         to any file the CLI reads (a mesh: .obj .ply .stl .glb .gltf, meshed as its signed
         distance; a volume: .nii .nii.gz .nrrd .nhdr .mhd .mha, a zarr store's folder).

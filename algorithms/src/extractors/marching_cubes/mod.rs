@@ -181,10 +181,6 @@ pub struct McOptions {
     pub frame: Frame,
     /// A value per vertex (default none).
     pub values: VertexValues,
-    /// Bytes a fresh output (and the sweep's scratch) may take: estimated before it is
-    /// allocated, over it the extraction fails with [`ExtractError::OverMemory`] having allocated
-    /// nothing (default: no limit).
-    pub memory_limit: Option<u64>,
 }
 
 /// One line for listings.
@@ -1022,16 +1018,17 @@ impl Extractor for MarchingCubes {
 impl MarchingCubes {
     /// Fails with [`ExtractError::OverMemory`] when a fresh output of `vertices` and `triangles`
     /// (with normals and values as asked), plus the sweep's per-layer scratch, would take more
-    /// than the options' memory limit.
+    /// than `limit` ([`Extraction::memory_limit`]).
     fn check_memory(
         &self,
+        limit: Option<u64>,
         vertices: usize,
         triangles: usize,
         grid: &Grid,
         normals: bool,
         values: bool,
     ) -> Result<(), ExtractError> {
-        let Some(limit) = self.options.memory_limit else { return Ok(()) };
+        let Some(limit) = limit else { return Ok(()) };
         let per_vertex = 12 + if normals { 12 } else { 0 } + if values { 4 } else { 0 };
         let [nx, ny, _] = grid.dims;
         let tasks = crate::sweep::slabs::task_count(self.options.parallelism, grid.cell_count(), grid.dims[2] - 1);
@@ -1095,7 +1092,7 @@ impl MarchingCubes {
                 // counting pass over every sample (which, on a volume larger than the caches,
                 // costs as much as the sweep's own read).
                 let vertices = estimate_crossing_edges(&mut s.signs, &ctx.values, ctx.iso);
-                self.check_memory(vertices, 2 * vertices, &grid, sample_normals, cell_ranges)?;
+                self.check_memory(out.memory_limit, vertices, 2 * vertices, &grid, sample_normals, cell_ranges)?;
                 reserve_for(out, vertices + vertices / 8, sample_normals, cell_ranges);
             }
             ctx.slab(0, slab_cells, Bottom::Make, s, &mut Grow { mesh: &mut out.surface, values: &mut out.vertex_values });
@@ -1130,7 +1127,7 @@ impl MarchingCubes {
             });
             let offsets = slab_offsets(counts.iter().map(|(c, _)| c.vertices), self.name())?;
             let (vertices, triangles) = counts.iter().fold((0, 0), |(v, t), (c, _)| (v + c.vertices, t + c.triangles));
-            if let Err(e) = self.check_memory(vertices, triangles, &grid, sample_normals, cell_ranges) {
+            if let Err(e) = self.check_memory(out.memory_limit, vertices, triangles, &grid, sample_normals, cell_ranges) {
                 self.scratch.give(held);
                 return Err(e);
             }

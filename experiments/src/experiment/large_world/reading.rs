@@ -32,6 +32,16 @@ pub(super) fn reading(runs: &[&Data], volume: Option<&VolumeData>) -> String {
                 peak / (v.file_gib * 1024.0)
             ));
         }
+        if let Some(p) = v.in_place.as_ref().filter(|p| p.peak_rss_mib.is_some()) {
+            let peak = p.peak_rss_mib.unwrap_or(f64::NAN);
+            lines.push(format!(
+                "Meshed whole in memory where its voxels lie, it took {:.1} s at a peak of {peak:.0} MiB, {:.2}× the file (the \
+                 header check before asked for {} MiB).",
+                p.seconds,
+                peak / (v.file_gib * 1024.0),
+                v.in_memory_need_mib
+            ));
+        }
         let same = if v.compare_triangles[0] == v.compare_triangles[1] { "the same" } else { "different" };
         lines.push(format!(
             "At {}³, streaming takes {:.2}× the time of meshing in memory at {:.2}× its peak memory (medians), with {same} \
@@ -51,7 +61,7 @@ pub(super) fn reading(runs: &[&Data], volume: Option<&VolumeData>) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::super::StreamedRun;
+    use super::super::volume::StreamedRun;
     use super::*;
     use crate::report::Spread;
 
@@ -92,6 +102,7 @@ mod tests {
             stream_seconds: Spread::of(vec![3.0]),
             stream_peak_mib: Spread::of(vec![100.0]),
             compare_triangles: [5, 5],
+            in_place: None,
         };
         let r = reading(&[&world], Some(&volume));
         assert!(r.contains("The 2.0 G-sample world (8.0 GiB as a dense grid) was meshed in 90 s into 7 triangles, its peak resident memory 512 MiB, 6.25 % of the dense grid."), "{r}");
@@ -102,5 +113,23 @@ mod tests {
         );
         volume.compare_triangles = [5, 6];
         assert!(reading(&[&world], Some(&volume)).contains("with different triangle counts (5 and 6)"));
+        assert!(!r.contains("where its voxels lie"));
+        volume.in_place = Some(super::super::volume::InPlaceRun {
+            seconds: 6.0,
+            reading_seconds: 1.0,
+            peak_rss_mib: Some(768.0),
+            peak_reset: true,
+            need_mib: 1024,
+            vertices: 1,
+            triangles: 2,
+            output_mib: 1.0,
+            iso: 100.0,
+        });
+        volume.in_memory_need_mib = 25600;
+        let r = reading(&[&world], Some(&volume));
+        assert!(
+            r.contains("it took 6.0 s at a peak of 768 MiB, 0.75× the file (the header check before asked for 25600 MiB)"),
+            "{r}"
+        );
     }
 }

@@ -1,13 +1,20 @@
 //! `python_users`: marching cubes as a researcher with a numpy array meets it, in one Python
 //! process: `isolab.marching_cubes` (the Python package, both methods) beside scikit-image's
-//! `marching_cubes` (Lorensen, Lewiner), PyMCubes, zmesh and VTK's `vtkFlyingEdges3D`, on the
-//! same arrays, one-shot, alternating, on one and two threads, with every conversion between the
-//! user's array and the returned arrays inside the timed call.
+//! `marching_cubes` (Lorensen, Lewiner), PyMCubes, zmesh, VTK's `vtkFlyingEdges3D` (without and
+//! with normals, and through pyvista's `contour`), libigl, warp-lang on the CPU, meshlib and
+//! marching-cubes-numpy, on the same arrays, one-shot, alternating, on one and two threads, with
+//! every conversion between the user's array and the returned arrays inside the timed call; each
+//! call's peak memory above the input, in a process of its own; and the floor (one read of the
+//! array, one write of our output).
 //!
 //! The timing runs in `bench.py` beside this file (its header is the protocol), in the pinned
 //! reference environment (`tests/reference/.venv`) with the package installed from `python/` by
 //! this experiment, so it times the code of this commit. Inputs: a gyroid at 64³ to 512³
-//! (float32, C order) and the MNI152 T1 template as nibabel hands it over (float64).
+//! (float32, C order), the 512³ gyroid as uint8, and the MNI152 T1 template as nibabel hands it
+//! over (float64, Fortran order) and in its stored type (uint8). The targets and peaks are worded
+//! in `targets.rs`.
+
+mod targets;
 
 use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::plot::{self, Scale, Series, Style, XyPlot};
@@ -34,6 +41,10 @@ const OURS: &str = "isolab lorensen";
 const HUGE_PAGES: &str = "huge pages";
 const HUGE_PAGES_TUNABLE: &str = "glibc.malloc.hugetlb=1";
 const HUGE_PAGE_SIZES: [usize; 2] = [256, 512];
+/// The implementations the huge pages run times (the ones the targets compare).
+const HUGE_PAGE_IMPLEMENTATIONS: [&str; 4] = [OURS, "isolab lewiner", targets::VTK, targets::SKIMAGE];
+/// The side of the uint8 gyroid (the memory target's input).
+const UINT8_SIZE: usize = 512;
 /// Rows written before there was a second run.
 fn default_environment() -> String {
     "default".into()
@@ -55,6 +66,35 @@ struct Row {
     triangles: usize,
     /// What the call converts on the way in and out.
     converts: String,
+    /// The arrays the call returns.
+    #[serde(default)]
+    returns: String,
+}
+
+/// One call's peak memory in a process of its own, as `bench.py` writes it.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Peak {
+    implementation: String,
+    input: String,
+    n: usize,
+    /// The resident high-water mark during the call above the resident memory before it.
+    peak_bytes: i64,
+    /// Bytes of the arrays the call returned.
+    output_bytes: i64,
+    /// Bytes of the input array.
+    input_bytes: i64,
+}
+
+/// The floor of a call on an input: one read of the array, one write of our output.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Floor {
+    input: String,
+    n: usize,
+    output_bytes: u64,
+    read_ms: f64,
+    write_ms: f64,
+    /// The write into fresh memory (its page faults included).
+    first_touch_write_ms: f64,
 }
 
 /// An input as `bench.py` describes it.
@@ -78,6 +118,10 @@ struct Data {
     notes: Vec<String>,
     inputs: Vec<Input>,
     rows: Vec<Row>,
+    #[serde(default)]
+    peaks: Vec<Peak>,
+    #[serde(default)]
+    floors: Vec<Floor>,
 }
 
 impl Experiment for PythonUsers {
@@ -86,7 +130,7 @@ impl Experiment for PythonUsers {
     }
 
     fn question(&self) -> &'static str {
-        "How fast is isolab's marching cubes from Python, against scikit-image, PyMCubes, zmesh and VTK on the same numpy arrays?"
+        "How fast is isolab's marching cubes from Python, and how much memory does it take, against scikit-image, VTK and the other marching cubes a Python user can install, on the same numpy arrays?"
     }
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
@@ -95,10 +139,17 @@ impl Experiment for PythonUsers {
         python::install_package(&python, &root).map_err(ExperimentError::Python)?;
         let repeats = ctx.repeats.max(1);
         let sizes: Vec<String> = SIZES.iter().map(usize::to_string).collect();
-        let mut data = bench(&python, &[&["--sizes", &sizes.join(","), "--mni", "nilearn"]], repeats, None)?;
+        let uint8 = UINT8_SIZE.to_string();
+        let mut data =
+            bench(&python, &[&["--sizes", &sizes.join(","), "--mni", "nilearn", "--uint8", &uint8, "--peak"]], repeats, None)?;
         let large: Vec<String> = HUGE_PAGE_SIZES.iter().map(usize::to_string).collect();
-        let huge =
-            bench(&python, &[&["--sizes", &large.join(","), "--environment", HUGE_PAGES]], repeats, Some(HUGE_PAGES_TUNABLE))?;
+        let only = HUGE_PAGE_IMPLEMENTATIONS.join(",");
+        let huge = bench(
+            &python,
+            &[&["--sizes", &large.join(","), "--environment", HUGE_PAGES, "--only", &only]],
+            repeats,
+            Some(HUGE_PAGES_TUNABLE),
+        )?;
         data.rows.extend(huge.rows);
         data.notes.extend(huge.notes.into_iter().map(|n| format!("{HUGE_PAGES}: {n}")));
         ctx.write_data(NAME, &data)?;
@@ -213,7 +264,18 @@ fn headline(data: &Data, input: &str, n: usize) -> Option<String> {
 }
 
 /// The peers timed on one thread beside ours.
-const PEERS: [&str; 5] = ["skimage lorensen", "skimage lewiner", "PyMCubes", "zmesh", "VTK flying edges"];
+const PEERS: [&str; 10] = [
+    "skimage lorensen",
+    "skimage lewiner",
+    "PyMCubes",
+    "zmesh",
+    "VTK flying edges",
+    "VTK flying edges + normals",
+    "pyvista contour",
+    "libigl",
+    "warp-lang (CPU)",
+    "marching-cubes-numpy",
+];
 
 /// The page's opening reading: the headline of the largest gyroid and of the MNI template, then
 /// which peers are faster or slower than ours on every input (one thread), and what the second
@@ -271,6 +333,8 @@ fn reading(data: &Data) -> String {
             THREADS[1], s.median, s.min, s.max
         ));
     }
+    lines.extend(targets::reading(data));
+    lines.extend(targets::peak_reading(data));
     format!("**Reading.** {}\n\n", lines.join(" "))
 }
 
@@ -280,10 +344,13 @@ fn section(data: &Data) -> String {
     md.push_str(&format!(
         "What a researcher with a numpy array meets: each implementation called from one Python process on the same \
          array, one-shot (nothing kept between calls: a new VTK filter, a new zmesh `Mesher`), every conversion between \
-         the user's array and the returned numpy arrays inside the timed call. Alternating: after one unrecorded warm-up \
-         round, every round calls each implementation once, in an order rotated by one each round. {two} threads: \
-         isolab (`threads={two}`) and VTK (its STDThread SMP backend, `Initialize({two})`); scikit-image, PyMCubes and \
-         zmesh have no threads to give and run in the one-thread rounds only. The script is \
+         the user's array and the returned numpy arrays inside the timed call (what each converts and returns is \
+         tabled below). Alternating: after one unrecorded warm-up round, every round calls each implementation once, in \
+         an order rotated by one each round. {two} threads: isolab (`threads={two}`), VTK and pyvista (VTK's STDThread SMP \
+         backend, `Initialize({two})`), and meshlib (TBB, which takes every core and has no setting, so it runs in these \
+         rounds only, in rounds of its own after the others'); the others have no threads to give and run in the \
+         one-thread rounds only. libigl takes its grid of sample positions as an argument, built outside the timed call, \
+         and is not run where that grid alone would take gigabytes. The script is \
          `experiments/src/experiment/python_users/bench.py`, run in `tests/reference/.venv` after `pip install ./python` \
          of this commit.\n\n",
     ));
@@ -314,6 +381,47 @@ fn section(data: &Data) -> String {
             md.push('\n');
         }
     }
+    md.push_str(&format!(
+        "### Targets\n\nOurs is `isolab.marching_cubes(method='lorensen')` returning its four arrays; {} is VTK's flying edges \
+         on the array's own buffer without normals; {} runs on one thread (it has no more to give), so our two-thread time \
+         is held to its one-thread time. The floor is one read of the array and one write of our output's bytes into memory \
+         touched before (both numpy, in the same process; a write into fresh memory, page faults included, is in the floors \
+         table).\n\n",
+        targets::VTK,
+        targets::SKIMAGE
+    ));
+    md.push_str(&targets::table(data));
+    md.push('\n');
+    if !data.peaks.is_empty() {
+        md.push_str(
+            "### Peak memory\n\nEach implementation on each input in a process of its own, one call after a warm-up call on \
+             a small block from the middle of the input: the resident high-water mark during the call less the resident \
+             memory before it (which holds the input), beside the bytes of the arrays the call returns.\n\n",
+        );
+        md.push_str(&targets::peaks_table(data));
+        md.push('\n');
+    }
+    if !data.floors.is_empty() {
+        md.push_str("### Floors\n\n");
+        let rows: Vec<Vec<String>> = data
+            .floors
+            .iter()
+            .map(|f| {
+                vec![
+                    label(&f.input, f.n, data),
+                    format!("{:.1}", f.output_bytes as f64 / (1u64 << 20) as f64),
+                    ms(f.read_ms),
+                    ms(f.write_ms),
+                    ms(f.first_touch_write_ms),
+                ]
+            })
+            .collect();
+        md.push_str(&markdown_table(
+            &["input", "our output, MiB", "read the array, ms", "write the output, ms", "write it into fresh memory, ms"],
+            &rows,
+        ));
+        md.push('\n');
+    }
     md.push_str("### Inputs\n\n");
     let rows: Vec<Vec<String>> = data
         .inputs
@@ -326,13 +434,13 @@ fn section(data: &Data) -> String {
          samples a side; the MNI152 T1 template is the one nilearn ships, as `nibabel.load(path).get_fdata()` returns it, \
          at the level `isolab.extract` picks for the file (Otsu's threshold).\n\n",
     );
-    md.push_str("### What each call converts\n\n");
+    md.push_str("### What each call returns and converts\n\n");
     let converts: Vec<Vec<String>> =
-        crate::report::first_seen(data.rows.iter().map(|r| (r.implementation.clone(), r.converts.clone())))
+        crate::report::first_seen(data.rows.iter().map(|r| (r.implementation.clone(), r.returns.clone(), r.converts.clone())))
             .into_iter()
-            .map(|(i, c)| vec![i, c])
+            .map(|(i, r, c)| vec![i, r, c])
             .collect();
-    md.push_str(&markdown_table(&["implementation", "conversion, inside the timed call"], &converts));
+    md.push_str(&markdown_table(&["implementation", "returns", "conversion, inside the timed call"], &converts));
     md.push_str(
         "\nzmesh meshes label volumes, not intensities: it is given the thresholded array and meshes that binary volume's \
          boundary (its triangle counts differ for that reason); its time includes the threshold.\n",
@@ -381,7 +489,20 @@ fn figures(ctx: &Context, data: &Data) -> Result<(), ExperimentError> {
 mod tests {
     use super::*;
 
-    fn row(implementation: &str, input: &str, n: usize, threads: usize, ms: f64) -> Row {
+    pub(super) fn data(rows: Vec<Row>) -> Data {
+        Data {
+            repeats: 1,
+            large_repeats: 1,
+            versions: BTreeMap::new(),
+            notes: Vec::new(),
+            inputs: Vec::new(),
+            rows,
+            peaks: Vec::new(),
+            floors: Vec::new(),
+        }
+    }
+
+    pub(super) fn row(implementation: &str, input: &str, n: usize, threads: usize, ms: f64) -> Row {
         Row {
             implementation: implementation.into(),
             input: input.into(),
@@ -392,19 +513,13 @@ mod tests {
             vertices: 0,
             triangles: 0,
             converts: String::new(),
+            returns: String::new(),
         }
     }
 
     #[test]
     fn the_reading_follows_the_rows() {
-        let mut data = Data {
-            repeats: 1,
-            large_repeats: 1,
-            versions: BTreeMap::new(),
-            notes: Vec::new(),
-            inputs: Vec::new(),
-            rows: Vec::new(),
-        };
+        let mut data = data(Vec::new());
         assert_eq!(reading(&data), "");
         data.rows = vec![
             row(OURS, "gyroid", 256, 1, 100.0),

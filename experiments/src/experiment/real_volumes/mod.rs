@@ -241,8 +241,9 @@ impl Experiment for RealVolumes {
         data.data_type = file.data_type.into();
         data.spacing = file.volume.spacing();
         data.file_bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
-        data.levels = levels(&file.volume.values);
-        data.zero_fraction = file.volume.values.iter().filter(|&&v| v == 0.0).count() as f64 / file.volume.values.len() as f64;
+        let values = file.volume.values_f32();
+        data.levels = levels(&values);
+        data.zero_fraction = values.iter().filter(|&&v| v == 0.0).count() as f64 / values.len() as f64;
         let field: Arc<dyn Field> = Arc::new(Complement(Arc::new(VolumeField::new(file.volume.clone()))));
         let voxel_volume = data.spacing.iter().product::<f64>();
         let surface: Vec<_> =

@@ -11,4 +11,5 @@ pub mod figures;
 pub mod html;
 pub mod memory;
 pub mod peers;
+pub mod provenance;
 pub mod report;

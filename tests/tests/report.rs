@@ -114,9 +114,9 @@ fn the_front_page_recommends_for_every_use_case_links_every_page_and_is_short() 
 /// The pages that reproduce a paper or post of `../shared/papers/`: each lists where we differ.
 const PAPER_PAGES: &[&str] = &["costen_table", "stuart_tables", "svoboda_timing", "surface_nets_smoothing", "terrain_liquids"];
 
-/// Where a page's reading must start: within its first lines (the heading, the one paragraph
-/// that says what ran, then the reading, a paragraph or a list).
-const READING_WITHIN_LINES: usize = 8;
+/// Where a page's reading must start: within its first lines (the heading, the provenance line,
+/// the one paragraph that says what ran, then the reading, a paragraph or a list).
+const READING_WITHIN_LINES: usize = 10;
 
 #[test]
 fn every_page_opens_with_a_reading() {
@@ -125,6 +125,21 @@ fn every_page_opens_with_a_reading() {
         let page = std::fs::read_to_string(tmp.path().join(format!("{}.md", e.name()))).expect("assembled page");
         let opens = page.lines().take(READING_WITHIN_LINES).any(|l| l.starts_with("**Reading.**"));
         assert!(opens, "{}.md does not open with a reading (\"**Reading.** ...\" in its first lines)", e.name());
+    }
+}
+
+#[test]
+fn every_page_states_where_its_data_ran_and_how_to_regenerate_it() {
+    let tmp = assembled();
+    let front = std::fs::read_to_string(tmp.path().join("REPORT.md")).expect("front page");
+    assert!(front.contains("| data made at | its code since |"), "the front page lists no commits");
+    for e in all() {
+        let page = std::fs::read_to_string(tmp.path().join(format!("{}.md", e.name()))).expect("assembled page");
+        let head: Vec<&str> = page.lines().take(READING_WITHIN_LINES).collect();
+        let line =
+            head.iter().find(|l| l.contains("Regenerate: `")).unwrap_or_else(|| panic!("{}.md: no provenance line", e.name()));
+        assert!(line.contains(&format!("--bin {}`", e.name())), "{}.md: {line}", e.name());
+        assert!(line.contains("Data made at commit `") || line.contains("not recorded"), "{}.md: {line}", e.name());
     }
 }
 

@@ -42,16 +42,12 @@ fn main() -> ExitCode {
             if !args.only.is_empty() && !args.only.iter().any(|o| o == e.name()) {
                 continue;
             }
-            let t = Instant::now();
-            if let Err(err) = e.run(&ctx) {
-                eprintln!("error: {}: {err}", e.name());
-                return ExitCode::FAILURE;
-            }
-            let seconds = t.elapsed().as_secs_f64();
-            eprintln!("{} done in {seconds:.1} s", e.name());
-            if let Err(err) = experiment::record_run_time(&ctx, e.name(), seconds) {
-                eprintln!("error: {err}");
-                return ExitCode::FAILURE;
+            match experiment::run_one(&ctx, e.as_ref()) {
+                Ok(seconds) => eprintln!("{} done in {seconds:.1} s", e.name()),
+                Err(err) => {
+                    eprintln!("error: {}: {err}", e.name());
+                    return ExitCode::FAILURE;
+                }
             }
         }
     }

@@ -87,12 +87,14 @@ pub struct Context {
     pub repeats: usize,
     /// Progress bars, one per experiment.
     pub progress: MultiProgress,
+    /// The data files written since [`Context::take_written`] last ran (names, in order).
+    written: std::sync::Mutex<Vec<String>>,
 }
 
 impl Context {
     /// A context writing into `report_dir`.
     pub fn new(report_dir: PathBuf, repeats: usize) -> Self {
-        Self { report_dir, repeats: repeats.max(1), progress: MultiProgress::new() }
+        Self { report_dir, repeats: repeats.max(1), progress: MultiProgress::new(), written: Default::default() }
     }
 
     /// `data/<name>.json`.
@@ -124,7 +126,16 @@ impl Context {
             std::fs::create_dir_all(dir).map_err(|source| IoError::Write { path: dir.into(), source })?;
         }
         isolab_pipeline::write_json(&path, data)?;
+        let mut written = self.written.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        if !written.iter().any(|n| n == name) {
+            written.push(name.to_owned());
+        }
         Ok(())
+    }
+
+    /// The names of the data files written since the last call, which it forgets.
+    pub fn take_written(&self) -> Vec<String> {
+        std::mem::take(&mut *self.written.lock().unwrap_or_else(std::sync::PoisonError::into_inner))
     }
 
     /// Reads an experiment's data file.

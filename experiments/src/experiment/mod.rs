@@ -72,12 +72,14 @@ pub fn assemble(ctx: &Context) -> Result<PathBuf, ExperimentError> {
             Err(err) => format!("## {}\n\n_Not generated yet: {err}_\n", e.name()),
         };
         let title = page_title(&section).unwrap_or(e.name()).to_owned();
-        let page = format!("[isolab report](REPORT.md) › {title}\n\n{}", promote_headings(&section).trim_end()) + "\n";
+        let provenance = crate::provenance::recorded(&ctx.data_path(e.name()));
+        let body = under_title(&promote_headings(&section), &crate::provenance::line(e.name(), provenance.as_ref()));
+        let page = format!("[isolab report](REPORT.md) › {title}\n\n{}", body.trim_end()) + "\n";
         let path = ctx.report_dir.join(format!("{}.md", e.name()));
         write_atomic(&path, |w| std::io::Write::write_all(w, page.as_bytes()))?;
         let html = crate::html::html_page(&title, &page);
         write_atomic(&ctx.report_dir.join(format!("{}.html", e.name())), |w| std::io::Write::write_all(w, html.as_bytes()))?;
-        pages.push((e.name(), title, e.question()));
+        pages.push(Page { name: e.name(), title, question: e.question(), provenance });
     }
     let md = front_page(ctx, &pages);
     let path = ctx.report_dir.join("REPORT.md");
@@ -90,7 +92,7 @@ pub fn assemble(ctx: &Context) -> Result<PathBuf, ExperimentError> {
 
 /// The front page: what was compared, the use-case recommendations, the at-a-glance table and
 /// the list of experiment pages.
-fn front_page(ctx: &Context, pages: &[(&str, String, &str)]) -> String {
+fn front_page(ctx: &Context, pages: &[Page]) -> String {
     let extractors: Vec<String> = isolab_algorithms::extractors::registry().iter().map(|e| format!("`{}`", e.name())).collect();
     let fields: Vec<String> = isolab_algorithms::fields::registry().iter().map(|f| format!("`{}`", f.name)).collect();
     let models: Vec<String> = context::MODELS.iter().map(|m| format!("`{m}`")).collect();
@@ -126,11 +128,60 @@ fn front_page(ctx: &Context, pages: &[(&str, String, &str)]) -> String {
          in 3D ([viewer](viewer.md) says how to open it).\n\n",
     );
     md.push_str("## The experiments\n\n");
-    md.push_str(&main_job_time(ctx, &pages.iter().map(|p| p.0).collect::<Vec<_>>()));
-    let rows: Vec<Vec<String>> =
-        pages.iter().map(|(name, title, question)| vec![format!("[{title}]({name}.md)"), (*question).to_owned()]).collect();
-    md.push_str(&crate::report::markdown_table(&["page", "the question it answers"], &rows));
+    md.push_str(&main_job_time(ctx, &pages.iter().map(|p| p.name).collect::<Vec<_>>()));
+    md.push_str(
+        "Each page's data were made at the commit listed (`+changes`: with uncommitted changes outside `report/`); \
+         \"changed since\" means the experiment's own source files differ from those that made its data, so the page may \
+         not show what its code does now (changes to the engine it measures are not tracked here). Each page states \
+         its machine and the command that regenerates it under its title.\n\n",
+    );
+    let root = crate::provenance::root();
+    let rows: Vec<Vec<String>> = pages
+        .iter()
+        .map(|p| {
+            let made = p.provenance.as_ref().map_or("not recorded".to_owned(), |v| {
+                format!("`{}`, {}", v.short_commit(), v.date_utc.split('T').next().unwrap_or(&v.date_utc))
+            });
+            vec![format!("[{}]({}.md)", p.title, p.name), p.question.to_owned(), made, code_changed(&root, p)]
+        })
+        .collect();
+    md.push_str(&crate::report::markdown_table(&["page", "the question it answers", "data made at", "its code since"], &rows));
     md
+}
+
+/// An assembled page's entry on the front page.
+struct Page {
+    name: &'static str,
+    title: String,
+    question: &'static str,
+    provenance: Option<crate::provenance::Provenance>,
+}
+
+/// The front page's "its code since" cell for a page.
+fn code_changed(root: &std::path::Path, page: &Page) -> String {
+    match crate::provenance::code_since(root, page.name, page.provenance.as_ref()) {
+        Some(true) => "**changed since**".into(),
+        Some(false) => "unchanged".into(),
+        None => "unknown".into(),
+    }
+}
+
+/// `page` with `line` as a paragraph after its first `# ` heading (at the top when it has none).
+fn under_title(page: &str, line: &str) -> String {
+    let mut out = String::with_capacity(page.len() + line.len() + 2);
+    let mut done = false;
+    for l in page.split_inclusive('\n') {
+        out.push_str(l);
+        if !done && l.starts_with("# ") {
+            out.push_str(&format!("\n{line}\n"));
+            done = true;
+        }
+    }
+    if done {
+        out
+    } else {
+        format!("{line}\n\n{page}")
+    }
 }
 
 /// The section's title: its first `## ` heading.
@@ -184,6 +235,23 @@ fn main_job_time(ctx: &Context, names: &[&str]) -> String {
     s
 }
 
+/// Runs one experiment, then records its wall time (`data/run_times.json`) and stamps every data
+/// file it wrote with its [`Provenance`](crate::provenance::Provenance); returns the seconds.
+pub fn run_one(ctx: &Context, e: &dyn Experiment) -> Result<f64, ExperimentError> {
+    let started = std::time::SystemTime::now();
+    let t = std::time::Instant::now();
+    ctx.take_written();
+    e.run(ctx)?;
+    let seconds = t.elapsed().as_secs_f64();
+    let written = ctx.take_written();
+    record_run_time(ctx, e.name(), seconds)?;
+    let provenance = crate::provenance::Provenance::collect(e.name(), started, seconds);
+    for name in written.iter().filter(|n| n.as_str() != RUN_TIMES) {
+        crate::provenance::stamp(&ctx.data_path(name), &provenance)?;
+    }
+    Ok(seconds)
+}
+
 /// Runs the experiment called `name` and reassembles the report (what each binary does).
 pub fn run_and_assemble(name: &str) -> std::process::ExitCode {
     let ctx = Context::new(default_report_dir(), 5);
@@ -191,11 +259,7 @@ pub fn run_and_assemble(name: &str) -> std::process::ExitCode {
         .into_iter()
         .find(|e| e.name() == name)
         .ok_or_else(|| ExperimentError::Missing(format!("no experiment called {name}")))
-        .and_then(|e| {
-            let t = std::time::Instant::now();
-            e.run(&ctx)?;
-            record_run_time(&ctx, e.name(), t.elapsed().as_secs_f64())
-        })
+        .and_then(|e| run_one(&ctx, e.as_ref()).map(|_| ()))
         .and_then(|()| assemble(&ctx));
     match result {
         Ok(path) => {
@@ -219,6 +283,12 @@ mod tests {
         assert_eq!(promote_headings(s), "# Title (`x`)\n\ntext # not a heading\n## Sub\n### Deeper\n#hashtag\n| a |\n");
         assert_eq!(page_title(s), Some("Title (`x`)"));
         assert_eq!(page_title("no heading"), None);
+    }
+
+    #[test]
+    fn provenance_goes_under_the_first_title() {
+        assert_eq!(under_title("# T\n\ntext\n# U\n", "_p_"), "# T\n\n_p_\n\ntext\n# U\n");
+        assert_eq!(under_title("text\n", "_p_"), "_p_\n\ntext\n");
     }
 
     #[test]

@@ -372,8 +372,9 @@ fn section(data: &Data) -> String {
             "### With huge pages for malloc\n\nThe same script in a second process started with \
              `GLIBC_TUNABLES={HUGE_PAGES_TUNABLE}` (glibc's malloc then asks the kernel for transparent huge pages, so \
              first touching a fresh buffer faults once per 2 MiB instead of once per 4 KiB), at the sizes where buffers are \
-             largest. Every implementation's allocations are affected alike; isolab's copy of the array into its float32 \
-             samples is one of them.\n\n"
+             largest. Every implementation's allocations are affected alike: for isolab, the arrays it returns (it reads \
+             the input where it lies). numpy asks the kernel for huge pages for its own large arrays (by default, on Linux) whatever the \
+             setting, so the inputs are alike in both runs.\n\n"
         ));
         for threads in THREADS {
             md.push_str(&format!("{} thread{}:\n\n", threads, if threads == 1 { "" } else { "s" }));

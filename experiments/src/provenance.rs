@@ -3,7 +3,7 @@
 //! outside `report/`, the date, the CPU, cores, memory, OS, the rustc that built the binary,
 //! the Python of the reference environment, isolab's version, the command that regenerates it,
 //! and a digest of the experiment's own source files. Pages state it under their title
-//! ([`line`]); the front page lists each page's commit and flags data whose experiment code
+//! ([`line()`]); the front page lists each page's commit and flags data whose experiment code
 //! changed since it was made ([`code_since`]: the digest recomputed from the tree, so no git
 //! history is needed to check it).
 

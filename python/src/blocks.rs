@@ -19,7 +19,12 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::collections::BTreeMap;
 
-fn extractor(algorithm: &str, options: Option<BTreeMap<String, String>>, serial: bool) -> PyResult<Box<dyn Extractor>> {
+/// The extractor called `algorithm` with `options` (serial where it can be, with `serial`).
+pub(crate) fn extractor(
+    algorithm: &str,
+    options: Option<BTreeMap<String, String>>,
+    serial: bool,
+) -> PyResult<Box<dyn Extractor>> {
     let mut options = crate::options_from(options);
     if serial {
         crate::serial_where_possible(&mut options, algorithm);

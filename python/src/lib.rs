@@ -22,6 +22,7 @@ use std::path::Path;
 mod arrays;
 mod blocks;
 mod drop_in;
+mod functions;
 mod label_blocks;
 mod labels;
 mod out;
@@ -304,6 +305,42 @@ fn extract<'py>(
     Ok(d)
 }
 
+/// Meshes the field a wrapped Python callable gives (`isolab.extract(fn, ...)`): samples at
+/// `bounds.0 + index * h`, `resolution` along the longest side, evaluated in batches of at most
+/// `batch` points only in the blocks of `chunk` cells that pruning keeps (a `lipschitz` bound
+/// certifies; without one, the sign-change heuristic; every block with `sparse=False`).
+#[pyfunction]
+#[pyo3(signature = (function, level, algorithm, bounds, resolution, lipschitz, sparse, batch, chunk, options, threads))]
+#[allow(clippy::too_many_arguments)]
+fn extract_function<'py>(
+    py: Python<'py>,
+    function: Py<PyAny>,
+    level: f64,
+    algorithm: String,
+    bounds: ([f64; 3], [f64; 3]),
+    resolution: usize,
+    lipschitz: Option<f64>,
+    sparse: bool,
+    batch: usize,
+    chunk: Option<usize>,
+    options: Option<BTreeMap<String, String>>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let call = functions::FunctionCall {
+        level: level as f32,
+        algorithm,
+        options,
+        bounds,
+        resolution,
+        lipschitz,
+        sparse,
+        batch,
+        chunk,
+        threads,
+    };
+    functions::extract_function(py, function, call)
+}
+
 /// The CLI's metrics of a mesh given as arrays, as JSON: every measure, the exact
 /// self-intersection test only with `self_intersections`; against `run`'s true surface when
 /// given (distance of vertices to it, normal deviation), with the tetrahedra's measures when
@@ -409,6 +446,7 @@ fn _isolab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(material_colours, m)?)?;
     m.add_function(wrap_pyfunction!(marching_cubes, m)?)?;
     m.add_function(wrap_pyfunction!(extract, m)?)?;
+    m.add_function(wrap_pyfunction!(extract_function, m)?)?;
     m.add_function(wrap_pyfunction!(metrics, m)?)?;
     m.add_function(wrap_pyfunction!(save, m)?)?;
     m.add_function(wrap_pyfunction!(load, m)?)?;

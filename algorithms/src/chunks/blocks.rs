@@ -199,7 +199,7 @@ pub fn weld_fragments<'a>(fragments: impl IntoIterator<Item = &'a Fragment>, out
 }
 
 impl Fragment {
-    fn piece(&self) -> WeldPiece<'_> {
+    pub(super) fn piece(&self) -> WeldPiece<'_> {
         WeldPiece {
             state: self.state,
             surface: &self.surface,

@@ -35,7 +35,8 @@
 //! levels of detail, stitched); `weld` (joining chunk meshes);
 //! `stream` ([`stream_chunked`], [`MeshSink`]); `edit` ([`ChunkedVolume`], [`Brush`]); `blocks`
 //! (one block meshed on its own into a [`Fragment`], and [`weld_fragments`]: a distributed driver's
-//! two steps).
+//! two steps); `sparse` ([`extract_sparse`]: a field evaluated in batches only in the blocks a
+//! Lipschitz bound or a coarse sign change keeps, meshed and welded as blocks).
 
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
 use crate::field::Field;
@@ -50,14 +51,16 @@ use std::time::Instant;
 mod blocks;
 mod edit;
 pub mod lod;
+mod sparse;
 mod stream;
 mod weld;
 
 pub use blocks::*;
 pub use edit::*;
+pub use sparse::*;
 pub use stream::*;
 pub use weld::weld_on_chunk_planes;
-use weld::{position_key, weld, WeldPiece};
+use weld::{position_key, weld, WeldPiece, Welder};
 
 /// What chunked extraction did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

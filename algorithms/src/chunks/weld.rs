@@ -25,10 +25,38 @@ pub(super) struct WeldPiece<'a> {
 
 /// Welds the chunks' meshes into `out` (cleared first) and fills the counts of `stats`.
 pub(super) fn weld<'a>(pieces: impl Iterator<Item = WeldPiece<'a>>, out: &mut Extraction, stats: &mut ChunkStats) {
-    out.surface.clear();
-    let mut index: HashMap<u128, u32> = HashMap::new();
-    let mut with_normals = true;
+    let mut welder = Welder::new(out);
     for piece in pieces {
+        welder.add(piece, out, stats);
+    }
+    welder.finish(out);
+}
+
+/// A weld that takes its pieces one at a time, in order. Keys live in two generations: those
+/// added since the last [`Welder::retire`] and those of the generation before; a retire drops
+/// the older. A driver that adds its blocks a layer at a time and retires at each new layer
+/// holds the keys of two layers only, which is enough when no vertex is made by blocks two
+/// layers apart (blocks thicker than twice their apron). Without retires, every key is kept.
+pub(super) struct Welder {
+    index: HashMap<u128, u32>,
+    older: HashMap<u128, u32>,
+    with_normals: bool,
+}
+
+impl Welder {
+    /// A weld into `out`, which it clears.
+    pub(super) fn new(out: &mut Extraction) -> Welder {
+        out.surface.clear();
+        Welder { index: HashMap::new(), older: HashMap::new(), with_normals: true }
+    }
+
+    /// Drops the keys of the generation before the current one.
+    pub(super) fn retire(&mut self) {
+        self.older = std::mem::take(&mut self.index);
+    }
+
+    /// Adds one piece: its vertices whose keys were seen become those vertices.
+    pub(super) fn add(&mut self, piece: WeldPiece<'_>, out: &mut Extraction, stats: &mut ChunkStats) {
         match piece.state {
             ChunkState::Empty => stats.empty += 1,
             ChunkState::Full => stats.full += 1,
@@ -37,7 +65,7 @@ pub(super) fn weld<'a>(pieces: impl Iterator<Item = WeldPiece<'a>>, out: &mut Ex
                 let e = piece.surface;
                 out.stats.discarded_triangles += piece.discarded_triangles;
                 out.stats.active_cells += piece.active_cells;
-                with_normals &= e.normals.len() == e.positions.len();
+                self.with_normals &= e.normals.len() == e.positions.len();
                 let remap: Vec<u32> = e
                     .positions
                     .iter()
@@ -45,7 +73,10 @@ pub(super) fn weld<'a>(pieces: impl Iterator<Item = WeldPiece<'a>>, out: &mut Ex
                     .map(|(i, &p)| {
                         let next = out.surface.positions.len() as u32;
                         let id = match piece.keys[i] {
-                            Some(key) => *index.entry(key).or_insert(next),
+                            Some(key) => match self.older.get(&key) {
+                                Some(&id) => id,
+                                None => *self.index.entry(key).or_insert(next),
+                            },
                             None => next,
                         };
                         if id == next {
@@ -63,8 +94,12 @@ pub(super) fn weld<'a>(pieces: impl Iterator<Item = WeldPiece<'a>>, out: &mut Ex
             }
         }
     }
-    if !with_normals || out.surface.normals.len() != out.surface.positions.len() {
-        out.surface.normals.clear();
+
+    /// Ends the weld: normals are kept only if every piece had them.
+    pub(super) fn finish(self, out: &mut Extraction) {
+        if !self.with_normals || out.surface.normals.len() != out.surface.positions.len() {
+            out.surface.normals.clear();
+        }
     }
 }
 

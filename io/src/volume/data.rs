@@ -174,7 +174,7 @@ pub fn gunzip_prefix(bytes: &[u8], n: usize, path: &Path) -> Result<Vec<u8>, IoE
 /// bytes straight into values of the stored type: the only copy of the data in memory is the
 /// volume's own (a 1 GiB uint8 scan takes 1 GiB). `None` when the file is read otherwise
 /// (compressed, scaled, 64-bit integers, text, a zarr store, a header that cannot say where the
-/// data is): [`read_volume`] then parses it whole.
+/// data is): [`read_volume`](super::read_volume) then parses it whole.
 pub fn read_stored(path: &Path, options: VolumeOptions) -> Result<Option<VolumeFile>, IoError> {
     if super::zarr::is_zarr(path) {
         return Ok(None);

@@ -28,8 +28,9 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 import warnings
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -248,13 +249,51 @@ class Mesh:
                      self._space)
 
 
-def extract(data: Union[np.ndarray, str, os.PathLike], level: Optional[float] = None, algorithm: str = "marching-cubes", *,
+def _batch_caller(fn: Callable[[np.ndarray], Any], progress: bool) -> Callable[[np.ndarray], np.ndarray]:
+    """``fn`` as :func:`extract` calls it: its answer for a batch of points as a float64 vector,
+    or ``ValueError`` naming the batch and its points' bounds for a wrong length, a dtype that
+    is not real numbers, or a value that is not finite."""
+    state = {"batch": 0, "points": 0}
+
+    def call(points: np.ndarray) -> np.ndarray:
+        number = state["batch"]
+        state["batch"] += 1
+        state["points"] += len(points)
+        where = lambda: f"batch {number} (points in {points.min(axis=0).tolist()}..{points.max(axis=0).tolist()})"
+        values = fn(points)
+        if hasattr(values, "__array__") or isinstance(values, (list, tuple)):
+            array = np.asarray(values)
+        elif hasattr(values, "__dlpack__"):
+            array = np.from_dlpack(values)
+        else:
+            raise ValueError(f"{where()}: the function returned {type(values).__name__}; an array of {len(points)} values is needed")
+        if array.dtype.kind not in "biuf":
+            raise ValueError(f"{where()}: the function returned dtype {array.dtype}; real numbers are needed")
+        array = array.reshape(-1) if array.ndim == 2 and array.shape[1:] == (1,) else array
+        if array.shape != (len(points),):
+            raise ValueError(f"{where()}: {len(points)} points gave values of shape {array.shape}; one value per point is needed")
+        array = np.ascontiguousarray(array, dtype=np.float64)
+        bad = ~np.isfinite(array)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise ValueError(f"{where()}: the value at point {points[i].tolist()} is {array[i]}; every value must be finite")
+        if progress:
+            print(f"\risolab: {state['batch']} batches, {state['points']} points evaluated", end="", file=sys.stderr, flush=True)
+        return array
+
+    return call
+
+
+def extract(data: Union[np.ndarray, str, os.PathLike, Callable[[np.ndarray], Any]], level: Optional[float] = None, algorithm: str = "marching-cubes", *,
             spacing: Optional[Sequence[float]] = None, affine: Optional[np.ndarray] = None, inside: Optional[str] = None,
             options: Optional[Mapping[str, Any]] = None, post: Sequence[str] = (), threads: Optional[int] = None,
             resolution: Optional[int] = None, dims: Optional[Sequence[int]] = None, lattice: str = "cubic",
-            seed: Optional[int] = None, chunk: Optional[int] = None, materials: bool = False) -> Mesh:
+            seed: Optional[int] = None, chunk: Optional[int] = None, materials: bool = False,
+            bounds: Optional[Sequence[Sequence[float]]] = None, lipschitz: Optional[float] = None, sparse: bool = True,
+            batch: int = 1 << 16, progress: bool = False) -> Mesh:
     """Meshes ``data`` with a registered extractor (``isolab.algorithms()`` lists them) and
-    post-processes, through the pipeline the ``isolab extract`` CLI runs.
+    post-processes, through the pipeline the ``isolab extract`` CLI runs; or, when ``data`` is a
+    callable, the field it gives, evaluated only near its surface.
 
     Parameters
     ----------
@@ -265,7 +304,25 @@ def extract(data: Union[np.ndarray, str, os.PathLike], level: Optional[float] = 
         float32 for one that copies them anyway), a built-in field name (``"sphere"``,
         ``"torus"``, ``"gyroid"``, ... ``isolab.fields()``) sampled at ``resolution``, or a path
         to any file the CLI reads (a mesh: .obj .ply .stl .glb .gltf, meshed as its signed
-        distance; a volume: .nii .nii.gz .nrrd .nhdr .mhd .mha, a zarr store's folder).
+        distance; a volume: .nii .nii.gz .nrrd .nhdr .mhd .mha, a zarr store's folder); or a
+        callable ``fn(points) -> values``: ``points`` an (N, 3) float64 array of world points,
+        ``values`` N real numbers (numpy, anything with ``__array__`` or DLPack, such as a CPU
+        torch tensor). A callable needs ``bounds`` and ``resolution``; inside is below
+        ``level``. Its grid's samples sit at ``bounds[0] + index * h``, ``resolution`` of them
+        along the longest side, the first and last on the bounds there (along a shorter side,
+        the last within ``h / 2`` of its bound), so a numpy grid built that way and meshed with
+        ``affine=`` gives the same mesh. The grid is split into blocks of ``chunk`` cells (default 4,
+        or for an extractor with an apron four times it and at least 8) and only the blocks that may hold the surface are evaluated: with ``lipschitz`` (a
+        bound L with ``|fn(p) - fn(q)| <= L |p - q|``; 1 for a signed distance) a block is dropped
+        only when its centre's value proves it one-sided, and the mesh equals the dense grid's
+        meshed in blocks; without one, blocks are kept where the values at the block corners change
+        sign, with one block of margin, a heuristic that misses any part of the surface that lies
+        wholly inside the blocks it drops (a bubble or a tube thinner than a block that crosses no
+        block edge twice). ``sparse=False`` evaluates every sample, for comparison. Points come in
+        batches of at most ``batch``; the GIL is held only while ``fn`` runs. ``mesh.stats``
+        gives ``evaluations``, ``batches``, ``function_ms`` (time inside ``fn``) and ``other_ms``.
+        A wrong length, dtype or a NaN raises ``ValueError`` naming the batch and its points'
+        bounds; an exception inside ``fn`` propagates unchanged.
     level : float, optional
         The iso-value; default 0 for fields and arrays, Otsu's threshold for a scan file.
     algorithm : str
@@ -308,6 +365,21 @@ def extract(data: Union[np.ndarray, str, os.PathLike], level: Optional[float] = 
     True
     """
     opts = None if options is None else {str(k): str(v) for k, v in options.items()}
+    if callable(data) and not isinstance(data, np.ndarray):
+        if bounds is None or resolution is None:
+            raise ValueError("a callable needs bounds=((x0, y0, z0), (x1, y1, z1)) and resolution= (samples along the longest side)")
+        try:
+            lo, hi = (tuple(float(v) for v in corner) for corner in bounds)
+        except (TypeError, ValueError):
+            raise ValueError(f"bounds must be ((x0, y0, z0), (x1, y1, z1)), not {bounds!r}") from None
+        if len(lo) != 3 or len(hi) != 3:
+            raise ValueError(f"bounds must be ((x0, y0, z0), (x1, y1, z1)), not {bounds!r}")
+        parts = _isolab.extract_function(_batch_caller(data, progress), 0.0 if level is None else float(level), algorithm,
+                                         (lo, hi), int(resolution), None if lipschitz is None else float(lipschitz),
+                                         bool(sparse), int(batch), None if chunk is None else int(chunk), opts, threads)
+        if progress:
+            print(file=sys.stderr)
+        return Mesh(parts)
     dims_ = None if dims is None else tuple(int(d) for d in dims)
     if len(dims_ or (0, 0, 0)) != 3:
         raise ValueError(f"dims must be three numbers of samples, not {dims!r}")

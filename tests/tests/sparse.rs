@@ -1,0 +1,223 @@
+//! Sparse extraction from a field evaluated in batches (`chunks::extract_sparse`): with a
+//! Lipschitz bound the mesh equals the dense grid's, vertex for vertex and triangle for triangle,
+//! for every extractor that meshes in blocks, from far fewer evaluations; the sign-change
+//! heuristic keeps a surface it sees; a wrong answer from the evaluator is an error naming its
+//! batch, and the evaluator's own error comes back unchanged.
+
+use isolab_algorithms::chunks::{
+    extract_sparse, BatchEval, EvalError, FieldEval, Pruning, SparseError, SparseGrid, SparseOptions,
+};
+use isolab_algorithms::extractors;
+use isolab_algorithms::fields::{builtin, FieldParams};
+use isolab_algorithms::{Chunking, Extraction, Extractor, Field, Grid, Lattice, Samples};
+use isolab_metrics::topology;
+use std::sync::Arc;
+
+fn field(name: &str) -> Arc<dyn Field> {
+    builtin(name, FieldParams::default()).expect("built-in field")
+}
+
+fn domain_grid(f: &dyn Field, resolution: usize) -> SparseGrid {
+    let d = f.domain();
+    let lo = d.min.to_array().map(f64::from);
+    let hi = d.max.to_array().map(f64::from);
+    SparseGrid::from_bounds(lo, hi, resolution).expect("grid")
+}
+
+fn run(
+    e: &dyn Extractor,
+    f: &dyn Field,
+    grid: &SparseGrid,
+    pruning: Pruning,
+) -> (Extraction, isolab_algorithms::chunks::SparseStats) {
+    let mut out = Extraction::default();
+    let options = SparseOptions { chunk: 8, batch: 5000, pruning };
+    let stats = extract_sparse(e, grid, 0.0, &options, &mut FieldEval(f), &mut out).expect("sparse extraction");
+    (out, stats)
+}
+
+fn chunking_extractors() -> Vec<Box<dyn Extractor>> {
+    extractors::registry().into_iter().filter(|e| e.chunking() != Chunking::Unsupported).collect()
+}
+
+#[test]
+fn certified_pruning_gives_the_dense_mesh_for_every_extractor_that_meshes_in_blocks() {
+    let extractors = chunking_extractors();
+    assert!(extractors.len() >= 5, "{} extractors mesh in blocks", extractors.len());
+    for name in ["sphere", "torus"] {
+        let f = field(name);
+        let grid = domain_grid(f.as_ref(), 57);
+        for e in &extractors {
+            let what = format!("{} on {name}", e.name());
+            let (dense, dense_stats) = run(e.as_ref(), f.as_ref(), &grid, Pruning::Dense);
+            let (sparse, stats) = run(e.as_ref(), f.as_ref(), &grid, Pruning::Lipschitz(1.0));
+            assert!(!dense.surface.triangles.is_empty(), "{what}: no surface");
+            assert_eq!(sparse.surface.positions, dense.surface.positions, "{what}: vertices");
+            assert_eq!(sparse.surface.triangles, dense.surface.triangles, "{what}: triangles");
+            assert_eq!(sparse.surface.normals, dense.surface.normals, "{what}: normals");
+            assert!(
+                stats.evaluations < dense_stats.evaluations,
+                "{what}: {} evaluations, dense {}",
+                stats.evaluations,
+                dense_stats.evaluations
+            );
+            assert!(stats.sampled_blocks < stats.blocks, "{what}: every block sampled");
+        }
+    }
+}
+
+#[test]
+fn the_dense_mode_is_the_whole_grids_marching_cubes_in_world_units() {
+    let f = field("sphere");
+    let grid = domain_grid(f.as_ref(), 48);
+    let mc = extractors::by_name("marching-cubes").expect("marching cubes");
+    let (dense, stats) = run(mc.as_ref(), f.as_ref(), &grid, Pruning::Dense);
+    assert!(stats.evaluations >= stats.dense_points, "every sample evaluated");
+    let g = Grid::with_dims(&f.domain(), grid.dims).expect("grid");
+    let whole = Samples::sample(f.clone(), Lattice::Cubic(g), 0.0).expect("samples");
+    let mut single = Extraction::default();
+    mc.extract(&whole, &mut single).expect("extraction");
+    assert_eq!(dense.surface.triangles.len(), single.surface.triangles.len());
+    assert_eq!(dense.surface.positions.len(), single.surface.positions.len());
+    let t = topology(&dense.surface);
+    assert!(t.closed && t.edge_manifold && t.outward && t.euler == 2, "{t:?}");
+    // Every vertex on the sphere of radius 0.4, to the grid's interpolation error.
+    let worst = dense.surface.positions.iter().map(|p| (p.length() - 0.4).abs()).fold(0.0f32, f32::max);
+    assert!(worst < 0.2 * grid.spacing as f32, "{worst}");
+}
+
+#[test]
+fn certified_pruning_evaluates_a_shell_not_the_volume() {
+    let f = field("sphere");
+    let grid = domain_grid(f.as_ref(), 257);
+    let mc = extractors::by_name("marching-cubes").expect("marching cubes");
+    let mut out = Extraction::default();
+    let options = SparseOptions { chunk: 8, batch: 1 << 16, pruning: Pruning::Lipschitz(1.0) };
+    let stats = extract_sparse(mc.as_ref(), &grid, 0.0, &options, &mut FieldEval(f.as_ref()), &mut out).expect("sparse");
+    let ratio = stats.dense_points as f64 / stats.evaluations as f64;
+    assert!(ratio > 5.0, "dense {} / sparse {} = {ratio}", stats.dense_points, stats.evaluations);
+    let t = topology(&out.surface);
+    assert!(t.closed && t.edge_manifold && t.euler == 2, "{t:?}");
+}
+
+#[test]
+fn the_sign_change_heuristic_keeps_a_surface_larger_than_its_blocks() {
+    let f = field("torus");
+    let grid = domain_grid(f.as_ref(), 65);
+    let mc = extractors::by_name("marching-cubes").expect("marching cubes");
+    let (dense, _) = run(mc.as_ref(), f.as_ref(), &grid, Pruning::Dense);
+    let (heuristic, stats) = run(mc.as_ref(), f.as_ref(), &grid, Pruning::SignChange { margin: 1 });
+    assert_eq!(heuristic.surface.triangles, dense.surface.triangles);
+    assert!(stats.sampled_blocks < stats.blocks);
+}
+
+/// An evaluator that answers wrongly on its `at`-th batch.
+struct Faulty {
+    at: u64,
+    calls: u64,
+    fault: Fault,
+}
+
+#[derive(Clone, Copy)]
+enum Fault {
+    Short,
+    Nan,
+    Fails,
+}
+
+#[derive(Debug)]
+struct Mine;
+
+impl std::fmt::Display for Mine {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("mine")
+    }
+}
+
+impl std::error::Error for Mine {}
+
+impl BatchEval for Faulty {
+    fn eval(&mut self, points: &[[f64; 3]], out: &mut Vec<f64>) -> Result<(), EvalError> {
+        out.clear();
+        out.extend(points.iter().map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - 0.4));
+        self.calls += 1;
+        if self.calls - 1 == self.at {
+            match self.fault {
+                Fault::Short => {
+                    out.pop();
+                }
+                Fault::Nan => out[0] = f64::NAN,
+                Fault::Fails => return Err(Box::new(Mine)),
+            }
+        }
+        Ok(())
+    }
+}
+
+#[test]
+fn a_wrong_answer_names_its_batch_and_an_evaluators_error_comes_back_unchanged() {
+    let grid = SparseGrid::from_bounds([-0.5; 3], [0.5; 3], 33).expect("grid");
+    let mc = extractors::by_name("marching-cubes").expect("marching cubes");
+    let options = SparseOptions { chunk: 8, batch: 1000, pruning: Pruning::Lipschitz(1.0) };
+    for (fault, at) in [(Fault::Short, 0), (Fault::Short, 3), (Fault::Nan, 2), (Fault::Fails, 1)] {
+        let mut eval = Faulty { at, calls: 0, fault };
+        let mut out = Extraction::default();
+        let err = extract_sparse(mc.as_ref(), &grid, 0.0, &options, &mut eval, &mut out).expect_err("a faulty evaluator");
+        match (fault, err) {
+            (Fault::Short, SparseError::BadBatch { batch, reason, lo, hi }) => {
+                assert_eq!(batch, at);
+                assert!(reason.contains("values; one value per point"), "{reason}");
+                assert!((0..3).all(|a| lo[a] <= hi[a] && lo[a] >= -0.5 && hi[a] <= 0.5), "{lo:?} {hi:?}");
+            }
+            (Fault::Nan, SparseError::BadBatch { batch, reason, .. }) => {
+                assert_eq!(batch, at);
+                assert!(reason.contains("NaN"), "{reason}");
+            }
+            (Fault::Fails, SparseError::Eval(e)) => assert!(e.downcast_ref::<Mine>().is_some(), "{e}"),
+            (_, other) => panic!("unexpected error: {other}"),
+        }
+    }
+    // A grid the blocks cannot take is refused by name.
+    let bad = SparseOptions { chunk: 1, ..options };
+    let err = extract_sparse(mc.as_ref(), &grid, 0.0, &bad, &mut FieldEval(field("sphere").as_ref()), &mut Extraction::default());
+    assert!(matches!(err, Err(SparseError::Extract(_))));
+}
+
+#[test]
+fn welding_layer_by_layer_keeps_every_weld_of_the_whole_plan() {
+    use isolab_algorithms::chunks::{mesh_block, weld_fragments, BlockPlan};
+    let f = field("torus");
+    let grid = domain_grid(f.as_ref(), 45);
+    for e in chunking_extractors() {
+        let chunk = SparseOptions::default_chunk(e.as_ref());
+        let mut sparse = Extraction::default();
+        let options = SparseOptions { chunk, batch: 4096, pruning: Pruning::Dense };
+        extract_sparse(e.as_ref(), &grid, 0.0, &options, &mut FieldEval(f.as_ref()), &mut sparse).expect("sparse");
+        // Every block of the plan, welded at once with every key kept.
+        let plan = BlockPlan::new(e.as_ref(), grid.dims, chunk).expect("plan");
+        let fragments: Vec<_> = plan
+            .blocks()
+            .map(|b| {
+                let mut values = Vec::new();
+                for z in 0..b.dims[2] {
+                    for y in 0..b.dims[1] {
+                        for x in 0..b.dims[0] {
+                            let p = grid.point([b.lo[0] + x, b.lo[1] + y, b.lo[2] + z]);
+                            values.push(f.value(glam::Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)));
+                        }
+                    }
+                }
+                mesh_block(e.as_ref(), &plan, b.id, values, 0.0).expect("block")
+            })
+            .collect();
+        let mut whole = Extraction::default();
+        weld_fragments(&fragments, &mut whole);
+        let to_index = |p: &glam::Vec3| [0, 1, 2].map(|a| ((f64::from(p.to_array()[a]) - grid.origin[a]) / grid.spacing) as f32);
+        let welded: Vec<[f32; 3]> = sparse.surface.positions.iter().map(to_index).collect();
+        assert_eq!(sparse.surface.triangles, whole.surface.triangles, "{}", e.name());
+        assert_eq!(welded.len(), whole.surface.positions.len(), "{}", e.name());
+        for (a, b) in welded.iter().zip(&whole.surface.positions) {
+            assert!((0..3).all(|k| (a[k] - b.to_array()[k]).abs() < 1e-3), "{}: {a:?} vs {b:?}", e.name());
+        }
+    }
+}

@@ -87,3 +87,24 @@ fn the_checks_see_what_they_look_for() {
     assert_eq!(own_globs(p, "use super::*;\nuse rayon::prelude::*;\n    use super::*;\n"), vec!["use super::*;"]);
     assert!(own_globs(Path::new("a/tests.rs"), "use super::*;\n").is_empty());
 }
+
+/// The licence `Cargo.toml` names has its texts beside it, and CITATION.cff cites this version
+/// under the same licences.
+#[test]
+fn the_licences_and_the_citation_match_the_manifest() {
+    let manifest = std::fs::read_to_string(workspace().join("Cargo.toml")).expect("Cargo.toml");
+    assert!(manifest.contains("license = \"MIT OR Apache-2.0\""), "the workspace's licence changed: update the files");
+    let version = manifest
+        .lines()
+        .find_map(|l| l.strip_prefix("version = \""))
+        .and_then(|v| v.strip_suffix('"'))
+        .expect("the workspace's version");
+    let mit = std::fs::read_to_string(workspace().join("LICENSE-MIT")).expect("LICENSE-MIT");
+    assert!(mit.starts_with("MIT License") && mit.contains("Permission is hereby granted"));
+    let apache = std::fs::read_to_string(workspace().join("LICENSE-APACHE")).expect("LICENSE-APACHE");
+    assert!(apache.contains("Apache License") && apache.contains("Version 2.0, January 2004"));
+    let cff = std::fs::read_to_string(workspace().join("CITATION.cff")).expect("CITATION.cff");
+    assert!(cff.contains("cff-version: 1.2.0"), "{cff}");
+    assert!(cff.contains(&format!("version: \"{version}\"")), "CITATION.cff does not cite version {version}");
+    assert!(cff.contains("  - MIT\n") && cff.contains("  - Apache-2.0\n"), "CITATION.cff's licences");
+}

@@ -84,6 +84,10 @@ pub fn assemble(ctx: &Context) -> Result<PathBuf, ExperimentError> {
     let md = front_page(ctx, &pages);
     let path = ctx.report_dir.join("REPORT.md");
     write_atomic(&path, |w| std::io::Write::write_all(w, md.as_bytes()))?;
+    // The front page as a page of its own, for a reader who opens the HTML pages without the
+    // viewer (each page's breadcrumb links it).
+    let front_html = crate::html::html_page("isolab report", &md);
+    write_atomic(&ctx.report_dir.join("REPORT.html"), |w| std::io::Write::write_all(w, front_html.as_bytes()))?;
     let html = viewer::page(ctx, &md);
     write_atomic(&ctx.report_dir.join("index.html"), |w| std::io::Write::write_all(w, html.as_bytes()))?;
     write_atomic(&ctx.report_dir.join("viewer.js"), |w| std::io::Write::write_all(w, viewer::SCRIPT.as_bytes()))?;

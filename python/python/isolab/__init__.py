@@ -363,6 +363,13 @@ def extract(data: Union[np.ndarray, str, os.PathLike, Callable[[np.ndarray], Any
     ('surface-nets', 3)
     >>> bool(abs(np.linalg.norm(mesh.vertices - 1, axis=1).mean() - 0.5 ** 0.5) < 0.01)
     True
+
+    A function, evaluated near its surface only (a signed distance: Lipschitz bound 1):
+
+    >>> sphere = lambda points: np.linalg.norm(points, axis=1) - 0.4
+    >>> mesh = isolab.extract(sphere, 0.0, "marching-cubes", bounds=((-0.5,) * 3, (0.5,) * 3), resolution=129, lipschitz=1.0)
+    >>> mesh.stats["evaluations"] * 4 < mesh.stats["dense_points"], mesh.metrics()["closed"]
+    (True, True)
     """
     opts = None if options is None else {str(k): str(v) for k, v in options.items()}
     if callable(data) and not isinstance(data, np.ndarray):

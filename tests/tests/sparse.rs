@@ -221,3 +221,22 @@ fn welding_layer_by_layer_keeps_every_weld_of_the_whole_plan() {
         }
     }
 }
+
+#[test]
+fn certified_pruning_gives_the_dense_mesh_at_257_samples_a_side() {
+    let f = field("sphere");
+    let grid = domain_grid(f.as_ref(), 257);
+    for e in chunking_extractors() {
+        let chunk = SparseOptions::default_chunk(e.as_ref());
+        let mut meshes = Vec::new();
+        for pruning in [Pruning::Dense, Pruning::Lipschitz(1.0)] {
+            let mut out = Extraction::default();
+            let options = SparseOptions { chunk, batch: 1 << 16, pruning };
+            extract_sparse(e.as_ref(), &grid, 0.0, &options, &mut FieldEval(f.as_ref()), &mut out).expect("sparse");
+            meshes.push(out);
+        }
+        assert!(!meshes[0].surface.triangles.is_empty(), "{}", e.name());
+        assert_eq!(meshes[1].surface.positions, meshes[0].surface.positions, "{}", e.name());
+        assert_eq!(meshes[1].surface.triangles, meshes[0].surface.triangles, "{}", e.name());
+    }
+}

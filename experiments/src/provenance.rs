@@ -45,8 +45,8 @@ pub struct Provenance {
     pub source_digest: String,
 }
 
-/// The workspace root (the experiments crate's parent).
-fn workspace_root() -> PathBuf {
+/// The workspace root (the experiments crate's parent), whose sources [`code_since`] digests.
+pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().map(Path::to_path_buf).unwrap_or_default()
 }
 
@@ -59,7 +59,7 @@ impl Provenance {
     /// This machine and checkout, for a run of `experiment` that started at `started` and took
     /// `seconds`.
     pub fn collect(experiment: &str, started: SystemTime, seconds: f64) -> Self {
-        let root = workspace_root();
+        let root = root();
         let git = |args: &[&str]| command_output(Command::new("git").arg("-C").arg(&root).args(args));
         let commit = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
         let dirty = git(&["status", "--porcelain", "--", ".", ":!report"]).is_some_and(|s| !s.is_empty());
@@ -258,11 +258,6 @@ pub fn line(name: &str, provenance: Option<&Provenance>) -> String {
 /// was recorded.
 pub fn code_since(root: &Path, name: &str, provenance: Option<&Provenance>) -> Option<bool> {
     provenance.map(|p| p.source_digest != source_digest(root, name))
-}
-
-/// The workspace root, for [`code_since`] from the report's directory.
-pub fn root() -> PathBuf {
-    workspace_root()
 }
 
 #[cfg(test)]

@@ -114,6 +114,14 @@ pub struct Fragment {
     pub discarded_triangles: usize,
 }
 
+/// The block of chunk `id`, or an error naming it when it is outside the plan.
+fn block_in(plan: &BlockPlan, id: [usize; 3], algorithm: &'static str) -> Result<BlockBounds, ExtractError> {
+    plan.block(id).ok_or_else(|| ExtractError::BadInput {
+        algorithm,
+        reason: format!("block {id:?} is outside the plan's {:?} blocks", plan.counts),
+    })
+}
+
 /// Meshes the block of chunk `id` from its samples (`plan.block(id)`'s `dims`, x fastest, inside
 /// where a value is below `iso`). A sample count that does not match, a chunk outside the plan
 /// or a non-finite sample is an error naming it.
@@ -126,9 +134,7 @@ pub fn mesh_block(
 ) -> Result<Fragment, ExtractError> {
     let algorithm = extractor.name();
     let bad = |reason: String| ExtractError::BadInput { algorithm, reason };
-    let Some(bounds) = plan.block(id) else {
-        return Err(bad(format!("block {id:?} is outside the plan's {:?} blocks", plan.counts)));
-    };
+    let bounds = block_in(plan, id, algorithm)?;
     let expected: usize = bounds.dims.iter().product();
     if values.len() != expected {
         return Err(bad(format!(
@@ -156,9 +162,7 @@ pub fn mesh_block_view(
 ) -> Result<Fragment, ExtractError> {
     let algorithm = extractor.name();
     let bad = |reason: String| ExtractError::BadInput { algorithm, reason };
-    let Some(bounds) = plan.block(id) else {
-        return Err(bad(format!("block {id:?} is outside the plan's {:?} blocks", plan.counts)));
-    };
+    let bounds = block_in(plan, id, algorithm)?;
     if values.dims() != bounds.dims {
         let [x, y, z] = bounds.dims;
         return Err(bad(format!(

@@ -1,7 +1,7 @@
 //! A field meshed from evaluations near its surface only: the grid is split into the blocks of a
 //! [`BlockPlan`], whole octants of blocks are ruled out from one evaluation at their centre, and
 //! only the surviving blocks are sampled (each with its extractor's apron), meshed by
-//! [`mesh_block`] and welded as they come, as [`weld_fragments`](super::weld_fragments) welds. Memory holds one
+//! [`mesh_block_view`] and welded as they come, as [`weld_fragments`](super::weld_fragments) welds. Memory holds one
 //! batch of samples, the mesh and the weld keys of two block layers, never the dense grid.
 //!
 //! **Certified pruning** ([`Pruning::Lipschitz`]), after libigl's Lipschitz octree (PRs #2488
@@ -20,9 +20,10 @@
 //!
 //! [`Pruning::Dense`] samples every block, for comparison.
 
-use super::{mesh_block, BlockBounds, BlockPlan, ChunkStats, Fragment, Welder};
+use super::{mesh_block_view, BlockBounds, BlockPlan, ChunkStats, Fragment, Welder};
 use crate::extract::{ExtractError, Extraction, Extractor};
 use crate::field::Field;
+use crate::samples::GridView;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -253,7 +254,7 @@ pub fn extract_sparse(
     let mut weld_stats = ChunkStats::default();
     let retire = plan.chunk > 2 * plan.apron;
     let mut layer = kept.first().map_or(0, |id| id[2]);
-    let (mut points, mut values) = (Vec::new(), Vec::new());
+    let (mut points, mut values, mut samples) = (Vec::new(), Vec::new(), Vec::<f32>::new());
     let mut group: Vec<BlockBounds> = Vec::new();
     let mut k = 0;
     while k < kept.len() {
@@ -275,12 +276,17 @@ pub fn extract_sparse(
             offsets.push(at);
             at += block_points(b);
         }
+        // The samples as the extractors read them, converted once per group; each block meshes
+        // its run of them where it lies.
+        samples.clear();
+        samples.extend(values.iter().map(|&v| v as f32));
         let meshed: Vec<Result<Fragment, ExtractError>> = group
             .par_iter()
             .zip(&offsets)
             .map(|(b, &off)| {
-                let samples: Vec<f32> = values[off..off + block_points(b)].iter().map(|&v| v as f32).collect();
-                mesh_block(extractor, &plan, b.id, samples, iso)
+                let view = GridView::contiguous(&samples[off..off + block_points(b)], b.dims)
+                    .map_err(|e| ExtractError::BadInput { algorithm: extractor.name(), reason: e.to_string() })?;
+                mesh_block_view(extractor, &plan, b.id, view.into(), iso)
             })
             .collect();
         for f in meshed {

@@ -21,6 +21,7 @@
 
 use crate::field::{Field, FieldError};
 use crate::geometry::Aabb;
+use crate::samples::stored::with_stored;
 use crate::samples::{Sample, StoredValues};
 use glam::{DAffine3, DMat3, DVec3, Vec3};
 use std::sync::Arc;
@@ -36,23 +37,6 @@ pub struct Volume {
     values: Arc<StoredValues>,
     /// Voxel index `(i, j, k)` to world position (millimetres for scans).
     pub index_to_world: DAffine3,
-}
-
-/// Runs `$body` with `$v` bound to the typed slice of a [`StoredValues`].
-macro_rules! with_values {
-    ($stored:expr, $v:ident => $body:expr) => {
-        match $stored {
-            StoredValues::Bool($v) => $body,
-            StoredValues::U8($v) => $body,
-            StoredValues::I8($v) => $body,
-            StoredValues::U16($v) => $body,
-            StoredValues::I16($v) => $body,
-            StoredValues::U32($v) => $body,
-            StoredValues::I32($v) => $body,
-            StoredValues::F32($v) => $body,
-            StoredValues::F64($v) => $body,
-        }
-    };
 }
 
 impl Volume {
@@ -150,14 +134,14 @@ impl Volume {
     /// The value at fractional index coordinates, trilinear between the eight voxels around it;
     /// coordinates outside the grid are clamped to it (the nearest voxel's value).
     pub fn trilinear(&self, p: DVec3) -> f32 {
-        with_values!(&*self.values, v => trilinear_in(v, self.dims, p))
+        with_stored!(&*self.values, v => trilinear_in(v, self.dims, p))
     }
 
     /// Values at the cell centres of the voxel grid (the mean of each cell's eight voxels, which
     /// is the trilinear interpolant there): the centre half of a body-centred cubic lattice on
     /// the voxel grid.
     pub fn cell_centres(&self) -> Vec<f32> {
-        with_values!(&*self.values, v => cell_centres_of(v, self.dims))
+        with_stored!(&*self.values, v => cell_centres_of(v, self.dims))
     }
 
     /// The iso-value that best separates the values into two classes (Otsu 1979, on a
@@ -166,7 +150,7 @@ impl Volume {
     pub fn otsu_threshold(&self) -> Option<f32> {
         let (lo, hi) = self.range();
         let mut histogram = OtsuHistogram::new(lo, hi)?;
-        with_values!(&*self.values, v => histogram.add_values(v));
+        with_stored!(&*self.values, v => histogram.add_values(v));
         Some(histogram.threshold())
     }
 }

@@ -25,18 +25,19 @@ pub enum StoredValues {
 macro_rules! with_stored {
     ($stored:expr, $v:ident => $body:expr) => {
         match $stored {
-            StoredValues::Bool($v) => $body,
-            StoredValues::U8($v) => $body,
-            StoredValues::I8($v) => $body,
-            StoredValues::U16($v) => $body,
-            StoredValues::I16($v) => $body,
-            StoredValues::U32($v) => $body,
-            StoredValues::I32($v) => $body,
-            StoredValues::F32($v) => $body,
-            StoredValues::F64($v) => $body,
+            $crate::samples::StoredValues::Bool($v) => $body,
+            $crate::samples::StoredValues::U8($v) => $body,
+            $crate::samples::StoredValues::I8($v) => $body,
+            $crate::samples::StoredValues::U16($v) => $body,
+            $crate::samples::StoredValues::I16($v) => $body,
+            $crate::samples::StoredValues::U32($v) => $body,
+            $crate::samples::StoredValues::I32($v) => $body,
+            $crate::samples::StoredValues::F32($v) => $body,
+            $crate::samples::StoredValues::F64($v) => $body,
         }
     };
 }
+pub(crate) use with_stored;
 
 impl From<Vec<f32>> for StoredValues {
     fn from(v: Vec<f32>) -> Self {

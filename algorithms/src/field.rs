@@ -108,6 +108,15 @@ pub trait Field: Send + Sync {
         None
     }
 
+    /// A bound `L` with `|f(p) - f(q)| <= L |p - q|` for all `p`, `q` (world units), when the
+    /// field has one: 1 for a signed distance, computed from the frequencies for the gyroid and
+    /// the noise fields. Sparse extraction ([`crate::chunks::extract_sparse`]) rules out a box
+    /// of half diagonal `r` around `c` when `|f(c) - iso| > L r`, so a bound too small loses
+    /// surface: only answer with one that holds. `None` (the default): no bound known.
+    fn lipschitz(&self) -> Option<f64> {
+        None
+    }
+
     /// The analytic volume enclosed by the level set `iso` within the default domain, where known.
     fn analytic_volume(&self, _iso: f32) -> Option<f64> {
         None

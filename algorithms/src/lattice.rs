@@ -13,6 +13,10 @@ use glam::Vec3;
 /// At most this many samples in one lattice, so vertex indices (up to three per sample) fit `u32`.
 pub const MAX_SAMPLES: usize = 1 << 30;
 
+/// At most this many samples in a grid sampled sparsely ([`Grid::sparse_covering`]): 2⁴⁰, about
+/// 10240³; its mesh, not its samples, must fit in memory.
+pub const MAX_SPARSE_SAMPLES: usize = 1 << 40;
+
 /// A cubic grid with the same spacing on every axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Grid {
@@ -78,6 +82,23 @@ impl Grid {
     /// The grid with `resolution` samples along the domain's longest side, the same spacing on the
     /// other sides (rounded up so the domain is covered), centred on the domain.
     pub fn covering(domain: &Aabb, resolution: usize) -> Result<Grid, LatticeError> {
+        Self::covering_within(domain, resolution, MAX_SAMPLES as u128)
+    }
+
+    /// [`Grid::covering`] for a grid whose samples are never all held at once (sparse
+    /// extraction samples blocks near the surface only: [`crate::chunks::extract_sparse`]): up
+    /// to [`MAX_SPARSE_SAMPLES`] samples rather than [`MAX_SAMPLES`].
+    pub fn sparse_covering(domain: &Aabb, resolution: usize) -> Result<Grid, LatticeError> {
+        Self::covering_within(domain, resolution, MAX_SPARSE_SAMPLES as u128)
+    }
+
+    /// [`Grid::with_dims`] for a grid whose samples are never all held at once (see
+    /// [`Grid::sparse_covering`]).
+    pub fn sparse_with_dims(domain: &Aabb, dims: [usize; 3]) -> Result<Grid, LatticeError> {
+        Self::with_dims_within(domain, dims, MAX_SPARSE_SAMPLES as u128)
+    }
+
+    fn covering_within(domain: &Aabb, resolution: usize, max: u128) -> Result<Grid, LatticeError> {
         if resolution < 2 {
             return Err(LatticeError::ResolutionTooSmall { resolution });
         }
@@ -88,24 +109,28 @@ impl Grid {
             let cells = (extent[a] / spacing - 1e-3).ceil().max(1.0);
             cells as usize + 1
         });
-        Self::centred(domain, spacing, dims)
+        Self::centred(domain, spacing, dims, max)
     }
 
     /// The grid with exactly `dims` samples, spacing chosen so the domain fits, centred on it.
     pub fn with_dims(domain: &Aabb, dims: [usize; 3]) -> Result<Grid, LatticeError> {
+        Self::with_dims_within(domain, dims, MAX_SAMPLES as u128)
+    }
+
+    fn with_dims_within(domain: &Aabb, dims: [usize; 3], max: u128) -> Result<Grid, LatticeError> {
         if let Some(&resolution) = dims.iter().find(|&&d| d < 2) {
             return Err(LatticeError::ResolutionTooSmall { resolution });
         }
         check_domain(domain)?;
         let extent = domain.extent();
         let spacing = (0..3).map(|a| extent[a] / (dims[a] - 1) as f32).fold(0.0, f32::max);
-        Self::centred(domain, spacing, dims)
+        Self::centred(domain, spacing, dims, max)
     }
 
-    fn centred(domain: &Aabb, spacing: f32, dims: [usize; 3]) -> Result<Grid, LatticeError> {
+    fn centred(domain: &Aabb, spacing: f32, dims: [usize; 3], max: u128) -> Result<Grid, LatticeError> {
         let samples = dims.iter().map(|&d| d as u128).product::<u128>();
-        if samples > MAX_SAMPLES as u128 {
-            return Err(LatticeError::TooManySamples { dims, samples, max: MAX_SAMPLES });
+        if samples > max {
+            return Err(LatticeError::TooManySamples { dims, samples, max: max as usize });
         }
         let size = Vec3::new(dims[0] as f32 - 1.0, dims[1] as f32 - 1.0, dims[2] as f32 - 1.0) * spacing;
         Ok(Grid { origin: domain.centre() - size * 0.5, spacing, dims })

@@ -10,7 +10,7 @@ use isolab_algorithms::{extractors, fields, post};
 use isolab_io as io;
 use isolab_io::volume::{Inside, VolumeOptions};
 use isolab_metrics::MeshMetrics;
-use isolab_pipeline::{run, write_json, LatticeKind, Measure, OutputSpace, RunConfig, RunError, VolumeGrid};
+use isolab_pipeline::{run, write_json, LatticeKind, Measure, OutputSpace, RunConfig, RunError, Sparse, VolumeGrid};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -96,6 +96,19 @@ enum Command {
         /// volume too large for memory streams without it when its output is a .ply.
         #[arg(long)]
         stream: bool,
+        /// Sample only near the surface, or refuse saying why not. Without --sparse or --dense, a
+        /// built-in or mesh field is meshed sparsely wherever its Lipschitz bound certifies it and
+        /// the mesh is the dense one (cubic lattice, an algorithm that meshes in blocks, no
+        /// --post, --materials or --samples-out): `-f asteroid -r 2048` fits in memory.
+        #[arg(long, conflicts_with = "dense")]
+        sparse: bool,
+        /// Sample every point of the grid.
+        #[arg(long)]
+        dense: bool,
+        /// A Lipschitz bound of the field (|f(p) - f(q)| <= L |p - q|) to prune with, for a field
+        /// without one of its own or to replace it; a bound too small loses surface.
+        #[arg(long)]
+        lipschitz: Option<f64>,
         /// Give every vertex the field's material (the inside sample of its lattice edge): counts
         /// per material in the metrics JSON, vertex colours in the written mesh.
         #[arg(long)]
@@ -324,6 +337,9 @@ fn main() -> ExitCode {
             perturbations,
             chunk,
             stream,
+            sparse,
+            dense,
+            lipschitz,
             materials,
             set,
             output,
@@ -365,6 +381,13 @@ fn main() -> ExitCode {
                     (false, Some(_)) => Measure::Metrics,
                     (false, None) => Measure::Counts,
                 },
+                // --samples-out needs every sample.
+                sparse: match (sparse, dense || samples_out.is_some()) {
+                    (true, _) => Sparse::Always,
+                    (false, true) => Sparse::Never,
+                    (false, false) => Sparse::Auto,
+                },
+                lipschitz,
             };
             extract(&config, stream, output, metrics, samples_out).map_err(|e| (e.exit_code(), e.to_string()))
         }
@@ -481,6 +504,10 @@ fn extract(
             return Err(io::IoError::UnknownFormat { path: path.clone() }.into());
         }
     }
+    if config.sparse == Sparse::Always && samples_out.is_some() {
+        let reason = "--samples-out needs every sample (drop --sparse)".into();
+        return Err(RunError::Sparse { field: config.field.clone(), reason });
+    }
     if stream {
         let Some(path) = &output else {
             return Err(RunError::Stream { path: config.field.clone(), reason: "a streamed mesh needs -o NAME.ply".into() });
@@ -526,8 +553,8 @@ fn extract(
             io::write_vtk_tets(&io::tetrahedra_path(path), &outcome.extraction.volume, outcome.space_tag)?;
         }
     }
-    if let Some(path) = &samples_out {
-        io::write_samples(path, &outcome.samples, outcome.samples_to_world.as_ref())?;
+    if let (Some(path), Some(samples)) = (&samples_out, &outcome.samples) {
+        io::write_samples(path, samples, outcome.samples_to_world.as_ref())?;
     }
     match &metrics {
         Some(path) => write_json(path, &outcome.report)?,

@@ -161,7 +161,10 @@ fn tetrahedral_options_are_checked() {
 fn impossible_resolutions_are_refused_before_allocating() {
     let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "1"]);
     assert_clean_failure(&o, 1, &["resolution 1", "at least 2"]);
-    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "5000"]);
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "5000", "--dense"]);
+    assert_clean_failure(&o, 1, &["samples"]);
+    // Sampled near its surface, a grid may be larger, but not without bound.
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "20000"]);
     assert_clean_failure(&o, 1, &["samples"]);
     let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "--dims", "10,1,10"]);
     assert_clean_failure(&o, 1, &["at least 2"]);
@@ -462,4 +465,94 @@ fn re_executing_with_huge_pages_keeps_the_arguments_the_name_and_the_mesh() {
         assert_eq!(o.status.code(), Some(2));
         assert!(stderr(&o).contains("Usage: isolab-under-test"), "the name it was called by: {}", stderr(&o));
     }
+}
+
+#[test]
+fn sparse_runs_write_the_dense_runs_mesh_from_fewer_evaluations() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
+    let cases =
+        [("torus", "marching-cubes"), ("sphere", "surface-nets"), ("gyroid", "dual-contouring"), ("asteroid", "marching-cubes")];
+    for (field, algorithm) in cases {
+        let mut meshes = Vec::new();
+        for mode in ["--sparse", "--dense"] {
+            let (mesh, metrics) = (path(&format!("{field}{mode}.ply")), path(&format!("{field}{mode}.json")));
+            let o =
+                isolab(&["extract", "-a", algorithm, "-f", field, "-r", "97", "--chunk", "8", mode, "-o", &mesh, "-m", &metrics]);
+            assert!(o.status.success(), "{field} {mode}: {}", stderr(&o));
+            let report = json(Path::new(&metrics));
+            assert!(report["triangles"].as_u64().unwrap() > 1000, "{field} {mode}");
+            if mode == "--sparse" {
+                let s = &report["sparse"];
+                assert_eq!(s["dense_points"].as_u64(), Some(97 * 97 * 97), "{field}");
+                // At 97³ only a distance with cell-local blocks prunes enough to save evaluations.
+                if field == "torus" {
+                    assert!(s["evaluations"].as_u64().unwrap() * 2 < s["dense_points"].as_u64().unwrap(), "{field}: {s}");
+                }
+                assert_eq!(s["field_bound"], serde_json::Value::Bool(true));
+            } else {
+                assert!(report.get("sparse").is_none(), "{field}: a dense run says sparse");
+            }
+            meshes.push(binary_ply(Path::new(&mesh)));
+        }
+        let [(sparse_vertices, sparse_faces), (dense_vertices, dense_faces)] = [&meshes[0], &meshes[1]];
+        assert!(sparse_faces == dense_faces, "{field}: the triangles differ");
+        assert_eq!(sparse_vertices.len(), dense_vertices.len(), "{field}");
+        for (s, d) in sparse_vertices.iter().zip(dense_vertices) {
+            assert_eq!(s[..3], d[..3], "{field}: positions differ");
+            // Normals: the samples' gradient where the dense run may take the field's.
+            let dot: f32 = (0..3).map(|a| s[3 + a] * d[3 + a]).sum();
+            assert!(dot > 0.98, "{field}: normals {s:?} and {d:?}");
+        }
+    }
+}
+
+/// The vertices (position and normal) and the face bytes of a binary PLY isolab wrote.
+fn binary_ply(path: &Path) -> (Vec<[f32; 6]>, Vec<u8>) {
+    let bytes = std::fs::read(path).unwrap();
+    let end = bytes.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    let header = String::from_utf8_lossy(&bytes[..end]);
+    let count: usize = header.lines().find_map(|l| l.strip_prefix("element vertex ")).unwrap().trim().parse().unwrap();
+    assert!(header.contains("property float nx"), "{header}");
+    let vertex = |k: usize| {
+        std::array::from_fn(|c| {
+            let at = end + 24 * k + 4 * c;
+            f32::from_le_bytes(bytes[at..at + 4].try_into().unwrap())
+        })
+    };
+    ((0..count).map(vertex).collect(), bytes[end + 24 * count..].to_vec())
+}
+
+#[test]
+fn large_grids_of_certified_fields_are_sampled_near_the_surface_unasked() {
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "600"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(report["sparse"]["evaluations"].as_u64().unwrap() * 15 < 600 * 600 * 600, "{}", report["sparse"]);
+    // Small grids stay dense: as fast or faster there.
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "-r", "64"]);
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(report.get("sparse").is_none());
+}
+
+#[test]
+fn sparse_runs_that_cannot_be_certified_or_lose_the_samples_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let samples = dir.path().join("s.raw").to_string_lossy().into_owned();
+    let base = ["extract", "-f", "sphere", "-r", "33", "--sparse"];
+    let with = |extra: &[&str]| isolab(&[&base[..], extra].concat());
+    assert_clean_failure(&with(&["-a", "marching-cubes", "--post", "edge-collapse"]), 1, &["sparsely", "post-processes"]);
+    assert_clean_failure(&with(&["-a", "marching-cubes", "--materials"]), 1, &["sparsely", "--materials"]);
+    assert_clean_failure(&with(&["-a", "marching-cubes", "--lattice", "bcc"]), 1, &["sparsely", "BCC"]);
+    assert_clean_failure(&with(&["-a", "bcc-sculpt"]), 1, &["sparsely", "bcc-sculpt", "blocks"]);
+    assert_clean_failure(&with(&["-a", "marching-cubes", "--samples-out", &samples]), 1, &["sparsely", "--samples-out"]);
+    assert!(!Path::new(&samples).exists());
+    let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "--sparse", "--dense"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    // A bound given replaces the field's own, and is reported as given.
+    let o = with(&["-a", "marching-cubes", "--lipschitz", "2.5"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(report["sparse"]["lipschitz"].as_f64(), Some(2.5));
+    assert_eq!(report["sparse"]["field_bound"], serde_json::Value::Bool(false));
 }

@@ -69,6 +69,14 @@ pub enum RunError {
         /// Why, and what to do instead.
         reason: String,
     },
+    /// A run asked to mesh sparsely cannot, or its sparse extraction failed.
+    #[error("cannot mesh '{field}' sparsely: {reason}")]
+    Sparse {
+        /// The field or file.
+        field: String,
+        /// Why, and what to do instead.
+        reason: String,
+    },
 }
 
 impl RunError {

@@ -32,13 +32,16 @@ use std::time::Instant;
 
 mod memory;
 mod report;
+pub mod sparse;
 
 use memory::check_volume_size;
 pub use memory::{available_memory, check_memory, check_memory_against, volume_file_need};
+use report::{empty_mesh_warning, no_inside_warning};
 
 pub use crate::error::RunError;
 
 pub use report::{ChunkReport, InputReport, MeshCounts, RunReport, TimesMs};
+pub use sparse::{Sparse, SparseReport};
 
 /// Which lattice to sample on.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -149,6 +152,12 @@ pub struct RunConfig {
     pub materials: bool,
     /// Which measures of the mesh to compute (`RunConfig::new`: all of them).
     pub measure: Measure,
+    /// Whether to sample only near the surface. `RunConfig::new` says [`Sparse::Never`], so
+    /// that a run measures the extractor on the dense grid as the experiments compare them; the
+    /// CLI and the Python package say [`Sparse::Auto`].
+    pub sparse: Sparse,
+    /// A Lipschitz bound of the field to prune with, replacing the field's own.
+    pub lipschitz: Option<f64>,
 }
 
 impl RunConfig {
@@ -171,6 +180,8 @@ impl RunConfig {
             chunk: None,
             materials: false,
             measure: Measure::All,
+            sparse: Sparse::Never,
+            lipschitz: None,
         }
     }
 }
@@ -199,8 +210,9 @@ pub fn lattice_for(field: &dyn Field, config: &RunConfig) -> Result<Lattice, Run
 /// The outcome of a run: the meshes and their report.
 pub struct RunOutcome {
     /// The samples it extracted from (for a volume on its own grid: in voxel index coordinates
-    /// unless the voxels are world-aligned cubes).
-    pub samples: Samples<'static>,
+    /// unless the voxels are world-aligned cubes); `None` for a sparse run, which never holds
+    /// them all.
+    pub samples: Option<Samples<'static>>,
     /// What the extractor produced, in world coordinates.
     pub extraction: Extraction,
     /// Each surface vertex's material (with `materials`), else empty.
@@ -323,28 +335,51 @@ pub fn run_input(config: &RunConfig, input: Input) -> Result<RunOutcome, RunErro
     };
     let internal_iso = if inside == Inside::Above { -iso } else { iso };
     let native = input.volume.as_ref().filter(|_| config.volume_grid == VolumeGrid::Native);
-    let Sampled { samples, to_world, mut notes } = match native {
-        Some(file) => native_samples(file, config, inside, iso)?,
-        None => {
-            let lattice = lattice_for(field.as_ref(), config)?;
-            check_memory(&lattice)?;
-            Sampled { samples: Samples::sample(field.clone(), lattice, internal_iso)?, to_world: None, notes: Vec::new() }
-        }
-    };
     let mut warnings = input.warnings.clone();
-    warnings.extend(no_inside_warning(&samples, field.name(), iso, inside));
     // Extractors that can estimate their output refuse one the memory available cannot hold.
-    let mut extraction = Extraction { memory_limit: available_memory(), ..Extraction::default() };
-    let chunks = match config.chunk {
-        Some(n) => Some(ChunkReport::from((n, extract_chunked(extractor.as_ref(), &samples, n, &mut extraction)?))),
-        None => {
-            extractor.extract(&samples, &mut extraction)?;
-            None
+    let memory_limit = available_memory();
+    // The grid a field (not a volume's own voxels) is sampled on; a sparse run samples it too.
+    let field_grid = match native {
+        Some(_) => None,
+        None => Some(sparse::grid_for(field.as_ref(), config)?),
+    };
+    let bound = sparse::sparse_bound(config, &input, field.as_ref(), extractor.as_ref(), field_grid.as_ref())?;
+    let (samples, grid, lattice_kind, to_world, mut notes, mut extraction, chunks, sparse_report) = match (bound, field_grid) {
+        (Some(bound), Some(grid)) => {
+            let (extraction, report) =
+                sparse::extract_sparse_run(extractor.as_ref(), &field, &grid, internal_iso, bound, config.chunk, memory_limit)?;
+            warnings.extend(sparse::empty_warning(&extraction, field.as_ref(), &grid, internal_iso, iso, inside));
+            (None, grid, "cubic", None, Vec::new(), extraction, None, Some(report))
+        }
+        _ => {
+            let Sampled { samples, to_world, notes } = match native {
+                Some(file) => native_samples(file, config, inside, iso)?,
+                None => {
+                    let lattice = lattice_for(field.as_ref(), config)?;
+                    check_memory(&lattice)?;
+                    let samples = Samples::sample(field.clone(), lattice, internal_iso)?;
+                    Sampled { samples, to_world: None, notes: Vec::new() }
+                }
+            };
+            warnings.extend(no_inside_warning(&samples, field.name(), iso, inside));
+            let mut extraction = Extraction { memory_limit, ..Extraction::default() };
+            let chunks = match config.chunk {
+                Some(n) => {
+                    let stats = extract_chunked(extractor.as_ref(), &samples, n, &mut extraction)?;
+                    Some(ChunkReport::from((n, stats)))
+                }
+                None => {
+                    extractor.extract(&samples, &mut extraction)?;
+                    None
+                }
+            };
+            for post in &posts {
+                post.apply(&samples, &mut extraction)?;
+            }
+            let (grid, kind) = (*samples.grid(), samples.lattice().kind());
+            (Some(samples), grid, kind, to_world, notes, extraction, chunks, None)
         }
     };
-    for post in &posts {
-        post.apply(&samples, &mut extraction)?;
-    }
     let world_start = Instant::now();
     if let Some(a) = &to_world {
         extraction.surface.transform(a);
@@ -352,8 +387,7 @@ pub fn run_input(config: &RunConfig, input: Input) -> Result<RunOutcome, RunErro
     }
     let to_world_time = world_start.elapsed();
     let mut vertex_materials = Vec::new();
-    if config.materials {
-        let grid = *samples.grid();
+    if let Some(samples) = samples.as_ref().filter(|_| config.materials) {
         let sample_materials = isolab_algorithms::materials::sample(field.as_ref(), &grid);
         let corners = &samples.values()[..grid.len()];
         let positions = &extraction.surface.positions;
@@ -428,9 +462,9 @@ pub fn run_input(config: &RunConfig, input: Input) -> Result<RunOutcome, RunErro
     let report = RunReport {
         algorithm: config.algorithm.clone(),
         field: field.name().to_owned(),
-        resolution: samples.grid().dims.iter().copied().max().unwrap_or(0),
-        dims: samples.grid().dims,
-        lattice: samples.lattice().kind(),
+        resolution: grid.dims.iter().copied().max().unwrap_or(0),
+        dims: grid.dims,
+        lattice: lattice_kind,
         iso,
         inside,
         input: input_report,
@@ -455,6 +489,7 @@ pub fn run_input(config: &RunConfig, input: Input) -> Result<RunOutcome, RunErro
         analytic_area: field.analytic_area(internal_iso),
         volume_mesh,
         chunks,
+        sparse: sparse_report,
         materials: material_counts,
         warnings,
         counts,
@@ -515,39 +550,6 @@ fn choose_iso(input: &Input, given: Option<f32>) -> (f32, Option<&'static str>) 
             },
         },
         None => (0.0, None),
-    }
-}
-
-/// A warning when no sample is inside, or every sample is: the mesh is then empty, and the user
-/// should hear why rather than get a silent empty file.
-fn no_inside_warning(samples: &Samples, name: &str, iso: f32, inside: Inside) -> Option<String> {
-    let internal = samples.iso();
-    // The lattice's corner grid (a BCC lattice's centres follow its corners' sign).
-    let view = samples.view();
-    let inside_count = view.count_below(internal);
-    let count = view.dims().iter().product::<usize>();
-    empty_mesh_warning(name, iso, inside, inside_count == 0, inside_count == count)
-}
-
-/// The warning of an empty mesh: no sample inside (`none`), or every one (`all`); shared with
-/// the streamed run, which knows it from its skipped blocks.
-pub(crate) fn empty_mesh_warning(name: &str, iso: f32, inside: Inside, none: bool, all: bool) -> Option<String> {
-    let side = match inside {
-        Inside::Above => "above",
-        Inside::Below => "below",
-    };
-    if none {
-        Some(format!(
-            "no sample of '{name}' is inside at iso-value {iso} (inside is {side} it, and no value is): the mesh is empty; \
-             try another --iso or --inside"
-        ))
-    } else if all {
-        Some(format!(
-            "every sample of '{name}' is inside at iso-value {iso} (inside is {side} it): the surface is outside the sampled \
-             domain and the mesh is empty; try another --iso or --inside"
-        ))
-    } else {
-        None
     }
 }
 

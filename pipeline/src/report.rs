@@ -4,6 +4,7 @@
 use super::{OutputSpace, VolumeGrid};
 use crate::input::InputKind;
 use isolab_algorithms::chunks::ChunkStats;
+use isolab_algorithms::Samples;
 use isolab_io::volume::Inside;
 use isolab_metrics::{MeshMetrics, VolumeMetrics};
 use serde::Serialize;
@@ -77,6 +78,9 @@ pub struct RunReport {
     /// Chunked extraction (`--chunk N`): chunks per axis, meshed, skipped, welded vertices.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub chunks: Option<ChunkReport>,
+    /// A sparse run's evaluations ([`crate::Sparse`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sparse: Option<crate::SparseReport>,
     /// Vertices per material (`--materials`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub materials: Option<std::collections::BTreeMap<String, usize>>,
@@ -154,5 +158,38 @@ pub struct ChunkReport {
 impl From<(usize, ChunkStats)> for ChunkReport {
     fn from((size, s): (usize, ChunkStats)) -> Self {
         Self { size, per_axis: s.chunks, meshed: s.meshed, empty: s.empty, full: s.full, welded: s.welded, apron: s.apron }
+    }
+}
+
+/// A warning when no sample is inside, or every sample is: the mesh is then empty, and the user
+/// should hear why rather than get a silent empty file.
+pub(crate) fn no_inside_warning(samples: &Samples, name: &str, iso: f32, inside: Inside) -> Option<String> {
+    let internal = samples.iso();
+    // The lattice's corner grid (a BCC lattice's centres follow its corners' sign).
+    let view = samples.view();
+    let inside_count = view.count_below(internal);
+    let count = view.dims().iter().product::<usize>();
+    empty_mesh_warning(name, iso, inside, inside_count == 0, inside_count == count)
+}
+
+/// The warning of an empty mesh: no sample inside (`none`), or every one (`all`); shared with
+/// the streamed run, which knows it from its skipped blocks.
+pub(crate) fn empty_mesh_warning(name: &str, iso: f32, inside: Inside, none: bool, all: bool) -> Option<String> {
+    let side = match inside {
+        Inside::Above => "above",
+        Inside::Below => "below",
+    };
+    if none {
+        Some(format!(
+            "no sample of '{name}' is inside at iso-value {iso} (inside is {side} it, and no value is): the mesh is empty; \
+             try another --iso or --inside"
+        ))
+    } else if all {
+        Some(format!(
+            "every sample of '{name}' is inside at iso-value {iso} (inside is {side} it): the surface is outside the sampled \
+             domain and the mesh is empty; try another --iso or --inside"
+        ))
+    } else {
+        None
     }
 }

@@ -281,6 +281,9 @@ fn extract<'py>(
         })?
     } else {
         config.field = data.extract::<String>().or_else(|_| data.str().map(|s| s.to_string()))?;
+        // A built-in or mesh field above 512³ samples is sampled near its surface where its
+        // Lipschitz bound certifies the same mesh (`isolab_pipeline::sparse`), as on the CLI.
+        config.sparse = isolab_pipeline::Sparse::Auto;
         py.allow_threads(|| pools::install(pool.as_deref(), || run(&config).map_err(run_error)))?
     };
     let d = PyDict::new(py);

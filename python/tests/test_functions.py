@@ -186,3 +186,15 @@ def test_bad_settings_are_value_errors(kwargs, message):
 def test_an_extractor_that_cannot_mesh_in_blocks_is_refused_by_name():
     with pytest.raises(ValueError, match="bcc-sculpt"):
         isolab.extract(sphere, 0.0, "bcc-sculpt", bounds=BOUNDS, resolution=17, lipschitz=1.0)
+
+
+def test_a_named_field_on_a_large_grid_is_sampled_near_its_surface():
+    """A built-in field with a Lipschitz bound, on a grid over 512³, is meshed sparsely unasked
+    (as on the CLI); a small grid stays dense."""
+    mesh = isolab.extract("sphere", 0.0, "marching-cubes", resolution=600)
+    sparse = mesh.stats["sparse"]
+    assert sparse["evaluations"] * 15 < sparse["dense_points"] == 600**3
+    assert sparse["lipschitz"] == 1.0 and sparse["field_bound"] is True
+    assert len(mesh.faces) > 1_000_000
+    small = isolab.extract("sphere", 0.0, "marching-cubes", resolution=64)
+    assert "sparse" not in small.stats

@@ -513,3 +513,29 @@ fn the_audit_finds_typed_numbers_and_spares_references_and_placeholders() {
     assert_eq!(texts, ["a 5", "raw \"9\" "]);
     assert_eq!(lits[1].line, 3);
 }
+
+/// The `functions` page's data (issue 60): every certified sparse mesh it compared is the dense
+/// mesh bit for bit, and at 1024³ the distances needed at least 30x fewer evaluations than the
+/// grid has points (evaluations are counted, not timed: the same on any machine).
+#[test]
+fn sparse_meshes_in_the_report_are_the_dense_ones_from_far_fewer_evaluations() {
+    let path = report_dir().join("data/functions.json");
+    let data: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).expect("functions.json")).unwrap();
+    let equality = data["equality"].as_array().expect("equality rows");
+    assert!(equality.len() >= 20, "{} comparisons", equality.len());
+    for e in equality {
+        for key in ["same_vertices", "same_triangles", "same_normals"] {
+            assert_eq!(e[key], serde_json::Value::Bool(true), "{key}: {e}");
+        }
+    }
+    for field in ["sphere", "torus"] {
+        let row = data["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["field"] == field && r["mode"] == "sparse" && r["n"] == 1024)
+            .unwrap_or_else(|| panic!("no sparse {field} at 1024"));
+        let ratio = row["dense_points"].as_f64().unwrap() / row["evaluations"].as_f64().unwrap();
+        assert!(ratio >= 30.0, "{field} at 1024³: {ratio:.1}x fewer evaluations");
+    }
+}

@@ -5,7 +5,7 @@
 //! batch, and the evaluator's own error comes back unchanged.
 
 use isolab_algorithms::chunks::{
-    extract_sparse, BatchEval, EvalError, FieldEval, Pruning, SparseError, SparseGrid, SparseOptions,
+    extract_sparse, BatchEval, EvalError, FieldEval, GridFieldEval, Pruning, SparseError, SparseGrid, SparseOptions,
 };
 use isolab_algorithms::extractors;
 use isolab_algorithms::fields::{builtin, FieldParams};
@@ -238,5 +238,45 @@ fn certified_pruning_gives_the_dense_mesh_at_257_samples_a_side() {
         assert!(!meshes[0].surface.triangles.is_empty(), "{}", e.name());
         assert_eq!(meshes[1].surface.positions, meshes[0].surface.positions, "{}", e.name());
         assert_eq!(meshes[1].surface.triangles, meshes[0].surface.triangles, "{}", e.name());
+    }
+}
+
+/// Every built-in field and a shipped model's distance field, each under its own Lipschitz bound.
+fn certified_fields() -> Vec<Arc<dyn Field>> {
+    let mut fields: Vec<Arc<dyn Field>> = isolab_algorithms::fields::registry().iter().map(|i| field(i.name)).collect();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let spot = isolab_io::read_mesh(&root.join("models/spot.obj")).expect("spot.obj");
+    let mesh = isolab_algorithms::fields::MeshField::new("spot", &spot.positions, &spot.triangles).expect("mesh field");
+    assert!(mesh.is_closed(), "spot is closed, so its signed distance is 1-Lipschitz");
+    fields.push(Arc::new(mesh));
+    fields
+}
+
+#[test]
+fn every_certified_field_gives_the_dense_chunked_mesh_for_every_extractor_that_meshes_in_blocks() {
+    let chunk = 16;
+    for f in certified_fields() {
+        let l = f.lipschitz().unwrap_or_else(|| panic!("{} has no bound", f.name()));
+        let grid = Grid::with_dims(&f.domain(), [6 * chunk + 1; 3]).expect("grid");
+        let dense = Samples::sample(f.clone(), Lattice::Cubic(grid), 0.0).expect("samples");
+        for e in chunking_extractors() {
+            let what = format!("{} on {} (L = {l:.2})", e.name(), f.name());
+            let mut whole = Extraction::default();
+            isolab_algorithms::chunks::extract_chunked(e.as_ref(), &dense, chunk, &mut whole).expect(&what);
+            let mut sparse = Extraction::default();
+            let options = SparseOptions { chunk, batch: 1 << 16, pruning: Pruning::Lipschitz(l) };
+            let mut eval = GridFieldEval { field: f.clone(), grid };
+            let stats = extract_sparse(e.as_ref(), &SparseGrid::of(&grid), 0.0, &options, &mut eval, &mut sparse).expect(&what);
+            assert!(!whole.surface.triangles.is_empty(), "{what}: no surface");
+            assert!(stats.sampled_blocks <= stats.blocks, "{what}");
+            assert!(sparse.surface.triangles == whole.surface.triangles, "{what}: triangles differ");
+            assert!(sparse.surface.positions == whole.surface.positions, "{what}: vertices differ");
+            let differ = sparse.surface.normals.iter().zip(&whole.surface.normals).filter(|(a, b)| a != b).count();
+            assert!(
+                sparse.surface.normals.len() == whole.surface.normals.len() && differ == 0,
+                "{what}: {differ} of {} normals differ",
+                whole.surface.normals.len()
+            );
+        }
     }
 }

@@ -11,10 +11,12 @@
 
 use super::{apron_of, check_chunk_and_size, chunk_ids, weld, Block, ChunkSlot, ChunkState, ChunkStats, WeldPiece};
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
+use crate::field::Field;
 use crate::lattice::Grid;
 use crate::mesh::TriMesh;
 use crate::samples::{AnyView, GridView};
 use glam::Vec3;
+use std::sync::Arc;
 
 /// The samples one block reads, in the volume's sample indices (x fastest).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -160,6 +162,21 @@ pub fn mesh_block_view(
     values: AnyView<'_>,
     iso: f32,
 ) -> Result<Fragment, ExtractError> {
+    mesh_block_view_of(extractor, plan, id, values, iso, None)
+}
+
+/// [`mesh_block_view`] of samples of a known field on the dense grid `world`: the extractor may
+/// read the field (marching cubes its analytic gradient for normals, dual contouring its
+/// gradient for Hermite data) as it does when the whole grid is meshed in chunks, so the
+/// block's mesh is [`extract_chunked`](super::extract_chunked)'s.
+pub fn mesh_block_view_of(
+    extractor: &dyn Extractor,
+    plan: &BlockPlan,
+    id: [usize; 3],
+    values: AnyView<'_>,
+    iso: f32,
+    field: Option<(&Arc<dyn Field>, &Grid)>,
+) -> Result<Fragment, ExtractError> {
     let algorithm = extractor.name();
     let bad = |reason: String| ExtractError::BadInput { algorithm, reason };
     let bounds = block_in(plan, id, algorithm)?;
@@ -177,7 +194,7 @@ pub fn mesh_block_view(
         return Err(bad(format!("sample {at:?} is {v}: every sample must be finite")));
     }
     let grid = Grid { origin: Vec3::ZERO, spacing: 1.0, dims: plan.dims };
-    let mut slot = ChunkSlot::with_view(id, plan.inner(id), values, iso)
+    let mut slot = ChunkSlot::with_view(id, plan.inner(id), values, iso, field)
         .ok_or_else(|| bad(format!("block {id:?}: its samples do not fit its block")))?;
     slot.mesh_loaded(extractor, plan.chunking, &grid, range.min, range.max)?;
     let stats = &slot.mesh.stats;

@@ -259,15 +259,25 @@ impl ChunkSlot<'static> {
 }
 
 impl<'a> ChunkSlot<'a> {
-    /// A slot for chunk `id` reading its block's samples where they lie (index coordinates, no
-    /// field); `None` when the view is not the block's size.
-    fn with_view(id: [usize; 3], block: Block, values: crate::samples::AnyView<'a>, iso: f32) -> Option<Self> {
+    /// A slot for chunk `id` reading its block's samples where they lie (index coordinates),
+    /// with `field` (the world's field and grid) when there is one; `None` when the view is not
+    /// the block's size.
+    fn with_view(
+        id: [usize; 3],
+        block: Block,
+        values: crate::samples::AnyView<'a>,
+        iso: f32,
+        field: Option<(&Arc<dyn Field>, &Grid)>,
+    ) -> Option<Self> {
         let local = Grid {
             origin: Vec3::new(block.lo[0] as f32, block.lo[1] as f32, block.lo[2] as f32),
             spacing: 1.0,
             dims: block.dims,
         };
-        let samples = Samples::borrowed(local, values, iso).ok()?;
+        let mut samples = Samples::borrowed(local, values, iso).ok()?;
+        if let Some((f, world)) = field {
+            samples = samples.with_field(Arc::new(IndexSpaceField::new(f.clone(), world)));
+        }
         Some(Self {
             id,
             block,

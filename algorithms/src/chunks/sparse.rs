@@ -20,18 +20,28 @@
 //!
 //! [`Pruning::Dense`] samples every block, for comparison.
 
-use super::{mesh_block_view, BlockBounds, BlockPlan, ChunkStats, Fragment, Welder};
+use super::{mesh_block_view_of, BlockBounds, BlockPlan, ChunkStats, Fragment, Welder};
 use crate::extract::{ExtractError, Extraction, Extractor};
 use crate::field::Field;
+use crate::lattice::Grid;
 use crate::samples::GridView;
 use glam::Vec3;
 use rayon::prelude::*;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// A field evaluated at batches of world points: `out` gets one value per point.
 pub trait BatchEval {
     /// Evaluates `points`, writing `out` (cleared first). An error is passed back unchanged.
     fn eval(&mut self, points: &[[f64; 3]], out: &mut Vec<f64>) -> Result<(), EvalError>;
+
+    /// The field evaluated and the dense grid whose samples the points are, when the evaluator
+    /// is a field on a grid ([`GridFieldEval`]): extractors then read the field as they do when
+    /// meshing the dense grid (gradients for normals and Hermite data), and the sparse mesh is
+    /// the dense one. `None` (the default): they read the samples only.
+    fn field_on_grid(&self) -> Option<(&Arc<dyn Field>, &Grid)> {
+        None
+    }
 }
 
 /// What a [`BatchEval`] may fail with, carried back to its caller unchanged.
@@ -47,6 +57,43 @@ impl BatchEval for FieldEval<'_> {
         points
             .par_iter()
             .map(|p| f64::from(self.0.value(Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32))))
+            .collect_into_vec(out);
+        Ok(())
+    }
+}
+
+/// A field evaluated where a dense [`Grid`]'s samples lie, bitwise: a point at a sample index
+/// (within 10⁻⁶ of one) is evaluated at [`Grid::position`] of it, in `f32` as dense sampling
+/// computes it, so sparse and dense meshes of the grid agree to the bit; any other point (an
+/// octree centre) at the point rounded to `f32`. In parallel.
+pub struct GridFieldEval {
+    /// The field.
+    pub field: Arc<dyn Field>,
+    /// The dense grid the samples belong to.
+    pub grid: Grid,
+}
+
+impl BatchEval for GridFieldEval {
+    fn field_on_grid(&self) -> Option<(&Arc<dyn Field>, &Grid)> {
+        Some((&self.field, &self.grid))
+    }
+
+    fn eval(&mut self, points: &[[f64; 3]], out: &mut Vec<f64>) -> Result<(), EvalError> {
+        out.clear();
+        let g = self.grid;
+        let (origin, h) = (g.origin.to_array().map(f64::from), f64::from(g.spacing));
+        points
+            .par_iter()
+            .map(|p| {
+                let t = [0, 1, 2].map(|a| (p[a] - origin[a]) / h);
+                let on_grid = t.iter().all(|&t| t >= -1e-6 && (t - t.round()).abs() < 1e-6);
+                let at = if on_grid {
+                    g.position(t[0].round() as usize, t[1].round() as usize, t[2].round() as usize)
+                } else {
+                    Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)
+                };
+                f64::from(self.field.value(at))
+            })
             .collect_into_vec(out);
         Ok(())
     }
@@ -79,6 +126,11 @@ impl SparseGrid {
         let spacing = longest / (resolution - 1) as f64;
         let dims = extent.map(|e| ((e / spacing).round() as usize).max(1) + 1);
         Ok(SparseGrid { origin: lo, spacing, dims })
+    }
+
+    /// The grid of a dense [`Grid`]'s samples (its `f32` origin and spacing, widened).
+    pub fn of(grid: &Grid) -> SparseGrid {
+        SparseGrid { origin: grid.origin.to_array().map(f64::from), spacing: f64::from(grid.spacing), dims: grid.dims }
     }
 
     /// The world position of sample `i`.
@@ -246,10 +298,13 @@ pub fn extract_sparse(
         Pruning::SignChange { margin } => sign_change_blocks(&plan, grid, iso, margin, &mut ev)?,
     };
     ev.stats.sampled_blocks = kept.len();
+    check_output_memory(extractor, &kept, plan.chunk, out.memory_limit)?;
     // Each group's fragments are welded as they come, in the plan's order; a pruned block would
     // be skipped as all outside or all inside, which adds nothing to the weld. With blocks
     // thicker than twice their apron no vertex is made two block layers apart, so the weld keeps
     // the keys of two layers only.
+    let field = ev.eval.field_on_grid().map(|(f, g)| (f.clone(), *g));
+    let field = field.as_ref().map(|(f, g)| (f, g));
     let mut welder = Welder::new(out);
     let mut weld_stats = ChunkStats::default();
     let retire = plan.chunk > 2 * plan.apron;
@@ -286,7 +341,7 @@ pub fn extract_sparse(
             .map(|(b, &off)| {
                 let view = GridView::contiguous(&samples[off..off + block_points(b)], b.dims)
                     .map_err(|e| ExtractError::BadInput { algorithm: extractor.name(), reason: e.to_string() })?;
-                mesh_block_view(extractor, &plan, b.id, view.into(), iso)
+                mesh_block_view_of(extractor, &plan, b.id, view.into(), iso, field)
             })
             .collect();
         for f in meshed {
@@ -299,11 +354,39 @@ pub fn extract_sparse(
         }
     }
     welder.finish(out);
-    out.finish_counts(0);
     to_world(grid, out);
+    // As extract_chunked: a field with an analytic gradient gives the normals.
+    super::field_normals(field.map(|(f, _)| f), out);
+    out.finish_counts(0);
     let eval_time = ev.stats.eval_time;
     ev.stats.other_time = start.elapsed().saturating_sub(eval_time);
     Ok(ev.stats)
+}
+
+/// Bytes of surface a kept block is taken to add: a smooth surface crosses about `chunk²` of
+/// its cells, each about one vertex (position and normal, 24 bytes) and two triangles (24),
+/// weld keys aside. On the sphere at 2048³ (911,492 blocks of 4 cells) this estimates 668 MiB;
+/// the CLI's run peaked at 660 MiB.
+const SURFACE_BYTES_PER_BLOCK_FACE_CELL: u64 = 48;
+
+/// Refuses, before any block is sampled, a mesh the memory allowed cannot hold.
+fn check_output_memory(
+    extractor: &dyn Extractor,
+    kept: &[[usize; 3]],
+    chunk: usize,
+    limit: Option<u64>,
+) -> Result<(), SparseError> {
+    let cells = kept.len() as u64 * (chunk * chunk) as u64;
+    let needed = cells * SURFACE_BYTES_PER_BLOCK_FACE_CELL;
+    match limit {
+        Some(limit) if needed > limit => Err(SparseError::Extract(ExtractError::OverMemory {
+            algorithm: extractor.name(),
+            needed,
+            limit,
+            vertices: cells as usize,
+        })),
+        _ => Ok(()),
+    }
 }
 
 /// Samples a block reads.
@@ -322,14 +405,23 @@ fn push_block_points(grid: &SparseGrid, b: &BlockBounds, points: &mut Vec<[f64; 
     }
 }
 
-/// Positions from sample indices to world units (`origin + index * spacing`, in `f64`).
+/// Positions from sample indices to world units: `origin + index * spacing`, in `f32` as dense
+/// chunked meshing computes it when the origin and spacing are `f32` values (a grid taken from a
+/// [`Grid`]: the same bits), in `f64` otherwise (bounds given in `f64`).
 fn to_world(grid: &SparseGrid, out: &mut Extraction) {
+    let origin = grid.origin.map(|o| o as f32);
+    let spacing = grid.spacing as f32;
+    let single = (0..3).all(|a| f64::from(origin[a]) == grid.origin[a]) && f64::from(spacing) == grid.spacing;
     for p in &mut out.surface.positions {
-        *p = Vec3::new(
-            (grid.origin[0] + f64::from(p.x) * grid.spacing) as f32,
-            (grid.origin[1] + f64::from(p.y) * grid.spacing) as f32,
-            (grid.origin[2] + f64::from(p.z) * grid.spacing) as f32,
-        );
+        *p = if single {
+            Vec3::from(origin) + *p * spacing
+        } else {
+            Vec3::new(
+                (grid.origin[0] + f64::from(p.x) * grid.spacing) as f32,
+                (grid.origin[1] + f64::from(p.y) * grid.spacing) as f32,
+                (grid.origin[2] + f64::from(p.z) * grid.spacing) as f32,
+            )
+        };
     }
 }
 
@@ -344,7 +436,7 @@ fn octant_samples(plan: &BlockPlan, o: &Octant) -> ([usize; 3], [usize; 3]) {
 /// Whether a value `d = f(c) - iso` proves the box of half diagonal `r` one-sided for a field
 /// of Lipschitz bound `l`: `|d| > l r`, with a margin for the rounding of samples to `f32`.
 fn proves_one_side(d: f64, l: f64, r: f64, iso: f32) -> bool {
-    let rounding = 1e-6 * (f64::from(iso).abs() + d.abs()) + f64::from(f32::MIN_POSITIVE);
+    let rounding = 1e-5 * (f64::from(iso).abs() + d.abs()) + f64::from(f32::MIN_POSITIVE);
     d.abs() > l * r * (1.0 + 1e-9) + rounding
 }
 

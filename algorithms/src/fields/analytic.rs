@@ -38,6 +38,9 @@ impl Field for Sphere {
     fn distance_to_surface(&self, p: Vec3, iso: f32) -> f32 {
         (self.value(p) - iso).abs()
     }
+    fn lipschitz(&self) -> Option<f64> {
+        Some(1.0)
+    }
     fn analytic_volume(&self, iso: f32) -> Option<f64> {
         let r = f64::from(self.radius + iso);
         Some(4.0 / 3.0 * PI * r * r * r)
@@ -86,6 +89,9 @@ impl Field for Torus {
     fn distance_to_surface(&self, p: Vec3, iso: f32) -> f32 {
         (self.value(p) - iso).abs()
     }
+    fn lipschitz(&self) -> Option<f64> {
+        Some(1.0)
+    }
     fn analytic_volume(&self, iso: f32) -> Option<f64> {
         let (rr, r) = (f64::from(self.major), f64::from(self.minor + iso));
         Some(2.0 * PI * PI * rr * r * r)
@@ -130,6 +136,11 @@ impl Field for Gyroid {
         let (sy, cy) = q.y.sin_cos();
         let (sz, cz) = q.z.sin_cos();
         Vec3::new(cx * cy - sz * sx, -sx * sy + cy * cz, -sy * sz + cz * cx) * k
+    }
+    /// `k √6`: each partial derivative is `k` times a sum like `cos(kx) cos(ky) - sin(kz) sin(kx)`,
+    /// at most `√(cos² kx + sin² kx) √(cos² ky + sin² kz) <= √2` by Cauchy-Schwarz.
+    fn lipschitz(&self) -> Option<f64> {
+        Some(f64::from(self.frequency).abs() * 6f64.sqrt())
     }
 }
 
@@ -185,6 +196,10 @@ impl Field for Csg {
     fn domain(&self) -> Aabb {
         Aabb::cube(0.5)
     }
+    /// The minimum and maximum of distances are 1-Lipschitz too.
+    fn lipschitz(&self) -> Option<f64> {
+        Some(1.0)
+    }
 }
 
 /// Features near the grid spacing at resolution 64 (spacing 1/63 ≈ 0.016): a tube of radius
@@ -205,5 +220,9 @@ impl Field for Thin {
     }
     fn domain(&self) -> Aabb {
         Aabb::cube(0.5)
+    }
+    /// The minimum of distances is 1-Lipschitz too.
+    fn lipschitz(&self) -> Option<f64> {
+        Some(1.0)
     }
 }

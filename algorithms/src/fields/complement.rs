@@ -45,6 +45,11 @@ impl Field for Complement {
     fn material(&self, p: Vec3) -> u8 {
         self.0.material(p)
     }
+
+    /// `-f` changes as fast as `f`.
+    fn lipschitz(&self) -> Option<f64> {
+        self.0.lipschitz()
+    }
 }
 
 #[cfg(test)]
@@ -60,5 +65,6 @@ mod tests {
         assert_eq!(c.gradient(p), -sphere.gradient(p));
         assert_eq!(c.distance_to_surface(p, -0.05), sphere.distance_to_surface(p, 0.05));
         assert!(c.surface_mesh().is_none() && c.analytic_volume(0.0).is_none());
+        assert_eq!(c.lipschitz(), Some(1.0));
     }
 }

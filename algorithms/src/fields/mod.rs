@@ -15,7 +15,7 @@ pub mod volume;
 pub use analytic::{Csg, Gyroid, Sphere, Thin, Torus};
 pub use complement::Complement;
 pub use mesh_sdf::{MeshField, CAP_WINDING_BOUND, CROSSING_TOLERANCE, DEFAULT_BAND_CELLS};
-pub use noise::{Asteroid, Terrain};
+pub use noise::{Asteroid, Terrain, NOISE_GRADIENT_BOUND_2D, NOISE_GRADIENT_BOUND_3D};
 pub use volume::{otsu_threshold, OtsuHistogram, Volume, VolumeField};
 
 use crate::field::{Field, FieldError};
@@ -138,6 +138,27 @@ mod tests {
                 let c = crate::field::central_difference(f.as_ref(), p, 1e-3);
                 assert!((g - c).length() < 2e-2 * g.length().max(1.0), "{}: {g} vs {c}", info.name);
             }
+        }
+    }
+
+    #[test]
+    fn every_builtin_has_a_lipschitz_bound_its_values_keep() {
+        for info in registry() {
+            let f = (info.make)(FieldParams::default());
+            let l = f.lipschitz().unwrap_or_else(|| panic!("{} has no Lipschitz bound", info.name));
+            let d = f.domain();
+            let mut steepest = 0.0f64;
+            let n = 20;
+            for i in 0..n * n * n {
+                let t = Vec3::new((i % n) as f32, (i / n % n) as f32, (i / (n * n)) as f32) / (n - 1) as f32;
+                let p = d.min + d.extent() * t;
+                for step in [Vec3::new(3e-3, 1e-3, -2e-3), Vec3::new(-1e-2, 4e-3, 2e-3)] {
+                    let q = p + step;
+                    steepest = steepest.max(f64::from((f.value(p) - f.value(q)).abs()) / f64::from(step.length()));
+                }
+            }
+            assert!(steepest <= l * (1.0 + 1e-3), "{}: {steepest} > {l}", info.name);
+            assert!(steepest > l / 20.0, "{}: {steepest}, bound {l} is loose beyond use", info.name);
         }
     }
 

@@ -223,6 +223,12 @@ impl Field for MeshField {
         Some(&self.bvh)
     }
 
+    /// 1 for a closed mesh, whose signed distance changes sign only across the surface; `None`
+    /// for an open one, whose sign flips across the winding number's `1/2` sheet away from it.
+    fn lipschitz(&self) -> Option<f64> {
+        self.is_closed().then_some(1.0)
+    }
+
     fn domain(&self) -> Aabb {
         self.domain
     }

@@ -120,7 +120,7 @@ pub(crate) fn run_second(
         let mesh = &outcome.extraction.surface;
         let m = MeshMetrics::measure(mesh, None);
         let to_index = outcome.samples_to_world.map(|a| a.inverse());
-        let dims = outcome.samples.grid().dims;
+        let dims = outcome.report.dims;
         let (open_edges, open_edges_inside) = open_edges(mesh, |p| {
             let q = to_index.map_or(p.as_dvec3(), |a| a.transform_point3(p.as_dvec3()));
             (0..3).any(|k| q[k] <= 1.0 + BORDER_TOLERANCE || q[k] >= (dims[k] - 2) as f64 - BORDER_TOLERANCE)

@@ -13,6 +13,7 @@ pub mod context;
 pub mod costen_table;
 pub mod decimation;
 pub mod distributed;
+pub mod functions;
 pub mod large_world;
 pub mod mesh_fields;
 pub mod peers;
@@ -57,6 +58,7 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(terrain_lod::TerrainLod),
         Box::new(terrain_liquids::TerrainLiquids),
         Box::new(large_world::LargeWorld),
+        Box::new(functions::Functions),
         Box::new(viewer::Viewer),
     ]
 }

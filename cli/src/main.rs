@@ -270,6 +270,10 @@ fn list() {
     );
     for f in fields::registry() {
         println!("  {:<34} {}", f.name, f.description);
+        // What lets a large grid of it be sampled near its surface only (`--sparse`).
+        if let Some(l) = (f.make)(fields::FieldParams::default()).lipschitz() {
+            println!("  {:<34} Lipschitz bound {l:.3}: sampled near its surface on large grids", "");
+        }
     }
 }
 

@@ -28,6 +28,8 @@ fn list_names_algorithms_post_processes_and_fields() {
     for name in ["marching-cubes", "post-processes", "sphere", "torus", "gyroid", "asteroid", "terrain", "csg", "thin"] {
         assert!(out.contains(name), "{name} missing from:\n{out}");
     }
+    // Every built-in field says the bound its sparse runs prune with.
+    assert_eq!(out.matches("Lipschitz bound").count(), isolab_algorithms::fields::registry().len(), "{out}");
 }
 
 #[test]

@@ -97,7 +97,10 @@ mod tests {
                 assert!(d > 60, "{} and {} look alike: {a:?} {b:?}", names[i], names[j]);
             }
         }
-        assert_eq!(color_of("a-new-extractor"), color_of("a-new-extractor"));
+        // A name outside the table gets a saturated colour of its own from its hash.
+        let (r, g, b) = color_of("a-new-extractor");
+        assert!(r.max(g).max(b) - r.min(g).min(b) > 60, "a new extractor's colour is grey: {:?}", (r, g, b));
+        assert_ne!(color_of("a-new-extractor"), color_of("another-new-extractor"));
         assert_eq!(hsv(0.0, 1.0, 1.0), (255, 0, 0));
         assert_eq!(hsv(120.0, 1.0, 1.0), (0, 255, 0));
     }

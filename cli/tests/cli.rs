@@ -551,6 +551,10 @@ fn sparse_runs_that_cannot_be_certified_or_lose_the_samples_are_refused() {
     assert!(!Path::new(&samples).exists());
     let o = isolab(&["extract", "-a", "marching-cubes", "-f", "sphere", "--sparse", "--dense"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    // A bound that is not a positive number is refused: 0 would rule out every block.
+    for bad in ["0", "inf", "NaN"] {
+        assert_clean_failure(&with(&["-a", "marching-cubes", "--lipschitz", bad]), 1, &["--lipschitz", "positive finite"]);
+    }
     // A bound given replaces the field's own, and is reported as given.
     let o = with(&["-a", "marching-cubes", "--lipschitz", "2.5"]);
     assert!(o.status.success(), "{}", stderr(&o));

@@ -1,8 +1,10 @@
 //! Runs meshed from evaluations near the surface only ([`extract_sparse`]): a built-in or mesh
 //! field with a Lipschitz bound ([`Field::lipschitz`], or one the user gives) is sampled only in
 //! the blocks the bound cannot rule out, so `isolab extract -f asteroid -r 2048` needs memory for
-//! its mesh, not for 2048³ samples. The mesh is the dense run's, bit for bit (the samples are
-//! evaluated where the dense grid's lie: [`GridFieldEval`]).
+//! its mesh, not for 2048³ samples. The mesh is the dense run's in blocks of the same size
+//! (`--chunk N`), bit for bit: the samples are evaluated where the dense grid's lie
+//! ([`GridFieldEval`]) and the extractors read the field as a dense run's do. Without `--chunk`
+//! a dense run meshes the grid in one piece, so its vertices come in another order.
 //!
 //! [`Sparse::Auto`] (the CLI's and the Python package's default) meshes sparsely wherever that is
 //! certified and gives the same mesh: a cubic lattice, an extractor that meshes in blocks, a
@@ -32,9 +34,9 @@ pub enum Sparse {
 
 /// The dense grid's size above which [`Sparse::Auto`] meshes sparsely: 512³ samples (512 MiB
 /// as `f32`). Measured with `isolab extract -a marching-cubes -o mesh.ply`, one run each: at
-/// 256³ the sphere took 189 ms sparse and 84 ms dense; at 512³, 0.95 s and 1.03 s (77 and 617
+/// 256³ the sphere took 189 ms sparse and 84 ms dense; at 512³, 0.95 s and 1.03 s (75 and 602
 /// MiB peak), the gyroid 5.9 s and 2.5 s (its surface fills the domain), the asteroid 7.3 s and
-/// 14.1 s; at 1024³ the sphere 2.6 s and 5.6 s (211 MiB and 4.6 GiB).
+/// 14.1 s; at 1024³ the sphere 2.6 s and 5.6 s (206 MiB and 4.4 GiB).
 pub const AUTO_ABOVE_SAMPLES: u64 = 1 << 27;
 
 /// The metrics JSON's `sparse`: what a sparse run evaluated.
@@ -70,6 +72,11 @@ pub(crate) fn sparse_bound(
     grid: Option<&Grid>,
 ) -> Result<Option<(f64, bool)>, RunError> {
     let small = grid.is_none_or(|g| g.dims.iter().map(|&d| d as u64).product::<u64>() <= AUTO_ABOVE_SAMPLES);
+    if let Some(l) = config.lipschitz.filter(|l| !(l.is_finite() && *l > 0.0)) {
+        // A bound of 0 would rule out every block: the mesh would be empty, silently.
+        let reason = format!("--lipschitz {l}: a Lipschitz bound must be a positive finite number");
+        return Err(RunError::Sparse { field: config.field.clone(), reason });
+    }
     if config.sparse == Sparse::Never || (config.sparse == Sparse::Auto && small) {
         return Ok(None);
     }

@@ -25,7 +25,7 @@
 
 use super::context::{load_object, Context, Experiment, ExperimentError};
 use crate::alloc_meter;
-use crate::report::markdown_table;
+use crate::report::{log_slope, markdown_table};
 use isolab_algorithms::chunks::{extract_sparse, GridFieldEval, Pruning, SparseGrid, SparseOptions, SparseStats};
 use isolab_algorithms::{extractors, Chunking, Extraction, Extractor, Field, Grid, Lattice, Samples};
 use serde::{Deserialize, Serialize};
@@ -463,8 +463,8 @@ fn growth(rows: &[Row]) -> Vec<Vec<String>> {
             continue;
         }
         let slope = |y: &dyn Fn(&Row) -> f64| {
-            let pts: Vec<(f64, f64)> = sparse.iter().map(|r| ((r.n as f64).ln(), y(r).max(1e-9).ln())).collect();
-            least_squares_slope(&pts)
+            let pts: Vec<(f64, f64)> = sparse.iter().map(|r| (r.n as f64, y(r))).collect();
+            log_slope(&pts).unwrap_or(f64::NAN)
         };
         out.push(vec![
             format!("`{name}`"),
@@ -474,18 +474,6 @@ fn growth(rows: &[Row]) -> Vec<Vec<String>> {
         ]);
     }
     out
-}
-
-fn least_squares_slope(pts: &[(f64, f64)]) -> f64 {
-    let n = pts.len() as f64;
-    let (mx, my) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
-    if sxx > 0.0 {
-        sxy / sxx
-    } else {
-        f64::NAN
-    }
 }
 
 /// The page's reading, from the data: the evaluation ratios at [`READ_AT`], the [`LARGEST`] runs

@@ -284,7 +284,7 @@ impl SampleAccess {
 /// What an extractor promises, for any finite samples none of which equals the iso-value
 /// exactly. A promise not made is not a defect: it is a property the extractor does not have
 /// (its module's **Non-guarantees** say why), and the report counts it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Guarantees {
     /// It meshes cubic grids; otherwise it refuses them with [`ExtractError::UnsupportedLattice`].
     pub cubic: bool,
@@ -303,6 +303,30 @@ pub struct Guarantees {
     /// characteristic) of the level set of the cell's trilinear interpolant: ambiguous faces and
     /// tunnels through the cell as the interpolant has them (marching cubes 33).
     pub trilinear_topology: bool,
+    /// Every part of the inside that holds a sample gives a surface (where the field changes sign
+    /// inside the lattice, the output is not empty). An extractor that snaps lattice vertices onto
+    /// the surface can lose parts thinner than its snapping distance.
+    pub keeps_small_parts: bool,
+    /// Tetrahedra (volume extractors): every dihedral angle within this interval and none
+    /// inverted, with its default options (`None`: no bound promised; the module doc says what
+    /// holds the bound: a proof, or an exhaustive test of its cases).
+    pub dihedral: Option<DihedralInterval>,
+}
+
+/// A closed interval of dihedral angles, in degrees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DihedralInterval {
+    /// Smallest angle allowed.
+    pub min_degrees: f64,
+    /// Largest angle allowed.
+    pub max_degrees: f64,
+}
+
+impl DihedralInterval {
+    /// Whether `degrees` lies in the interval.
+    pub fn contains(&self, degrees: f64) -> bool {
+        (self.min_degrees..=self.max_degrees).contains(&degrees)
+    }
 }
 
 impl Guarantees {

@@ -47,8 +47,8 @@ pub mod sweep;
 pub mod tables;
 
 pub use extract::{
-    Chunking, ExtractError, Extraction, Extractor, Guarantees, LevelsOfDetail, Origins, PostGuarantees, PostProcess, StageTimes,
-    Stats,
+    Chunking, DihedralInterval, ExtractError, Extraction, Extractor, Guarantees, LevelsOfDetail, Origins, PostGuarantees,
+    PostProcess, StageTimes, Stats,
 };
 pub use field::{Field, FieldError};
 pub use geometry::Aabb;

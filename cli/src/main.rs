@@ -229,8 +229,12 @@ fn guarantees(g: &isolab_algorithms::Guarantees) -> String {
         ("outward", g.outward),
         ("free of self-intersections", g.intersection_free),
         ("the trilinear interpolant's topology in every cell", g.trilinear_topology),
+        ("every part of the inside, however small", g.keeps_small_parts),
     ];
-    format!("lattices: {}; guarantees: {}", g.lattices().join(", "), promised(&flags, "none"))
+    let dihedral = g
+        .dihedral
+        .map_or(String::new(), |d| format!("; every dihedral angle in [{}°, {}°], none inverted", d.min_degrees, d.max_degrees));
+    format!("lattices: {}; guarantees: {}{dihedral}", g.lattices().join(", "), promised(&flags, "none"))
 }
 
 fn list() {

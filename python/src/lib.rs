@@ -65,6 +65,9 @@ fn algorithms(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
         g.set_item("outward", e.guarantees.outward)?;
         g.set_item("intersection_free", e.guarantees.intersection_free)?;
         g.set_item("trilinear_topology", e.guarantees.trilinear_topology)?;
+        g.set_item("keeps_small_parts", e.guarantees.keeps_small_parts)?;
+        // Volume extractors' dihedral interval in degrees, [min, max], or None.
+        g.set_item("dihedral_degrees", e.guarantees.dihedral.map(|d| vec![d.min_degrees, d.max_degrees]))?;
         d.set_item("guarantees", g)?;
         // How it reads a numpy array: in place ("borrowed"), or "copies: REASON".
         d.set_item("samples", e.samples.describe())?;

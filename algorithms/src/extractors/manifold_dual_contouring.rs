@@ -72,6 +72,8 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
         outward: true,
         intersection_free: true,
         trilinear_topology: false,
+        keeps_small_parts: true,
+        dihedral: None,
     },
     samples: crate::extract::SampleAccess::Copies(
         "the dual engine reads f32 samples by flat index (its QEF gathers and gradients); not yet ported to typed views",

@@ -9,6 +9,7 @@
 pub mod bcc_sculpt;
 pub mod dual;
 pub mod dual_contouring;
+pub mod isosurface_stuffing;
 pub mod manifold_dual_contouring;
 pub mod marching_cubes;
 pub mod marching_tetrahedra;
@@ -18,13 +19,14 @@ pub mod tetrahedral;
 
 pub use bcc_sculpt::BccSculpt;
 pub use dual_contouring::DualContouring;
+pub use isosurface_stuffing::IsosurfaceStuffing;
 pub use manifold_dual_contouring::ManifoldDualContouring;
 pub use marching_cubes::MarchingCubes;
 pub use marching_tetrahedra::MarchingTetrahedra;
 pub use regularised_marching_tetrahedra::RegularisedMarchingTetrahedra;
 pub use surface_nets::SurfaceNets;
 
-pub use crate::extract::{ExtractorInfo, Guarantees, PostInfo};
+pub use crate::extract::{DihedralInterval, ExtractorInfo, Guarantees, PostInfo};
 
 use crate::extract::Extractor;
 use crate::options::{OptionError, Options};
@@ -41,6 +43,7 @@ pub const INFOS: &[ExtractorInfo] = &[
     marching_tetrahedra::INFO,
     regularised_marching_tetrahedra::INFO,
     bcc_sculpt::INFO,
+    isosurface_stuffing::INFO,
 ];
 
 /// Every extractor, built from its default options (which every registered extractor accepts:

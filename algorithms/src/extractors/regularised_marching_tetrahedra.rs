@@ -160,6 +160,8 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
         outward: true,
         intersection_free: false,
         trilinear_topology: false,
+        keeps_small_parts: true,
+        dihedral: None,
     },
     samples: crate::extract::SampleAccess::Copies("the tetrahedral engine, shared with BCC lattices (whose centre samples no array holds), reads f32 samples by flat lattice index"),
 };

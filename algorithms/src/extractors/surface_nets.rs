@@ -99,6 +99,8 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
         outward: true,
         intersection_free: false,
         trilinear_topology: false,
+        keeps_small_parts: true,
+        dihedral: None,
     },
     samples: crate::extract::SampleAccess::Copies(
         "the dual engine reads f32 samples by flat index (its vertex placement and smoothing); not yet ported to typed views",

@@ -202,6 +202,8 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
         outward: true,
         intersection_free: false,
         trilinear_topology: false,
+        keeps_small_parts: true,
+        dihedral: None,
     },
     // On a cubic grid with no surface mesh, its input surface is marching cubes' of the samples,
     // which reads them in place.

@@ -206,6 +206,8 @@ pub const INFO: ExtractorInfo = ExtractorInfo {
         outward: true,
         intersection_free: true,
         trilinear_topology: false,
+        keeps_small_parts: true,
+        dihedral: None,
     },
     samples: SampleAccess::Borrowed,
 };
@@ -224,6 +226,8 @@ pub const DECIDER_INFO: ExtractorInfo = ExtractorInfo {
         outward: true,
         intersection_free: true,
         trilinear_topology: false,
+        keeps_small_parts: true,
+        dihedral: None,
     },
     samples: SampleAccess::Borrowed,
 };
@@ -243,6 +247,8 @@ pub const MC33_INFO: ExtractorInfo = ExtractorInfo {
         outward: true,
         intersection_free: false,
         trilinear_topology: true,
+        keeps_small_parts: true,
+        dihedral: None,
     },
     samples: SampleAccess::Borrowed,
 };

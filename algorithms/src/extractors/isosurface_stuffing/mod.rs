@@ -186,9 +186,10 @@ impl Extractor for IsosurfaceStuffing {
         let warped = warp(&lattice, &cuts, [self.alpha_long, self.alpha_short]);
         out.stats.times.vertex = t.elapsed();
         let t = Instant::now();
-        let filled = fill_lattice(&lattice, &cuts, &warped);
+        let signs = warped_signs(&lattice, &warped);
+        let filled = fill_lattice(&lattice, &signs, &cuts);
         out.stats.active_cells = filled.cut_tets;
-        write_meshes(&lattice, &cuts, &warped, &filled.tets, out);
+        write_meshes(&lattice, &signs, &cuts, &warped, &filled.tets, out);
         out.stats.times.geometry = t.elapsed();
         Ok(lattice.values.capacity() * 4 + lattice.signs.capacity())
     }
@@ -473,8 +474,17 @@ fn cut_key(c: usize) -> u32 {
     u32::MAX - c as u32
 }
 
-fn fill_lattice(lattice: &StuffingLattice, cuts: &Cuts, warps: &Warps) -> Filled {
-    let sign_of = |id: u32| if warps.contains_key(&id) { 0 } else { lattice.signs[id as usize] };
+/// Each lattice vertex's sign after warping (a warped vertex is zero).
+fn warped_signs(lattice: &StuffingLattice, warps: &Warps) -> Vec<i8> {
+    let mut signs = lattice.signs.clone();
+    for &v in warps.keys() {
+        signs[v as usize] = 0;
+    }
+    signs
+}
+
+fn fill_lattice(lattice: &StuffingLattice, signs: &[i8], cuts: &Cuts) -> Filled {
+    let sign_of = |id: u32| signs[id as usize];
     let parts: Vec<(Vec<[u32; 4]>, usize)> = (0..lattice.layers())
         .into_par_iter()
         .map(|z| {
@@ -513,13 +523,32 @@ fn fill_lattice(lattice: &StuffingLattice, cuts: &Cuts, warps: &Warps) -> Filled
 const FACES: [[usize; 3]; 4] = [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]];
 
 /// Compacts the vertex keys into the volume mesh and writes its boundary as the surface.
-fn write_meshes(lattice: &StuffingLattice, cuts: &Cuts, warps: &Warps, tets: &[[u32; 4]], out: &mut Extraction) {
+fn write_meshes(lattice: &StuffingLattice, signs: &[i8], cuts: &Cuts, warps: &Warps, tets: &[[u32; 4]], out: &mut Extraction) {
     // Vertex keys in order: lattice ids ascending, then cut points ascending.
     let is_cut = |k: u32| u64::from(k) > u64::from(u32::MAX) - cuts.edges.len() as u64;
-    let mut keys: Vec<u32> = tets.iter().flatten().copied().collect();
-    keys.par_sort_unstable_by_key(|&k| if is_cut(k) { (1, u32::MAX - k) } else { (0, k) });
-    keys.dedup();
-    let index: HashMap<u32, u32> = keys.iter().enumerate().map(|(i, &k)| (k, i as u32)).collect();
+    // Used lattice vertices and cut points, numbered in that order through dense arrays.
+    let lattice_len = lattice.values.len();
+    let mut used_lattice = vec![false; lattice_len];
+    let mut used_cut = vec![false; cuts.edges.len()];
+    for &k in tets.iter().flatten() {
+        if is_cut(k) {
+            used_cut[(u32::MAX - k) as usize] = true;
+        } else {
+            used_lattice[k as usize] = true;
+        }
+    }
+    let mut lattice_index = vec![u32::MAX; lattice_len];
+    let mut cut_index = vec![u32::MAX; cuts.edges.len()];
+    let mut keys: Vec<u32> = Vec::new();
+    for (k, _) in used_lattice.iter().enumerate().filter(|(_, &u)| u) {
+        lattice_index[k] = keys.len() as u32;
+        keys.push(k as u32);
+    }
+    for (c, _) in used_cut.iter().enumerate().filter(|(_, &u)| u) {
+        cut_index[c] = keys.len() as u32;
+        keys.push(cut_key(c));
+    }
+    let index_of = |k: u32| if is_cut(k) { cut_index[(u32::MAX - k) as usize] } else { lattice_index[k as usize] };
     let position = |k: u32| -> Vec3 {
         if is_cut(k) {
             cuts.positions[(u32::MAX - k) as usize].as_vec3()
@@ -531,13 +560,13 @@ fn write_meshes(lattice: &StuffingLattice, cuts: &Cuts, warps: &Warps, tets: &[[
     };
     let volume: &mut TetMesh = &mut out.volume;
     volume.positions.extend(keys.iter().map(|&k| position(k)));
-    volume.tetrahedra.extend(tets.iter().map(|t| t.map(|k| index[&k])));
+    volume.tetrahedra.extend(tets.iter().map(|t| t.map(index_of)));
     // Boundary faces: those of one tetrahedron only. A face whose three vertices are negative
     // lattice vertices away from the lattice's border is inside (the tetrahedron across it keeps
     // that face whole), so only the others are counted.
     let [nx, ny, nz] = lattice.grid.dims;
     let special = |k: u32| -> bool {
-        if is_cut(k) || warps.contains_key(&k) || lattice.signs[k as usize] >= 0 {
+        if is_cut(k) || signs[k as usize] >= 0 {
             return true;
         }
         let d = lattice.doubled(k);

@@ -10,10 +10,14 @@ use isolab_metrics::topology;
 use isolab_tests::{object_field, shipped_models};
 
 fn stuff(name: &str, resolution: usize, bcc: bool) -> (Extraction, Samples<'static>) {
+    stuff_at(name, resolution, bcc, 0.0)
+}
+
+fn stuff_at(name: &str, resolution: usize, bcc: bool, iso: f32) -> (Extraction, Samples<'static>) {
     let field = object_field(name);
     let grid = Grid::covering(&field.domain(), resolution).expect("grid");
     let lattice = if bcc { Lattice::Bcc(grid) } else { Lattice::Cubic(grid) };
-    let samples = Samples::sample(field, lattice, 0.0).expect("samples");
+    let samples = Samples::sample(field, lattice, iso).expect("samples");
     let mut out = Extraction::default();
     extractors::by_name("isosurface-stuffing").expect("registered").extract(&samples, &mut out).expect("extraction");
     (out, samples)
@@ -99,4 +103,17 @@ fn the_sphere_volume_converges() {
         .collect();
     // Faces are chords: second order, so each halving of h cuts the error about four times.
     assert!(errors[1] < errors[0] / 2.5 && errors[2] < errors[1] / 2.5, "{errors:?}");
+}
+
+#[test]
+fn a_mesh_field_is_stuffed_at_a_nonzero_level() {
+    // Corners and cube centres are sampled for the same iso-value, and the boundary lies on the
+    // inset surface (an offset outward would leave the domain).
+    let iso = -0.12;
+    let (out, samples) = stuff_at("spot.obj", 32, false, iso);
+    check_quality(&out, "spot offset");
+    let field = samples.field().expect("a field");
+    let h = samples.grid().spacing;
+    let far = out.surface.positions.iter().map(|&p| (field.value(p) - iso).abs()).fold(0.0f32, f32::max);
+    assert!(far < 1e-3 * h, "a boundary vertex {far} off the level (h = {h})");
 }

@@ -218,7 +218,7 @@ impl StuffingLattice {
                 let centres = grid.centres();
                 let mut v = Vec::with_capacity(grid.len() + centres.len());
                 v.extend_from_slice(given);
-                v.extend(cube_centre_values(&grid, given, samples.field().map(|f| f.as_ref())));
+                v.extend(cube_centre_values(&grid, given, iso, samples.field().map(|f| f.as_ref())));
                 v
             }
         };
@@ -282,6 +282,10 @@ impl StuffingLattice {
     fn layers(&self) -> usize {
         self.centres()[2]
     }
+
+    fn id_is_corner(&self, id: u32) -> bool {
+        (id as usize) < self.grid.len()
+    }
 }
 
 fn sign(v: f32) -> i8 {
@@ -294,13 +298,14 @@ fn sign(v: f32) -> i8 {
     }
 }
 
-/// Values at the centres of `grid`'s cubes: the field's where it is given, else the mean of each
-/// cube's eight corners.
-fn cube_centre_values(grid: &Grid, corners: &[f32], field: Option<&dyn crate::field::Field>) -> Vec<f32> {
+/// Values at the centres of `grid`'s cubes: the field's where it is given (sampled for `iso`, as
+/// the corners were: a mesh field's narrow band depends on it), else the mean of each cube's eight
+/// corners.
+fn cube_centre_values(grid: &Grid, corners: &[f32], iso: f32, field: Option<&dyn crate::field::Field>) -> Vec<f32> {
     let centres = grid.centres();
     let mut out = vec![0.0f32; centres.len()];
     if let Some(field) = field {
-        field.sample_grid(&centres, 0.0, &mut out);
+        field.sample_grid(&centres, iso, &mut out);
         return out;
     }
     let [nx, ny, _] = grid.dims;
@@ -454,12 +459,6 @@ pub fn warp(lattice: &StuffingLattice, cuts: &Cuts, alpha: [f64; 2]) -> Warps {
         warps.extend(best.into_iter().map(|(v, (_, c))| (v, c)));
     }
     warps
-}
-
-impl StuffingLattice {
-    fn id_is_corner(&self, id: u32) -> bool {
-        (id as usize) < self.grid.len()
-    }
 }
 
 /// The stencil tetrahedra of the whole lattice, as vertex keys: a lattice id, or

@@ -153,10 +153,18 @@ pub fn split_prism(a: [Corner; 3], b: [Corner; 3], diagonal: [bool; 3]) -> Optio
 /// vertex or a cut point). Tetrahedra come unoriented: [`orient`] orders them.
 pub fn fill(d: &[[i32; 3]; 4], signs: [i8; 4]) -> Fill {
     let mut out = Fill::default();
-    let of = |s: i8| (0..4).filter(move |&i| signs[i] == s);
-    let (pos, neg, zero): (Vec<usize>, Vec<usize>, Vec<usize>) = (of(1).collect(), of(-1).collect(), of(0).collect());
+    // The vertices of each sign, in order (fixed arrays: this runs once per cut tetrahedron).
+    let of = |s: i8| {
+        let (mut v, mut n) = ([0usize; 4], 0);
+        for i in (0..4).filter(|&i| signs[i] == s) {
+            v[n] = i;
+            n += 1;
+        }
+        (v, n)
+    };
+    let ((pos, np), (neg, nn), (zero, _)) = (of(1), of(-1), of(0));
     let all = [vertex(0), vertex(1), vertex(2), vertex(3)];
-    match (pos.len(), neg.len()) {
+    match (np, nn) {
         (_, 0) => {}
         (0, _) => out.push(all),
         (1, 1) => {

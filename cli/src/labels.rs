@@ -17,10 +17,25 @@ pub struct Job {
     pub config: LabelConfig,
     /// A folder or a `.glb`.
     pub output: Option<PathBuf>,
-    /// Per-label file format in a folder.
+    /// Per-label file format in a folder, or `neuroglancer`.
     pub format: String,
+    /// The neuroglancer source's settings (with `format` `neuroglancer`).
+    pub neuroglancer: NeuroglancerJob,
     /// Metrics JSON path (`-`: stdout).
     pub metrics: Option<PathBuf>,
+}
+
+/// `--format neuroglancer`'s settings.
+#[derive(Clone, Copy, Debug)]
+pub struct NeuroglancerJob {
+    /// Cells per level-0 box.
+    pub chunk: usize,
+    /// Levels of detail (`None`: down to one box).
+    pub lods: Option<usize>,
+    /// Shards instead of two files per segment.
+    pub sharded: bool,
+    /// Quantization bits.
+    pub bits: u32,
 }
 
 /// Where the meshes go.
@@ -29,6 +44,8 @@ enum Target {
     Scene(PathBuf),
     /// A folder, a file per label with this extension.
     Folder(PathBuf, String),
+    /// A folder holding a neuroglancer precomputed mesh source.
+    Neuroglancer(PathBuf),
 }
 
 fn bad_output(path: &Path, reason: &str) -> RunError {
@@ -53,9 +70,19 @@ fn target(output: &Path, format: &str) -> Result<Target, RunError> {
             "one file holds every label only as .glb (a node per label); give a folder for one file per label",
         ));
     }
+    if format == "neuroglancer" {
+        if ext.is_some() {
+            return Err(bad_output(output, "a neuroglancer source is a folder: give a folder name, not a file"));
+        }
+        std::fs::create_dir_all(output).map_err(|source| io::IoError::Write { path: output.into(), source })?;
+        return Ok(Target::Neuroglancer(output.into()));
+    }
     let probe = Path::new("label").with_extension(format);
     if io::MeshFormat::from_extension(&probe).is_none() {
-        return Err(bad_output(output, &format!("--format {format} is not a mesh format (ply, obj, stl, glb, gltf)")));
+        return Err(bad_output(
+            output,
+            &format!("--format {format} is not a mesh format (ply, obj, stl, glb, gltf) nor neuroglancer"),
+        ));
     }
     std::fs::create_dir_all(output).map_err(|source| io::IoError::Write { path: output.into(), source })?;
     Ok(Target::Folder(output.into(), format.to_owned()))
@@ -63,8 +90,14 @@ fn target(output: &Path, format: &str) -> Result<Target, RunError> {
 
 /// Runs the job: reads, meshes, writes, reports.
 pub fn run(job: &Job) -> Result<(), RunError> {
+    if job.format == "neuroglancer" {
+        check_neuroglancer(job)?;
+    }
     let target = job.output.as_deref().map(|o| target(o, &job.format)).transpose()?;
     let volume = LabelVolume::read(&job.input, job.volume)?;
+    if let Some(Target::Neuroglancer(dir)) = &target {
+        return run_neuroglancer(job, &volume, dir);
+    }
     let outcome = labels::mesh_labels(&volume, &job.config)?;
     for note in &outcome.notes {
         eprintln!("note: {note}");
@@ -93,7 +126,7 @@ pub fn run(job: &Job) -> Result<(), RunError> {
                 io::write_mesh_with(&path, mesh, io::MeshExtras { colours: None, space: outcome.space_tag })?;
             }
         }
-        None => {}
+        Some(Target::Neuroglancer(_)) | None => {}
     }
     let metrics = labels::label_metrics(&outcome);
     match job.metrics.as_deref() {
@@ -114,6 +147,71 @@ pub fn run(job: &Job) -> Result<(), RunError> {
                 );
             }
         }
+    }
+    Ok(())
+}
+
+fn neuroglancer_error(output: &Path, reason: String) -> RunError {
+    RunError::Neuroglancer { output: output.display().to_string(), reason }
+}
+
+/// Refuses bad `--format neuroglancer` settings before anything is read or written.
+fn check_neuroglancer(job: &Job) -> Result<(), RunError> {
+    let output = job.output.as_deref().unwrap_or(Path::new("(none)"));
+    let ng = &job.neuroglancer;
+    if job.output.is_none() {
+        return Err(neuroglancer_error(output, "give the source's folder with -o".into()));
+    }
+    if ng.bits != 10 && ng.bits != 16 {
+        return Err(neuroglancer_error(output, format!("--quantization-bits must be 10 or 16, not {}", ng.bits)));
+    }
+    if ng.lods.is_some_and(|l| !(1..=16).contains(&l)) {
+        return Err(neuroglancer_error(output, format!("--lods must be 1 to 16, not {}", ng.lods.unwrap_or(0))));
+    }
+    if ng.chunk < 2 {
+        return Err(neuroglancer_error(output, format!("--chunk must be 2 cells or more, not {}", ng.chunk)));
+    }
+    Ok(())
+}
+
+/// `--format neuroglancer`: the map's multi-resolution mesh source in `dir`, block by block.
+fn run_neuroglancer(job: &Job, volume: &LabelVolume, dir: &Path) -> Result<(), RunError> {
+    use isolab_pipeline::neuroglancer::{self as ngp, NgConfig};
+    let started = std::time::Instant::now();
+    for note in &volume.notes {
+        eprintln!("note: {note}");
+    }
+    let extractor = labels::build(&job.config)?;
+    let plan = isolab_algorithms::labels::LabelBlockPlan::new(extractor.as_ref(), volume.dims, job.neuroglancer.chunk)?;
+    let deepest = plan.counts.iter().map(|&c| usize::BITS - (c.max(1) - 1).leading_zeros()).max().unwrap_or(0) as usize;
+    let lods = job.neuroglancer.lods.unwrap_or(deepest + 1);
+    let counts = volume.values.as_slice().counts();
+    let (keep, missing) = labels::selection(job.config.select.as_deref(), &counts);
+    if !missing.is_empty() {
+        eprintln!("note: labels {missing:?} do not occur in {}: no mesh for them", volume.name);
+    }
+    let config = NgConfig {
+        lods,
+        bits: job.neuroglancer.bits,
+        sharded: job.neuroglancer.sharded,
+        transform: ngp::transform_of(&volume.index_to_world),
+        names: Vec::new(),
+        keep_work: false,
+    };
+    let report = ngp::write_source(extractor.as_ref(), &plan, volume.values.as_slice(), keep.as_deref(), dir, &config)
+        .map_err(|e| neuroglancer_error(dir, e.to_string()))?;
+    let summary = serde_json::json!({ "output": dir, "lods": lods, "chunk": plan.chunk, "seconds": started.elapsed().as_secs_f64(), "written": report });
+    match job.metrics.as_deref() {
+        Some(path) if path.as_os_str() != "-" => write_json(path, &summary)?,
+        Some(_) => println!("{}", serde_json::to_string_pretty(&summary).unwrap_or_default()),
+        None => println!(
+            "{} segments to {} ({} levels of detail; fragments per level {:?}, triangles per level {:?})",
+            report.segments,
+            dir.display(),
+            lods,
+            report.fragments,
+            report.triangles
+        ),
     }
     Ok(())
 }

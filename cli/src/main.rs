@@ -163,9 +163,25 @@ enum Command {
         /// created if missing) or a `.glb` file (one named, coloured node per label).
         #[arg(long, short)]
         output: Option<PathBuf>,
-        /// Format of the per-label files in a folder: ply, obj, stl, glb or gltf.
+        /// Format of the per-label files in a folder: ply, obj, stl, glb or gltf; or
+        /// `neuroglancer`: the folder becomes a neuroglancer precomputed multi-resolution mesh
+        /// source (Draco fragments in an octree of blocks, coarser levels simplified).
         #[arg(long, default_value = "ply")]
         format: String,
+        /// With `--format neuroglancer`: cells per level-0 fragment box along each axis.
+        #[arg(long, default_value_t = 64)]
+        chunk: usize,
+        /// With `--format neuroglancer`: levels of detail (default: enough that the coarsest is
+        /// one box).
+        #[arg(long)]
+        lods: Option<usize>,
+        /// With `--format neuroglancer`: write shards (neuroglancer_uint64_sharded_v1) instead
+        /// of two files per label.
+        #[arg(long)]
+        sharded: bool,
+        /// With `--format neuroglancer`: bits per quantized vertex coordinate, 10 or 16.
+        #[arg(long, default_value_t = 16)]
+        quantization_bits: u32,
         /// Write each label's metrics (closed, manifold, area, volume, triangle shape, triangles
         /// shared with each neighbour) as JSON here (`-` for stdout); without it, stdout gets one
         /// line per label.
@@ -399,13 +415,28 @@ fn main() -> ExitCode {
             };
             extract(&config, stream, output, metrics, samples_out).map_err(|e| (e.exit_code(), e.to_string()))
         }
-        Command::Labels { field, algorithm, labels: select, volume, space, set, output, format, metrics } => {
+        Command::Labels {
+            field,
+            algorithm,
+            labels: select,
+            volume,
+            space,
+            set,
+            output,
+            format,
+            chunk,
+            lods,
+            sharded,
+            quantization_bits,
+            metrics,
+        } => {
             let mut options = isolab_algorithms::Options::new();
             for (k, v) in &set {
                 options.set(k, v);
             }
             let config = isolab_pipeline::labels::LabelConfig { algorithm, options, select, space };
-            let job = labels::Job { input: field, volume, config, output, format, metrics };
+            let neuroglancer = labels::NeuroglancerJob { chunk, lods, sharded, bits: quantization_bits };
+            let job = labels::Job { input: field, volume, config, output, format, neuroglancer, metrics };
             labels::run(&job).map_err(|e| (e.exit_code(), e.to_string()))
         }
         Command::Metrics { file } => io::read_mesh(&file)

@@ -142,3 +142,80 @@ fn bad_label_input_is_refused_with_nothing_written() {
         std::fs::read_dir(&folder).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
     assert_eq!(written, ["seg-label-2.ply"]);
 }
+
+/// A manifest's fragment sizes per level (the spec's layout), for checking what the CLI wrote.
+fn manifest_sizes(bytes: &[u8]) -> Vec<Vec<u32>> {
+    let word = |i: usize| u32::from_le_bytes(bytes[4 * i..4 * i + 4].try_into().unwrap());
+    let lods = word(6) as usize;
+    let counts: Vec<usize> = (0..lods).map(|l| word(7 + 4 * lods + l) as usize).collect();
+    let mut at = 7 + 5 * lods;
+    let mut out = Vec::new();
+    for n in counts {
+        at += 3 * n;
+        out.push((0..n).map(|i| word(at + i)).collect());
+        at += n;
+    }
+    assert_eq!(4 * at, bytes.len(), "the manifest's length");
+    out
+}
+
+#[test]
+fn neuroglancer_sources_are_written_unsharded_and_sharded() {
+    let dir = tempfile::tempdir().unwrap();
+    let seg = three_labels(dir.path());
+    let out = dir.path().join("ng");
+    let o =
+        isolab(&["labels", "-f", seg.to_str().unwrap(), "--format", "neuroglancer", "--chunk", "4", "-o", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let info: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("info")).unwrap()).unwrap();
+    assert_eq!(info["@type"], "neuroglancer_multilod_draco");
+    assert_eq!(info["vertex_quantization_bits"], 16);
+    for label in [1, 2, 5] {
+        let sizes = manifest_sizes(&std::fs::read(out.join(format!("{label}.index"))).unwrap());
+        // 3 x 3 x 3 boxes of 4 cells (11 and 9 cells with the closed border): three levels.
+        assert_eq!(sizes.len(), 3, "label {label}");
+        assert_eq!(sizes[2].len(), 1, "label {label}: one box at the top");
+        let total: u64 = sizes.iter().flatten().map(|&n| u64::from(n)).sum();
+        assert_eq!(std::fs::metadata(out.join(label.to_string())).unwrap().len(), total, "label {label}");
+    }
+    assert!(!out.join(".isolab-work").exists());
+    let sharded = dir.path().join("sharded");
+    let o = isolab(&[
+        "labels",
+        "-f",
+        seg.to_str().unwrap(),
+        "--format",
+        "neuroglancer",
+        "--sharded",
+        "--lods",
+        "2",
+        "-o",
+        sharded.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let info: serde_json::Value = serde_json::from_slice(&std::fs::read(sharded.join("info")).unwrap()).unwrap();
+    assert_eq!(info["sharding"]["hash"], "murmurhash3_x86_128");
+    assert!(sharded.join("0.shard").is_file());
+    // Bad settings: refused before anything is written.
+    for (flag, value, says) in
+        [("--quantization-bits", "12", "10 or 16"), ("--lods", "0", "1 to 16"), ("--chunk", "1", "2 cells")]
+    {
+        let none = dir.path().join(format!("none{flag}"));
+        let o = isolab(&[
+            "labels",
+            "-f",
+            seg.to_str().unwrap(),
+            "--format",
+            "neuroglancer",
+            flag,
+            value,
+            "-o",
+            none.to_str().unwrap(),
+        ]);
+        let err = stderr(&o);
+        assert!(o.status.code() == Some(1) && err.contains(says) && err.contains("neuroglancer") && !none.exists(), "{err}");
+    }
+    let file = dir.path().join("ng.ply");
+    let o = isolab(&["labels", "-f", seg.to_str().unwrap(), "--format", "neuroglancer", "-o", file.to_str().unwrap()]);
+    assert!(o.status.code() == Some(1) && stderr(&o).contains("folder") && !file.exists(), "{}", stderr(&o));
+}

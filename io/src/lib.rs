@@ -14,6 +14,7 @@
 //! readers can be fed any bytes in tests; none panics on malformed input.
 
 pub mod gltf;
+pub mod neuroglancer;
 pub mod obj;
 pub mod ply;
 pub mod stl;

@@ -77,6 +77,14 @@ pub enum RunError {
         /// Why, and what to do instead.
         reason: String,
     },
+    /// A neuroglancer source cannot be written as asked, or writing it failed.
+    #[error("cannot write the neuroglancer source '{output}': {reason}")]
+    Neuroglancer {
+        /// The output folder.
+        output: String,
+        /// Why.
+        reason: String,
+    },
 }
 
 impl RunError {

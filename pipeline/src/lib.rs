@@ -12,6 +12,7 @@
 pub mod error;
 pub mod input;
 pub mod labels;
+pub mod neuroglancer;
 pub mod stream;
 
 pub use crate::input::load_field;

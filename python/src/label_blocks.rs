@@ -22,7 +22,7 @@ use pyo3::types::PyDict;
 use crate::arrays::{self, Layout};
 use crate::{out, pools, run_error, value_error};
 
-fn extractor(algorithm: &str, options: Option<BTreeMap<String, String>>) -> PyResult<Box<dyn LabelExtractor>> {
+pub(crate) fn extractor(algorithm: &str, options: Option<BTreeMap<String, String>>) -> PyResult<Box<dyn LabelExtractor>> {
     let config = LabelConfig { algorithm: algorithm.to_owned(), options: crate::options_from(options), ..LabelConfig::default() };
     labels::build(&config).map_err(run_error)
 }
@@ -49,7 +49,7 @@ pub fn label_block_plan(
 
 /// A C-ordered block of labels as values: uint8, uint16 and uint32 copied as they are, other
 /// integers and bool converted (each a label from 0 to 2^32 - 1), floats refused.
-fn block_values(block: &Bound<'_, PyUntypedArray>) -> PyResult<LabelValues> {
+pub(crate) fn block_values(block: &Bound<'_, PyUntypedArray>) -> PyResult<LabelValues> {
     let unreadable = |e: numpy::BorrowError| PyValueError::new_err(format!("the block cannot be read: {e}"));
     macro_rules! same {
         ($($t:ty => $v:ident),*) => {$(

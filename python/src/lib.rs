@@ -25,6 +25,7 @@ mod drop_in;
 mod functions;
 mod label_blocks;
 mod labels;
+mod neuroglancer;
 mod out;
 mod pools;
 mod views;
@@ -465,6 +466,15 @@ fn _isolab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(label_blocks::label_block_plan, m)?)?;
     m.add_function(wrap_pyfunction!(label_blocks::mesh_label_block, m)?)?;
     m.add_function(wrap_pyfunction!(label_blocks::weld_label_fragments, m)?)?;
+    m.add_function(wrap_pyfunction!(neuroglancer::ng_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(neuroglancer::ng_level0, m)?)?;
+    m.add_function(wrap_pyfunction!(neuroglancer::ng_coarser, m)?)?;
+    m.add_function(wrap_pyfunction!(neuroglancer::ng_segments, m)?)?;
+    m.add_function(wrap_pyfunction!(neuroglancer::ng_sharding, m)?)?;
+    m.add_function(wrap_pyfunction!(neuroglancer::ng_shard_of, m)?)?;
+    m.add_function(wrap_pyfunction!(neuroglancer::ng_shard, m)?)?;
+    m.add_function(wrap_pyfunction!(neuroglancer::ng_info, m)?)?;
+    m.add_function(wrap_pyfunction!(neuroglancer::ng_box_index, m)?)?;
     m.add_class::<Run>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -123,6 +123,20 @@ impl LabelBlockPlan {
         (0..cz).flat_map(move |z| (0..cy).flat_map(move |y| (0..cx).map(move |x| self.bounds([x, y, z]))))
     }
 
+    /// This plan with `margin` more cells read around every block: the samples
+    /// [`mesh_label_block_with_margin`] needs (its blocks own the same cells).
+    pub fn widened(&self, margin: usize) -> Self {
+        Self { apron: self.apron + margin, ..*self }
+    }
+
+    /// The box of block `id` in map sample coordinates: the cells it owns span from the first
+    /// one's low corner to the last one's high corner (padded cell `c` spans map samples
+    /// `c - 1 ..= c`, so a closed border's first box starts at -1).
+    pub fn block_box(&self, id: [usize; 3]) -> ([f64; 3], [f64; 3]) {
+        let b = self.bounds(id);
+        (std::array::from_fn(|a| b.cells[a].start as f64 - 1.0), std::array::from_fn(|a| b.cells[a].end as f64 - 1.0))
+    }
+
     /// Number of blocks.
     pub fn len(&self) -> usize {
         self.counts.iter().product()
@@ -226,8 +240,25 @@ pub fn mesh_label_block(
     samples: LabelSamples<'_>,
     out: &mut LabelFragment,
 ) -> Result<(), ExtractError> {
+    mesh_label_block_with_margin(extractor, plan, id, 0, samples, out)
+}
+
+/// Meshes block `id` of `plan` and the `margin` cells around it on every side (within the map):
+/// the triangles of every lattice edge those cells own, each exactly as the whole map has it. A
+/// driver that cuts the surface at the block's faces (`isolab labels --format neuroglancer`)
+/// takes a margin of one cell, so that every triangle crossing a face reaches both blocks. The
+/// samples are those `plan.widened(margin).block(id)` reads.
+pub fn mesh_label_block_with_margin(
+    extractor: &dyn LabelExtractor,
+    plan: &LabelBlockPlan,
+    id: [usize; 3],
+    margin: usize,
+    samples: LabelSamples<'_>,
+    out: &mut LabelFragment,
+) -> Result<(), ExtractError> {
     let algorithm = extractor.info().name;
-    let bounds = plan.block(id).ok_or_else(|| ExtractError::BadInput {
+    let wide = plan.widened(margin);
+    let bounds = wide.block(id).ok_or_else(|| ExtractError::BadInput {
         algorithm,
         reason: format!("block {id:?} is outside the plan's {:?} blocks", plan.counts),
     })?;
@@ -241,6 +272,10 @@ pub fn mesh_label_block(
     if extractor.apron() != plan.apron || extractor.border() != plan.border {
         return Err(ExtractError::BadInput { algorithm, reason: "the plan was made for other options".into() });
     }
+    let cells: [Range<usize>; 3] = std::array::from_fn(|a| {
+        let all = plan.cell_range(a);
+        bounds.cells[a].start.saturating_sub(margin).max(all.start)..(bounds.cells[a].end + margin).min(all.end)
+    });
     out.id = id;
     out.keys.clear();
     out.surface.clear();
@@ -251,7 +286,7 @@ pub fn mesh_label_block(
                 window_lo: bounds.lo,
                 window_dims: bounds.dims,
                 map_dims: plan.dims,
-                cells: bounds.cells.clone(),
+                cells: cells.clone(),
                 apron: plan.apron,
             };
             extractor.$method(block, out)

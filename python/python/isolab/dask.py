@@ -398,7 +398,10 @@ def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] =
                 affine: Optional[np.ndarray] = None, labels: Optional[Sequence[int]] = None,
                 algorithm: str = "surface-nets", smoothing: Optional[Union[bool, str]] = None, border: str = "closed",
                 options: Optional[Mapping[str, Any]] = None, client=None, out: Optional[Union[str, os.PathLike]] = None,
-                merge: bool = True, progress: bool = False, threads: int = 1) -> Union[LabelMeshes, List[str]]:
+                merge: bool = True, progress: bool = False, threads: int = 1, format: str = "fragments",
+                lods: Optional[int] = None, sharded: bool = False, quantization_bits: int = 16,
+                names: Optional[Mapping[int, str]] = None,
+                keep_work: bool = False) -> Union[LabelMeshes, List[str], Dict[str, Any]]:
     """Meshes a label map (a segmentation) block by block on Dask into one mesh per label, as
     :func:`isolab.mesh_labels` does in one process, and with the same result: each block meshes
     its own cells (and the apron its extractor needs: none for ``marching-tetrahedra``, one cell,
@@ -419,10 +422,35 @@ def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] =
     client, out, merge, progress, threads
         As :func:`mesh_volume`: ``out`` keeps one ``fragment-X-Y-Z.npz`` per block
         (:func:`load_label_fragment`) and a manifest, and a rerun meshes only the missing blocks.
+    format : str
+        ``"fragments"`` (the default: the above), or ``"neuroglancer"``: ``out`` becomes a
+        neuroglancer precomputed multi-resolution mesh source (``neuroglancer_multilod_draco``)
+        that neuroglancer and cloud-volume read. Each block's task writes its own level-0
+        fragments (its labels' triangles cut at the block's box, quantized and Draco-encoded);
+        each coarser level's task joins the eight boxes below it, each simplified with its box
+        faces locked (so no triangle crosses the 2x2x2 grid, and levels meet without cracks);
+        the segments' files are the fragments' bytes copied in Z-curve order. No label is ever
+        held whole by a task, and a rerun resumes from the box files in ``out/.isolab-work``.
+        Coordinates: ``affine`` or ``spacing`` become the ``info``'s transform; with neither,
+        vertices are in voxels in the array's axis order, as :func:`isolab.mesh_labels` gives
+        them (axis 0 is neuroglancer's x, as for arrays cloud-volume reads).
+    lods : int, optional
+        Levels of detail for ``"neuroglancer"`` (default: until one box holds the volume).
+    sharded : bool
+        ``"neuroglancer"`` in shards (``neuroglancer_uint64_sharded_v1``: murmurhash3_x86_128,
+        minishards, gzip indices) instead of two files per label.
+    quantization_bits : int
+        10 or 16 bits per vertex coordinate within a fragment.
+    names : mapping of label to str, optional
+        Label names, written as the source's ``segment_properties``.
+    keep_work : bool
+        Keep ``out/.isolab-work`` (the per-box meshes) after a finished run.
 
     Returns
     -------
-    isolab.LabelMeshes, or a list of fragment paths when ``merge=False``
+    isolab.LabelMeshes, or a list of fragment paths when ``merge=False``, or with
+    ``format="neuroglancer"`` a dict of what was written (``segments``, ``lods``, per level
+    ``fragments``, ``triangles`` and ``bytes``, ``shards``)
         Its ``extract_ms`` is the weld's time (the blocks ran on the workers).
 
     >>> import numpy as np, isolab, isolab.dask
@@ -441,6 +469,10 @@ def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] =
         raise TypeError(f"a label map holds integer labels, but this array's dtype is {array.dtype}: an intensity "
                         "volume is meshed at a level with mesh_volume; labels stored as floats convert with "
                         ".astype(np.uint16)")
+    if format not in ("fragments", "neuroglancer"):
+        raise ValueError(f"format must be 'fragments' or 'neuroglancer', not {format!r}")
+    if format == "neuroglancer" and out is None:
+        raise ValueError("format='neuroglancer' writes a folder: give out=FOLDER")
     if not merge and out is None:
         raise ValueError("merge=False keeps the fragments in `out`: give out=FOLDER")
     opts = {} if options is None else {str(k): str(v) for k, v in options.items()}
@@ -450,6 +482,10 @@ def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] =
     chosen = None if labels is None else sorted({int(s) for s in labels})
     dims = [shape[2], shape[1], shape[0]]
     counts, apron, blocks = _isolab.label_block_plan(algorithm, opts, dims, int(chunk))
+    if format == "neuroglancer":
+        return _neuroglancer(array, algorithm, opts, dims, int(chunk), counts, lods, bool(sharded),
+                             int(quantization_bits), chosen, _index_to_world(affine, spacing), names, client, out,
+                             progress, int(threads), keep_work)
     job = {"kind": "labels", "algorithm": algorithm, "options": opts, "dims": dims, "chunk": int(chunk),
            "labels": chosen, "threads": int(threads)}
     params = dict(job, shape=list(shape), dtype=str(array.dtype))
@@ -466,3 +502,112 @@ def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] =
     if result.missing:
         warnings.warn(f"labels {result.missing} do not occur in the label map: no mesh for them", stacklevel=2)
     return result
+
+
+def _ng_level0_task(source, slices, block_id, job, work: str, select, threads: int):
+    """One Dask task: a block's level-0 box (skipped when its file is whole)."""
+    done = _isolab.ng_box_index(work, 0, list(block_id))
+    if done is not None:
+        return done
+    block = source if slices is None else source[slices]
+    block = np.ascontiguousarray(np.asarray(block))
+    return _isolab.ng_level0(job, block, list(block_id), work, select, threads)
+
+
+def _ng_coarser_task(job, level: int, position, work: str, *children):
+    """One Dask task: a box at ``level`` from its children (``children``: their tasks, so that
+    Dask runs them first)."""
+    return _isolab.ng_coarser(job, level, list(position), work)
+
+
+def _ng_segments_task(job, work: str, out_dir: str, segments) -> None:
+    """One Dask task: a batch of segments' files (unsharded)."""
+    _isolab.ng_segments(job, work, out_dir, segments)
+
+
+def _ng_shard_task(job, work: str, out_dir: str, count: int, shard: int, segments) -> None:
+    """One Dask task: one shard file."""
+    _isolab.ng_shard(job, work, out_dir, count, shard, segments)
+
+
+def _ng_transform(affine_) -> List[float]:
+    """The stored model (isolab's x, y, z: the array's last axis first) to model transform: the
+    array's index-to-world affine (identity: voxels in the array's axis order) after the axis
+    swap, its top three rows."""
+    a = np.eye(4) if affine_ is None else np.asarray(affine_, dtype=np.float64)
+    swap = np.zeros((4, 4))
+    swap[0, 2] = swap[1, 1] = swap[2, 0] = swap[3, 3] = 1.0
+    return [float(v) for v in (a @ swap)[:3].ravel()]
+
+
+def _neuroglancer(array, algorithm, opts, dims, chunk, counts, lods, sharded, bits, chosen, affine_, names, client,
+                  out, progress, threads, keep_work) -> Dict[str, Any]:
+    """``mesh_labels(..., format="neuroglancer")``: level-0 boxes, coarser boxes, segments."""
+    import shutil
+    if lods is None:
+        lods = 1 + max(int(np.ceil(np.log2(c))) if c > 1 else 0 for c in counts)
+    job = (algorithm, opts, list(dims), chunk, int(lods), bits)
+    level_counts, windows = _isolab.ng_plan(job)
+    out_dir = os.fspath(out)
+    work = os.path.join(out_dir, ".isolab-work")
+    os.makedirs(work, exist_ok=True)
+    source = array
+    if not _is_dask_array(array) and isinstance(array, np.ndarray):
+        source = client.scatter(array, broadcast=True) if client is not None else dask.delayed(array, name="isolab-ng")
+    tasks: Dict[Any, Any] = {}
+    for block_id, lo, bdims in windows:
+        slices = tuple(slice(lo[a], lo[a] + bdims[a]) for a in (2, 1, 0))
+        key = (0, tuple(block_id))
+        if _is_dask_array(array):
+            tasks[key] = dask.delayed(_ng_level0_task, pure=False)(array[slices], None, tuple(block_id), job, work,
+                                                                   chosen, threads)
+        else:
+            tasks[key] = dask.delayed(_ng_level0_task, pure=False)(source, slices, tuple(block_id), job, work, chosen,
+                                                                   threads)
+    for level in range(1, lods):
+        cx, cy, cz = level_counts[level]
+        below = level_counts[level - 1]
+        for z in range(cz):
+            for y in range(cy):
+                for x in range(cx):
+                    kids = [tasks[(level - 1, (2 * x + dx, 2 * y + dy, 2 * z + dz))]
+                            for dz in (0, 1) for dy in (0, 1) for dx in (0, 1)
+                            if 2 * x + dx < below[0] and 2 * y + dy < below[1] and 2 * z + dz < below[2]]
+                    tasks[(level, (x, y, z))] = dask.delayed(_ng_coarser_task, pure=False)(job, level, (x, y, z), work,
+                                                                                           *kids)
+    keys = list(tasks)
+    results = _compute([tasks[k] for k in keys], client, progress)
+    segments: Dict[int, List[Any]] = {}
+    per_level = [[0, 0, 0] for _ in range(lods)]
+    for (level, position), index in zip(keys, results):
+        for label, triangles, nbytes in index:
+            segments.setdefault(int(label), []).append((level, list(position), int(nbytes)))
+            per_level[level][0] += 1
+            per_level[level][1] += int(triangles)
+            per_level[level][2] += int(nbytes)
+    labels_ = sorted(segments)
+    writes = []
+    if sharded:
+        shard_of = _isolab.ng_shard_of(len(labels_), labels_)
+        by_shard: Dict[int, Dict[int, Any]] = {}
+        for label, shard in zip(labels_, shard_of):
+            by_shard.setdefault(int(shard), {})[label] = segments[label]
+        for shard, segs in sorted(by_shard.items()):
+            writes.append(dask.delayed(_ng_shard_task, pure=False)(job, work, out_dir, len(labels_), shard, segs))
+    else:
+        batch = 256
+        for i in range(0, len(labels_), batch):
+            segs = {label: segments[label] for label in labels_[i:i + batch]}
+            writes.append(dask.delayed(_ng_segments_task, pure=False)(job, work, out_dir, segs))
+    _compute(writes, client, progress)
+    named = None if names is None else sorted((int(k), str(v)) for k, v in names.items())
+    _isolab.ng_info(job, out_dir, _ng_transform(affine_), len(labels_) if sharded else None, named)
+    if not keep_work:
+        shutil.rmtree(work, ignore_errors=True)
+    missing = [] if chosen is None else [label for label in chosen if label not in segments]
+    if missing:
+        warnings.warn(f"labels {missing} do not occur in the label map: no mesh for them", stacklevel=3)
+    return {"out": out_dir, "format": "neuroglancer", "segments": len(labels_), "lods": int(lods),
+            "fragments": [p[0] for p in per_level], "triangles": [p[1] for p in per_level],
+            "bytes": [p[2] for p in per_level], "shards": len(writes) if sharded else 0,
+            "sharded": sharded, "quantization_bits": bits, "chunk": chunk}

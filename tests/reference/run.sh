@@ -7,7 +7,7 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 venv="$here/.venv"
-if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import vtk, pymeshlab, CGAL, igl, skimage, scipy, mcubes, tetgen, nibabel, nilearn, nrrd, SimpleITK, netgen.stl, pytetwild, zmesh, dask, distributed, zarr, warp, meshlib, marching_cubes" 2>/dev/null; then
+if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import vtk, pymeshlab, CGAL, igl, skimage, scipy, mcubes, tetgen, nibabel, nilearn, nrrd, SimpleITK, netgen.stl, pytetwild, zmesh, dask, distributed, zarr, warp, meshlib, marching_cubes, neuroglancer, cloudvolume, DracoPy" 2>/dev/null; then
   python3 -m venv "$venv"
   "$venv/bin/pip" install --quiet --disable-pip-version-check -r "$here/requirements.txt"
 fi
@@ -51,3 +51,11 @@ if [ "${1:-}" = "setup" ]; then
 fi
 cargo build --release --quiet -p isolab-cli --bin isolab
 "$venv/bin/python" "$here/reference.py" live --isolab "$root/target/release/isolab"
+# Neuroglancer sources (isolab labels --format neuroglancer): cloud-volume reads every segment at
+# every level, then neuroglancer's own viewer draws them in headless Chromium (Debian's chromium
+# and playwright-core from tests/browser, installed there when missing).
+ng_data="$root/target/neuroglancer-check"
+segments=$("$venv/bin/python" "$here/precomputed.py" "$root/target/release/isolab" "$ng_data" \
+  | "$venv/bin/python" -c 'import json, sys; print(",".join(map(str, json.load(sys.stdin)["segments"][:12])))')
+[ -d "$root/tests/browser/node_modules/playwright-core" ] || (cd "$root/tests/browser" && npm ci --no-audit --no-fund --silent)
+node "$root/tests/browser/neuroglancer.mjs" "$venv/bin/python" "$here/ng_viewer.py" "$ng_data" "$segments" "$(command -v chromium)"

@@ -1,0 +1,107 @@
+// isolab's neuroglancer mesh sources in neuroglancer itself: the viewer of the `neuroglancer`
+// Python package (its bundled client) and its static file server (HTTP Range requests, which the
+// multi-resolution and sharded formats need), started on 127.0.0.1 by tests/reference/ng_viewer.py,
+// opened in headless Chromium (Debian's chromium, driven by playwright-core). Two views: the segmentation volume with its unsharded mesh source,
+// and the sharded mesh source on its own. Each must load with no console or page error and draw
+// the selected segments: its screenshot must differ from the same view with no segment selected.
+// Writes target/neuroglancer-unsharded.png and target/neuroglancer-sharded.png.
+// Usage: node neuroglancer.mjs PYTHON NG_VIEWER_PY DATA_DIR SEGMENTS(comma-separated) [chromium path]
+import { chromium } from "playwright-core";
+import { spawn } from "node:child_process";
+import fs from "node:fs";
+
+const [python, viewerScript, dataDir, segmentList] = process.argv.slice(2, 6);
+const executablePath = process.argv[6] || process.env.CHROMIUM || "/usr/bin/chromium";
+const segments = segmentList.split(",");
+
+// The Python side serves the data and the viewers; its first line names the views.
+const helper = spawn(python, [viewerScript, dataDir, segmentList], { stdio: ["pipe", "pipe", "inherit"] });
+const views = await new Promise((resolve, reject) => {
+  let text = "";
+  helper.stdout.on("data", (d) => {
+    text += d;
+    if (text.includes("\n")) resolve(JSON.parse(text.split("\n")[0]));
+  });
+  helper.on("exit", (code) => reject(new Error(`ng_viewer.py exited with ${code}`)));
+});
+
+const problems = [];
+const browser = await chromium.launch({
+  executablePath,
+  args: ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"],
+});
+
+async function settle(page) {
+  // Neuroglancer has no "done" signal: screenshots until two in a row (a second apart) agree.
+  let last = null;
+  for (let i = 0; i < 90; i++) {
+    await page.waitForTimeout(1000);
+    const shot = await page.screenshot();
+    if (last && shot.equals(last) && i > 4) return shot;
+    last = shot;
+  }
+  problems.push("the view never settled");
+  return last;
+}
+
+async function view(name) {
+  const page = await browser.newPage({ viewport: { width: 800, height: 600 } });
+  // The one error ignored: the browser's own request for /favicon.ico, which neuroglancer's
+  // Python server does not have.
+  page.on("console", (m) => {
+    const where = m.location().url;
+    if (m.type() === "error" && !where.endsWith("/favicon.ico")) problems.push(`${name}: console error: ${m.text()} (${where})`);
+  });
+  page.on("pageerror", (e) => problems.push(`${name}: page error: ${e.message}`));
+  // Neuroglancer cancels fetches it no longer needs (a finer level arrived): those are aborts,
+  // not failures.
+  page.on("requestfailed", (r) => {
+    const why = r.failure()?.errorText || "";
+    if (why !== "net::ERR_ABORTED") problems.push(`${name}: request failed (${why}): ${r.url()}`);
+  });
+  page.on("response", (r) => { if (r.status() >= 400) problems.push(`${name}: HTTP ${r.status()}: ${r.url()}`); });
+  await page.goto(views[name]);
+  const shot = await settle(page);
+  await page.close();
+  return shot;
+}
+
+let checked = 0;
+try {
+  for (const name of ["unsharded", "sharded"]) {
+    const empty = await view(`${name} (no segment)`);
+    const drawn = await view(name);
+    fs.mkdirSync(new URL("../../target/", import.meta.url).pathname, { recursive: true });
+    fs.writeFileSync(new URL(`../../target/neuroglancer-${name}.png`, import.meta.url).pathname, drawn);
+    // PNG bytes differ if any pixel does; ask for a real difference: compare decoded pixels.
+    const page = await browser.newPage();
+    const differing = await page.evaluate(async ([a, b]) => {
+      const load = async (b64) => {
+        const img = new Image();
+        img.src = `data:image/png;base64,${b64}`;
+        await img.decode();
+        const c = document.createElement("canvas");
+        c.width = img.width; c.height = img.height;
+        const g = c.getContext("2d");
+        g.drawImage(img, 0, 0);
+        return g.getImageData(0, 0, c.width, c.height).data;
+      };
+      const [p, q] = [await load(a), await load(b)];
+      let n = 0;
+      for (let i = 0; i < p.length; i += 4) if (Math.abs(p[i] - q[i]) + Math.abs(p[i + 1] - q[i + 1]) + Math.abs(p[i + 2] - q[i + 2]) > 30) n++;
+      return n;
+    }, [empty.toString("base64"), drawn.toString("base64")]);
+    await page.close();
+    if (differing < 2000) problems.push(`${name}: the segments changed only ${differing} pixels of the view`);
+    console.log(`${name}: ${differing} pixels drawn by ${segments.length} segments`);
+    checked++;
+  }
+} finally {
+  await browser.close();
+  helper.stdin.end();
+}
+if (problems.length || checked !== 2) {
+  console.error(problems.join("\n"));
+  process.exit(1);
+}
+console.log("neuroglancer drew both sources with no error");

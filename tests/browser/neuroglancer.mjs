@@ -4,8 +4,9 @@
 // opened in headless Chromium (Debian's chromium, driven by playwright-core). Two views: the segmentation volume with its unsharded mesh source,
 // and the sharded mesh source on its own. Each must load with no console or page error and draw
 // the selected segments: its screenshot must differ from the same view with no segment selected.
-// Writes target/neuroglancer-unsharded.png and target/neuroglancer-sharded.png.
-// Usage: node neuroglancer.mjs PYTHON NG_VIEWER_PY DATA_DIR SEGMENTS(comma-separated) [chromium path]
+// Writes target/neuroglancer-<view>.png (by default the views unsharded and sharded).
+// Usage: node neuroglancer.mjs PYTHON NG_VIEWER_PY DATA_DIR SEGMENTS(comma-separated) CHROMIUM
+//        [NAME=PATH ...] [OUT=DIR]   (views as ng_viewer.py takes them; screenshots into DIR)
 import { chromium } from "playwright-core";
 import { spawn } from "node:child_process";
 import fs from "node:fs";
@@ -13,9 +14,13 @@ import fs from "node:fs";
 const [python, viewerScript, dataDir, segmentList] = process.argv.slice(2, 6);
 const executablePath = process.argv[6] || process.env.CHROMIUM || "/usr/bin/chromium";
 const segments = segmentList.split(",");
+// Further arguments: NAME=PATH views (ng_viewer.py's), and OUT=DIR for the screenshots.
+const extra = process.argv.slice(7);
+const outDir = (extra.find((a) => a.startsWith("OUT=")) || `OUT=${new URL("../../target/", import.meta.url).pathname}`).slice(4);
+const viewArgs = extra.filter((a) => !a.startsWith("OUT="));
 
 // The Python side serves the data and the viewers; its first line names the views.
-const helper = spawn(python, [viewerScript, dataDir, segmentList], { stdio: ["pipe", "pipe", "inherit"] });
+const helper = spawn(python, [viewerScript, dataDir, segmentList, ...viewArgs], { stdio: ["pipe", "pipe", "inherit"] });
 const views = await new Promise((resolve, reject) => {
   let text = "";
   helper.stdout.on("data", (d) => {
@@ -67,12 +72,13 @@ async function view(name) {
 }
 
 let checked = 0;
+const names = Object.keys(views).filter((n) => !n.endsWith(" (no segment)"));
 try {
-  for (const name of ["unsharded", "sharded"]) {
+  for (const name of names) {
     const empty = await view(`${name} (no segment)`);
     const drawn = await view(name);
-    fs.mkdirSync(new URL("../../target/", import.meta.url).pathname, { recursive: true });
-    fs.writeFileSync(new URL(`../../target/neuroglancer-${name}.png`, import.meta.url).pathname, drawn);
+    fs.mkdirSync(outDir, { recursive: true });
+    fs.writeFileSync(`${outDir}/neuroglancer-${name}.png`, drawn);
     // PNG bytes differ if any pixel does; ask for a real difference: compare decoded pixels.
     const page = await browser.newPage();
     const differing = await page.evaluate(async ([a, b]) => {
@@ -100,8 +106,8 @@ try {
   await browser.close();
   helper.stdin.end();
 }
-if (problems.length || checked !== 2) {
+if (problems.length || checked !== names.length || checked === 0) {
   console.error(problems.join("\n"));
   process.exit(1);
 }
-console.log("neuroglancer drew both sources with no error");
+console.log(`neuroglancer drew ${checked} source(s) with no error`);

@@ -7,7 +7,7 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 venv="$here/.venv"
-if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import vtk, pymeshlab, CGAL, igl, skimage, scipy, mcubes, tetgen, nibabel, nilearn, nrrd, SimpleITK, netgen.stl, pytetwild, zmesh, dask, distributed, zarr, warp, meshlib, marching_cubes, neuroglancer, cloudvolume, DracoPy" 2>/dev/null; then
+if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import vtk, pymeshlab, CGAL, igl, skimage, scipy, mcubes, tetgen, nibabel, nilearn, nrrd, SimpleITK, netgen.stl, pytetwild, zmesh, dask, distributed, zarr, warp, meshlib, marching_cubes, neuroglancer, cloudvolume, DracoPy, igneous" 2>/dev/null; then
   python3 -m venv "$venv"
   "$venv/bin/pip" install --quiet --disable-pip-version-check -r "$here/requirements.txt"
 fi

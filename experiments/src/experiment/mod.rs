@@ -9,6 +9,7 @@
 
 pub mod choosing;
 pub mod compare_algorithms;
+pub mod connectomics;
 pub mod context;
 pub mod costen_table;
 pub mod decimation;
@@ -48,6 +49,7 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(python_users::PythonUsers),
         Box::new(distributed::Distributed),
         Box::new(segmentations::Segmentations),
+        Box::new(connectomics::Connectomics),
         Box::new(mesh_fields::MeshFields),
         Box::new(real_volumes::RealVolumes),
         Box::new(scaling::Scaling),

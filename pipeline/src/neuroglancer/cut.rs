@@ -7,7 +7,7 @@
 //! box's mesh with meshoptimizer, every vertex on the box's faces locked; [`join_welded`] joins
 //! meshes, welding vertices at equal positions.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 use glam::{DVec3, Vec3};
 use isolab_algorithms::TriMesh;
@@ -45,7 +45,7 @@ fn clip_polygon(poly: &[Vec3], out: &mut Vec<Vec3>, axis: usize, value: f32, abo
 /// vertices welded by position. A triangle lying in a face `axis = hi` is left to the next box.
 pub fn clip_to_box(mesh: &TriMesh, lo: [f32; 3], hi: [f32; 3]) -> TriMesh {
     let mut out = TriMesh::default();
-    let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
+    let mut ids: HashMap<[u32; 3], u32> = HashMap::default();
     let mut id_of = |p: Vec3, out: &mut TriMesh| {
         *ids.entry(p.to_array().map(f32::to_bits)).or_insert_with(|| {
             out.positions.push(p);
@@ -146,7 +146,7 @@ pub fn simplify_locked(mesh: &TriMesh, lo: [f32; 3], hi: [f32; 3], level: usize)
 /// Meshes joined into one, vertices at bit-equal positions welded.
 pub fn join_welded(meshes: &[TriMesh]) -> TriMesh {
     let mut out = TriMesh::default();
-    let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
+    let mut ids: HashMap<[u32; 3], u32> = HashMap::default();
     for m in meshes {
         let map: Vec<u32> = m
             .positions

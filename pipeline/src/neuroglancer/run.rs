@@ -31,7 +31,7 @@ pub struct NgConfig {
 }
 
 /// What was written.
-#[derive(Clone, Debug, Default, Serialize, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, Serialize, PartialEq)]
 pub struct NgReport {
     /// Segments written.
     pub segments: usize,
@@ -45,6 +45,8 @@ pub struct NgReport {
     pub bytes: Vec<u64>,
     /// Shard files written (0 unsharded).
     pub shards: usize,
+    /// Seconds per step: each level's boxes, then the segments (files or shards).
+    pub seconds: Vec<f64>,
 }
 
 /// The report of every level's box indices.
@@ -91,6 +93,12 @@ pub fn write_source(
     let layout = Layout::new(plan, config.lods, config.bits).map_err(NgError::Invalid)?;
     let work = out.join(".isolab-work");
     let wide = plan.widened(MARGIN);
+    let mut seconds = Vec::new();
+    let mut clock = std::time::Instant::now();
+    let mut lap = |seconds: &mut Vec<f64>| {
+        seconds.push(clock.elapsed().as_secs_f64());
+        clock = std::time::Instant::now();
+    };
     let blocks: Vec<[usize; 3]> = plan.blocks().map(|b| b.id).collect();
     let level0: Vec<([u32; 3], BoxIndex)> = blocks
         .par_iter()
@@ -104,6 +112,7 @@ pub fn write_source(
             Ok((id.map(|v| v as u32), index))
         })
         .collect::<Result<_, NgError>>()?;
+    lap(&mut seconds);
     let mut levels = vec![level0];
     for level in 1..layout.lods {
         let [cx, cy, cz] = layout.counts_at(level);
@@ -114,6 +123,7 @@ pub fn write_source(
             .map(|&p| coarser_box(&layout, level, p, &work).map(|i| (p, i)))
             .collect::<Result<Vec<_>, NgError>>()?;
         levels.push(boxes);
+        lap(&mut seconds);
     }
     let flat: Vec<(usize, [u32; 3], BoxIndex)> =
         levels.iter().enumerate().flat_map(|(l, boxes)| boxes.iter().map(move |(p, i)| (l, *p, i.clone()))).collect();
@@ -137,8 +147,9 @@ pub fn write_source(
         }
     };
     write_info(&layout, out, config.transform, sharding, &config.names)?;
+    lap(&mut seconds);
     if !config.keep_work {
         std::fs::remove_dir_all(&work).map_err(super::file_error(&work))?;
     }
-    Ok(report(&levels, count, shards))
+    Ok(NgReport { seconds, ..report(&levels, count, shards) })
 }

@@ -70,7 +70,7 @@ fn target(output: &Path, format: &str) -> Result<Target, RunError> {
             "one file holds every label only as .glb (a node per label); give a folder for one file per label",
         ));
     }
-    if format == "neuroglancer" {
+    if format == "neuroglancer" || format == "neuroglancer-legacy" {
         if ext.is_some() {
             return Err(bad_output(output, "a neuroglancer source is a folder: give a folder name, not a file"));
         }
@@ -90,7 +90,7 @@ fn target(output: &Path, format: &str) -> Result<Target, RunError> {
 
 /// Runs the job: reads, meshes, writes, reports.
 pub fn run(job: &Job) -> Result<(), RunError> {
-    if job.format == "neuroglancer" {
+    if job.format.starts_with("neuroglancer") {
         check_neuroglancer(job)?;
     }
     let target = job.output.as_deref().map(|o| target(o, &job.format)).transpose()?;
@@ -197,6 +197,7 @@ fn run_neuroglancer(job: &Job, volume: &LabelVolume, dir: &Path) -> Result<(), R
         transform: ngp::transform_of(&volume.index_to_world),
         names: Vec::new(),
         keep_work: false,
+        legacy: job.format == "neuroglancer-legacy",
     };
     let report = ngp::write_source(extractor.as_ref(), &plan, volume.values.as_slice(), keep.as_deref(), dir, &config)
         .map_err(|e| neuroglancer_error(dir, e.to_string()))?;

@@ -165,7 +165,8 @@ enum Command {
         output: Option<PathBuf>,
         /// Format of the per-label files in a folder: ply, obj, stl, glb or gltf; or
         /// `neuroglancer`: the folder becomes a neuroglancer precomputed multi-resolution mesh
-        /// source (Draco fragments in an octree of blocks, coarser levels simplified).
+        /// source (Draco fragments in an octree of blocks, coarser levels simplified);
+        /// `neuroglancer-legacy`: the legacy single-resolution format (a float fragment per block).
         #[arg(long, default_value = "ply")]
         format: String,
         /// With `--format neuroglancer`: cells per level-0 fragment box along each axis.

@@ -196,6 +196,32 @@ fn neuroglancer_sources_are_written_unsharded_and_sharded() {
     let info: serde_json::Value = serde_json::from_slice(&std::fs::read(sharded.join("info")).unwrap()).unwrap();
     assert_eq!(info["sharding"]["hash"], "murmurhash3_x86_128");
     assert!(sharded.join("0.shard").is_file());
+    // The legacy format: a float fragment per block and label, each label's `<label>:0` naming them.
+    let legacy = dir.path().join("legacy");
+    let o = isolab(&[
+        "labels",
+        "-f",
+        seg.to_str().unwrap(),
+        "--format",
+        "neuroglancer-legacy",
+        "--chunk",
+        "4",
+        "-o",
+        legacy.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let info: serde_json::Value = serde_json::from_slice(&std::fs::read(legacy.join("info")).unwrap()).unwrap();
+    assert_eq!(info["@type"], "neuroglancer_legacy_mesh");
+    for label in [1, 2, 5] {
+        let m: serde_json::Value = serde_json::from_slice(&std::fs::read(legacy.join(format!("{label}:0"))).unwrap()).unwrap();
+        let names = m["fragments"].as_array().unwrap();
+        assert!(!names.is_empty(), "label {label}");
+        for name in names {
+            let bytes = std::fs::read(legacy.join(name.as_str().unwrap())).unwrap();
+            let nv = u32::from_le_bytes(bytes[..4].try_into().unwrap()) as usize;
+            assert!(nv > 0 && (bytes.len() - 4 - 12 * nv) % 12 == 0, "label {label}: {name}");
+        }
+    }
     // Bad settings: refused before anything is written.
     for (flag, value, says) in
         [("--quantization-bits", "12", "10 or 16"), ("--lods", "0", "1 to 16"), ("--chunk", "1", "2 cells")]

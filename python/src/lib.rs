@@ -475,6 +475,8 @@ fn _isolab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(neuroglancer::ng_shard, m)?)?;
     m.add_function(wrap_pyfunction!(neuroglancer::ng_info, m)?)?;
     m.add_function(wrap_pyfunction!(neuroglancer::ng_box_index, m)?)?;
+    m.add_function(wrap_pyfunction!(neuroglancer::ng_legacy_block, m)?)?;
+    m.add_function(wrap_pyfunction!(neuroglancer::ng_legacy_manifests, m)?)?;
     m.add_class::<Run>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -162,3 +162,52 @@ pub fn ng_info(
 pub fn ng_box_index(work: PathBuf, level: usize, position: [u32; 3]) -> Option<Vec<(u32, u32, u64)>> {
     ngp::boxfile::read_index_if_complete(&ngp::box_path(&work, level, position)).map(index_rows)
 }
+
+/// The legacy format: block `id`'s fragments (its window as for `ng_level0`) written into `out`
+/// in model coordinates (`transform`): `[(label, triangles), ...]`.
+#[pyfunction]
+#[pyo3(signature = (job, block, id, out, transform, select=None, threads=1))]
+#[allow(clippy::too_many_arguments)]
+pub fn ng_legacy_block(
+    py: Python<'_>,
+    job: Job,
+    block: &Bound<'_, PyUntypedArray>,
+    id: [usize; 3],
+    out: PathBuf,
+    transform: [f64; 12],
+    select: Option<Vec<u32>>,
+    threads: Option<usize>,
+) -> PyResult<Vec<(u32, u32)>> {
+    let (e, plan, _) = layout_of(&job)?;
+    let bounds = plan
+        .widened(ngp::MARGIN)
+        .block(id)
+        .ok_or_else(|| PyValueError::new_err(format!("block {id:?} is outside the plan's {:?} blocks", plan.counts)))?;
+    let want: Vec<usize> = bounds.dims.into_iter().rev().collect();
+    if !block.is_c_contiguous() || block.shape() != want.as_slice() {
+        return Err(PyValueError::new_err(format!(
+            "block {id:?}: expected a C-ordered array of {want:?} labels (numpy shape), got shape {:?}",
+            block.shape()
+        )));
+    }
+    let values = block_values(block)?;
+    let pool = pools::pool(threads)?;
+    py.allow_threads(|| {
+        pools::install(pool.as_deref(), || {
+            let selected = select.as_deref().map(|s| {
+                let mut keep = s.to_vec();
+                keep.sort_unstable();
+                values.as_slice().keep_only(&keep)
+            });
+            let samples = selected.as_ref().unwrap_or(&values).as_slice();
+            ngp::legacy_block(e.as_ref(), &plan, id, samples, transform, &out)
+        })
+    })
+    .map_err(ng_error)
+}
+
+/// The legacy format's `<label>:0` files (`{label: [position, ...]}`) and `info`.
+#[pyfunction]
+pub fn ng_legacy_manifests(out: PathBuf, segments: BTreeMap<u32, Vec<[u32; 3]>>) -> PyResult<()> {
+    ngp::write_legacy_manifests(&out, &segments).map_err(ng_error)
+}

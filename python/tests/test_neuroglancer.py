@@ -269,7 +269,38 @@ def test_bad_settings_raise(tmp_path):
         idask.mesh_labels(lab, format="neuroglancer")
     with pytest.raises(ValueError, match="format must be"):
         idask.mesh_labels(lab, format="draco", out=tmp_path / "x")
+    with pytest.raises(ValueError, match="out=FOLDER"):
+        idask.mesh_labels(lab, format="neuroglancer-legacy")
     with pytest.raises(ValueError, match="10 or 16"):
         idask.mesh_labels(lab, chunk=4, format="neuroglancer", out=tmp_path / "y", quantization_bits=12)
     with pytest.raises(ValueError, match="lods must be"):
         idask.mesh_labels(lab, chunk=4, format="neuroglancer", out=tmp_path / "z", lods=0)
+
+
+def test_legacy_format_reassembles_each_label(tmp_path):
+    lab = voronoi((22, 26, 20), 8, seed=9)
+    report = idask.mesh_labels(lab, chunk=8, spacing=(1.0, 2.0, 0.5), format="neuroglancer-legacy", out=tmp_path / "ng")
+    with open(tmp_path / "ng" / "info") as f:
+        assert json.load(f)["@type"] == "neuroglancer_legacy_mesh"
+    whole = isolab.mesh_labels(lab, spacing=(1.0, 2.0, 0.5))
+    assert report["segments"] == len(whole)
+    for label, mesh in whole.items():
+        with open(tmp_path / "ng" / f"{label}:0") as f:
+            names = json.load(f)["fragments"]
+        total = 0.0
+        verts = []
+        for name in names:
+            with open(tmp_path / "ng" / name, "rb") as f:
+                data = f.read()
+            (nv,) = struct.unpack_from("<I", data, 0)
+            v = np.frombuffer(data, "<f4", 3 * nv, 4).reshape(nv, 3).astype(np.float64)
+            rest = (len(data) - 4 - 12 * nv)
+            assert rest % 12 == 0
+            faces = np.frombuffer(data, "<u4", rest // 4, 4 + 12 * nv).reshape(-1, 3).astype(np.int64)
+            assert faces.max() < nv
+            total += area(v, faces)
+            verts.append(v)
+        a = area(mesh.vertices, mesh.faces)
+        assert abs(total - a) <= 1e-3 * a, (label, total, a)
+        dist, _ = cKDTree(np.concatenate(verts)).query(mesh.vertices)
+        assert dist.max() < 1e-4, label

@@ -97,6 +97,7 @@ fn write(algorithm: &str, dims: [usize; 3], chunk: usize, lods: usize) -> Source
         transform: isolab_io::neuroglancer::MultilodInfo::IDENTITY,
         names: Vec::new(),
         keep_work: true,
+        legacy: false,
     };
     let report = ngp::write_source(extractor.as_ref(), &plan, LabelSamples::U16(&map), None, dir.path(), &config).unwrap();
     let mut surface = LabelSurface::default();

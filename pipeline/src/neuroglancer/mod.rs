@@ -158,18 +158,89 @@ pub fn level0_box(
     if let Some(index) = boxfile::read_index_if_complete(&path) {
         return Ok(index);
     }
+    let meshes = block_meshes(extractor, plan, id, samples)?;
+    encode_and_write(layout, 0, position, meshes, &path)
+}
+
+/// Every label's triangles of block `id`, cut at the block's box (the samples are those
+/// `plan.widened(MARGIN).block(id)` reads).
+pub fn block_meshes(
+    extractor: &dyn LabelExtractor,
+    plan: &LabelBlockPlan,
+    id: [usize; 3],
+    samples: LabelSamples<'_>,
+) -> Result<BTreeMap<u32, TriMesh>, NgError> {
     let mut fragment = LabelFragment::default();
     mesh_label_block_with_margin(extractor, plan, id, MARGIN, samples, &mut fragment)?;
     let (lo, hi) = plan.block_box(id);
     let (lo, hi) = (lo.map(|v| v as f32), hi.map(|v| v as f32));
-    let meshes: BTreeMap<u32, TriMesh> = fragment
+    Ok(fragment
         .surface
         .label_meshes()
         .into_iter()
         .map(|(l, m)| (l, cut::clip_to_box(&m, lo, hi)))
         .filter(|(_, m)| !m.triangles.is_empty())
-        .collect();
-    encode_and_write(layout, 0, position, meshes, &path)
+        .collect())
+}
+
+/// The legacy single-resolution format, block by block: block `id`'s label meshes (cut at its
+/// box, placed in model coordinates by `transform`) as fragment files `<label>:0:<x>_<y>_<z>`
+/// in `out`, each written atomically. Returns `(label, triangles)` of the fragments written.
+pub fn legacy_block(
+    extractor: &dyn LabelExtractor,
+    plan: &LabelBlockPlan,
+    id: [usize; 3],
+    samples: LabelSamples<'_>,
+    transform: [f64; 12],
+    out: &Path,
+) -> Result<Vec<(u32, u32)>, NgError> {
+    let meshes = block_meshes(extractor, plan, id, samples)?;
+    std::fs::create_dir_all(out).map_err(file_error(out))?;
+    let mut written = Vec::with_capacity(meshes.len());
+    for (label, mesh) in meshes {
+        let model: Vec<Vec3> = mesh
+            .positions
+            .iter()
+            .map(|p| {
+                let p = p.as_dvec3();
+                let row = |r: usize| {
+                    transform[4 * r] * p.x + transform[4 * r + 1] * p.y + transform[4 * r + 2] * p.z + transform[4 * r + 3]
+                };
+                glam::DVec3::new(row(0), row(1), row(2)).as_vec3()
+            })
+            .collect();
+        // A mirroring transform reverses the winding, as it does for every isolab mesh.
+        let mirrored = {
+            let t = transform;
+            let det =
+                t[0] * (t[5] * t[10] - t[6] * t[9]) - t[1] * (t[4] * t[10] - t[6] * t[8]) + t[2] * (t[4] * t[9] - t[5] * t[8]);
+            det < 0.0
+        };
+        let triangles: Vec<[u32; 3]> =
+            if mirrored { mesh.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect() } else { mesh.triangles.clone() };
+        let path = out.join(legacy_fragment_name(label, id.map(|v| v as u32)));
+        write_atomic(&path, |w| w.write_all(&ng::legacy_fragment(&model, &triangles)))?;
+        written.push((label, triangles.len() as u32));
+    }
+    Ok(written)
+}
+
+/// A legacy fragment's file name.
+pub fn legacy_fragment_name(label: u32, position: [u32; 3]) -> String {
+    format!("{label}:0:{}_{}_{}", position[0], position[1], position[2])
+}
+
+/// The legacy format's `<label>:0` files (each naming the label's fragments) and `info`.
+pub fn write_legacy_manifests(out: &Path, segments: &BTreeMap<u32, Vec<[u32; 3]>>) -> Result<(), NgError> {
+    std::fs::create_dir_all(out).map_err(file_error(out))?;
+    for (&label, positions) in segments {
+        let names: Vec<String> = positions.iter().map(|&p| legacy_fragment_name(label, p)).collect();
+        let json = ng::legacy_manifest(&names);
+        write_atomic(&out.join(format!("{label}:0")), |w| serde_json::to_writer(w, &json).map_err(io::Error::other))?;
+    }
+    let info = ng::legacy_info_json();
+    write_atomic(&out.join("info"), |w| serde_json::to_writer_pretty(w, &info).map_err(io::Error::other))?;
+    Ok(())
 }
 
 /// Box `position` at `level` (1 or more) from its children's box files: each child's label

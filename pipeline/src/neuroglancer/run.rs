@@ -28,6 +28,8 @@ pub struct NgConfig {
     pub names: Vec<(u64, String)>,
     /// Keep the work folder (the box files) after the run.
     pub keep_work: bool,
+    /// The legacy single-resolution format instead (level 0 only, float fragments).
+    pub legacy: bool,
 }
 
 /// What was written.
@@ -90,6 +92,9 @@ pub fn write_source(
     out: &Path,
     config: &NgConfig,
 ) -> Result<NgReport, NgError> {
+    if config.legacy {
+        return write_legacy(extractor, plan, values, keep, out, config);
+    }
     let layout = Layout::new(plan, config.lods, config.bits).map_err(NgError::Invalid)?;
     let work = out.join(".isolab-work");
     let wide = plan.widened(MARGIN);
@@ -152,4 +157,51 @@ pub fn write_source(
         std::fs::remove_dir_all(&work).map_err(super::file_error(&work))?;
     }
     Ok(NgReport { seconds, ..report(&levels, count, shards) })
+}
+
+/// A block's position and its legacy fragments' `(label, triangles)`.
+type BlockFragments = ([u32; 3], Vec<(u32, u32)>);
+
+/// The legacy format: each block's fragments, then each label's `<label>:0` and the `info`.
+fn write_legacy(
+    extractor: &dyn LabelExtractor,
+    plan: &LabelBlockPlan,
+    values: LabelSamples<'_>,
+    keep: Option<&[u32]>,
+    out: &Path,
+    config: &NgConfig,
+) -> Result<NgReport, NgError> {
+    let started = std::time::Instant::now();
+    let wide = plan.widened(MARGIN);
+    let blocks: Vec<[usize; 3]> = plan.blocks().map(|b| b.id).collect();
+    let written: Vec<BlockFragments> = blocks
+        .par_iter()
+        .map(|&id| {
+            let b = wide.block(id).ok_or_else(|| NgError::Invalid(format!("block {id:?} is outside the plan")))?;
+            let mut samples = window(values, plan.dims, b.lo, b.dims);
+            if let Some(keep) = keep {
+                samples = samples.as_slice().keep_only(keep);
+            }
+            let rows = super::legacy_block(extractor, plan, id, samples.as_slice(), config.transform, out)?;
+            Ok((id.map(|v| v as u32), rows))
+        })
+        .collect::<Result<_, NgError>>()?;
+    let mut segments: BTreeMap<u32, Vec<[u32; 3]>> = BTreeMap::new();
+    let mut triangles = 0u64;
+    for (p, rows) in &written {
+        for &(label, t) in rows {
+            segments.entry(label).or_default().push(*p);
+            triangles += u64::from(t);
+        }
+    }
+    super::write_legacy_manifests(out, &segments)?;
+    Ok(NgReport {
+        segments: segments.len(),
+        boxes: vec![written.iter().filter(|(_, r)| !r.is_empty()).count()],
+        fragments: vec![segments.values().map(Vec::len).sum()],
+        triangles: vec![triangles],
+        bytes: Vec::new(),
+        shards: 0,
+        seconds: vec![started.elapsed().as_secs_f64()],
+    })
 }

@@ -434,6 +434,9 @@ def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] =
         Coordinates: ``affine`` or ``spacing`` become the ``info``'s transform; with neither,
         vertices are in voxels in the array's axis order, as :func:`isolab.mesh_labels` gives
         them (axis 0 is neuroglancer's x, as for arrays cloud-volume reads).
+        ``"neuroglancer-legacy"``: the legacy single-resolution format instead (each block's
+        task writes its labels' fragments ``<label>:0:<x>_<y>_<z>`` as floats in model
+        coordinates; then each label's ``<label>:0`` names them).
     lods : int, optional
         Levels of detail for ``"neuroglancer"`` (default: until one box holds the volume).
     sharded : bool
@@ -469,9 +472,9 @@ def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] =
         raise TypeError(f"a label map holds integer labels, but this array's dtype is {array.dtype}: an intensity "
                         "volume is meshed at a level with mesh_volume; labels stored as floats convert with "
                         ".astype(np.uint16)")
-    if format not in ("fragments", "neuroglancer"):
-        raise ValueError(f"format must be 'fragments' or 'neuroglancer', not {format!r}")
-    if format == "neuroglancer" and out is None:
+    if format not in ("fragments", "neuroglancer", "neuroglancer-legacy"):
+        raise ValueError(f"format must be 'fragments', 'neuroglancer' or 'neuroglancer-legacy', not {format!r}")
+    if format.startswith("neuroglancer") and out is None:
         raise ValueError("format='neuroglancer' writes a folder: give out=FOLDER")
     if not merge and out is None:
         raise ValueError("merge=False keeps the fragments in `out`: give out=FOLDER")
@@ -482,6 +485,9 @@ def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] =
     chosen = None if labels is None else sorted({int(s) for s in labels})
     dims = [shape[2], shape[1], shape[0]]
     counts, apron, blocks = _isolab.label_block_plan(algorithm, opts, dims, int(chunk))
+    if format == "neuroglancer-legacy":
+        return _neuroglancer_legacy(array, algorithm, opts, dims, int(chunk), chosen, _index_to_world(affine, spacing),
+                                    client, out, progress, int(threads))
     if format == "neuroglancer":
         return _neuroglancer(array, algorithm, opts, dims, int(chunk), counts, lods, bool(sharded),
                              int(quantization_bits), chosen, _index_to_world(affine, spacing), names, client, out,
@@ -611,3 +617,44 @@ def _neuroglancer(array, algorithm, opts, dims, chunk, counts, lods, sharded, bi
             "fragments": [p[0] for p in per_level], "triangles": [p[1] for p in per_level],
             "bytes": [p[2] for p in per_level], "shards": len(writes) if sharded else 0,
             "sharded": sharded, "quantization_bits": bits, "chunk": chunk}
+
+
+def _ng_legacy_task(source, slices, block_id, job, out_dir: str, transform, select, threads: int):
+    """One Dask task: a block's legacy fragments."""
+    block = source if slices is None else source[slices]
+    block = np.ascontiguousarray(np.asarray(block))
+    return _isolab.ng_legacy_block(job, block, list(block_id), out_dir, transform, select, threads)
+
+
+def _neuroglancer_legacy(array, algorithm, opts, dims, chunk, chosen, affine_, client, out, progress,
+                         threads) -> Dict[str, Any]:
+    """``mesh_labels(..., format="neuroglancer-legacy")``: each block's fragments, then the
+    labels' ``<label>:0`` files."""
+    job = (algorithm, opts, list(dims), chunk, 1, 16)
+    _, windows = _isolab.ng_plan(job)
+    out_dir = os.fspath(out)
+    os.makedirs(out_dir, exist_ok=True)
+    transform = _ng_transform(affine_)
+    source = array
+    if not _is_dask_array(array) and isinstance(array, np.ndarray):
+        source = client.scatter(array, broadcast=True) if client is not None else dask.delayed(array, name="isolab-ngl")
+    tasks, ids = [], []
+    for block_id, lo, bdims in windows:
+        slices = tuple(slice(lo[a], lo[a] + bdims[a]) for a in (2, 1, 0))
+        if _is_dask_array(array):
+            tasks.append(dask.delayed(_ng_legacy_task, pure=False)(array[slices], None, tuple(block_id), job, out_dir,
+                                                                   transform, chosen, threads))
+        else:
+            tasks.append(dask.delayed(_ng_legacy_task, pure=False)(source, slices, tuple(block_id), job, out_dir,
+                                                                   transform, chosen, threads))
+        ids.append(list(block_id))
+    results = _compute(tasks, client, progress)
+    segments: Dict[int, List[Any]] = {}
+    triangles = 0
+    for block_id, rows in zip(ids, results):
+        for label, t in rows:
+            segments.setdefault(int(label), []).append(block_id)
+            triangles += int(t)
+    _isolab.ng_legacy_manifests(out_dir, segments)
+    return {"out": out_dir, "format": "neuroglancer-legacy", "segments": len(segments),
+            "fragments": [sum(len(v) for v in segments.values())], "triangles": [triangles], "chunk": chunk}

@@ -477,6 +477,7 @@ fn _isolab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(neuroglancer::ng_box_index, m)?)?;
     m.add_function(wrap_pyfunction!(neuroglancer::ng_legacy_block, m)?)?;
     m.add_function(wrap_pyfunction!(neuroglancer::ng_legacy_manifests, m)?)?;
+    m.add_function(wrap_pyfunction!(neuroglancer::ng_encode_fragment, m)?)?;
     m.add_class::<Run>()?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

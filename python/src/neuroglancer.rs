@@ -211,3 +211,25 @@ pub fn ng_legacy_block(
 pub fn ng_legacy_manifests(out: PathBuf, segments: BTreeMap<u32, Vec<[u32; 3]>>) -> PyResult<()> {
     ngp::write_legacy_manifests(&out, &segments).map_err(ng_error)
 }
+
+/// Draco-encodes one fragment as the writer does (`positions`: N x 3 integers in `[0, 2^bits)`,
+/// `triangles`: M x 3): the bytes, for measuring the encoder against others.
+#[pyfunction]
+pub fn ng_encode_fragment<'py>(
+    py: Python<'py>,
+    positions: numpy::PyReadonlyArray2<'py, i32>,
+    triangles: numpy::PyReadonlyArray2<'py, u32>,
+) -> PyResult<Bound<'py, pyo3::types::PyBytes>> {
+    let p = positions.as_array();
+    let t = triangles.as_array();
+    if p.ncols() != 3 || t.ncols() != 3 {
+        return Err(PyValueError::new_err("positions and triangles must be N x 3 and M x 3"));
+    }
+    let p: Vec<[i32; 3]> = p.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+    let t: Vec<[u32; 3]> = t.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+    if t.iter().flatten().any(|&v| v as usize >= p.len()) {
+        return Err(PyValueError::new_err("a triangle names a vertex the positions do not have"));
+    }
+    let bytes = py.allow_threads(|| isolab_io::neuroglancer::encode_fragment(&p, &t)).map_err(PyValueError::new_err)?;
+    Ok(pyo3::types::PyBytes::new(py, &bytes))
+}

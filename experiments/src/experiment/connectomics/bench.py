@@ -24,7 +24,8 @@ Runs, one round, alternating isolab and igneous at each worker count:
   shards), both on `LocalTaskQueue(parallel=workers)`, timed together.
 Per run: wall seconds, bytes written, peak resident memory of the worker processes (isolab: each
 Dask worker's VmHWM; igneous: the largest of its pool's processes, getrusage of the children),
-and for isolab the fragments, triangles and bytes per level. Then neuroglancer's own viewer draws
+and for isolab the fragments, triangles and bytes per level. Then the Draco encoders side by side
+on the same fragments (`draco_comparison`), and neuroglancer's own viewer draws
 some segments of isolab's source in headless Chromium (tests/browser/neuroglancer.mjs), the
 screenshot kept for the page.
 """
@@ -172,6 +173,55 @@ def run_igneous(seg, workers, args):
             "shape": args.igneous_shape}
 
 
+def draco_comparison(vol, work, side=256, rounds=3):
+    """The Draco encoders side by side on the same fragments: isolab's finest fragments of a
+    side³ crop (64³ boxes), decoded by DracoPy, then encoded again by isolab's writer (the
+    draco-core crate, speed 5) and by DracoPy (Google's C++ Draco, compression levels 5 and 7,
+    Draco's own 16-bit quantization with range 65535 and origin 0, which maps the integers to
+    themselves, as igneous calls it); one process, one thread, alternating, `rounds` rounds."""
+    import statistics
+    import DracoPy
+    import isolab
+    import isolab.dask as idask
+    out = os.path.join(work, "draco-crop")
+    shutil.rmtree(out, ignore_errors=True)
+    crop = np.ascontiguousarray(np.asarray(vol[:side, :side, :side]))
+    idask.mesh_labels(crop, chunk=64, format="neuroglancer", lods=1, out=out)
+    frags = []
+    for name in os.listdir(out):
+        if not name.endswith(".index"):
+            continue
+        m = open(os.path.join(out, name), "rb").read()
+        n = int.from_bytes(m[44:48], "little")  # one level: 3+3 floats, count, scale, offset (3)
+        sizes = np.frombuffer(m, "<u4", n, 48 + 12 * n)
+        data, at = open(os.path.join(out, name[:-6]), "rb").read(), 0
+        for size in sizes:
+            d = DracoPy.decode(data[at:at + int(size)])
+            at += int(size)
+            frags.append((np.asarray(d.points).astype(np.int32), np.asarray(d.faces).astype(np.uint32)))
+    shutil.rmtree(out, ignore_errors=True)
+
+    def ours():
+        return sum(len(isolab._isolab.ng_encode_fragment(p, f)) for p, f in frags)
+
+    def dracopy(level):
+        return lambda: sum(len(DracoPy.encode(p.astype(np.float32), f, quantization_bits=16, compression_level=level,
+                                              quantization_range=65535.0, quantization_origin=[0.0, 0.0, 0.0]))
+                           for p, f in frags)
+
+    runs = {"isolab (draco-core, speed 5)": ours, "DracoPy, level 5": dracopy(5), "DracoPy, level 7": dracopy(7)}
+    times, size = {k: [] for k in runs}, {}
+    for r in range(rounds):
+        for k in (list(runs) if r % 2 == 0 else list(runs)[::-1]):
+            t = time.perf_counter()
+            size[k] = runs[k]()
+            times[k].append(time.perf_counter() - t)
+    triangles = int(sum(len(f) for _, f in frags))
+    return {"side": side, "fragments": len(frags), "triangles": triangles,
+            "encoders": [{"encoder": k, "seconds": times[k], "median": statistics.median(times[k]), "bytes": size[k]}
+                         for k in runs]}
+
+
 def screenshot(args, seg, out_rel, segments):
     here = os.path.dirname(os.path.abspath(__file__))
     root = os.path.abspath(os.path.join(here, "..", "..", "..", ".."))
@@ -224,6 +274,13 @@ def main():
             runs.append(row)
             log(f"  {tool}, {w} worker(s): {row['seconds']:.1f} s, {row['bytes'] / 2**20:.0f} MiB written, "
                 f"peak {max(row['peak_rss_mib']):.0f} MiB")
+    draco = None
+    try:
+        draco = draco_comparison(vol, args.work)
+        for e in draco["encoders"]:
+            log(f"  {e['encoder']}: {e['median']:.2f} s, {e['bytes'] / 2**20:.1f} MiB")
+    except Exception as e:  # noqa: BLE001 - the note says what failed
+        notes.append(f"Draco comparison not run: {e}")
     shot = None
     if args.shots:
         labels = list(range(1, args.cells + 1))
@@ -239,7 +296,7 @@ def main():
                                                                 gib=vol.nbytes / 2**30, dtype="uint32",
                                                                 made_seconds=made),
            "chunk": args.chunk, "memory_limit_mib": args.memory_limit_mib, "igneous_shape": args.igneous_shape,
-           "cores": os.cpu_count(), "runs": runs, "screenshot": shot is not None and shot["ok"]}
+           "cores": os.cpu_count(), "runs": runs, "screenshot": shot is not None and shot["ok"], "draco": draco}
     with open(args.out + ".tmp", "w") as f:
         json.dump(doc, f)
     os.replace(args.out + ".tmp", args.out)

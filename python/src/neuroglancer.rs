@@ -38,6 +38,36 @@ fn index_rows(i: BoxIndex) -> Vec<(u32, u32, u64)> {
     i.labels
 }
 
+/// A block's window (a C-ordered integer array of the samples `plan.widened(MARGIN).block(id)`
+/// reads) as label values, labels outside `select` as background; an error names a wrong shape.
+fn block_samples(
+    plan: &LabelBlockPlan,
+    block: &Bound<'_, PyUntypedArray>,
+    id: [usize; 3],
+    select: Option<&[u32]>,
+) -> PyResult<isolab_algorithms::labels::LabelValues> {
+    let bounds = plan
+        .widened(ngp::MARGIN)
+        .block(id)
+        .ok_or_else(|| PyValueError::new_err(format!("block {id:?} is outside the plan's {:?} blocks", plan.counts)))?;
+    let want: Vec<usize> = bounds.dims.into_iter().rev().collect();
+    if !block.is_c_contiguous() || block.shape() != want.as_slice() {
+        return Err(PyValueError::new_err(format!(
+            "block {id:?}: expected a C-ordered array of {want:?} labels (numpy shape), got shape {:?}",
+            block.shape()
+        )));
+    }
+    let values = block_values(block)?;
+    Ok(match select {
+        Some(s) => {
+            let mut keep = s.to_vec();
+            keep.sort_unstable();
+            values.as_slice().keep_only(&keep)
+        }
+        None => values,
+    })
+}
+
 /// The plan: `(counts per level, [(id, lo, dims), ...])`, each block's window the samples its
 /// level-0 task reads (its cells, the extractor's apron and the one-cell margin).
 #[pyfunction]
@@ -63,27 +93,11 @@ pub fn ng_level0(
     threads: Option<usize>,
 ) -> PyResult<Vec<(u32, u32, u64)>> {
     let (e, plan, layout) = layout_of(&job)?;
-    let bounds = plan
-        .widened(ngp::MARGIN)
-        .block(id)
-        .ok_or_else(|| PyValueError::new_err(format!("block {id:?} is outside the plan's {:?} blocks", plan.counts)))?;
-    let want: Vec<usize> = bounds.dims.into_iter().rev().collect();
-    if !block.is_c_contiguous() || block.shape() != want.as_slice() {
-        return Err(PyValueError::new_err(format!(
-            "block {id:?}: expected a C-ordered array of {want:?} labels (numpy shape), got shape {:?}",
-            block.shape()
-        )));
-    }
-    let values = block_values(block)?;
+    let values = block_samples(&plan, block, id, select.as_deref())?;
     let pool = pools::pool(threads)?;
     py.allow_threads(|| {
         pools::install(pool.as_deref(), || {
-            let selected = select.as_deref().map(|s| {
-                let mut keep = s.to_vec();
-                keep.sort_unstable();
-                values.as_slice().keep_only(&keep)
-            });
-            let samples = selected.as_ref().unwrap_or(&values).as_slice();
+            let samples = values.as_slice();
             ngp::level0_box(e.as_ref(), &plan, &layout, id, samples, &work)
         })
     })
@@ -179,27 +193,11 @@ pub fn ng_legacy_block(
     threads: Option<usize>,
 ) -> PyResult<Vec<(u32, u32)>> {
     let (e, plan, _) = layout_of(&job)?;
-    let bounds = plan
-        .widened(ngp::MARGIN)
-        .block(id)
-        .ok_or_else(|| PyValueError::new_err(format!("block {id:?} is outside the plan's {:?} blocks", plan.counts)))?;
-    let want: Vec<usize> = bounds.dims.into_iter().rev().collect();
-    if !block.is_c_contiguous() || block.shape() != want.as_slice() {
-        return Err(PyValueError::new_err(format!(
-            "block {id:?}: expected a C-ordered array of {want:?} labels (numpy shape), got shape {:?}",
-            block.shape()
-        )));
-    }
-    let values = block_values(block)?;
+    let values = block_samples(&plan, block, id, select.as_deref())?;
     let pool = pools::pool(threads)?;
     py.allow_threads(|| {
         pools::install(pool.as_deref(), || {
-            let selected = select.as_deref().map(|s| {
-                let mut keep = s.to_vec();
-                keep.sort_unstable();
-                values.as_slice().keep_only(&keep)
-            });
-            let samples = selected.as_ref().unwrap_or(&values).as_slice();
+            let samples = values.as_slice();
             ngp::legacy_block(e.as_ref(), &plan, id, samples, transform, &out)
         })
     })

@@ -196,6 +196,10 @@ pub fn legacy_block(
 ) -> Result<Vec<(u32, u32)>, NgError> {
     let meshes = block_meshes(extractor, plan, id, samples)?;
     std::fs::create_dir_all(out).map_err(file_error(out))?;
+    // A mirroring transform reverses the winding, as it does for every isolab mesh.
+    let t = transform;
+    let mirrored =
+        t[0] * (t[5] * t[10] - t[6] * t[9]) - t[1] * (t[4] * t[10] - t[6] * t[8]) + t[2] * (t[4] * t[9] - t[5] * t[8]) < 0.0;
     let mut written = Vec::with_capacity(meshes.len());
     for (label, mesh) in meshes {
         let model: Vec<Vec3> = mesh
@@ -209,13 +213,6 @@ pub fn legacy_block(
                 glam::DVec3::new(row(0), row(1), row(2)).as_vec3()
             })
             .collect();
-        // A mirroring transform reverses the winding, as it does for every isolab mesh.
-        let mirrored = {
-            let t = transform;
-            let det =
-                t[0] * (t[5] * t[10] - t[6] * t[9]) - t[1] * (t[4] * t[10] - t[6] * t[8]) + t[2] * (t[4] * t[9] - t[5] * t[8]);
-            det < 0.0
-        };
         let triangles: Vec<[u32; 3]> =
             if mirrored { mesh.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect() } else { mesh.triangles.clone() };
         let path = out.join(legacy_fragment_name(label, id.map(|v| v as u32)));

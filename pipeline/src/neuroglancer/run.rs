@@ -82,6 +82,22 @@ pub fn window(values: LabelSamples<'_>, map_dims: [usize; 3], lo: [usize; 3], di
     }
 }
 
+/// Block `id`'s window of the whole map (what `plan.widened(MARGIN).block(id)` reads), labels
+/// outside `keep` as background when given.
+fn block_window(
+    plan: &LabelBlockPlan,
+    values: LabelSamples<'_>,
+    keep: Option<&[u32]>,
+    id: [usize; 3],
+) -> Result<LabelValues, NgError> {
+    let b = plan.widened(MARGIN).block(id).ok_or_else(|| NgError::Invalid(format!("block {id:?} is outside the plan")))?;
+    let samples = window(values, plan.dims, b.lo, b.dims);
+    Ok(match keep {
+        Some(keep) => samples.as_slice().keep_only(keep),
+        None => samples,
+    })
+}
+
 /// Writes a multi-resolution source of the map `values` (`plan.dims` samples, labels outside
 /// `keep` as background when given) into `out`.
 pub fn write_source(
@@ -97,7 +113,6 @@ pub fn write_source(
     }
     let layout = Layout::new(plan, config.lods, config.bits).map_err(NgError::Invalid)?;
     let work = out.join(".isolab-work");
-    let wide = plan.widened(MARGIN);
     let mut seconds = Vec::new();
     let mut clock = std::time::Instant::now();
     let mut lap = |seconds: &mut Vec<f64>| {
@@ -108,11 +123,7 @@ pub fn write_source(
     let level0: Vec<([u32; 3], BoxIndex)> = blocks
         .par_iter()
         .map(|&id| {
-            let b = wide.block(id).ok_or_else(|| NgError::Invalid(format!("block {id:?} is outside the plan")))?;
-            let mut samples = window(values, plan.dims, b.lo, b.dims);
-            if let Some(keep) = keep {
-                samples = samples.as_slice().keep_only(keep);
-            }
+            let samples = block_window(plan, values, keep, id)?;
             let index = level0_box(extractor, plan, &layout, id, samples.as_slice(), &work)?;
             Ok((id.map(|v| v as u32), index))
         })
@@ -172,16 +183,11 @@ fn write_legacy(
     config: &NgConfig,
 ) -> Result<NgReport, NgError> {
     let started = std::time::Instant::now();
-    let wide = plan.widened(MARGIN);
     let blocks: Vec<[usize; 3]> = plan.blocks().map(|b| b.id).collect();
     let written: Vec<BlockFragments> = blocks
         .par_iter()
         .map(|&id| {
-            let b = wide.block(id).ok_or_else(|| NgError::Invalid(format!("block {id:?} is outside the plan")))?;
-            let mut samples = window(values, plan.dims, b.lo, b.dims);
-            if let Some(keep) = keep {
-                samples = samples.as_slice().keep_only(keep);
-            }
+            let samples = block_window(plan, values, keep, id)?;
             let rows = super::legacy_block(extractor, plan, id, samples.as_slice(), config.transform, out)?;
             Ok((id.map(|v| v as u32), rows))
         })

@@ -69,7 +69,7 @@ fn no_extractor_self_intersects_more_than_measured() {
 #[test]
 fn no_marching_cubes_cell_folds_over_itself() {
     const DRAWS: usize = 3000;
-    for name in ["marching-cubes", "marching-cubes-decider"] {
+    for name in ["marching-cubes", "marching-cubes-decider", "marching-cubes-33"] {
         let extractor = extractors::by_name(name).unwrap();
         let info = INFOS.iter().find(|i| i.name == name).unwrap();
         assert!(info.guarantees.intersection_free, "{name} declares itself free of self-intersections");

@@ -81,7 +81,8 @@ pub struct Case {
     pub next: [u8; 12],
     /// Bit `p` set when polygon `p` is fanned around an interior vertex at the mean of its edge
     /// crossings, referred to in `triangles` as `12 + p` (only some joined ambiguous faces need
-    /// it; the default table never does).
+    /// it; the default table never does). Marching cubes 33's tubes also set the bits of the
+    /// slots their waist ring takes (`crate::tables::marching_cubes_33`).
     pub interior: u8,
 }
 

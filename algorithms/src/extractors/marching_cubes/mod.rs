@@ -245,7 +245,7 @@ pub const MC33_INFO: ExtractorInfo = ExtractorInfo {
         closed: true,
         manifold: true,
         outward: true,
-        intersection_free: false,
+        intersection_free: true,
         trilinear_topology: true,
         keeps_small_parts: true,
         dihedral: None,
@@ -665,16 +665,23 @@ impl<'a, T: Sample> Ctx<'a, T> {
     /// The table entry of a surface cell: the default table's, or with the decider, the one for
     /// the ambiguous faces whose inside corners the trilinear interpolant joins.
     #[inline(always)]
-    fn entry(&self, case: usize, corners: &[usize; 8]) -> &'static Case {
+    fn entry(&self, case: usize, corners: &[usize; 8], cell: [usize; 3]) -> &'static Case {
+        self.cell_entry(case, corners, cell).0
+    }
+
+    /// [`Ctx::entry`], with marching cubes 33's tube vertex where it is not Lewiner's centre
+    /// ([`marching_cubes_33::CellEntry`]).
+    #[inline(always)]
+    fn cell_entry(&self, case: usize, corners: &[usize; 8], cell: [usize; 3]) -> marching_cubes_33::CellEntry {
         let ambiguous = AMBIGUOUS_FACES[case];
         if self.faces == FaceResolution::SeparateInside {
             if ambiguous == 0 || self.t_min > 0.0 {
-                return &TABLE[case];
+                return (&TABLE[case], None);
             }
-            return self.tie_entry(case, ambiguous, corners);
+            return (self.tie_entry(case, ambiguous, corners), None);
         }
         if ambiguous == 0 && (self.faces != FaceResolution::Trilinear || !marching_cubes_33::may_tunnel(case as u8)) {
-            return &TABLE[case];
+            return (&TABLE[case], None);
         }
         let g = corners.map(|k| f64::from(self.values.read(k)) - f64::from(self.iso));
         let mut joins = 0usize;
@@ -684,24 +691,31 @@ impl<'a, T: Sample> Ctx<'a, T> {
             }
         }
         if self.faces == FaceResolution::Trilinear {
-            return marching_cubes_33::entry(case as u8, joins as u8, &g);
+            return marching_cubes_33::entry(
+                case as u8,
+                joins as u8,
+                &g,
+                &marching_cubes_33::CellFrame { grid: self.grid, cell },
+            );
         }
-        &FACE_CHOICE_TABLE[case * 64 + joins]
+        (&FACE_CHOICE_TABLE[case * 64 + joins], None)
     }
 
-    /// The default table's entry, except that an ambiguous face whose two outside corners are
-    /// both at the iso-value joins its inside corners (interpolated exactly, `on-iso=exact`).
-    /// Joined across such a face, the outside corners would make a tube of no thickness: with
-    /// three of them in a cell, two triangles on the same three corners, back to back (the
-    /// duplicate faces scikit-image's classic table makes, its issue #8109). Both cells of a face
-    /// decide from its four values, so the surface stays closed.
+    /// The default table's entry, except on an ambiguous face with a corner at the iso-value
+    /// (interpolated exactly, `on-iso=exact`), which the asymptotic decider resolves. Separated
+    /// there, the inside corners would leave the outside a passage of no thickness through a
+    /// corner at the level: two triangles on the same three vertices, back to back (the
+    /// duplicate faces scikit-image's classic table makes, its issue #8109; where both outside
+    /// corners are at the level, the decider always joins). Both cells of a face decide from its
+    /// four values, so the surface stays closed. `tests/tests/ties.rs` holds every pattern of
+    /// corners at the level to no duplicate face.
     #[cold]
     fn tie_entry(&self, case: usize, ambiguous: u8, corners: &[usize; 8]) -> &'static Case {
         let mut joins = 0usize;
         for (f, (cycle, _)) in FACES.iter().enumerate() {
-            let outside_at_iso =
-                cycle.iter().filter(|&&k| case >> k & 1 == 0).all(|&k| self.values.read(corners[k as usize]) == self.iso);
-            joins |= usize::from(ambiguous >> f & 1 == 1 && outside_at_iso) << f;
+            let v = cycle.map(|k| f64::from(self.values.read(corners[k as usize])) - f64::from(self.iso));
+            let any_at_iso = v.contains(&0.0);
+            joins |= usize::from(ambiguous >> f & 1 == 1 && any_at_iso && decider_joins_inside(v)) << f;
         }
         &FACE_CHOICE_TABLE[case * 64 + joins]
     }
@@ -713,7 +727,7 @@ impl<'a, T: Sample> Ctx<'a, T> {
         let mut active = 0;
         self.for_each_surface_cell(signs, z, |x, y, case, corners| {
             active += 1;
-            let entry = self.entry(case, &corners);
+            let (entry, placed) = self.cell_entry(case, &corners, [x, y, z]);
             let e = x + nx * y;
             let mut ids = [0u32; 16];
             let mut mask = entry.edge_mask;
@@ -736,7 +750,7 @@ impl<'a, T: Sample> Ctx<'a, T> {
                 };
             }
             if entry.interior != 0 {
-                self.interior_vertices(entry, &corners, [x, y, z], &mut ids, sink);
+                self.interior_vertices(entry, placed, &corners, [x, y, z], &mut ids, sink);
             }
             if self.cell_ranges {
                 // The cell's range raises its edges' vertices' values (every cell around a
@@ -760,14 +774,25 @@ impl<'a, T: Sample> Ctx<'a, T> {
 
     /// Vertices inside the cell for the polygons the table fans around one (joined ambiguous
     /// faces only): the mean of the polygon's edge crossings, stored in `ids[12 + polygon]`; for
-    /// marching cubes 33, Lewiner et al.'s centre ([`marching_cubes_33::lewiner_centre`]).
-    fn interior_vertices(&self, entry: &Case, corners: &[usize; 8], cell: [usize; 3], ids: &mut [u32; 16], sink: &mut impl Sink) {
+    /// marching cubes 33, Lewiner et al.'s centre ([`marching_cubes_33::lewiner_centre`]), or
+    /// where the cell's tube `placed` its own (a slot past the polygons: a waist ring's).
+    fn interior_vertices(
+        &self,
+        entry: &Case,
+        placed: Option<marching_cubes_33::Placed>,
+        corners: &[usize; 8],
+        cell: [usize; 3],
+        ids: &mut [u32; 16],
+        sink: &mut impl Sink,
+    ) {
         let values = corners.map(|i| self.values.read(i));
-        for piece in 0..entry.polygons {
+        for piece in 0..4u8 {
             if entry.interior >> piece & 1 == 0 {
                 continue;
             }
-            let local = if self.faces == FaceResolution::Trilinear {
+            let local = if let Some(p) = placed.filter(|p| p.mask >> piece & 1 == 1) {
+                p.at[usize::from(piece)]
+            } else if self.faces == FaceResolution::Trilinear {
                 marching_cubes_33::lewiner_centre(values.map(|v| v - self.iso))
             } else {
                 self.crossings_mean(entry, piece, &values)
@@ -798,7 +823,7 @@ impl<'a, T: Sample> Ctx<'a, T> {
 
     /// Interior vertices a cell's entry makes ([`Ctx::interior_vertices`]).
     fn interior_count(entry: &Case) -> usize {
-        (0..entry.polygons).filter(|&piece| entry.interior >> piece & 1 == 1).count()
+        entry.interior.count_ones() as usize
     }
 
     /// What [`Ctx::slab`] will write for cell layers `z0..z1`, from the sign bits alone (and the
@@ -825,8 +850,8 @@ impl<'a, T: Sample> Ctx<'a, T> {
                 before_top = vertices;
             }
             vertices += layer_edges(signs, z + 1);
-            self.for_each_surface_cell(signs, z, |_, _, case, corners| {
-                let entry = self.entry(case, &corners);
+            self.for_each_surface_cell(signs, z, |x, y, case, corners| {
+                let entry = self.entry(case, &corners, [x, y, z]);
                 triangles += entry.triangles().len();
                 if entry.interior != 0 {
                     vertices += Self::interior_count(entry);

@@ -29,22 +29,38 @@
 //! faces is fanned around one vertex inside the cell instead, as Lewiner et al.'s case 6.1.2 is.
 //! Where a polygon has eight or more vertices it is fanned around that vertex too, as their
 //! tables do (their cases 7.3, 10.2, 12.2, 13.3 and 13.4). The vertex is at their centre: the
-//! corners' mean weighted by the inverse distance of each corner's value from the iso-value.
+//! corners' mean weighted by the inverse distance of each corner's value from the iso-value,
+//! kept a thousandth of the cell inside its faces (where a corner lies at the iso-value,
+//! Lewiner's centre is that corner, where the neighbouring cells' triangles cross its fan).
 //! Everything else is the face-choice table's.
 //!
-//! A tunnel keeps several tube triangulations (other bands, and bands with a run fanned around
-//! the centre vertex); each cell takes the first that does not cross itself at its own vertex
-//! positions (the exact predicate, on the crossings and centre the cell's values give), else the
-//! first. Tables are built per (pattern, face choices, tunnel) the first time a cell needs them.
+//! **No tube crosses itself.** A tunnel keeps several tube triangulations (other bands, and
+//! bands with a run fanned around the centre vertex); each cell takes the first that does not
+//! cross or fold onto itself at its own vertex positions (the exact predicate, on the crossings
+//! and centre the cell's values give, computed as the engine computes them). Where none does
+//! (a thin tunnel between skewed loops, as a few cells of the MNI T1 template in `real_volumes`
+//! have), the tube is drawn through the tunnel's **waist**: a ring of three
+//! level-set points around the interpolant's body saddle ([`waist`]), a band from each loop to
+//! the ring, the first pair of bands that keeps off itself and the cell's other triangles.
+//! Failing that, the tube's own vertex moves from Lewiner's centre to the nearest point of an
+//! 8³ lattice in the cell where a fanned tube keeps off itself. Failing all (a tunnel too thin
+//! to draw: at a critical value of the interpolant its walls touch), the tunnel is left out and
+//! the cell keeps the two discs; the topology tests allow a cell to differ from the
+//! interpolant only within a hair of a critical value.
+//! `tests/tests/marching_cubes_33.rs` and `tests/tests/self_intersections.rs` hold the whole
+//! mesh to no crossing on every sign pattern (tunnel draws and corner-crowding draws), and the
+//! contract test on corners at the iso-value. Tables are built per (pattern, face choices,
+//! tunnel) the first time a cell needs them; waist tubes per (pattern, face choices, tunnel,
+//! bands) the first time one is chosen.
 
 use super::marching_cubes::{
-    chain_polygons, crosses_at, fan_around, triangulate, Case, FaceRule, AMBIGUOUS_FACES, EDGES, FACES, FACE_CHOICE_TABLE,
-    MAX_TRIANGLES,
+    chain_polygons, fan_around, triangulate, Case, FaceRule, AMBIGUOUS_FACES, EDGES, FACES, FACE_CHOICE_TABLE, MAX_TRIANGLES,
 };
 use std::sync::{LazyLock, OnceLock};
 use tubes::tubes;
 
 mod tubes;
+mod waist;
 
 /// Polygons of at least this many vertices are fanned around the cell's centre vertex.
 pub const CENTRE_FAN_VERTICES: usize = 8;
@@ -273,7 +289,10 @@ pub fn may_tunnel(case: u8) -> bool {
 
 /// The vertex inside a cell that Lewiner et al.'s tables fan polygons around (scikit-image's
 /// `calculate_center_vertex`): the cell's corners averaged with weights `1 / (ε + |g|)` for
-/// corner values `g` minus the iso-value (ε: `f32::EPSILON`), in cell-local coordinates.
+/// corner values `g` minus the iso-value (ε: `f32::EPSILON`), in cell-local coordinates, kept
+/// [`CENTRE_MARGIN`] inside the cell's faces. (Unclamped, a corner at the iso-value takes all
+/// the weight and the vertex lands on that corner, shared with seven other cells, where their
+/// triangles cross its fan: scikit-image's does.)
 pub fn lewiner_centre(g: [f32; 8]) -> glam::Vec3 {
     let (mut sum, mut total) = (glam::Vec3::ZERO, 0.0f32);
     for (c, v) in g.iter().enumerate() {
@@ -281,50 +300,175 @@ pub fn lewiner_centre(g: [f32; 8]) -> glam::Vec3 {
         sum += w * glam::Vec3::from(super::marching_cubes::CORNERS[c].map(f32::from));
         total += w;
     }
-    sum / total
+    (sum / total).clamp(glam::Vec3::splat(CENTRE_MARGIN), glam::Vec3::splat(1.0 - CENTRE_MARGIN))
 }
+
+/// How far inside the cell's faces [`lewiner_centre`] stays (in cell widths): ten times as far
+/// as an edge crossing is kept from a corner (the engine's default, `1e-4`).
+pub const CENTRE_MARGIN: f32 = 1e-3;
+
+/// Interior vertices a cell places elsewhere than [`lewiner_centre`]: bit `k` of `mask` for slot
+/// `12 + k`, at `at[k]` (cell-local coordinates).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Placed {
+    /// The slots placed here.
+    pub mask: u8,
+    /// Their positions.
+    pub at: [glam::Vec3; 4],
+}
+
+/// Where a cell lies, so that its vertex positions are checked exactly as the engine computes
+/// them (in `f32`, from its grid: rounding can move a vertex onto another triangle): its grid
+/// and the sample index of its corner 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CellFrame {
+    /// The cell's grid.
+    pub grid: crate::Grid,
+    /// The sample index of its corner 0.
+    pub cell: [usize; 3],
+}
+
+impl CellFrame {
+    /// The unit cell at the origin.
+    pub const UNIT: CellFrame =
+        CellFrame { grid: crate::Grid { origin: glam::Vec3::ZERO, spacing: 1.0, dims: [2, 2, 2] }, cell: [0, 0, 0] };
+
+    /// The position of corner `c`, as the engine computes a sample's.
+    fn corner(&self, c: u8) -> glam::Vec3 {
+        let [x, y, z] = super::marching_cubes::CORNERS[c as usize].map(usize::from);
+        self.grid.position(self.cell[0] + x, self.cell[1] + y, self.cell[2] + z)
+    }
+
+    /// The position of cell-local point `p`, as the engine computes an interior vertex's.
+    fn place(&self, p: glam::Vec3) -> glam::Vec3 {
+        self.grid.position(self.cell[0], self.cell[1], self.cell[2]) + p * self.grid.spacing
+    }
+}
+
+/// A cell's table entry and the interior vertices its tube places itself ([`Placed`]).
+pub type CellEntry = (&'static Case, Option<Placed>);
 
 /// The table entry of a cell with pattern `case` (bit `c`: corner `c` inside), face choices
 /// `joins` (bit `f`: ambiguous face `f` joins its inside corners) and corner values `g` (minus
-/// the iso-value).
-pub fn entry(case: u8, joins: u8, g: &[f64; 8]) -> &'static Case {
+/// the iso-value), placed at `frame`, with the tube's own interior vertices where it needs them
+/// ([`CellEntry`]).
+///
+/// A tube takes, in this order, the first triangulation that does not cross itself (the exact
+/// predicate, at the cell's own vertex positions): around Lewiner's centre (as scikit-image
+/// places it); else drawn through the tunnel's waist, a ring of three level-set points around its
+/// body saddle ([`waist::ring`]); else fanned around the nearest point of a lattice inside the
+/// cell where it keeps off itself ([`centre_candidates`]). Failing all, no tube: the discs.
+pub fn entry(case: u8, joins: u8, g: &[f64; 8], frame: &CellFrame) -> CellEntry {
     let joins = joins & AMBIGUOUS_FACES[case as usize];
     let key = case as usize * 64 + joins as usize;
     let tables = &*TABLES;
     let candidates = &tables.candidates[key];
+    let discs =
+        || fans_kept_off(&tables.cases[key * (MAX_CANDIDATES + 1)].get_or_init(|| variants(case, joins, None))[0], g, frame);
     if candidates.is_empty() {
         if !tables.fanned[key] {
-            return &FACE_CHOICE_TABLE[key];
+            return (&FACE_CHOICE_TABLE[key], None);
         }
-        return &tables.cases[key * (MAX_CANDIDATES + 1)].get_or_init(|| variants(case, joins, None))[0];
+        return discs();
     }
     let components = interior_components(*g);
-    let slot =
-        candidates.iter().position(|c| components[c.corners.0 as usize] == components[c.corners.1 as usize]).map_or(0, |k| k + 1);
-    let choices = tables.cases[key * (MAX_CANDIDATES + 1) + slot]
-        .get_or_init(|| variants(case, joins, slot.checked_sub(1).map(|k| candidates[k].polygons)));
-    if choices.len() == 1 {
-        return &choices[0];
+    let Some(k) = candidates.iter().position(|c| components[c.corners.0 as usize] == components[c.corners.1 as usize]) else {
+        return discs();
+    };
+    let tunnel = candidates[k];
+    let choices = tables.cases[key * (MAX_CANDIDATES + 1) + k + 1].get_or_init(|| variants(case, joins, Some(tunnel.polygons)));
+    let piece = tunnel.polygons.0;
+    let mut at = cell_points(g, frame);
+    if let Some(c) = choices.iter().find(|c| !meets_at(c.triangles(), &at)) {
+        return (c, None);
     }
-    // A tube: the first triangulation that does not cross itself at this cell's own vertices.
-    let at = cell_points(g);
-    choices.iter().find(|c| !crosses_at(c.triangles(), &at)).unwrap_or(&choices[0])
+    // Through the tunnel's waist.
+    if let Some(found) = waist::through_waist(case, joins, g, (key, k), tunnel, frame, &mut at) {
+        return found;
+    }
+    at = cell_points(g, frame);
+    // Around another place of the tube's own vertex.
+    let slot = 12 + usize::from(piece);
+    let fanned: Vec<&Case> = choices.iter().filter(|c| c.interior >> piece & 1 == 1).collect();
+    for centre in centre_candidates(lewiner_centre(g.map(|v| v as f32))) {
+        at[slot] = frame.place(centre);
+        if let Some(c) = fanned.iter().find(|c| !meets_at(c.triangles(), &at)) {
+            let mut placed = Placed { mask: 1 << piece, ..Placed::default() };
+            placed.at[usize::from(piece)] = centre;
+            return (c, Some(placed));
+        }
+    }
+    // A tunnel too thin to draw (at a critical value, where it has no thickness): left out, the
+    // two discs as the boundary has them.
+    discs()
 }
 
-/// A cell's vertex positions in cell-local coordinates for corner values `g` (minus the
-/// iso-value): the crossing of each edge that changes sign (linear, kept 1e-4 from the edge's
-/// ends as the engine keeps them by default), then the centre vertex ([`lewiner_centre`]) in
-/// the four interior slots (vertex slots as [`crosses_at`] reads them).
-fn cell_points(g: &[f64; 8]) -> [glam::Vec3; 16] {
-    let corner = |c: u8| glam::Vec3::from(super::marching_cubes::CORNERS[c as usize].map(f32::from));
-    let centre = lewiner_centre(g.map(|v| v as f32));
+/// `entry` (no tube) with its fanned polygons' vertex kept off the cell's other triangles: at
+/// Lewiner's centre where the fans meet nothing there (the exact predicate, at the cell's own
+/// vertex positions), else at the nearest lattice point where they meet nothing
+/// ([`centre_candidates`]; every fan around the one point).
+fn fans_kept_off(entry: &'static Case, g: &[f64; 8], frame: &CellFrame) -> CellEntry {
+    if entry.interior == 0 {
+        return (entry, None);
+    }
+    let mut at = cell_points(g, frame);
+    if !meets_at(entry.triangles(), &at) {
+        return (entry, None);
+    }
+    for centre in centre_candidates(lewiner_centre(g.map(|v| v as f32))) {
+        at[12..].fill(frame.place(centre));
+        if !meets_at(entry.triangles(), &at) {
+            return (entry, Some(Placed { mask: entry.interior, at: [centre; 4] }));
+        }
+    }
+    (entry, None)
+}
+
+/// Points per axis of the lattice [`centre_candidates`] tries.
+const CENTRE_LATTICE: usize = 8;
+
+/// The places a tube's interior vertex is tried at when Lewiner's centre `from` gives no tube
+/// free of crossings: the points of a lattice of [`CENTRE_LATTICE`]³ inside the cell (each at
+/// least half a lattice step from its faces), nearest `from` first (ties in lattice order).
+fn centre_candidates(from: glam::Vec3) -> impl Iterator<Item = glam::Vec3> {
+    let n = CENTRE_LATTICE;
+    let mut points: Vec<glam::Vec3> = (0..n * n * n)
+        .map(|i| (glam::Vec3::new((i % n) as f32, (i / n % n) as f32, (i / (n * n)) as f32) + 0.5) / n as f32)
+        .collect();
+    points.sort_by(|a, b| a.distance_squared(from).total_cmp(&b.distance_squared(from)));
+    points.into_iter()
+}
+
+/// A cell's vertex positions for corner values `g` (minus the iso-value) at `frame`, as the
+/// engine computes them: the crossing of each edge that changes sign, in `f32` from the edge's
+/// lower end (linear, kept 1e-4 from the edge's ends as the engine keeps them by default), then
+/// the centre vertex ([`lewiner_centre`]) in the four interior slots (vertex slots as
+/// [`meets_at`] reads them).
+fn cell_points(g: &[f64; 8], frame: &CellFrame) -> [glam::Vec3; 16] {
+    let centre = frame.place(lewiner_centre(g.map(|v| v as f32)));
+    let spacing = frame.grid.spacing;
     std::array::from_fn(|i| match EDGES.get(i) {
         Some(&(a, b)) => {
-            let (ga, gb) = (g[a as usize], g[b as usize]);
-            let t = if (ga < 0.0) != (gb < 0.0) { (ga / (ga - gb)).clamp(1e-4, 1.0 - 1e-4) as f32 } else { 0.5 };
-            corner(a) + (corner(b) - corner(a)) * t
+            let (pa, pb) = (frame.corner(a), frame.corner(b));
+            let (lo, hi) = if pa.cmple(pb).all() { (a, b) } else { (b, a) };
+            let (ga, gb) = (g[lo as usize] as f32, g[hi as usize] as f32);
+            let t = if (ga < 0.0) != (gb < 0.0) { (-ga / (gb - ga)).clamp(1e-4, 1.0 - 1e-4) } else { 0.5 };
+            let mut p = frame.corner(lo);
+            let axis = (frame.corner(hi) - p).abs().max_position();
+            p[axis] += t * spacing;
+            p
         }
         None => centre,
+    })
+}
+
+/// Whether any two triangles of `t` (vertex slots into `at`) meet beyond what they share, as
+/// the self-intersection metric counts it: crossings, and triangles sharing a side folded
+/// onto each other.
+fn meets_at(t: &[[u8; 3]], at: &[glam::Vec3; 16]) -> bool {
+    (0..t.len()).any(|i| {
+        (i + 1..t.len())
+            .any(|j| crate::predicates::indexed_triangles_intersect(t[i].map(u32::from), t[j].map(u32::from), |v| at[v as usize]))
     })
 }
 
@@ -378,6 +522,8 @@ fn assemble(case: u8, (edge_mask, next, polygons): (u16, [u8; 12], &[Vec<u8>]), 
         }
     }
     assert!(triangles.len() <= MAX_TRIANGLES, "case {case}: {} triangles", triangles.len());
+    // Every interior slot a triangle uses (a waist ring's too).
+    interior |= triangles.iter().flatten().filter(|&&v| v >= 12).fold(0u8, |m, &v| m | 1 << (v - 12));
     let mut fixed = [[0u8; 3]; MAX_TRIANGLES];
     fixed[..triangles.len()].copy_from_slice(&triangles);
     Case {
@@ -412,7 +558,8 @@ mod tests {
         assert_eq!(c[0], c[6]);
         let case = 1 | 1 << 6;
         assert_eq!(candidates(case, 0).len(), 1);
-        let tube = entry(case, 0, &g);
+        let (tube, placed) = entry(case, 0, &g, &CellFrame::UNIT);
+        assert_eq!(placed, None, "Lewiner's centre serves");
         assert_eq!((tube.count, tube.interior), (6, 0), "two triangles become a tube of six");
     }
 

@@ -37,8 +37,8 @@ fn anywhere(_: u8, _: u8) -> bool {
 }
 
 /// Most tube triangulations kept for one tunnel, and most bands they are made from.
-const TUBE_VARIANTS: usize = 48;
-const TUBE_BANDS: usize = 8;
+const TUBE_VARIANTS: usize = 256;
+const TUBE_BANDS: usize = 64;
 
 /// The tube triangulations between loops `a` and `b` a cell chooses from, its own vertex positions
 /// deciding ([`entry`]): [`tube`]'s first, then other valid bands (sides off the faces, failing
@@ -49,13 +49,13 @@ pub(super) fn tubes(a: &[u8], b: &[u8], centre: u8) -> Vec<Vec<[u8; 3]>> {
     let Some(first) = tube(a, b, centre) else {
         return Vec::new();
     };
-    let mut bands = band_list(a, b, &off_faces);
+    let mut bands = band_list(a, b, &off_faces, TUBE_BANDS);
     if bands.is_empty() {
-        bands = band_list(a, b, &off_lower_faces);
+        bands = band_list(a, b, &off_lower_faces, TUBE_BANDS);
     }
     let plain = !bands.is_empty();
     if !plain {
-        bands = band_list(a, b, &anywhere);
+        bands = band_list(a, b, &anywhere, TUBE_BANDS);
     }
     let mut out = vec![first];
     if plain {
@@ -74,9 +74,9 @@ pub(super) fn tubes(a: &[u8], b: &[u8], centre: u8) -> Vec<Vec<[u8; 3]>> {
     out
 }
 
-/// Up to [`TUBE_BANDS`] bands between loops `a` and `b` whose sides between the loops are all
+/// Up to `limit` bands between loops `a` and `b` whose sides between the loops are all
 /// `allowed`.
-fn band_list(a: &[u8], b: &[u8], allowed: &dyn Fn(u8, u8) -> bool) -> Vec<Vec<[u8; 3]>> {
+fn band_list(a: &[u8], b: &[u8], allowed: &dyn Fn(u8, u8) -> bool, limit: usize) -> Vec<Vec<[u8; 3]>> {
     let (m, n) = (a.len(), b.len());
     let mut out = Vec::new();
     let mut band = Vec::with_capacity(m + n);
@@ -85,10 +85,10 @@ fn band_list(a: &[u8], b: &[u8], allowed: &dyn Fn(u8, u8) -> bool) -> Vec<Vec<[u
             if allowed(a[i0], b[j0]) {
                 walk((a, b), (i0, j0 + n), (m, n), 1 << (i0 * n + j0), allowed, &mut band, &mut |t| {
                     out.push(t.to_vec());
-                    out.len() >= TUBE_BANDS
+                    out.len() >= limit
                 });
             }
-            if out.len() >= TUBE_BANDS {
+            if out.len() >= limit {
                 return out;
             }
         }
@@ -226,4 +226,38 @@ fn walk(
         band.pop();
     }
     false
+}
+
+/// The two halves of the tubes between loops `a` and `b` drawn through a ring of three interior
+/// vertices (slots `ring`, in positive turn around the axis from `a` to `b` as
+/// [`super::waist::ring`] places them): for each turn of the ring (the loops' winding decides
+/// which fits), every distinct band from `a` to the ring and every one from the ring to `b`. A
+/// tube is one of each; each ring side is then used once each way, so it stays a wound annulus.
+pub(super) fn ring_halves(a: &[u8], b: &[u8], ring: [u8; 3]) -> [RingHalves; 2] {
+    [ring, [ring[0], ring[2], ring[1]]].map(|ring| {
+        let back = [ring[0], ring[2], ring[1]];
+        RingHalves {
+            upper: distinct(band_list(a, &ring, &anywhere, usize::MAX)),
+            lower: distinct(band_list(&back, b, &anywhere, usize::MAX)),
+        }
+    })
+}
+
+/// The bands on each side of a waist ring ([`ring_halves`]).
+pub(super) struct RingHalves {
+    /// From the first loop to the ring.
+    pub upper: Vec<Vec<[u8; 3]>>,
+    /// From the ring to the second loop.
+    pub lower: Vec<Vec<[u8; 3]>>,
+}
+
+/// `bands` without repeats (the same triangles walked from another start).
+fn distinct(mut bands: Vec<Vec<[u8; 3]>>) -> Vec<Vec<[u8; 3]>> {
+    let mut seen = std::collections::HashSet::new();
+    bands.retain(|t| {
+        let mut key = t.clone();
+        key.sort_unstable();
+        seen.insert(key)
+    });
+    bands
 }

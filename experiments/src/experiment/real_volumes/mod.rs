@@ -48,6 +48,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 mod islands;
+mod lewiner;
 mod page;
 mod second;
 
@@ -133,6 +134,10 @@ pub(crate) struct Data {
     /// Each of our extractors' options as it ran (absent from runs before they were recorded).
     #[serde(default)]
     pub(crate) settings: Vec<(String, String)>,
+    /// `marching-cubes-33` against scikit-image's Lewiner, cell by cell, per level (absent from
+    /// runs before it was added).
+    #[serde(default)]
+    pub(crate) lewiner_cells: Vec<lewiner::CellCounts>,
 }
 
 /// The iso-values: Otsu of all voxels, then Otsu of the voxels above the first.
@@ -413,6 +418,15 @@ impl Experiment for RealVolumes {
             }
             _ => data.skipped.push(format!("the second volume: nibabel's example4d.nii.gz not found ({})", hello["errors"])),
         }
+        match lewiner::classify(&root, path, &data.levels) {
+            Ok((rows, versions)) => {
+                data.lewiner_cells = rows;
+                for (k, v) in versions {
+                    data.versions.entry(k).or_insert(v);
+                }
+            }
+            Err(e) => data.skipped.push(format!("the cell-by-cell comparison with scikit-image's Lewiner: {e}")),
+        }
         bar.finish();
         ctx.write_data(NAME, &data)
     }
@@ -507,6 +521,7 @@ impl Experiment for RealVolumes {
         }
         s.push_str(&comparison_notes(&data));
         s.push_str(&islands_section(&data));
+        s.push_str(&lewiner::section(&data));
         let rows: Vec<Vec<String>> = data
             .end_to_end
             .iter()

@@ -14,6 +14,8 @@ use std::path::Path;
 /// One level's cells by reason.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub(crate) struct CellCounts {
+    /// The level's name (the script gives the iso-value only).
+    #[serde(default)]
     pub(crate) level: String,
     pub(crate) iso: f32,
     /// Cells by reason, and "same" (and "same, with a centre": both put a vertex inside).

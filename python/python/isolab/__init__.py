@@ -97,11 +97,13 @@ def marching_cubes(volume: np.ndarray, level: Optional[float] = None, *, spacing
         interpolant's level set, the ambiguous faces by the asymptotic decider and the tunnels
         through a cell's interior by an exact test (scikit-image's Lewiner tests one slice of the
         cell, which errs on some cells; tested against a fine sampling of the interpolant). Like
-        scikit-image it adds a vertex inside some cells, at the same weighted centre; a tunnel's
-        tube may be triangulated otherwise than scikit-image's, each cell taking one that does
-        not cross itself at its own vertices where one of its choices does not. The
-        mesh is closed wherever it does not reach the volume's boundary and manifold, and no
-        triangle has zero area (a crossing within 1e-4 of a sample is kept that far from it).
+        scikit-image it adds a vertex inside some cells, at the same weighted centre (kept a
+        thousandth of the cell inside its faces); a tunnel's tube may be drawn otherwise than
+        scikit-image's, each cell taking one that does not cross itself at its own vertices
+        (another triangulation, a ring of three vertices around the tunnel's waist, or its
+        centre vertex moved), so the mesh never crosses itself. The mesh is closed wherever it
+        does not reach the volume's boundary and manifold, and no triangle has zero area (a
+        crossing within 1e-4 of a sample is kept that far from it).
     mask : (M, N, P) bool array, optional
         Only the cells whose highest corner (the largest index along every axis) is True are
         meshed, the corner scikit-image reads the mask at.

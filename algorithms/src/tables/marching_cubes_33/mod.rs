@@ -40,7 +40,7 @@
 //! and centre the cell's values give, computed as the engine computes them). Where none does
 //! (a thin tunnel between skewed loops, as a few cells of the MNI T1 template in `real_volumes`
 //! have), the tube is drawn through the tunnel's **waist**: a ring of three
-//! level-set points around the interpolant's body saddle ([`waist`]), a band from each loop to
+//! level-set points around the interpolant's body saddle (`waist.rs`), a band from each loop to
 //! the ring, the first pair of bands that keeps off itself and the cell's other triangles.
 //! Failing that, the tube's own vertex moves from Lewiner's centre to the nearest point of an
 //! 8³ lattice in the cell where a fanned tube keeps off itself. Failing all (a tunnel too thin
@@ -356,8 +356,8 @@ pub type CellEntry = (&'static Case, Option<Placed>);
 /// A tube takes, in this order, the first triangulation that does not cross itself (the exact
 /// predicate, at the cell's own vertex positions): around Lewiner's centre (as scikit-image
 /// places it); else drawn through the tunnel's waist, a ring of three level-set points around its
-/// body saddle ([`waist::ring`]); else fanned around the nearest point of a lattice inside the
-/// cell where it keeps off itself ([`centre_candidates`]). Failing all, no tube: the discs.
+/// body saddle (`waist.rs`); else fanned around the nearest point of a lattice inside the
+/// cell where it keeps off itself. Failing all, no tube: the discs.
 pub fn entry(case: u8, joins: u8, g: &[f64; 8], frame: &CellFrame) -> CellEntry {
     let joins = joins & AMBIGUOUS_FACES[case as usize];
     let key = case as usize * 64 + joins as usize;

@@ -277,3 +277,15 @@ pub fn tunnel_corner_values(case: u8, random: &mut isolab_algorithms::random::Ra
         }
     })
 }
+
+/// An id per vertex of `positions`, equal for vertices at one position (bit for bit), drawn from
+/// and added to `ids` (so several meshes can share one numbering).
+pub fn position_ids(positions: &[Vec3], ids: &mut std::collections::HashMap<[u32; 3], u32>) -> Vec<u32> {
+    positions
+        .iter()
+        .map(|p| {
+            let n = ids.len() as u32;
+            *ids.entry(p.to_array().map(f32::to_bits)).or_insert(n)
+        })
+        .collect()
+}

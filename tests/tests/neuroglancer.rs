@@ -58,14 +58,7 @@ fn welded_topology(meshes: &[&TriMesh]) -> (usize, i64) {
     let mut edges: HashMap<(u32, u32), usize> = HashMap::new();
     let mut faces = 0i64;
     for m in meshes {
-        let map: Vec<u32> = m
-            .positions
-            .iter()
-            .map(|p| {
-                let n = ids.len() as u32;
-                *ids.entry(p.to_array().map(f32::to_bits)).or_insert(n)
-            })
-            .collect();
+        let map = isolab_tests::position_ids(&m.positions, &mut ids);
         for t in &m.triangles {
             faces += 1;
             let v = t.map(|i| map[i as usize]);

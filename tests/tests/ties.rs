@@ -32,15 +32,7 @@ fn pattern(p: usize) -> isolab_algorithms::Samples<'static> {
 
 /// The mesh's triangles with vertices at one position made one, those that collapse dropped.
 fn welded(mesh: &TriMesh) -> Vec<[u32; 3]> {
-    let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
-    let id: Vec<u32> = mesh
-        .positions
-        .iter()
-        .map(|p| {
-            let n = ids.len() as u32;
-            *ids.entry(p.to_array().map(f32::to_bits)).or_insert(n)
-        })
-        .collect();
+    let id = isolab_tests::position_ids(&mesh.positions, &mut HashMap::new());
     mesh.triangles.iter().map(|t| t.map(|v| id[v as usize])).filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).collect()
 }
 

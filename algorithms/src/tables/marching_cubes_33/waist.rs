@@ -138,6 +138,8 @@ struct Waist {
     halves: [RingHalves; 2],
     /// The other polygons' triangles.
     others: Vec<[u8; 3]>,
+    /// The entry's crossing edges, successors and polygons ([`chain_polygons`]).
+    chained: (u16, [u8; 12], Vec<Vec<u8>>),
 }
 
 /// [`Waist`]s built so far, by (table key, tunnel): few cells need one, so a map.
@@ -176,10 +178,10 @@ pub(super) fn through_waist(
             let (p, q) = tunnel.polygons;
             let others = assemble(case, (edge_mask, next, &polygons), Some(((p, q), &[]))).triangles().to_vec();
             let halves = ring_halves(&polygons[p as usize], &polygons[q as usize], slots);
-            Some(Arc::new(Waist { slots, halves, others }))
+            Some(Arc::new(Waist { slots, halves, others, chained: (edge_mask, next, polygons) }))
         })
         .clone()?;
-    let (_, _, polygons) = chain_polygons(case, face_rule(joins));
+    let (edge_mask, next, polygons) = &waist.chained;
     let centroid =
         |p: u8| polygons[p as usize].iter().map(|&e| at[e as usize]).sum::<glam::Vec3>() / polygons[p as usize].len() as f32;
     let inside = case >> tunnel.corners.0 & 1 == 1;
@@ -190,27 +192,28 @@ pub(super) fn through_waist(
         placed.mask |= 1 << (slot - 12);
         placed.at[slot as usize - 12] = p;
     }
-    let with_others = |band: &[[u8; 3]]| -> Vec<[u8; 3]> { band.iter().chain(&waist.others).copied().collect() };
+    // The triangles checked: the bands' first, the other polygons' after (one buffer).
+    let mut checked: Vec<[u8; 3]> = Vec::with_capacity(2 * MAX_TRIANGLES);
+    let mut meets = |bands: &[&[[u8; 3]]]| {
+        checked.clear();
+        bands.iter().for_each(|b| checked.extend_from_slice(b));
+        checked.extend_from_slice(&waist.others);
+        meets_at(&checked, at)
+    };
     for (turn, halves) in waist.halves.iter().enumerate() {
-        let keeps_off = |bands: &[Vec<[u8; 3]>]| -> Vec<usize> {
-            (0..bands.len()).filter(|&i| !meets_at(&with_others(&bands[i]), at)).collect()
-        };
-        let (upper, lower) = (keeps_off(&halves.upper), keeps_off(&halves.lower));
+        let upper: Vec<usize> = (0..halves.upper.len()).filter(|&i| !meets(&[&halves.upper[i]])).collect();
+        let lower: Vec<usize> = (0..halves.lower.len()).filter(|&j| !meets(&[&halves.lower[j]])).collect();
         for &i in &upper {
             for &j in &lower {
-                let tube: Vec<[u8; 3]> = halves.upper[i].iter().chain(&halves.lower[j]).copied().collect();
-                if tube.len() + waist.others.len() > MAX_TRIANGLES || meets_at(&with_others(&tube), at) {
+                let (u, l) = (&halves.upper[i], &halves.lower[j]);
+                if u.len() + l.len() + waist.others.len() > MAX_TRIANGLES || meets(&[u, l]) {
                     continue;
                 }
                 let entry =
                     *WAIST_ENTRIES.lock().unwrap_or_else(PoisonError::into_inner).entry(((key, k), turn, i, j)).or_insert_with(
                         || {
-                            let (edge_mask, next, polygons) = chain_polygons(case, face_rule(joins));
-                            Box::leak(Box::new(assemble(
-                                case,
-                                (edge_mask, next, &polygons),
-                                Some((tunnel.polygons, tube.as_slice())),
-                            )))
+                            let tube: Vec<[u8; 3]> = u.iter().chain(l).copied().collect();
+                            Box::leak(Box::new(assemble(case, (*edge_mask, *next, polygons), Some((tunnel.polygons, &tube)))))
                         },
                     );
                 return Some((entry, Some(placed)));

@@ -77,14 +77,15 @@ pub(super) fn section(data: &Data) -> String {
             row
         })
         .collect();
-    let mut s = String::from(
+    let mut s = format!(
         "### Cell by cell against scikit-image's Lewiner\n\n`marching-cubes-33` and scikit-image's Lewiner each mesh a cell from its eight corner \
          values alone, so every cell the surface crosses is compared on its own (each cell spread into its own block of a volume twice \
          the size, both libraries masked to those blocks). A cell is the same when both make as many triangles and put the same vertex \
-         inside it, if any (ours keeps Lewiner's centre a thousandth of the cell inside its faces). Every other cell is named by the \
+         inside it, if any (ours keeps Lewiner's centre {} of a cell inside its faces). Every other cell is named by the \
          interpolant's own level set in the cell, sampled finely: a topology scikit-image misses (its one-slice tunnel test), a tube ours \
          draws otherwise so that it does not cross itself, or a cell within a hair of a critical value, where neither can be judged. \
          The rules are `python/tests/lewiner_cells.py`'s, which the Python test holds to no unnamed cell.\n\n",
+        isolab_algorithms::tables::marching_cubes_33::CENTRE_MARGIN
     );
     s.push_str(&markdown_table(&header, &rows));
     for r in data.lewiner_cells.iter().filter(|r| r.unnamed > 0) {

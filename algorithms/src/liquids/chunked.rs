@@ -109,6 +109,13 @@ impl ChunkedLayers {
             mesh.compute_face_weighted_normals();
             mesh
         };
-        Layers { solid: weld(|l| &l.solid), liquid: weld(|l| &l.liquid), contact: self.slots.iter().map(|l| l.contact).sum() }
+        let sum = |count: fn(&Layers) -> usize| self.slots.iter().map(count).sum();
+        Layers {
+            solid: weld(|l| &l.solid),
+            liquid: weld(|l| &l.liquid),
+            contact: sum(|l| l.contact),
+            crossing_cells: sum(|l| l.crossing_cells),
+            retiled_cells: sum(|l| l.retiled_cells),
+        }
     }
 }

@@ -18,7 +18,8 @@
 //!
 //! **Where the rule carries over.** It needs one vertex per crossing lattice edge: marching cubes
 //! (all three variants) and marching tetrahedra on Kuhn-split cubes, whose edges run from a
-//! sample to a sample `+{0,1}³`. Surface nets and dual contouring put their vertices inside cells
+//! sample to a sample `+{0,1}³` (marching cubes 33's vertices inside a tunnel cell are on no edge
+//! and shared with nothing). Surface nets and dual contouring put their vertices inside cells
 //! and have no edge vertex to share: [`extract_layers`] refuses them with that reason (a shared
 //! interface for cell-vertex extractors is the multi-label problem, [`crate::labels`]).
 //!
@@ -31,8 +32,15 @@
 //! on one polygon that each side may split along another diagonal; the liquid then takes the
 //! solid's triangles there, reversed, patch by patch where the patches' boundaries agree (so no
 //! crack opens), and the contact is the same triangles in both meshes. Marching cubes' pieces are
-//! not convex hulls of their crossings; there the absence of overlap is measured
-//! (`tests/tests/liquids.rs`), not proved.
+//! not convex hulls of their crossings: a cell with solid, liquid and air corners can fill the
+//! liquid's quad and the solid's pentagon along diagonals that pass through each other. So after
+//! the rule, every cell where a liquid triangle crosses a solid one of the same cell (exact
+//! predicates) has its polygons filled again (`untangle`: other triangulations of the same
+//! outlines, liquid first, or a fan from a point inside the cell) until none crosses, checked by
+//! the same predicates; [`Layers::crossing_cells`] and [`Layers::retiled_cells`] count them. What
+//! is left unproved: a cell for which no filling is found (counted: the two counts differ), and
+//! a crossing of the outlines on a face between two cells, which no filling can move (neither has
+//! been seen: `tests/tests/liquids.rs` checks the scene and every edit of a brush script).
 //!
 //! **Non-guarantees.** A crossing within float rounding of a sample is stored at the sample: a
 //! solid vertex there is still shared (found by its solid sample), but a liquid vertex rounded
@@ -61,10 +69,12 @@
 //! ```
 
 mod chunked;
+mod untangle;
 
 pub use chunked::ChunkedLayers;
+pub use untangle::ALL_TRIANGULATIONS_UP_TO;
 
-use crate::extract::{ExtractError, Extraction, Extractor};
+use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
 use crate::lattice::{Grid, Lattice, LatticePlace};
 use crate::mesh::TriMesh;
 use crate::samples::Samples;
@@ -111,6 +121,11 @@ pub struct Layers {
     pub liquid: TriMesh,
     /// Liquid vertices moved onto the solid's vertex of their edge (the post's rule).
     pub contact: usize,
+    /// Cells where a liquid triangle crossed a solid one after the rule (marching cubes' pieces
+    /// are not convex hulls of their crossings: the `untangle` rule of the module doc).
+    pub crossing_cells: usize,
+    /// Of those, the cells whose polygons were filled again so that none crosses.
+    pub retiled_cells: usize,
 }
 
 impl Phases {
@@ -327,25 +342,40 @@ pub fn lake_and_cave(n: usize) -> Phases {
 /// a solid–liquid lattice edge onto the solid's vertex there (module doc); liquid vertices moved
 /// onto one solid vertex become one, and where every corner of a liquid triangle was moved, the
 /// liquid takes the solid's triangles there, reversed (the two quads of a cell or tetrahedron can
-/// be split along different diagonals). An extractor whose vertices are not on lattice edges is
-/// refused, naming it.
+/// be split along different diagonals). Then every cell where a liquid triangle still crosses a
+/// solid one has its polygons filled again so that none does (module doc). An extractor whose
+/// vertices are not on lattice edges is refused, naming it.
 pub fn extract_layers(extractor: &dyn Extractor, phases: &Phases) -> Result<Layers, ExtractError> {
+    layers(extractor, phases, true)
+}
+
+/// [`extract_layers`] with the post's rule alone: no cell is filled again where the two layers
+/// cross (for comparing what the untangling costs and buys).
+pub fn extract_layers_without_untangling(extractor: &dyn Extractor, phases: &Phases) -> Result<Layers, ExtractError> {
+    layers(extractor, phases, false)
+}
+
+fn layers(extractor: &dyn Extractor, phases: &Phases, untangle: bool) -> Result<Layers, ExtractError> {
     let mut out = Extraction::default();
     extractor.extract(&phases.samples(&phases.solid)?, &mut out)?;
     let solid = std::mem::take(&mut out.surface);
     extractor.extract(&phases.samples(&phases.liquid)?, &mut out)?;
     let liquid = std::mem::take(&mut out.surface);
-    let targets = contact_targets(extractor.name(), phases, &solid, &liquid)?;
+    let targets = contact_targets(extractor, phases, &solid, &liquid)?;
     let contact = targets.iter().flatten().count();
-    let liquid = share_contact(&solid, liquid, &targets);
-    Ok(Layers { solid, liquid, contact })
+    let mut liquid = share_contact(&solid, liquid, &targets);
+    let mut solid = solid;
+    let untangled = if untangle { untangle::untangle(phases.grid(), &mut solid, &mut liquid) } else { Default::default() };
+    Ok(Layers { solid, liquid, contact, crossing_cells: untangled.crossing_cells, retiled_cells: untangled.retiled })
 }
 
 /// For each liquid vertex, the solid vertex of its lattice edge when the edge joins a solid and a
 /// liquid sample (the solid's vertex rounded onto the edge's solid sample when its crossing is
-/// within float rounding of it).
+/// within float rounding of it). A vertex off the lattice edges is refused unless the extractor
+/// is cell-local (marching cubes 33's vertices inside tunnel cells: not on an edge, so never
+/// shared).
 fn contact_targets(
-    name: &'static str,
+    extractor: &dyn Extractor,
     phases: &Phases,
     solid: &TriMesh,
     liquid: &TriMesh,
@@ -360,9 +390,10 @@ fn contact_targets(
             LatticePlace::Sample(i) => {
                 on_samples.insert(i, v as u32);
             }
+            LatticePlace::Elsewhere if extractor.chunking() == Chunking::CellLocal => {}
             LatticePlace::Elsewhere => {
                 return Err(ExtractError::BadInput {
-                    algorithm: name,
+                    algorithm: extractor.name(),
                     reason: format!(
                         "its vertex {v} at {p} is not on a lattice edge: the post's rule shares the vertex of an edge \
                          between solid and liquid, and this extractor places vertices inside cells (marching cubes and \

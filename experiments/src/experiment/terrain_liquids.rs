@@ -11,7 +11,9 @@
 
 use super::context::{Context, Experiment, ExperimentError};
 use crate::report::markdown_table;
-use isolab_algorithms::liquids::{extract_layers, lake_and_cave, ChunkedLayers, Layers, Phases};
+use isolab_algorithms::liquids::{
+    extract_layers, extract_layers_without_untangling, lake_and_cave, ChunkedLayers, Layers, Phases,
+};
 use isolab_algorithms::random::Random;
 use isolab_algorithms::{extractors, Extraction, Extractor, Lattice, Samples, TriMesh, Vec3};
 use isolab_cli::render::{self, RenderOptions, Shading};
@@ -49,6 +51,12 @@ struct Row {
     liquid_closed_manifold: bool,
     contact: LayerContact,
     median_ms: f64,
+    /// Cells where the layers crossed after the post's rule, and of those the ones filled again
+    /// (`liquids::extract_layers`' untangling).
+    #[serde(default)]
+    crossing_cells: usize,
+    #[serde(default)]
+    retiled_cells: usize,
 }
 
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -77,6 +85,9 @@ struct EditRun {
     /// Chunks per axis.
     #[serde(default)]
     chunk_counts: [usize; 3],
+    /// The most cells filled again (where the layers crossed after the rule) after an edit.
+    #[serde(default)]
+    most_retiled_cells: usize,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -86,6 +97,10 @@ struct Data {
     rows: Vec<Row>,
     /// The post's naive solution.
     naive: Row,
+    /// The extractors whose layers crossed after the rule, meshed with the rule alone (no cell
+    /// filled again), timed alternating with their row.
+    #[serde(default)]
+    rule_alone: Vec<Row>,
     /// Extractors `extract_layers` refuses (vertices off the lattice edges).
     refused: Vec<String>,
     edits: Vec<EditRun>,
@@ -142,6 +157,38 @@ fn reading(d: &Data) -> String {
     format!("**Reading.** {}\n\n", lines.join(" "))
 }
 
+/// What filling the crossing cells again bought and cost, beside the rule alone (empty without
+/// such rows).
+fn untangling(d: &Data) -> String {
+    let pairs: Vec<String> = d
+        .rule_alone
+        .iter()
+        .filter_map(|alone| {
+            let name = alone.method.split(',').next()?;
+            let with = d.rows.iter().find(|r| r.method == name)?;
+            Some(format!(
+                "{name}: {} crossing pairs with the rule alone, {} after filling {} of {} cells again, {:.1} ms against {:.1} \
+                 ({:.2}×, {} / {} triangles against {} / {})",
+                alone.contact.crossing_pairs,
+                with.contact.crossing_pairs,
+                with.retiled_cells,
+                with.crossing_cells,
+                with.median_ms,
+                alone.median_ms,
+                with.median_ms / alone.median_ms,
+                with.solid_triangles,
+                with.liquid_triangles,
+                alone.solid_triangles,
+                alone.liquid_triangles,
+            ))
+        })
+        .collect();
+    if pairs.is_empty() {
+        return String::new();
+    }
+    format!(" What the untangling buys and costs (median of {RUNS} runs each, alternating): {}.", pairs.join("; "))
+}
+
 /// One cell of the edit table: a measure of one extractor's run.
 type Cell = dyn Fn(&EditRun) -> String;
 
@@ -163,6 +210,8 @@ fn row(method: &str, phases: &Phases, layers: &Layers, times: &mut [f64]) -> Row
         liquid_closed_manifold: closed_manifold(&layers.liquid),
         contact: layer_contact(phases, &layers.solid, &layers.liquid),
         median_ms: times[times.len() / 2],
+        crossing_cells: layers.crossing_cells,
+        retiled_cells: layers.retiled_cells,
     }
 }
 
@@ -175,7 +224,7 @@ fn independent_layers(extractor: &dyn Extractor, phases: &Phases) -> Result<Laye
         extractor.extract(&samples, &mut out)?;
         Ok(out.surface)
     };
-    Ok(Layers { solid: mesh(phases.solid())?, liquid: mesh(phases.liquid())?, contact: 0 })
+    Ok(Layers { solid: mesh(phases.solid())?, liquid: mesh(phases.liquid())?, contact: 0, crossing_cells: 0, retiled_cells: 0 })
 }
 
 /// Both layers in one picture: the solid by height (brown below, green on top), the liquid blue.
@@ -258,6 +307,7 @@ fn edit_run(ctx: &Context, name: &str) -> Result<(EditRun, Vec<render::Image>, r
         let c = layer_contact(&phases, &layers.solid, &layers.liquid);
         run.worst.unshared = run.worst.unshared.max(c.unshared);
         run.worst.crossing_pairs = run.worst.crossing_pairs.max(c.crossing_pairs);
+        run.most_retiled_cells = run.most_retiled_cells.max(layers.retiled_cells);
         run.worst.liquid_inside_solid = run.worst.liquid_inside_solid.max(c.liquid_inside_solid);
         run.worst.contact_vertices = run.worst.contact_vertices.max(c.contact_vertices);
         run.fewest_contact = run.fewest_contact.min(c.contact_vertices);
@@ -294,23 +344,31 @@ impl Experiment for TerrainLiquids {
         // Every registered surface extractor: those with edge vertices take the rule, the others
         // are refused by extract_layers (listed with its reason).
         let mut settings = Vec::new();
+        let mut rule_alone = Vec::new();
         for extractor in extractors::registry().into_iter().filter(|e| !e.produces_volume()) {
             settings.push((extractor.name().to_owned(), extractor.settings()));
-            let mut times = Vec::new();
-            let mut layers = Layers::default();
+            let Ok(layers) = extract_layers(extractor.as_ref(), &phases) else {
+                refused.push(format!("`{}`", extractor.name()));
+                continue;
+            };
+            // Where the layers crossed after the rule, the rule alone is timed too, alternating.
+            let both = layers.crossing_cells > 0;
+            let (mut times, mut alone_times) = (Vec::new(), Vec::new());
+            let mut alone = Layers::default();
             for _ in 0..RUNS {
                 let start = Instant::now();
-                match extract_layers(extractor.as_ref(), &phases) {
-                    Ok(l) => layers = l,
-                    Err(_) => {
-                        refused.push(format!("`{}`", extractor.name()));
-                        break;
-                    }
-                }
+                std::hint::black_box(extract_layers(extractor.as_ref(), &phases)?);
                 times.push(start.elapsed().as_secs_f64() * 1e3);
+                if both {
+                    let start = Instant::now();
+                    alone = extract_layers_without_untangling(extractor.as_ref(), &phases)?;
+                    alone_times.push(start.elapsed().as_secs_f64() * 1e3);
+                }
             }
-            if times.len() == RUNS {
-                rows.push(row(extractor.name(), &phases, &layers, &mut times));
+            rows.push(row(extractor.name(), &phases, &layers, &mut times));
+            if both {
+                let method = format!("{}, the post's rule alone", extractor.name());
+                rule_alone.push(row(&method, &phases, &alone, &mut alone_times));
             }
         }
         let naive_extractor = rows
@@ -339,7 +397,10 @@ impl Experiment for TerrainLiquids {
         render::save_gif(&path, &frames, 40)?;
         let gif = ctx.link(&path);
         let edit_scene = lake_and_cave(EDIT_SCENE).grid().dims;
-        ctx.write_data(NAME, &Data { scene: phases.grid().dims, rows, naive, refused, edits, edit_scene, picture, gif, settings })
+        ctx.write_data(
+            NAME,
+            &Data { scene: phases.grid().dims, rows, naive, rule_alone, refused, edits, edit_scene, picture, gif, settings },
+        )
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
@@ -353,7 +414,10 @@ impl Experiment for TerrainLiquids {
              a {sx} × {sy} × {sz}-sample terrain with a lake and a half-flooded cave (`liquids::lake_and_cave`) are meshed by \
              each extractor with a vertex on every crossing lattice edge (`liquids::extract_layers`: the liquid's vertex on a \
              solid–liquid edge takes the solid's; where every corner of a liquid patch moved, the liquid takes the solid's \
-             triangles there, reversed, when the patches' boundaries agree). Checked with `metrics::layers`: contact vertices \
+             triangles there, reversed, when the patches' boundaries agree; then every cell where a liquid triangle still \
+             crosses a solid one of the cell has its polygons filled again, by other triangulations of the same outlines or \
+             a fan from a point inside the cell, until none crosses by exact predicates). Where that untangling acts, the \
+             rule alone is run beside it, timed alternating. Checked with `metrics::layers`: contact vertices \
              (liquid vertices on a solid–liquid lattice edge), those not bit-equal to a solid vertex, triangle pairs of the two \
              meshes that cross (exact predicates), liquid vertices inside the solid. Median of {RUNS} runs; the naive row is \
              one run.\n\n"
@@ -364,8 +428,11 @@ impl Experiment for TerrainLiquids {
         let rows: Vec<Vec<String>> = d
             .rows
             .iter()
+            .chain(&d.rule_alone)
             .chain(std::iter::once(&d.naive))
             .map(|r| {
+                let filled =
+                    if r.crossing_cells == 0 { "–".to_owned() } else { format!("{} of {}", r.retiled_cells, r.crossing_cells) };
                 vec![
                     r.method.clone(),
                     format!("{} / {}", r.solid_triangles, r.liquid_triangles),
@@ -374,6 +441,7 @@ impl Experiment for TerrainLiquids {
                     r.contact.unshared.to_string(),
                     r.contact.crossing_pairs.to_string(),
                     r.contact.liquid_inside_solid.to_string(),
+                    filled,
                     format!("{:.1}", r.median_ms),
                 ]
             })
@@ -387,6 +455,7 @@ impl Experiment for TerrainLiquids {
                 "unshared",
                 "crossing pairs",
                 "liquid inside solid",
+                "cells filled again (of those crossing)",
                 "ms (both layers)",
             ],
             &rows,
@@ -415,6 +484,7 @@ impl Experiment for TerrainLiquids {
                 list(&crossing)
             ));
         }
+        md.push_str(&untangling(&d));
         md.push('\n');
         let naive = &d.naive;
         md.push_str(&format!(
@@ -455,13 +525,16 @@ impl Experiment for TerrainLiquids {
         let mean_chunks = |e: &EditRun| {
             format!("{:.1}", e.chunks_remeshed.iter().sum::<usize>() as f64 / e.chunks_remeshed.len().max(1) as f64)
         };
-        let measures: [(&str, &Cell); 10] = [
+        let measures: [(&str, &Cell); 11] = [
             ("edits after which a layer was open or non-manifold", &|e| e.open_after.to_string()),
             ("contact vertices (fewest and most after an edit)", &|e| {
                 format!("{}–{}", e.fewest_contact, e.worst.contact_vertices)
             }),
             ("most unshared contact vertices after an edit", &|e| e.worst.unshared.to_string()),
             ("most crossing pairs after an edit", &|e| e.worst.crossing_pairs.to_string()),
+            ("most cells filled again after an edit (where the layers crossed after the rule)", &|e| {
+                e.most_retiled_cells.to_string()
+            }),
             ("most liquid vertices inside the solid after an edit", &|e| e.worst.liquid_inside_solid.to_string()),
             ("solid mass: start, dug, end", &|e| format!("{:.1}, {:.1}, {:.1}", e.solid_mass[0], e.dug, e.solid_mass[1])),
             ("liquid mass: start, poured, drained, end", &|e| {
@@ -487,8 +560,9 @@ impl Experiment for TerrainLiquids {
         md.push_str(&format!(
             "\n### Where we differ from the post: its claims beside ours\n\n\
              - *Layered meshes for liquids without overlap, connected where they meet*: the rows above (contact vertices \
-             shared, crossing pairs). No overlap is proved for marching tetrahedra alone (`liquids` module doc); crossing \
-             pairs with the rule: {}.\n\
+             shared, crossing pairs). No overlap is proved for marching tetrahedra (`liquids` module doc); for marching \
+             cubes the cells where the layers crossed are filled again, checked by exact predicates; crossing pairs left: \
+             {}.\n\
              - *Solid and liquid mass conservation still works*: each brush changes one density and returns what it moved; \
              {books}.\n\
              - *Both marches in parallel*: on the whole scene the two layers are meshed one after the other, each by the \
@@ -518,6 +592,8 @@ mod tests {
             liquid_closed_manifold: true,
             contact: LayerContact { contact_vertices: 10, unshared, crossing_pairs: crossing, liquid_inside_solid: 0 },
             median_ms: 1.0,
+            crossing_cells: 0,
+            retiled_cells: 0,
         }
     }
 
@@ -527,6 +603,7 @@ mod tests {
             scene: [1, 1, 1],
             rows: Vec::new(),
             naive: row("naive", 3, 4),
+            rule_alone: Vec::new(),
             refused: Vec::new(),
             edits: Vec::new(),
             edit_scene: [1, 1, 1],
@@ -544,5 +621,28 @@ mod tests {
         assert!(r.contains("the masses equal to the brushes' books"), "{r}");
         d.edits[0].mass_drift = 2e-7;
         assert!(reading(&d).contains("the masses within 2.0e-7 (relative)"));
+    }
+
+    #[test]
+    fn the_untangling_sentence_pairs_each_row_with_its_rule_alone() {
+        let mut d = Data {
+            scene: [1, 1, 1],
+            rows: vec![Row { crossing_cells: 3, retiled_cells: 3, median_ms: 3.0, ..row("mc", 0, 0) }],
+            naive: row("naive", 3, 4),
+            rule_alone: Vec::new(),
+            refused: Vec::new(),
+            edits: Vec::new(),
+            edit_scene: [1, 1, 1],
+            picture: String::new(),
+            gif: String::new(),
+            settings: Vec::new(),
+        };
+        assert_eq!(untangling(&d), "");
+        d.rule_alone = vec![Row { median_ms: 2.0, ..row("mc, the post's rule alone", 0, 6) }];
+        let s = untangling(&d);
+        assert!(
+            s.contains("mc: 6 crossing pairs with the rule alone, 0 after filling 3 of 3 cells again, 3.0 ms against 2.0 (1.50×"),
+            "{s}"
+        );
     }
 }

@@ -85,14 +85,16 @@ fn sorted(t: Tri) -> Tri {
 struct Cells<'a> {
     grid: &'a Grid,
     counts: [i64; 3],
+    /// `1 / (3 spacing)`: from a sum of three corners to index coordinates.
+    scale: f64,
 }
 
 impl Cells<'_> {
     /// The cell holding a triangle: the one its centroid is in (index coordinates, in `f64`),
     /// clamped to the grid's cells.
     fn of(&self, p: [Vec3; 3]) -> Cell {
-        let c = (p[0].as_dvec3() + p[1].as_dvec3() + p[2].as_dvec3()) / 3.0;
-        let q = ((c - self.grid.origin.as_dvec3()) / self.grid.spacing as f64).to_array();
+        let sum = p[0].as_dvec3() + p[1].as_dvec3() + p[2].as_dvec3();
+        let q = ((sum - 3.0 * self.grid.origin.as_dvec3()) * self.scale).to_array();
         // Truncation is the floor here: below 0 clamps to the first cell anyway.
         std::array::from_fn(|a| (q[a].max(0.0) as i64).min(self.counts[a] - 1))
     }
@@ -103,6 +105,10 @@ impl Cells<'_> {
             .then(|| (c[0] + self.counts[0] * (c[1] + self.counts[1] * c[2])) as u64)
     }
 
+    fn count(&self) -> u64 {
+        self.counts.iter().product::<i64>() as u64
+    }
+
     fn cell(&self, key: u64) -> Cell {
         let k = key as i64;
         [k % self.counts[0], (k / self.counts[0]) % self.counts[1], k / (self.counts[0] * self.counts[1])]
@@ -111,15 +117,43 @@ impl Cells<'_> {
     /// `(cell key, triangle)` for the triangles of `mesh` whose cell `keep` accepts, sorted.
     fn sorted_triangles(&self, mesh: &TriMesh, keep: impl Fn(u64) -> bool + Sync) -> Vec<(u64, u32)> {
         let mut keyed: Vec<(u64, u32)> = (0..mesh.triangles.len() as u32)
-            .into_par_iter()
             .filter_map(|i| {
                 let p = mesh.triangles[i as usize].map(|v| mesh.positions[v as usize]);
                 let key = self.key(self.of(p)).unwrap_or(u64::MAX);
                 keep(key).then_some((key, i))
             })
             .collect();
-        keyed.par_sort_unstable();
+        keyed.sort_unstable_by_key(|&(k, _)| k);
         keyed
+    }
+}
+
+/// A set of cell keys: a bit per cell while the grid has at most [`DENSE_CELLS`] cells (a
+/// lookup per solid triangle is most of the untangling's cost where nothing crosses).
+enum CellSet {
+    Dense(Vec<u64>),
+    Sparse(FxHashSet<u64>),
+}
+
+/// Grids up to this many cells keep a bit per cell (8 MB).
+const DENSE_CELLS: u64 = 1 << 26;
+
+impl CellSet {
+    fn new(cells: u64, keys: impl Iterator<Item = u64>) -> CellSet {
+        if cells <= DENSE_CELLS {
+            let mut bits = vec![0u64; cells.div_ceil(64) as usize];
+            keys.filter(|&k| k < cells).for_each(|k| bits[(k / 64) as usize] |= 1 << (k % 64));
+            CellSet::Dense(bits)
+        } else {
+            CellSet::Sparse(keys.collect())
+        }
+    }
+
+    fn contains(&self, key: u64) -> bool {
+        match self {
+            CellSet::Dense(bits) => bits.get((key / 64) as usize).is_some_and(|w| w & (1 << (key % 64)) != 0),
+            CellSet::Sparse(set) => set.contains(&key),
+        }
     }
 }
 
@@ -149,10 +183,11 @@ fn in_closed_cell(grid: &Grid, cell: Cell, p: Vec3) -> bool {
 /// Fills again, cell by cell, the patches of the cells where a liquid triangle crosses a solid
 /// one of the same cell (module doc); both meshes are rewritten where a cell is retiled.
 pub fn untangle(grid: &Grid, solid: &mut TriMesh, liquid: &mut TriMesh) -> Untangled {
-    let cells = Cells { grid, counts: grid.dims.map(|d| d.saturating_sub(1).max(1) as i64) };
+    let counts = grid.dims.map(|d| d.saturating_sub(1).max(1) as i64);
+    let cells = Cells { grid, counts, scale: 1.0 / (3.0 * grid.spacing as f64) };
     let liquid_keyed = cells.sorted_triangles(liquid, |_| true);
-    let liquid_cells: FxHashSet<u64> = liquid_keyed.iter().map(|&(k, _)| k).collect();
-    let mut keyed = [cells.sorted_triangles(solid, |k| liquid_cells.contains(&k)), liquid_keyed];
+    let liquid_cells = CellSet::new(cells.count(), liquid_keyed.iter().map(|&(k, _)| k));
+    let mut keyed = [cells.sorted_triangles(solid, |k| liquid_cells.contains(k)), liquid_keyed];
     let meshes = [&*solid, &*liquid];
     // The cells holding triangles of both layers, and of those the ones where they cross.
     let mut both: Vec<(u64, [std::ops::Range<usize>; 2])> = Vec::new();
@@ -189,13 +224,15 @@ pub fn untangle(grid: &Grid, solid: &mut TriMesh, liquid: &mut TriMesh) -> Untan
     for &key in &crossing {
         let cell = cells.cell(key);
         let mut local = Local::default();
-        let own: [Vec<u32>; 2] = [0, 1].map(|m| in_cell(&keyed[m], key).collect());
+        // The cell's triangles in an order of their own (by position), so that the search
+        // decides the same whatever the meshes' order (a chunk's or the whole grid's).
+        let own: [Vec<u32>; 2] = [0, 1].map(|m| by_position(meshes[m], in_cell(&keyed[m], key).collect()));
         let tris: [Vec<Tri>; 2] =
             [0, 1].map(|m| own[m].iter().map(|&t| local.triangle(meshes[m], meshes[m].triangles[t as usize])).collect());
         let mut obstacles: [Vec<Tri>; 2] = [Vec::new(), Vec::new()];
         for near in neighbours(cell).filter(|&n| n != cell).filter_map(|n| cells.key(n)) {
             for m in 0..2 {
-                for t in in_cell(&keyed[m], near) {
+                for t in by_position(meshes[m], in_cell(&keyed[m], near).collect()) {
                     let t = meshes[m].triangles[t as usize];
                     if t.iter().all(|&v| in_closed_cell(grid, cell, meshes[m].positions[v as usize])) {
                         obstacles[m].push(local.triangle(meshes[m], t));
@@ -220,6 +257,18 @@ pub fn untangle(grid: &Grid, solid: &mut TriMesh, liquid: &mut TriMesh) -> Untan
         rebuild(liquid, &drop[1], &added_liquid);
     }
     report
+}
+
+/// Triangles of `mesh` sorted by their corners' positions (each triangle from its least corner,
+/// its winding kept).
+fn by_position(mesh: &TriMesh, mut tris: Vec<u32>) -> Vec<u32> {
+    let key = |t: u32| {
+        let p = mesh.triangles[t as usize].map(|v| mesh.positions[v as usize].to_array().map(f32::to_bits));
+        let first = (0..3).min_by_key(|&k| p[k]).unwrap_or(0);
+        [p[first], p[(first + 1) % 3], p[(first + 2) % 3]]
+    };
+    tris.sort_by_cached_key(|&t| key(t));
+    tris
 }
 
 /// Whether a liquid triangle of the cell crosses a solid one of it (a liquid triangle that is a

@@ -36,7 +36,7 @@ const EDIT_CHUNK: usize = 16;
 /// A GIF frame every this many edits.
 const GIF_EVERY: usize = 10;
 /// Timed runs per extractor.
-const RUNS: usize = 3;
+const RUNS: usize = 9;
 /// The extractors of the edit script: marching cubes (the post's), and marching tetrahedra, whose
 /// layers provably do not overlap. The GIF shows the first.
 const EDIT_EXTRACTORS: [&str; 2] = ["marching-cubes", "marching-tetrahedra"];

@@ -2,6 +2,10 @@
 
 use glam::{DVec3, Vec3};
 
+/// Polygons of at most this many corners are filled in every triangulation (429 for nine) by
+/// the crate's polygon fillings (`all_triangulations`); longer ones as fans from each corner.
+pub const ALL_TRIANGULATIONS_UP_TO: usize = 9;
+
 /// An axis-aligned bounding box.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
@@ -200,8 +204,71 @@ pub fn circumcentre(p: [DVec3; 4]) -> Option<DVec3> {
     (det != 0.0 && c.is_finite()).then(|| p[0] + c)
 }
 
+/// Every triangulation of a polygon (its corners in winding order, each triangle wound as the
+/// polygon) up to
+/// [`ALL_TRIANGULATIONS_UP_TO`] corners; fans from each corner beyond.
+pub(crate) fn all_triangulations(ring: &[u32]) -> Vec<Vec<[u32; 3]>> {
+    let n = ring.len();
+    if n > ALL_TRIANGULATIONS_UP_TO {
+        return (0..n)
+            .map(|k| {
+                let r: Vec<u32> = (0..n).map(|i| ring[(k + i) % n]).collect();
+                (1..n - 1).map(|i| [r[0], r[i], r[i + 1]]).collect()
+            })
+            .collect();
+    }
+    fn between(ring: &[u32], i: usize, j: usize) -> Vec<Vec<[u32; 3]>> {
+        if j - i < 2 {
+            return vec![Vec::new()];
+        }
+        let mut out = Vec::new();
+        for k in i + 1..j {
+            for left in between(ring, i, k) {
+                for right in between(ring, k, j) {
+                    let mut t = vec![[ring[i], ring[k], ring[j]]];
+                    t.extend(left.iter().copied());
+                    t.extend(right.iter().copied());
+                    out.push(t);
+                }
+            }
+        }
+        out
+    }
+    between(ring, 0, n - 1)
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn every_triangulation_of_a_hexagon_is_listed_once() {
+        let ring = [0, 1, 2, 3, 4, 5];
+        let all = all_triangulations(&ring);
+        assert_eq!(all.len(), 14, "Catalan(4)");
+        let distinct: std::collections::HashSet<Vec<[u32; 3]>> = all
+            .iter()
+            .map(|t| {
+                let mut k: Vec<[u32; 3]> = t
+                    .iter()
+                    .map(|&t| {
+                        let mut k = t;
+                        k.sort_unstable();
+                        k
+                    })
+                    .collect();
+                k.sort_unstable();
+                k
+            })
+            .collect();
+        assert_eq!(distinct.len(), 14);
+        // Each winds as the loop: every loop edge appears in its forward direction.
+        for t in &all {
+            assert_eq!(t.len(), 4);
+            let directed: std::collections::HashSet<(u32, u32)> =
+                t.iter().flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)]).collect();
+            assert!((0..6).all(|i| directed.contains(&(ring[i], ring[(i + 1) % 6]))), "{t:?}");
+        }
+    }
+
     use super::*;
 
     #[test]

@@ -72,7 +72,6 @@ mod chunked;
 mod untangle;
 
 pub use chunked::ChunkedLayers;
-pub use untangle::ALL_TRIANGULATIONS_UP_TO;
 
 use crate::extract::{Chunking, ExtractError, Extraction, Extractor};
 use crate::lattice::{Grid, Lattice, LatticePlace};

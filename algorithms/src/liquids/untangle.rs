@@ -14,7 +14,7 @@
 //! crosses a solid one of the same cell (exact predicates), the
 //! patches of the cell (its triangles joined by shared edges; those with one boundary loop and
 //! the Euler characteristic of a disk) are filled again, first the liquid's, then the solid's,
-//! then both, through every triangulation of their loops (up to [`ALL_TRIANGULATIONS_UP_TO`]
+//! then both, through every triangulation of their loops (up to [`crate::geometry::ALL_TRIANGULATIONS_UP_TO`]
 //! corners, fans from each corner beyond), and last as fans from a point of a lattice inside the
 //! cell. The first filling under which no triangle of the cell crosses another of either layer
 //! (a liquid triangle that is a solid one reversed is the shared contact, as the metric counts
@@ -25,6 +25,7 @@
 //! The decision reads only the cell's own triangles (and any of a neighbour's lying within the
 //! cell's closed box), so chunks that mesh a terrain piecewise decide as the whole grid does.
 
+use crate::geometry::all_triangulations;
 use crate::lattice::Grid;
 use crate::mesh::TriMesh;
 use crate::predicates::{has_zero_area, indexed_triangles_intersect};
@@ -33,9 +34,6 @@ use petgraph::unionfind::UnionFind;
 use rayon::prelude::*;
 use rustc_hash::{FxHashMap, FxHashSet};
 
-/// Loops of at most this many corners are tried in every triangulation (429 for nine); longer
-/// ones as fans from each corner.
-pub const ALL_TRIANGULATIONS_UP_TO: usize = 9;
 /// Fan centres per axis of the lattice inside a cell (tried nearest the loop's centroid first).
 const FAN_LATTICE: usize = 8;
 /// Fillings tried per cell and phase at most.
@@ -550,38 +548,6 @@ fn disk_ring(tris: &[Tri]) -> Option<Vec<u32>> {
     (ring.len() == boundary.len() && euler == 1).then_some(ring)
 }
 
-/// Every triangulation of a polygon (its corners in winding order) up to
-/// [`ALL_TRIANGULATIONS_UP_TO`] corners; fans from each corner beyond.
-fn all_triangulations(ring: &[u32]) -> Vec<Vec<Tri>> {
-    let n = ring.len();
-    if n > ALL_TRIANGULATIONS_UP_TO {
-        return (0..n)
-            .map(|k| {
-                let r: Vec<u32> = (0..n).map(|i| ring[(k + i) % n]).collect();
-                (1..n - 1).map(|i| [r[0], r[i], r[i + 1]]).collect()
-            })
-            .collect();
-    }
-    fn between(ring: &[u32], i: usize, j: usize) -> Vec<Vec<Tri>> {
-        if j - i < 2 {
-            return vec![Vec::new()];
-        }
-        let mut out = Vec::new();
-        for k in i + 1..j {
-            for left in between(ring, i, k) {
-                for right in between(ring, k, j) {
-                    let mut t = vec![[ring[i], ring[k], ring[j]]];
-                    t.extend(left.iter().copied());
-                    t.extend(right.iter().copied());
-                    out.push(t);
-                }
-            }
-        }
-        out
-    }
-    between(ring, 0, n - 1)
-}
-
 /// The fan from `centre` over a loop.
 fn fan(centre: u32, ring: &[u32]) -> Vec<Tri> {
     (0..ring.len()).map(|i| [centre, ring[i], ring[(i + 1) % ring.len()]]).collect()
@@ -590,28 +556,6 @@ fn fan(centre: u32, ring: &[u32]) -> Vec<Tri> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn every_triangulation_of_a_hexagon_is_listed_once() {
-        let ring = [0, 1, 2, 3, 4, 5];
-        let all = all_triangulations(&ring);
-        assert_eq!(all.len(), 14, "Catalan(4)");
-        let distinct: FxHashSet<Vec<Tri>> = all
-            .iter()
-            .map(|t| {
-                let mut k: Vec<Tri> = t.iter().map(|&t| sorted(t)).collect();
-                k.sort_unstable();
-                k
-            })
-            .collect();
-        assert_eq!(distinct.len(), 14);
-        // Each winds as the loop: every loop edge appears in its forward direction.
-        for t in &all {
-            assert_eq!(t.len(), 4);
-            let directed: FxHashSet<(u32, u32)> = t.iter().flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)]).collect();
-            assert!((0..6).all(|i| directed.contains(&(ring[i], ring[(i + 1) % 6]))), "{t:?}");
-        }
-    }
 
     #[test]
     fn a_disk_has_its_loop_and_a_tube_has_none() {

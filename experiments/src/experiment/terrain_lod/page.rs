@@ -14,8 +14,9 @@ pub(super) fn page(d: &Data) -> String {
          other sample) or at a quarter; chunks that touch differ by one level at most. Every registered extractor that \
          takes levels of detail runs ({}). For all of them the finer side's samples on a seam are first restricted to \
          what the coarser side sees (linear on a coarse edge, bilinear on a coarse face, an ambiguous face's interior \
-         kept outside). *Restriction + stitching* (marching cubes) then fans each coarse seam triangle over the fine \
-         boundary path; *octree minimal edges* (surface nets, dual contouring; Ju et al. 2002's rule for octrees) gives \
+         kept outside). *Restriction + stitching* (marching cubes) then fills each coarse seam triangle's polygon (its \
+         corners off the seam and the fine boundary path) with the best-shaped of its triangulations and of fans from a \
+         new vertex inside it whose triangles cross nothing near them (exact predicates); *octree minimal edges* (surface nets, dual contouring; Ju et al. 2002's rule for octrees) gives \
          every crossing edge of the finest cells around it a polygon joining the vertices of the cells around it, a \
          triangle where one coarse cell spans two of them, and splits a vertex where a fine cell's ring meets a coarse \
          cell's across a seam (*pinched*). **The `transvoxel` crate** ({TRANSVOXEL_VERSION}, Lengyel 2010's transition \

@@ -113,7 +113,7 @@ impl Cells<'_> {
     }
 
     /// `(cell key, triangle)` for the triangles of `mesh` whose cell `keep` accepts, sorted.
-    fn sorted_triangles(&self, mesh: &TriMesh, keep: impl Fn(u64) -> bool + Sync) -> Vec<(u64, u32)> {
+    fn sorted_triangles(&self, mesh: &TriMesh, keep: impl Fn(u64) -> bool) -> Vec<(u64, u32)> {
         let mut keyed: Vec<(u64, u32)> = (0..mesh.triangles.len() as u32)
             .filter_map(|i| {
                 let p = mesh.triangles[i as usize].map(|v| mesh.positions[v as usize]);
@@ -208,8 +208,10 @@ pub fn untangle(grid: &Grid, solid: &mut TriMesh, liquid: &mut TriMesh) -> Untan
     }
     let crossing: Vec<u64> = both
         .par_iter()
-        .filter(|(_, [s, l])| cell_crosses(meshes, &keyed[0][s.clone()], &keyed[1][l.clone()]))
-        .map(|&(k, _)| k)
+        .map_init(CrossScratch::default, |scratch, (k, [s, l])| {
+            scratch.crosses(meshes, &keyed[0][s.clone()], &keyed[1][l.clone()]).then_some(*k)
+        })
+        .flatten()
         .collect();
     let mut report = Untangled { crossing_cells: crossing.len(), retiled: 0 };
     if crossing.is_empty() {
@@ -269,15 +271,28 @@ fn by_position(mesh: &TriMesh, mut tris: Vec<u32>) -> Vec<u32> {
     tris
 }
 
-/// Whether a liquid triangle of the cell crosses a solid one of it (a liquid triangle that is a
-/// solid one reversed is the shared contact).
-fn cell_crosses(meshes: [&TriMesh; 2], solid: &[(u64, u32)], liquid: &[(u64, u32)]) -> bool {
-    let mut local = Local::default();
-    let s: Vec<Tri> = solid.iter().map(|&(_, t)| local.triangle(meshes[0], meshes[0].triangles[t as usize])).collect();
-    let l: Vec<Tri> = liquid.iter().map(|&(_, t)| local.triangle(meshes[1], meshes[1].triangles[t as usize])).collect();
-    let keys: Vec<Tri> = s.iter().map(|&t| sorted(t)).collect();
-    let at = |v: u32| local.positions[v as usize];
-    l.iter().filter(|&&t| !keys.contains(&sorted(t))).any(|&lt| s.iter().any(|&st| indexed_triangles_intersect(st, lt, at)))
+/// Buffers for [`CrossScratch::crosses`], kept per thread across the cells it tests.
+#[derive(Default)]
+struct CrossScratch {
+    local: Local,
+    solid: Vec<Tri>,
+    liquid: Vec<Tri>,
+}
+
+impl CrossScratch {
+    /// Whether a liquid triangle of the cell crosses a solid one of it (a liquid triangle that
+    /// is a solid one reversed is the shared contact).
+    fn crosses(&mut self, meshes: [&TriMesh; 2], solid: &[(u64, u32)], liquid: &[(u64, u32)]) -> bool {
+        let CrossScratch { local, solid: s, liquid: l } = self;
+        local.positions.clear();
+        s.clear();
+        l.clear();
+        s.extend(solid.iter().map(|&(_, t)| local.triangle(meshes[0], meshes[0].triangles[t as usize])));
+        l.extend(liquid.iter().map(|&(_, t)| local.triangle(meshes[1], meshes[1].triangles[t as usize])));
+        let at = |v: u32| local.positions[v as usize];
+        let shared = |t: Tri| s.iter().any(|&o| sorted(o) == sorted(t));
+        l.iter().filter(|&&t| !shared(t)).any(|&lt| s.iter().any(|&st| indexed_triangles_intersect(st, lt, at)))
+    }
 }
 
 /// The cell and its 26 neighbours.

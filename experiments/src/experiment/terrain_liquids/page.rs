@@ -273,11 +273,11 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_reading_follows_the_rows() {
-        let mut d = Data {
+    /// A run's data with `rows` and nothing else.
+    fn data(rows: Vec<Row>) -> Data {
+        Data {
             scene: [1, 1, 1],
-            rows: Vec::new(),
+            rows,
             naive: row("naive", 3, 4),
             rule_alone: Vec::new(),
             refused: Vec::new(),
@@ -286,7 +286,12 @@ mod tests {
             picture: String::new(),
             gif: String::new(),
             settings: Vec::new(),
-        };
+        }
+    }
+
+    #[test]
+    fn the_reading_follows_the_rows() {
+        let mut d = data(Vec::new());
         assert_eq!(reading(&d), "");
         d.rows = vec![row("mc", 0, 6), row("mt", 0, 0)];
         d.edits = vec![EditRun { extractor: "mt".into(), edits: 200, open_after: 0, mass_drift: 0.0, ..EditRun::default() }];
@@ -301,18 +306,7 @@ mod tests {
 
     #[test]
     fn the_untangling_sentence_pairs_each_row_with_its_rule_alone() {
-        let mut d = Data {
-            scene: [1, 1, 1],
-            rows: vec![Row { crossing_cells: 3, retiled_cells: 3, median_ms: 3.0, ..row("mc", 0, 0) }],
-            naive: row("naive", 3, 4),
-            rule_alone: Vec::new(),
-            refused: Vec::new(),
-            edits: Vec::new(),
-            edit_scene: [1, 1, 1],
-            picture: String::new(),
-            gif: String::new(),
-            settings: Vec::new(),
-        };
+        let mut d = data(vec![Row { crossing_cells: 3, retiled_cells: 3, median_ms: 3.0, ..row("mc", 0, 0) }]);
         assert_eq!(untangling(&d), "");
         d.rule_alone = vec![Row { median_ms: 2.0, ..row("mc, the post's rule alone", 0, 6) }];
         let s = untangling(&d);

@@ -13,7 +13,7 @@ const REASON: &str = "**Why one file";
 
 /// The crates' source folders.
 const SOURCE_DIRS: &[&str] =
-    &["algorithms/src", "metrics/src", "io/src", "pipeline/src", "cli/src", "python/src", "experiments/src"];
+    &["algorithms/src", "metrics/src", "io/src", "pipeline/src", "render/src", "cli/src", "python/src", "experiments/src"];
 
 fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -52,12 +52,18 @@ fn states_its_reason(text: &str) -> bool {
     text.lines().take_while(|l| l.starts_with("//!") || l.trim().is_empty()).any(|l| l.contains(REASON))
 }
 
-/// Top-level `use path::*;` lines of the crate's own modules (not a `prelude`), outside tests.
+/// Top-level `use path::*;` lines of the crate's own modules (not a `prelude`), outside tests,
+/// re-exports (`pub use path::*;`, `pub(crate) use ...`) included: a glob re-export hides where a
+/// public name is defined as much as a glob import hides where a used one comes from.
 fn own_globs(path: &Path, text: &str) -> Vec<String> {
     if path.file_name().is_some_and(|n| n == "tests.rs") {
         return Vec::new();
     }
-    text.lines().filter(|l| l.starts_with("use ") && l.ends_with("::*;") && !l.contains("prelude::")).map(str::to_owned).collect()
+    let is_use = |l: &str| {
+        let rest = l.strip_prefix("pub(crate) ").or_else(|| l.strip_prefix("pub ")).unwrap_or(l);
+        rest.starts_with("use ")
+    };
+    text.lines().filter(|l| is_use(l) && l.ends_with("::*;") && !l.contains("prelude::")).map(str::to_owned).collect()
 }
 
 #[test]
@@ -85,6 +91,10 @@ fn the_checks_see_what_they_look_for() {
     assert!(!states_its_reason("//! Title\n\nuse x;\n// **Why one file** in a later comment\n"));
     let p = Path::new("a/mod.rs");
     assert_eq!(own_globs(p, "use super::*;\nuse rayon::prelude::*;\n    use super::*;\n"), vec!["use super::*;"]);
+    assert_eq!(
+        own_globs(p, "pub use engine::*;\npub(crate) use table::*;\npub use engine::{Star};\npub use x::prelude::*;\n"),
+        vec!["pub use engine::*;", "pub(crate) use table::*;"]
+    );
     assert!(own_globs(Path::new("a/tests.rs"), "use super::*;\n").is_empty());
 }
 

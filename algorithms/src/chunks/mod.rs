@@ -55,10 +55,12 @@ mod sparse;
 mod stream;
 mod weld;
 
-pub use blocks::*;
-pub use edit::*;
-pub use sparse::*;
-pub use stream::*;
+pub use blocks::{mesh_block, mesh_block_view, mesh_block_view_of, weld_fragments, BlockBounds, BlockPlan, Fragment};
+pub use edit::{Brush, ChunkedVolume, EditError};
+pub use sparse::{
+    extract_sparse, BatchEval, EvalError, FieldEval, GridFieldEval, Pruning, SparseError, SparseGrid, SparseOptions, SparseStats,
+};
+pub use stream::{stream_blocks, stream_chunked, MeshSink, SliceReader, StreamError, StreamStats};
 pub use weld::weld_on_chunk_planes;
 use weld::{position_key, weld, WeldPiece, Welder};
 

@@ -32,7 +32,10 @@ pub mod terrain_liquids;
 pub mod terrain_lod;
 pub mod viewer;
 
-pub use context::*;
+pub use context::{
+    compared_inputs, corner_distances_h, default_options, default_report_dir, load_object, measure, model_path, ms,
+    options_as_run, settings_of, Context, Experiment, ExperimentError, Measured, FIELD_LEVELS, MODELS, MODEL_LEVELS,
+};
 
 use isolab_io::write_atomic;
 use std::path::PathBuf;

@@ -67,13 +67,19 @@ pub mod repair;
 pub mod table;
 pub mod topology;
 
-pub use engine::*;
-pub use geometry::*;
-pub use repair::*;
-pub use table::*;
-pub use topology::*;
+pub use engine::{
+    compute_normals, extract_tetrahedral, tetrahedron_count, Clustering, Islands, NoClustering, Star, TetCounts, TetScratch,
+};
+pub use geometry::{geometry_pass, regenerate_anchors};
+pub use repair::{finish_repair, unmerge_and_regenerate};
+pub use table::{MtCase, MT_TABLE};
+pub use topology::{topology, TetKind, TetTopology, BCC, DIRECTIONS, KUHN};
+// The engine's internals its sibling passes share.
+use engine::{owns, Addresser, Plan};
+
 #[cfg(test)]
 mod tests {
+    use super::topology::orientation;
     use super::*;
     use glam::Vec3;
 

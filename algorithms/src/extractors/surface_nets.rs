@@ -79,13 +79,14 @@ pub use crate::extractors::dual::{DualOptions as SnOptions, Smoothing};
 
 /// One line for listings.
 pub const DESCRIPTION: &str =
-    "Gibson 1998: one vertex per surface cell (mean of its edge crossings), a quad per crossing edge; constrained smoothing";
+    "Gibson 1998: one vertex per piece of surface in each cell (mean of its edge crossings), a quad per crossing edge; constrained smoothing";
 
 /// Option names for [`from_options`].
 pub const OPTION_NAMES: &[&str] =
     &["smoothing", "iterations", "strength", "decay", "stiffness", "damping", "time-step", "parallelism"];
 
-/// Gibson 1998: one vertex per surface cell, quads across crossing edges, constrained smoothing.
+/// Gibson 1998: one vertex per piece of surface in each cell, quads across crossing edges,
+/// constrained smoothing.
 pub const INFO: ExtractorInfo = ExtractorInfo {
     name: "surface-nets",
     description: DESCRIPTION,

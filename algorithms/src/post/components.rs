@@ -2,7 +2,8 @@
 //!
 //! A scan's isosurface comes with islands: noise, vessels cut by the iso-value, a few voxels of
 //! skull at a brain's threshold. `keep-components` drops them: the mesh's connected components
-//! (triangles joined through shared vertices, the way every extractor here welds them) are
+//! (triangles joined through shared edges, as `metrics` and CGAL count them; two blobs touching
+//! at a vertex are two components, and dropping one leaves the other whole) are
 //! ranked by the volume they enclose, and only the `largest` of them (default 1; `0` keeps any
 //! number) whose volume is at least `min-volume` grid cells (default 0) are kept. Volumes are in
 //! cells (voxels, for a volume meshed on its own grid: spacing cubed), so one option value means
@@ -120,11 +121,12 @@ impl PostProcess for KeepComponents {
     }
 }
 
-/// A mesh's connected components: triangles joined through shared vertices.
+/// A mesh's connected components: triangles joined through shared edges, as `metrics` counts
+/// them (and CGAL and MeshLab): two spheres touching at one vertex are two components.
 #[derive(Clone, Debug)]
 pub struct Components {
-    /// Each vertex's component (`u32::MAX` for a vertex no triangle uses).
-    vertex: Vec<u32>,
+    /// Each triangle's component.
+    triangle: Vec<u32>,
     /// Each component's triangle count.
     pub triangles: Vec<usize>,
     /// Each component's volume (the absolute signed volume its triangles bound about their own
@@ -135,29 +137,42 @@ pub struct Components {
 impl Components {
     /// The components of `mesh`, numbered in the order of their first triangle.
     pub fn of(mesh: &TriMesh) -> Self {
-        let n = mesh.positions.len();
-        let mut union = UnionFind::<u32>::new(n);
-        for t in &mesh.triangles {
-            union.union(t[0], t[1]);
-            union.union(t[0], t[2]);
+        let count_t = mesh.triangles.len();
+        // Each edge (smaller vertex in the high half) with a triangle holding it; triangles on
+        // the same edge are joined.
+        let mut edges: Vec<(u64, u32)> = mesh
+            .triangles
+            .iter()
+            .enumerate()
+            .flat_map(|(t, tri)| {
+                (0..3).map(move |k| {
+                    let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                    ((u64::from(a.min(b)) << 32) | u64::from(a.max(b)), t as u32)
+                })
+            })
+            .collect();
+        edges.sort_unstable();
+        let mut union = UnionFind::<u32>::new(count_t);
+        for pair in edges.windows(2) {
+            if pair[0].0 == pair[1].0 {
+                union.union(pair[0].1, pair[1].1);
+            }
         }
-        let mut number = vec![u32::MAX; n];
-        let mut vertex = vec![u32::MAX; n];
+        let mut number = vec![u32::MAX; count_t];
+        let mut triangle = vec![u32::MAX; count_t];
         let mut count = 0u32;
-        for t in &mesh.triangles {
-            let root = union.find(t[0]) as usize;
+        for (t, component) in triangle.iter_mut().enumerate() {
+            let root = union.find(t as u32) as usize;
             if number[root] == u32::MAX {
                 number[root] = count;
                 count += 1;
             }
-            for &v in t {
-                vertex[v as usize] = number[root];
-            }
+            *component = number[root];
         }
-        let mut components = Self { vertex, triangles: vec![0; count as usize], volumes: vec![0.0; count as usize] };
+        let mut components = Self { triangle, triangles: vec![0; count as usize], volumes: vec![0.0; count as usize] };
         let mut centres = vec![(DVec3::ZERO, 0usize); count as usize];
-        for t in &mesh.triangles {
-            let c = components.of_triangle(t) as usize;
+        for (i, t) in mesh.triangles.iter().enumerate() {
+            let c = components.triangle[i] as usize;
             components.triangles[c] += 1;
             let (sum, k) = &mut centres[c];
             *sum += t.iter().map(|&v| mesh.positions[v as usize].as_dvec3()).sum::<DVec3>();
@@ -165,8 +180,8 @@ impl Components {
         }
         let centres: Vec<DVec3> = centres.iter().map(|&(sum, k)| sum / k.max(1) as f64).collect();
         let mut signed = vec![0.0f64; count as usize];
-        for t in &mesh.triangles {
-            let c = components.of_triangle(t) as usize;
+        for (i, t) in mesh.triangles.iter().enumerate() {
+            let c = components.triangle[i] as usize;
             let [a, b, d] = t.map(|v| mesh.positions[v as usize].as_dvec3() - centres[c]);
             signed[c] += a.dot(b.cross(d)) / 6.0;
         }
@@ -179,9 +194,9 @@ impl Components {
         self.triangles.len()
     }
 
-    /// The component of triangle `t`.
-    pub fn of_triangle(&self, t: &[u32; 3]) -> u32 {
-        self.vertex[t[0] as usize]
+    /// The component of the mesh's triangle number `t`.
+    pub fn of_triangle(&self, t: usize) -> u32 {
+        self.triangle[t]
     }
 
     /// Which components to keep: those of volume at least `min_volume`, the `largest` of them by
@@ -200,10 +215,11 @@ impl Components {
     }
 }
 
-/// Keeps the triangles `keep` accepts, in order, and the vertices they use (positions and
-/// normals, in order); returns which of the input's vertices were kept.
-fn keep_triangles(mesh: &mut TriMesh, keep: impl Fn(&[u32; 3]) -> bool) -> Vec<bool> {
-    mesh.triangles.retain(|t| keep(t));
+/// Keeps the triangles whose numbers `keep` accepts, in order, and the vertices they use
+/// (positions and normals, in order); returns which of the input's vertices were kept.
+fn keep_triangles(mesh: &mut TriMesh, keep: impl Fn(usize) -> bool) -> Vec<bool> {
+    let mut number = 0..;
+    mesh.triangles.retain(|_| keep(number.next().unwrap_or(0)));
     let mut used = vec![false; mesh.positions.len()];
     mesh.triangles.iter().flatten().for_each(|&v| used[v as usize] = true);
     let mut new_index = vec![u32::MAX; used.len()];
@@ -256,13 +272,33 @@ mod tests {
     }
 
     #[test]
+    fn components_touching_at_a_vertex_are_two() {
+        // Two tetrahedra sharing only vertex 0 (the second's apex): joined through a vertex, not
+        // an edge; the smaller one dropped leaves the larger whole, the shared vertex kept.
+        let mut mesh = TriMesh::default();
+        tetrahedron(&mut mesh, Vec3::ZERO, 2.0);
+        tetrahedron(&mut mesh, Vec3::splat(-1.0), 1.0);
+        let apex = mesh.positions.len() as u32 - 1;
+        mesh.positions[apex as usize] = Vec3::ZERO;
+        mesh.triangles.iter_mut().flatten().filter(|v| **v == apex).for_each(|v| *v = 0);
+        let c = Components::of(&mesh);
+        assert_eq!(c.count(), 2);
+        assert_eq!(c.triangles, vec![4, 4]);
+        assert_eq!(c.kept(1, 0.0), vec![true, false]);
+        let kept = keep_triangles(&mut mesh, |t| c.kept(1, 0.0)[c.of_triangle(t) as usize]);
+        assert!(kept[0], "the shared vertex stays with the kept tetrahedron");
+        assert_eq!(mesh.triangles.len(), 4);
+        assert_eq!(mesh.positions.len(), 4);
+    }
+
+    #[test]
     fn kept_triangles_and_vertices_are_the_inputs_in_order() {
         let mut mesh = TriMesh::default();
         tetrahedron(&mut mesh, Vec3::ZERO, 1.0);
         tetrahedron(&mut mesh, Vec3::splat(5.0), 2.0);
         mesh.compute_face_weighted_normals();
         let input = mesh.clone();
-        let kept = keep_triangles(&mut mesh, |t| t[0] >= 4);
+        let kept = keep_triangles(&mut mesh, |t| t >= 4);
         assert_eq!(kept, [vec![false; 4], vec![true; 4]].concat());
         assert_eq!(mesh.positions, input.positions[4..]);
         assert_eq!(mesh.normals, input.normals[4..]);

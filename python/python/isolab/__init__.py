@@ -1,6 +1,6 @@
 """isolab: isosurface meshes from numpy arrays.
 
-Two ways in:
+Three ways in:
 
 * :func:`marching_cubes` has scikit-image's signature, return value and conventions
   (``skimage.measure.marching_cubes``), so replacing the import is enough.
@@ -195,8 +195,7 @@ class Mesh:
     materials : (N,) uint8 or None
         Each vertex's material (``materials=True``).
     tet_vertices, tetrahedra : (K, 3) float32 and (T, 4) int32, or None
-        The tetrahedral mesh of a volume extractor (``bcc-sculpt``, the marching tetrahedra
-        family with ``output=volume``).
+        The tetrahedral mesh of a volume extractor (``bcc-sculpt``, ``isosurface-stuffing``).
     stats : dict
         The CLI's JSON for the run: stage times in ``times_ms``, counts, the input, warnings.
     warnings : list of str
@@ -531,7 +530,7 @@ def metrics(vertices: np.ndarray, faces: np.ndarray, *, self_intersections: bool
     return json.loads(_isolab.metrics(vertices, faces, None, None, None, None, self_intersections, threads))
 
 
-def load(path: Union[str, os.PathLike]) -> Union[Tuple[np.ndarray, np.ndarray], Tuple[np.ndarray, np.ndarray]]:
+def load(path: Union[str, os.PathLike]) -> Tuple[np.ndarray, np.ndarray]:
     """Reads a file the CLI reads. A volume file (NIfTI, NRRD, MetaImage, isolab's grid) gives
     ``(array, affine)``: the voxels in index order ``[i, j, k]`` (float32, Fortran-ordered over
     the buffer isolab read, no copy) and the 4 x 4 index-to-world affine (RAS for anatomical

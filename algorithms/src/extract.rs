@@ -125,10 +125,10 @@ pub enum LevelsOfDetail<'a> {
     /// interpolation, kept off the samples, and ambiguous faces that keep their inside corners
     /// apart (plain marching cubes).
     Stitched,
-    /// Restriction and octree dual contouring's minimal edges
-    /// ([`crate::extractors::dual::lod`]): the dual engine's vertices and placement, a polygon
-    /// per minimal crossing edge (surface nets, dual contouring).
-    Dual(&'a crate::extractors::dual::DualEngine),
+    /// Restriction and octree dual contouring's minimal edges: the extractor's own
+    /// [`crate::chunks::lod::DualLevels`], a polygon per minimal crossing edge joining its
+    /// cells' vertices (surface nets, dual contouring).
+    Dual(&'a dyn crate::chunks::lod::DualLevels),
 }
 
 impl LevelsOfDetail<'_> {

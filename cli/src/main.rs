@@ -464,7 +464,7 @@ fn render(
     wireframe: bool,
     size: u32,
 ) -> Result<(), (i32, String)> {
-    use isolab_cli::render::{self, RenderOptions, Shading};
+    use isolab_render::{self as render, RenderOptions, Shading};
     let mesh = io::read_mesh(file).map_err(|e| (2, e.to_string()))?;
     let bad = mesh.positions.iter().filter(|p| !p.is_finite()).count();
     if bad > 0 {

@@ -1,9 +1,7 @@
 //! The `isolab` command line as scripts use it: outputs, metrics, and every kind of bad input
 //! (a clear message, a non-zero exit code, no panic, no half-written file).
 
-mod common;
-
-use common::{isolab, stderr};
+use crate::common::{isolab, stderr};
 use std::path::Path;
 use std::process::Output;
 

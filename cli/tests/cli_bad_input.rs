@@ -2,9 +2,7 @@
 //! non-zero exit code, no panic, nothing written): binary garbage, truncated and malformed PLY,
 //! malformed OBJ, impossible numbers, unwritable outputs, pictures of nothing.
 
-mod common;
-
-use common::{isolab, stderr};
+use crate::common::{isolab, stderr};
 use std::path::Path;
 
 /// Runs `isolab` with `args`, expecting exit `code`, every needle in stderr, no panic, and no

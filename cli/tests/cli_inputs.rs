@@ -3,9 +3,8 @@
 //! the file and what is wrong, exit code 1, no panic, no output file left behind).
 
 use isolab_io::volume::nifti::write::nifti1;
-mod common;
 
-use common::{isolab, stderr};
+use crate::common::{isolab, stderr};
 use std::path::Path;
 
 fn fixture(name: &str) -> String {

@@ -2,9 +2,7 @@
 //! neighbouring labels sharing their interface triangles; bad input refused with the input named
 //! and nothing written.
 
-mod common;
-
-use common::{isolab, stderr};
+use crate::common::{isolab, stderr};
 use isolab_algorithms::TriMesh;
 use std::collections::HashSet;
 use std::path::Path;

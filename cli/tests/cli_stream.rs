@@ -2,9 +2,7 @@
 //! the mesh `--chunk` makes in memory, refuses before reading what it cannot do, streams on its
 //! own when the volume does not fit in memory, and holds far less than the volume.
 
-mod common;
-
-use common::{isolab, stderr};
+use crate::common::{isolab, stderr};
 use std::collections::BTreeSet;
 use std::io::Write;
 use std::path::Path;

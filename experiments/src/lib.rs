@@ -13,3 +13,5 @@ pub mod memory;
 pub mod peers;
 pub mod provenance;
 pub mod report;
+#[cfg(test)]
+mod report_check;

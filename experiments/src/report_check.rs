@@ -1,9 +1,12 @@
+//! (Unit tests of the crate, not an integration test: the crate then has no integration test, so
+//! `cargo test` builds none of its 23 binaries.)
+//!
 //! The generated report: its pages assemble from the committed data and match what is committed,
 //! every link resolves, the front page recommends for every use case and stays short, and no
 //! number is typed into the experiments' prose (every number is computed from the data or from a
 //! labelled constant).
 
-use isolab_experiments::experiment::{all, assemble, Context};
+use crate::experiment::{all, assemble, Context};
 use std::path::{Path, PathBuf};
 
 /// The front page must fit on a few screens.

@@ -1,6 +1,8 @@
-//! Pictures of meshes: a fixed perspective camera, flat or smooth (Gouraud-interpolated normal)
-//! shading with a headlight plus a key light, an optional wireframe overlay, 2x supersampling,
-//! rasterized by the `euc` crate. Also turntable GIFs and side-by-side pairs.
+//! # isolab-render
+//!
+//! Pictures of meshes for the `isolab render` command and the report: a fixed perspective
+//! camera, flat or smooth (Gouraud-interpolated normal) shading with a headlight plus a key
+//! light, an optional wireframe overlay, 2x supersampling, rasterized by the `euc` crate. Also turntable GIFs and side-by-side pairs.
 //!
 //! The wireframe is drawn in the fragment shader: each corner carries its distance to the opposite
 //! edge in pixels, interpolation gives every fragment its distance to the three edges, and

@@ -48,15 +48,16 @@
 //! [`Extractor::levels_of_detail`].
 
 use crate::extract::{ExtractError, Extraction, Extractor, LevelsOfDetail};
-use crate::extractors::dual::lod::LodGrid as DualGrid;
 use crate::lattice::{Grid, Lattice};
 use crate::samples::Samples;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
 
+mod dual;
 mod seam_fill;
 
+pub use dual::{DualLevels, DualLodCounts, LodGrid};
 use seam_fill::SeamNeighbourhood;
 
 /// The coarsest level [`extract_lod`] meshes: 1/16 of the samples per axis.
@@ -195,8 +196,8 @@ pub fn extract_lod(
     if let LevelsOfDetail::Dual(engine) = method {
         out.clear();
         let field = samples.field().map(|f| f.as_ref());
-        let g = DualGrid { grid, values: &restricted_values, iso, field, chunk, counts, levels };
-        let made = crate::extractors::dual::lod::extract_lod(engine, g, &mut out.surface, levels_out);
+        let g = LodGrid { grid, values: &restricted_values, iso, field, chunk, counts, levels };
+        let made = engine.extract_lod(g, &mut out.surface, levels_out);
         out.finish_counts(0);
         return Ok(LodStats {
             chunks: counts,

@@ -6,7 +6,7 @@
 use super::context::{corner_distances_h, Context, Experiment, ExperimentError};
 use crate::report::markdown_table;
 use isolab_algorithms::{extractors, fields, Extraction, Grid, Lattice, Samples, Vec3};
-use isolab_cli::render::{render, save_png, RenderOptions};
+use isolab_render::{render, save_png, RenderOptions};
 use serde::{Deserialize, Serialize};
 
 /// A corner the mesh comes within this many grid spacings of counts as kept (dual contouring's

@@ -10,7 +10,7 @@ use crate::figures::plot::{self, BarChart, BarSeries};
 use crate::report::{markdown_table, median};
 use isolab_algorithms::extractors::surface_nets::{Smoothing, SnOptions, SurfaceNets};
 use isolab_algorithms::{fields, Extraction, Extractor, Field, Grid, Lattice, Samples};
-use isolab_cli::render::{render, save_png, RenderOptions};
+use isolab_render::{render, save_png, RenderOptions};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 

@@ -12,7 +12,7 @@ use crate::report::markdown_table;
 use isolab_algorithms::chunks::lod::open_edges_away_from_bounds;
 use isolab_algorithms::chunks::{Brush, ChunkedVolume};
 use isolab_algorithms::{extractors, fields, materials, Chunking, Extraction, Grid, Lattice, Samples};
-use isolab_cli::render::{self, RenderOptions, Shading};
+use isolab_render::{self as render, RenderOptions, Shading};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 

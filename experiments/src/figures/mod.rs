@@ -1,9 +1,9 @@
 //! Figures: plots of measurements (`plot`); pictures of meshes come from the CLI's renderer
-//! (`isolab_cli::render`, re-exported here as `render`). They live here, not in `metrics`,
+//! (`isolab_render`, re-exported here as `render`). They live here, not in `metrics`,
 //! because they write files; `metrics` stays a light, read-only library.
 
 pub mod plot;
-pub use isolab_cli::render;
+pub use isolab_render as render;
 
 /// Eight distinct colours (Tableau's), for series that are not algorithms.
 pub const PALETTE: [(u8, u8, u8); 8] = [

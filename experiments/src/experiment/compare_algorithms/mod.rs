@@ -9,9 +9,9 @@ use crate::figures::color_of;
 use crate::figures::plot::{self, HistogramPlot, Scale, Series, Style, XyPlot};
 use crate::report::{first_seen, markdown_table, Spread};
 use isolab_algorithms::{extractors, fields, Samples};
-use isolab_cli::render::{render, save_png, save_turntable, side_by_side, RenderOptions, Shading};
 use isolab_metrics::Histogram;
 use isolab_pipeline::{lattice_for, load_field, RunConfig};
+use isolab_render::{render, save_png, save_turntable, side_by_side, RenderOptions, Shading};
 use serde::{Deserialize, Serialize};
 
 mod reading;

@@ -7,7 +7,7 @@ use crate::figures::plot::{BarChart, BarSeries};
 use isolab_algorithms::extractors::regularised_marching_tetrahedra::RegularisedMarchingTetrahedra;
 use isolab_algorithms::mesh::manifold_defects;
 use isolab_algorithms::{Extraction, Extractor, Grid, Lattice, Samples, Vec3};
-use isolab_cli::render::{render, save_png, side_by_side, RenderOptions, Shading};
+use isolab_render::{render, save_png, side_by_side, RenderOptions, Shading};
 
 /// The defect close-up's radius around the first faulty vertex, in grid spacings.
 const CLOSE_UP_H: f32 = 3.0;

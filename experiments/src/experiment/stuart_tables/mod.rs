@@ -24,9 +24,9 @@
 use super::context::{load_object, Context, Experiment, ExperimentError};
 use crate::report::median;
 use isolab_algorithms::extractors::bcc_sculpt::{sculpt_surface, SculptOptions};
-use isolab_cli::render::{self, RenderOptions, Shading};
 use isolab_metrics::topology;
 use isolab_metrics::volume_mesh::volume_metrics;
+use isolab_render::{self as render, RenderOptions, Shading};
 use serde::{Deserialize, Serialize};
 
 mod checks;

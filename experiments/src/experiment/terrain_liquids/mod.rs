@@ -16,8 +16,8 @@ use isolab_algorithms::liquids::{
 };
 use isolab_algorithms::random::Random;
 use isolab_algorithms::{extractors, Extraction, Extractor, Lattice, Samples, TriMesh, Vec3};
-use isolab_cli::render::{self, RenderOptions, Shading};
 use isolab_metrics::layers::{layer_contact, LayerContact};
+use isolab_render::{self as render, RenderOptions, Shading};
 use serde::{Deserialize, Serialize};
 
 mod page;

@@ -16,7 +16,7 @@ use super::context::{Context, Experiment, ExperimentError};
 use crate::report::Spread;
 use isolab_algorithms::chunks::lod::{balance_levels, extract_lod, open_edges_away_from_bounds, open_edges_off_bounds};
 use isolab_algorithms::{extractors, fields, Extraction, Extractor, Grid, Lattice, LevelsOfDetail, Samples, TriMesh, Vec3};
-use isolab_cli::render::{self, Image, RenderOptions, Shading};
+use isolab_render::{self as render, Image, RenderOptions, Shading};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::time::Instant;

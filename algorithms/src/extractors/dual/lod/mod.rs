@@ -29,43 +29,12 @@ use super::boundary::{boundary_split, SPLIT};
 use super::cells::{place, split_least_folded, Tables};
 use super::smoothing::{build_adjacency, smooth_within, SmoothBuffers};
 use super::{DualEngine, Placement, Smoothing};
-use crate::field::Field;
+use crate::chunks::lod::{DualLevels, DualLodCounts, LodGrid};
 use crate::geometry::trilinear_gradient;
-use crate::lattice::Grid;
 use crate::mesh::TriMesh;
 use crate::tables::marching_cubes::{face_edges, opposite_face, Case, CORNERS, EDGES, FACES, RING_FACES};
 use glam::Vec3;
 use rayon::prelude::*;
-
-/// A chunked grid whose chunks have levels of detail, as [`crate::chunks::lod`] hands it over.
-#[derive(Clone, Copy)]
-pub struct LodGrid<'a> {
-    /// The whole grid; positions are made in its sample indices and placed by it at the end.
-    pub grid: Grid,
-    /// The samples, finer ones on coarser chunks' boundaries restricted.
-    pub values: &'a [f32],
-    /// The iso-value (inside below).
-    pub iso: f32,
-    /// The field, for dual contouring's normals where the samples carry it.
-    pub field: Option<&'a dyn Field>,
-    /// Cells per chunk along each axis (at full resolution).
-    pub chunk: usize,
-    /// Chunks per axis.
-    pub counts: [usize; 3],
-    /// Each chunk's level (x fastest): its cells have `2^level` samples a side.
-    pub levels: &'a [u8],
-}
-
-/// What [`extract_lod`] made besides the mesh.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct DualLodCounts {
-    /// Polygons on minimal edges between chunks of different levels.
-    pub seam_polygons: usize,
-    /// Crossing minimal edges whose coarse cell had no piece to give (0 in every test; left open).
-    pub unmatched: usize,
-    /// Vertices split where a seam edge had four triangles (`pinch`: where two rings met).
-    pub pinched: usize,
-}
 
 const NONE: u32 = u32::MAX;
 
@@ -459,6 +428,12 @@ fn local_edge(a: usize, r: [usize; 3]) -> usize {
 /// The cube face normal to axis `a` on side `high` (0 or 1).
 fn face_index(a: usize, high: usize) -> usize {
     (0..6).find(|&f| FACES[f].1[a] == if high == 1 { 1 } else { -1 }).expect("six faces")
+}
+
+impl DualLevels for DualEngine {
+    fn extract_lod(&self, g: LodGrid<'_>, out: &mut TriMesh, levels: Option<&mut Vec<u8>>) -> DualLodCounts {
+        extract_lod(self, g, out, levels)
+    }
 }
 
 /// Meshes the chunked grid `g` with `engine`'s placement and smoothing, each chunk at its level,

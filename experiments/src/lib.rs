@@ -12,6 +12,7 @@ pub mod html;
 pub mod memory;
 pub mod peers;
 pub mod provenance;
+pub mod readme;
 pub mod report;
 #[cfg(test)]
 mod report_check;

@@ -1,4 +1,5 @@
-//! Shared helpers for the integration tests in `tests/tests/`.
+//! Shared helpers for the integration tests in `tests/tests/`, and the README's Rust quick start
+//! as a doc test (`ReadmeQuickStart`, built for doc tests only).
 
 use glam::Vec3;
 use isolab_algorithms::{Extraction, Extractor, Grid, Lattice, Samples, TriMesh};
@@ -289,3 +290,9 @@ pub fn position_ids(positions: &[Vec3], ids: &mut std::collections::HashMap<[u32
         })
         .collect()
 }
+
+/// README.md, whose Rust code blocks run as this crate's doc tests (the quick start must work as
+/// written; its other blocks are `sh`, `python` and `text`, which rustdoc does not run).
+#[doc = include_str!("../../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeQuickStart;

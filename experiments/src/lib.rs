@@ -13,6 +13,8 @@ pub mod memory;
 pub mod peers;
 pub mod provenance;
 pub mod readme;
+#[cfg(test)]
+mod readme_check;
 pub mod report;
 #[cfg(test)]
 mod report_check;

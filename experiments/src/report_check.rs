@@ -14,11 +14,11 @@ use std::path::{Path, PathBuf};
 /// extractors and experiments, which must not need a test edit).
 const FRONT_PAGE_MAX_LINES: usize = 40;
 
-fn workspace() -> PathBuf {
+pub(crate) fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-fn report_dir() -> PathBuf {
+pub(crate) fn report_dir() -> PathBuf {
     workspace().join("report")
 }
 
@@ -36,7 +36,7 @@ fn assembled() -> tempfile::TempDir {
 }
 
 /// The relative link targets of a Markdown page (`](target)`), without anchors.
-fn links(md: &str) -> Vec<String> {
+pub(crate) fn links(md: &str) -> Vec<String> {
     md.split("](")
         .skip(1)
         .filter_map(|rest| rest.split(')').next())
@@ -558,83 +558,5 @@ fn sparse_meshes_in_the_report_are_the_dense_ones_from_far_fewer_evaluations() {
             .unwrap_or_else(|| panic!("no sparse {field} at 1024"));
         let ratio = row["dense_points"].as_f64().unwrap() / row["evaluations"].as_f64().unwrap();
         assert!(ratio >= 30.0, "{field} at 1024³: {ratio:.1}x fewer evaluations");
-    }
-}
-
-/// The README's generated parts (the commands' times, the experiments table) are what the
-/// committed data gives: `report` rewrites them at every assembly.
-#[test]
-fn the_readme_generated_parts_match_the_committed_data() {
-    let path = workspace().join("README.md");
-    let readme = std::fs::read_to_string(&path).expect("README.md");
-    let filled = crate::readme::fill(&readme, &Context::new(report_dir(), 1), &all()).expect("markers");
-    assert!(filled == readme, "README.md's generated parts are stale: rerun `--bin report -- --assemble-only` and commit it");
-}
-
-/// README.md's prose sentences (outside code blocks, tables and markers), split at full stops.
-fn readme_sentences(readme: &str) -> Vec<String> {
-    let mut prose = String::new();
-    let mut in_code = false;
-    for line in readme.lines() {
-        if line.starts_with("```") {
-            in_code = !in_code;
-            prose.push_str(".\n");
-            continue;
-        }
-        if in_code || line.starts_with('|') || line.starts_with("<!--") || line.starts_with('#') {
-            prose.push_str(".\n");
-            continue;
-        }
-        prose.push_str(line);
-        prose.push('\n');
-    }
-    prose.split(['.', '?', '!']).map(|s| s.split_whitespace().collect::<Vec<_>>().join(" ")).filter(|s| !s.is_empty()).collect()
-}
-
-/// The README reads in a minute: under 2,500 words, no sentence over 60, the test command `.ci/run`
-/// runs written in it, and every relative link resolving.
-#[test]
-fn the_readme_is_a_front_door() {
-    const MAX_WORDS: usize = 2500;
-    const MAX_SENTENCE_WORDS: usize = 60;
-    let readme = std::fs::read_to_string(workspace().join("README.md")).expect("README.md");
-    let words = readme.split_whitespace().count();
-    assert!(words < MAX_WORDS, "README.md has {words} words (at most {MAX_WORDS})");
-    // A decimal point or a path's dot splits early, which only shortens sentences: lists and
-    // parentheses stay whole, so the long ones are still found.
-    let long: Vec<String> =
-        readme_sentences(&readme).into_iter().filter(|s| s.split_whitespace().count() > MAX_SENTENCE_WORDS).collect();
-    assert!(long.is_empty(), "sentences over {MAX_SENTENCE_WORDS} words: {long:#?}");
-    let ci = std::fs::read_to_string(workspace().join(".ci/run")).expect(".ci/run");
-    assert!(readme.contains("\nbash tests/all.sh") && ci.contains("bash tests/all.sh"), "the test command is not in both");
-    assert!(readme.contains("\ncargo run --release -p isolab-experiments --bin report"), "the main job is not written out");
-    let missing: Vec<String> = links(&readme).into_iter().filter(|l| !workspace().join(l).exists()).collect();
-    assert!(missing.is_empty(), "README.md links to missing files: {missing:?}");
-    for member in ["algorithms/", "metrics/", "io/", "pipeline/", "render/", "cli/", "python/", "experiments/", "tests/"] {
-        assert!(readme.contains(&format!("\n{member}")), "the Layout misses {member}");
-    }
-}
-
-#[test]
-fn the_readme_sentence_splitter_sees_long_sentences() {
-    let long = format!("# T\n\n{}.\n\n```sh\n{}\n```\n", "word ".repeat(61), "code ".repeat(80));
-    let sentences = readme_sentences(&long);
-    assert_eq!(sentences.iter().filter(|s| s.split_whitespace().count() > 60).count(), 1, "{sentences:?}");
-}
-
-/// Every relative link of the guides in `docs/` resolves.
-#[test]
-fn the_guides_links_resolve() {
-    let docs = workspace().join("docs");
-    let pages: Vec<PathBuf> = std::fs::read_dir(&docs)
-        .expect("docs/")
-        .map(|e| e.expect("entry").path())
-        .filter(|p| p.extension().is_some_and(|e| e == "md"))
-        .collect();
-    assert!(pages.len() >= 5, "docs/ has {} pages", pages.len());
-    for page in pages {
-        let text = std::fs::read_to_string(&page).expect("page");
-        let missing: Vec<String> = links(&text).into_iter().filter(|l| !docs.join(l).exists()).collect();
-        assert!(missing.is_empty(), "{} links to missing files: {missing:?}", page.display());
     }
 }

@@ -109,6 +109,16 @@ impl OptionReader {
         })
     }
 
+    /// The `parallelism` option, which every slab-sweeping extractor takes: `rayon` (slabs in
+    /// parallel on the pool) or `serial` (one slab on the calling thread).
+    pub fn parallelism(
+        &mut self,
+        default: crate::sweep::slabs::Parallelism,
+    ) -> Result<crate::sweep::slabs::Parallelism, OptionError> {
+        use crate::sweep::slabs::Parallelism;
+        self.choice("parallelism", default, &[("rayon", Parallelism::Rayon), ("serial", Parallelism::Serial)])
+    }
+
     /// Fails if any option was not taken.
     pub fn finish(self) -> Result<(), OptionError> {
         match self.values.into_keys().next() {

@@ -73,7 +73,6 @@ use crate::extract::{Chunking, ExtractError, Extraction, Extractor, ExtractorInf
 use crate::extractors::dual::{DualEngine, Placement};
 use crate::options::{OptionError, Options};
 use crate::samples::Samples;
-use crate::sweep::slabs::Parallelism;
 
 pub use crate::extractors::dual::{DualOptions as SnOptions, Smoothing};
 
@@ -130,7 +129,7 @@ pub fn from_options(options: &Options) -> Result<Box<dyn Extractor>, OptionError
         stiffness: r.number("stiffness", d.stiffness, 1e-6, 1.0)?,
         damping: r.number("damping", d.damping, 0.0, 1.0)?,
         time_step: r.number("time-step", d.time_step, 1e-6, 100.0)?,
-        parallelism: r.choice("parallelism", d.parallelism, &[("rayon", Parallelism::Rayon), ("serial", Parallelism::Serial)])?,
+        parallelism: r.parallelism(d.parallelism)?,
     };
     r.finish()?;
     Ok(Box::new(SurfaceNets::new(o)))

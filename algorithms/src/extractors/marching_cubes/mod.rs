@@ -293,8 +293,7 @@ fn build(
             ("none", NormalSource::None),
         ],
     )?;
-    let parallelism =
-        r.choice("parallelism", Parallelism::Rayon, &[("rayon", Parallelism::Rayon), ("serial", Parallelism::Serial)])?;
+    let parallelism = r.parallelism(Parallelism::Rayon)?;
     let on_iso =
         r.choice("on-iso", OnIsoSamples::Separate, &[("separate", OnIsoSamples::Separate), ("exact", OnIsoSamples::Exact)])?;
     let faces = r.choice(

@@ -14,6 +14,16 @@ pub struct TriMesh {
 }
 
 impl TriMesh {
+    /// The corner tetrahedron (the origin and the three unit axis points), closed and wound
+    /// outward (counter-clockwise seen from outside): the one small closed mesh the tests share.
+    pub fn unit_tetrahedron() -> TriMesh {
+        TriMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
+            normals: vec![],
+            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        }
+    }
+
     /// Empties the mesh, keeping its capacity.
     pub fn clear(&mut self) {
         self.positions.clear();
@@ -394,11 +404,7 @@ mod tests {
     use super::*;
 
     fn tetrahedron() -> TriMesh {
-        TriMesh {
-            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
-            normals: vec![],
-            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
-        }
+        TriMesh::unit_tetrahedron()
     }
 
     #[test]

@@ -309,11 +309,10 @@ mod tests {
     }
 
     fn tetrahedron() -> TriMesh {
-        TriMesh {
-            positions: vec![Vec3::ZERO, Vec3::new(1.5, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.25), Vec3::new(0.0, 0.0, 1.0)],
-            normals: vec![],
-            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
-        }
+        // The shared fixture, skewed so that no coordinate is trivially 0 or 1 everywhere.
+        let mut t = TriMesh::unit_tetrahedron();
+        t.positions = vec![Vec3::ZERO, Vec3::new(1.5, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.25), Vec3::new(0.0, 0.0, 1.0)];
+        t
     }
 
     #[test]

@@ -170,11 +170,9 @@ mod tests {
     use glam::Vec3;
 
     fn tetra(scale: f32) -> TriMesh {
-        TriMesh {
-            positions: vec![Vec3::ZERO, Vec3::X * scale, Vec3::Y * scale, Vec3::Z * scale],
-            normals: vec![],
-            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
-        }
+        let mut t = TriMesh::unit_tetrahedron();
+        t.positions.iter_mut().for_each(|p| *p *= scale);
+        t
     }
 
     #[test]

@@ -93,7 +93,7 @@ mod tests {
 
     #[test]
     fn closed_tetrahedron_has_none_and_a_pierced_one_is_listed() {
-        let tet = mesh(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z], vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]);
+        let tet = TriMesh::unit_tetrahedron();
         assert_eq!(self_intersections(&tet).count, 0);
         // A separate triangle piercing face [0, 2, 1] (z = 0) only.
         let mut pierced = tet.clone();

@@ -305,11 +305,7 @@ mod tests {
     use super::*;
 
     fn tetra() -> TriMesh {
-        TriMesh {
-            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
-            normals: vec![],
-            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
-        }
+        TriMesh::unit_tetrahedron()
     }
 
     #[test]

@@ -19,16 +19,7 @@ struct Seed {
 fn seeds() -> &'static [Seed] {
     static SEEDS: OnceLock<Vec<Seed>> = OnceLock::new();
     SEEDS.get_or_init(|| {
-        let mesh = isolab_algorithms::TriMesh {
-            positions: vec![
-                glam::Vec3::ZERO,
-                glam::Vec3::X,
-                glam::Vec3::Y,
-                glam::Vec3::Z,
-            ],
-            normals: vec![],
-            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
-        };
+        let mesh = isolab_algorithms::TriMesh::unit_tetrahedron();
         let dir = std::env::temp_dir().join(format!("isolab-parsers-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let mut out = Vec::new();

@@ -248,8 +248,9 @@ mod tests {
     /// A closed tetrahedron of edge `s` at `o`, wound outward.
     fn tetrahedron(mesh: &mut TriMesh, o: Vec3, s: f32) {
         let base = mesh.positions.len() as u32;
-        mesh.positions.extend([o, o + Vec3::X * s, o + Vec3::Y * s, o + Vec3::Z * s]);
-        mesh.triangles.extend([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]].map(|t| t.map(|v| v + base)));
+        let unit = TriMesh::unit_tetrahedron();
+        mesh.positions.extend(unit.positions.iter().map(|&p| o + p * s));
+        mesh.triangles.extend(unit.triangles.iter().map(|t| t.map(|v| v + base)));
     }
 
     #[test]

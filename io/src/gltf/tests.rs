@@ -55,11 +55,7 @@ fn quantized_glb_round_trips_within_half_a_step_and_is_smaller() {
 }
 
 fn tetrahedron() -> TriMesh {
-    TriMesh {
-        positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
-        normals: vec![],
-        triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
-    }
+    TriMesh::unit_tetrahedron()
 }
 
 #[test]

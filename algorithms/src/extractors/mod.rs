@@ -10,7 +10,6 @@ pub mod bcc_sculpt;
 pub mod dual;
 pub mod dual_contouring;
 pub mod isosurface_stuffing;
-pub mod manifold_dual_contouring;
 pub mod marching_cubes;
 pub mod marching_tetrahedra;
 pub mod regularised_marching_tetrahedra;
@@ -18,13 +17,21 @@ pub mod surface_nets;
 pub mod tetrahedral;
 
 pub use bcc_sculpt::BccSculpt;
-pub use dual_contouring::DualContouring;
+pub use dual_contouring::{DualContouring, ManifoldDualContouring};
 pub use isosurface_stuffing::IsosurfaceStuffing;
-pub use manifold_dual_contouring::ManifoldDualContouring;
 pub use marching_cubes::MarchingCubes;
 pub use marching_tetrahedra::MarchingTetrahedra;
 pub use regularised_marching_tetrahedra::RegularisedMarchingTetrahedra;
 pub use surface_nets::SurfaceNets;
+
+/// Manifold dual contouring's former path: the mode now lives in [`dual_contouring`] (kept so
+/// that code naming this module still builds).
+pub mod manifold_dual_contouring {
+    pub use super::dual_contouring::{
+        manifold_from_options as from_options, ManifoldDualContouring, MdcOptions, MANIFOLD_DESCRIPTION as DESCRIPTION,
+        MANIFOLD_INFO as INFO, MANIFOLD_OPTION_NAMES as OPTION_NAMES,
+    };
+}
 
 pub use crate::extract::{DihedralInterval, ExtractorInfo, Guarantees, PostInfo};
 
@@ -39,7 +46,7 @@ pub const INFOS: &[ExtractorInfo] = &[
     marching_cubes::MC33_INFO,
     surface_nets::INFO,
     dual_contouring::INFO,
-    manifold_dual_contouring::INFO,
+    dual_contouring::MANIFOLD_INFO,
     marching_tetrahedra::INFO,
     regularised_marching_tetrahedra::INFO,
     bcc_sculpt::INFO,

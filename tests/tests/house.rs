@@ -118,3 +118,55 @@ fn the_licences_and_the_citation_match_the_manifest() {
     assert!(cff.contains(&format!("version: \"{version}\"")), "CITATION.cff does not cite version {version}");
     assert!(cff.contains("  - MIT\n") && cff.contains("  - Apache-2.0\n"), "CITATION.cff's licences");
 }
+
+/// The leading `//!` lines of a file.
+fn module_doc(text: &str) -> String {
+    text.lines().take_while(|l| l.starts_with("//!") || l.trim().is_empty()).collect::<Vec<_>>().join("\n")
+}
+
+/// What an extractor's module doc lacks of the sections ARCHITECTURE asks for: the paper it
+/// follows (a quoted title and a year), its **Guarantees**, its **Non-guarantees** and an example.
+fn missing_doc_sections(doc: &str) -> Vec<&'static str> {
+    let has_year = doc.split(|c: char| !c.is_ascii_digit()).any(|t| t.len() == 4 && (t.starts_with("19") || t.starts_with("20")));
+    let cites_a_paper = has_year && doc.matches('"').count() >= 2;
+    let mut missing = Vec::new();
+    if !cites_a_paper {
+        missing.push("the paper (a quoted title and a year)");
+    }
+    if !doc.contains("**Guarantees") {
+        missing.push("**Guarantees**");
+    }
+    if !doc.contains("**Non-guarantees") {
+        missing.push("**Non-guarantees**");
+    }
+    if !doc.contains("//! ```") {
+        missing.push("an example");
+    }
+    missing
+}
+
+#[test]
+fn every_extractor_module_doc_has_its_paper_guarantees_non_guarantees_and_an_example() {
+    let extractors: Vec<(PathBuf, String)> =
+        sources().into_iter().filter(|(_, text)| text.lines().any(|l| l.starts_with("pub const INFO: ExtractorInfo"))).collect();
+    assert!(extractors.len() >= 7, "found only {} extractor modules", extractors.len());
+    let lacking: Vec<String> = extractors
+        .iter()
+        .filter_map(|(p, text)| {
+            let missing = missing_doc_sections(&module_doc(text));
+            (!missing.is_empty()).then(|| format!("{}: {}", p.display(), missing.join(", ")))
+        })
+        .collect();
+    assert!(lacking.is_empty(), "extractor module docs without their sections: {lacking:#?}");
+}
+
+#[test]
+fn the_doc_section_check_sees_what_it_looks_for() {
+    let whole =
+        "//! # X\n//! After Gibson, \"Nets\", 1998.\n//! **Guarantees.** a\n//! **Non-guarantees.** b\n//! ```\n//! x\n//! ```\n";
+    assert!(missing_doc_sections(&module_doc(whole)).is_empty());
+    assert_eq!(
+        missing_doc_sections("//! # X\n//! **Guarantees.** a\n"),
+        vec!["the paper (a quoted title and a year)", "**Non-guarantees**", "an example"]
+    );
+}

@@ -19,6 +19,9 @@ Three ways in:
 >>> mesh.metrics()["closed"]
 True
 
+Errors are :class:`IsolabError` subclasses that are also the built-in exceptions (``ValueError``,
+``OSError``, ``MemoryError``, ``TypeError``): see :mod:`isolab.errors`.
+
 Every call releases the GIL while it works; ``threads=N`` runs it on a pool of N threads (kept
 for later calls), ``threads=None`` on rayon's global pool (one thread per core, or
 ``RAYON_NUM_THREADS``).
@@ -35,9 +38,11 @@ from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 import numpy as np
 
 from . import _isolab
+from .errors import (IsolabError, IsolabMemoryError, IsolabOSError, IsolabTypeError, IsolabValueError,
+                     raises_isolab_errors)
 
 __all__ = ["marching_cubes", "extract", "Mesh", "mesh_labels", "LabelMeshes", "metrics", "load", "algorithms", "fields",
-           "__version__"]
+           "IsolabError", "IsolabValueError", "IsolabTypeError", "IsolabOSError", "IsolabMemoryError", "__version__"]
 __version__ = _isolab.__version__
 
 # The dtypes read in place; any other is converted to float32 first (a copy).
@@ -53,6 +58,7 @@ def _as_volume(volume: Any) -> np.ndarray:
     return volume
 
 
+@raises_isolab_errors
 def marching_cubes(volume: np.ndarray, level: Optional[float] = None, *, spacing: Sequence[float] = (1.0, 1.0, 1.0),
                    gradient_direction: str = "descent", step_size: int = 1, allow_degenerate: bool = True,
                    method: str = "lewiner", mask: Optional[np.ndarray] = None,
@@ -219,6 +225,7 @@ class Mesh:
         tets = "" if self.tetrahedra is None else f", {len(self.tetrahedra)} tetrahedra"
         return f"<isolab.Mesh {self.stats.get('algorithm')}: {len(self.vertices)} vertices, {len(self.faces)} faces{tets}>"
 
+    @raises_isolab_errors
     def metrics(self, self_intersections: bool = False, threads: Optional[int] = None) -> Dict[str, Any]:
         """The CLI's metrics of this mesh (``isolab extract -m``): triangle quality, topology
         (closed, manifold, oriented, genus), volume, area, distance of the vertices to the true
@@ -235,6 +242,7 @@ class Mesh:
         return json.loads(_isolab.metrics(self.vertices, self.faces, self.normals, self.tet_vertices, self.tetrahedra,
                                           self._run, self_intersections, threads))
 
+    @raises_isolab_errors
     def save(self, path: Union[str, os.PathLike]) -> None:
         """Writes the mesh in the format the extension names: ``.obj``, ``.ply``, ``.stl``
         (binary), ``.glb`` or ``.gltf`` (with normals, and vertex colours for materials),
@@ -285,6 +293,7 @@ def _batch_caller(fn: Callable[[np.ndarray], Any], progress: bool) -> Callable[[
     return call
 
 
+@raises_isolab_errors
 def extract(data: Union[np.ndarray, str, os.PathLike, Callable[[np.ndarray], Any]], level: Optional[float] = None, algorithm: str = "marching-cubes", *,
             spacing: Optional[Sequence[float]] = None, affine: Optional[np.ndarray] = None, inside: Optional[str] = None,
             options: Optional[Mapping[str, Any]] = None, post: Sequence[str] = (), threads: Optional[int] = None,
@@ -440,6 +449,7 @@ class LabelMeshes(dict):
         return f"<isolab.LabelMeshes: {len(self)} labels, {len(self.faces)} interface triangles>"
 
 
+@raises_isolab_errors
 def mesh_labels(label_map: Union[np.ndarray, str, os.PathLike], /, *, spacing: Optional[Sequence[float]] = None,
                 affine: Optional[np.ndarray] = None, labels: Optional[Sequence[int]] = None,
                 algorithm: str = "surface-nets", smoothing: Optional[Union[bool, str]] = None,
@@ -515,6 +525,7 @@ def mesh_labels(label_map: Union[np.ndarray, str, os.PathLike], /, *, spacing: O
     return out
 
 
+@raises_isolab_errors
 def metrics(vertices: np.ndarray, faces: np.ndarray, *, self_intersections: bool = True,
             threads: Optional[int] = None) -> Dict[str, Any]:
     """The metrics ``isolab metrics FILE`` prints, for any triangle mesh given as arrays:
@@ -530,6 +541,7 @@ def metrics(vertices: np.ndarray, faces: np.ndarray, *, self_intersections: bool
     return json.loads(_isolab.metrics(vertices, faces, None, None, None, None, self_intersections, threads))
 
 
+@raises_isolab_errors
 def load(path: Union[str, os.PathLike]) -> Tuple[np.ndarray, np.ndarray]:
     """Reads a file the CLI reads. A volume file (NIfTI, NRRD, MetaImage, isolab's grid) gives
     ``(array, affine)``: the voxels in index order ``[i, j, k]`` (float32, Fortran-ordered over

@@ -6,6 +6,12 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 import numpy as np
 import numpy.typing as npt
 
+from .errors import IsolabError as IsolabError
+from .errors import IsolabMemoryError as IsolabMemoryError
+from .errors import IsolabOSError as IsolabOSError
+from .errors import IsolabTypeError as IsolabTypeError
+from .errors import IsolabValueError as IsolabValueError
+
 __version__: str
 
 def marching_cubes(

@@ -31,6 +31,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 import numpy as np
 
 from . import LabelMeshes, Mesh, _index_to_world, _isolab
+from .errors import raises_isolab_errors
 
 try:
     import dask
@@ -76,6 +77,7 @@ def _save_npz(path: str, arrays: Dict[str, Any]) -> None:
         raise
 
 
+@raises_isolab_errors
 def save_fragment(path: str, fragment: Dict[str, Any]) -> None:
     """Writes a volume fragment as ``.npz``, atomically (never half a file)."""
     _save_npz(path, dict(id=np.asarray(fragment["id"], dtype=np.int64), state=np.asarray(fragment["state"]),
@@ -85,6 +87,7 @@ def save_fragment(path: str, fragment: Dict[str, Any]) -> None:
                          triangles=fragment["triangles"], keys=fragment["keys"], keyed=fragment["keyed"]))
 
 
+@raises_isolab_errors
 def load_fragment(path: str) -> Dict[str, Any]:
     """A fragment ``mesh_volume(..., out=...)`` wrote: the block's mesh (``positions`` in the
     volume's sample indices, isolab's x = numpy's last axis), ``triangles``, ``normals``, the
@@ -159,6 +162,7 @@ def _mesh_task(source, slices, block_id, job: Dict[str, Any], path: Optional[str
     return path
 
 
+@raises_isolab_errors
 def mesh_volume(array, level: float, algorithm: str = "marching-cubes", *, chunk: int = 128,
                 spacing: Optional[Sequence[float]] = None, affine: Optional[np.ndarray] = None, inside: str = "below",
                 options: Optional[Mapping[str, Any]] = None, client=None, out: Optional[Union[str, os.PathLike]] = None,
@@ -265,6 +269,7 @@ def _bake_task(block_id, lo, dims, job: Dict[str, Any], fragment_path: str, mesh
             "mesh": os.path.basename(mesh_path) if len(f["triangles"]) else None}
 
 
+@raises_isolab_errors
 def bake_world(field: str = "terrain", size: Sequence[int] = (8192, 512, 8192), *, out: Union[str, os.PathLike],
                chunk: int = 128, algorithm: str = "marching-cubes", options: Optional[Mapping[str, Any]] = None,
                seed: Optional[int] = None, format: str = "glb", client=None, merge: bool = False,
@@ -336,6 +341,7 @@ def bake_world(field: str = "terrain", size: Sequence[int] = (8192, 512, 8192), 
     return Mesh(_isolab.weld_fragments([load_fragment(p) for p in fragment_paths], affine_, json.dumps(report)))
 
 
+@raises_isolab_errors
 def save_label_fragment(path: str, fragment: Dict[str, Any]) -> None:
     """Writes a label fragment (what one block of :func:`mesh_labels` makes) as ``.npz``,
     atomically (never half a file)."""
@@ -347,6 +353,7 @@ def save_label_fragment(path: str, fragment: Dict[str, Any]) -> None:
                          count_samples=np.asarray([fragment["counts"][k] for k in labels], dtype=np.int64)))
 
 
+@raises_isolab_errors
 def load_label_fragment(path: str) -> Dict[str, Any]:
     """A fragment ``mesh_labels(..., out=...)`` wrote: the block's interface triangles
     (``positions`` in the map's sample indices, isolab's x = numpy's last axis; ``triangles``;
@@ -394,6 +401,7 @@ def _run_blocks(array, blocks, task, job, client, out_dir, name, progress):
     return [t if isinstance(t, str) else next(results) for t in tasks], paths
 
 
+@raises_isolab_errors
 def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] = None,
                 affine: Optional[np.ndarray] = None, labels: Optional[Sequence[int]] = None,
                 algorithm: str = "surface-nets", smoothing: Optional[Union[bool, str]] = None, border: str = "closed",

@@ -71,15 +71,23 @@ fn the_readme_sentence_splitter_sees_long_sentences() {
 #[test]
 fn the_guides_links_resolve() {
     let docs = workspace().join("docs");
-    let pages: Vec<PathBuf> = std::fs::read_dir(&docs)
-        .expect("docs/")
-        .map(|e| e.expect("entry").path())
-        .filter(|p| p.extension().is_some_and(|e| e == "md"))
-        .collect();
+    fn markdown(dir: &std::path::Path, out: &mut Vec<PathBuf>) {
+        for entry in std::fs::read_dir(dir).expect("a docs folder") {
+            let path = entry.expect("entry").path();
+            if path.is_dir() {
+                markdown(&path, out);
+            } else if path.extension().is_some_and(|e| e == "md") {
+                out.push(path);
+            }
+        }
+    }
+    let mut pages = Vec::new();
+    markdown(&docs, &mut pages);
     assert!(pages.len() >= 5, "docs/ has {} pages", pages.len());
     for page in pages {
         let text = std::fs::read_to_string(&page).expect("page");
-        let missing: Vec<String> = links(&text).into_iter().filter(|l| !docs.join(l).exists()).collect();
+        let here = page.parent().expect("a page's folder");
+        let missing: Vec<String> = links(&text).into_iter().filter(|l| !here.join(l).exists()).collect();
         assert!(missing.is_empty(), "{} links to missing files: {missing:?}", page.display());
     }
 }

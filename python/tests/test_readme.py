@@ -12,8 +12,8 @@ import pytest
 README = Path(__file__).resolve().parents[2] / "README.md"
 
 
-def blocks(language):
-    return re.findall(r"```" + language + r"\n(.*?)```", README.read_text(), re.S)
+def blocks(language, readme=README):
+    return re.findall(r"```" + language + r"\n(.*?)```", readme.read_text(), re.S)
 
 
 def test_the_python_quick_start_runs(tmp_path, monkeypatch, capsys):
@@ -21,6 +21,14 @@ def test_the_python_quick_start_runs(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     exec(compile(code, "README.md", "exec"), {})
     assert capsys.readouterr().out.startswith("True "), "the quick start's mesh is not closed"
+    assert (tmp_path / "ball.glb").stat().st_size > 0
+
+
+def test_the_package_readme_example_runs(tmp_path, monkeypatch):
+    """python/README.md, the package's description on an index."""
+    [code] = blocks("python", README.parent / "python" / "README.md")
+    monkeypatch.chdir(tmp_path)
+    exec(compile(code, "python/README.md", "exec"), {})
     assert (tmp_path / "ball.glb").stat().st_size > 0
 
 

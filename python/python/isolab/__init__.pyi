@@ -1,10 +1,13 @@
 """Type stubs for isolab (the docstrings are in __init__.py)."""
 
 import os
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
+
+__all__ = ["marching_cubes", "extract", "Mesh", "mesh_labels", "LabelMeshes", "metrics", "load", "algorithms", "fields",
+           "IsolabError", "IsolabValueError", "IsolabTypeError", "IsolabOSError", "IsolabMemoryError", "__version__"]
 
 from .errors import IsolabError as IsolabError
 from .errors import IsolabMemoryError as IsolabMemoryError
@@ -25,9 +28,11 @@ def marching_cubes(
     method: str = "lewiner",
     mask: Optional[npt.NDArray[np.bool_]] = None,
     threads: Optional[int] = None,
+    memory_limit: Optional[int] = None,
 ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32], npt.NDArray[np.float32], npt.NDArray[np.float32]]: ...
 
 class Mesh:
+    def __init__(self, parts: Dict[str, Any]) -> None: ...
     vertices: npt.NDArray[np.float32]
     faces: npt.NDArray[np.int32]
     normals: Optional[npt.NDArray[np.float32]]
@@ -41,7 +46,7 @@ class Mesh:
     def save(self, path: Union[str, os.PathLike[str]]) -> None: ...
 
 def extract(
-    data: Union[npt.NDArray[Any], str, os.PathLike[str]],
+    data: Union[npt.NDArray[Any], str, os.PathLike[str], Callable[[npt.NDArray[np.float64]], Any]],
     level: Optional[float] = None,
     algorithm: str = "marching-cubes",
     *,
@@ -57,6 +62,11 @@ def extract(
     seed: Optional[int] = None,
     chunk: Optional[int] = None,
     materials: bool = False,
+    bounds: Optional[Sequence[Sequence[float]]] = None,
+    lipschitz: Optional[float] = None,
+    sparse: bool = True,
+    batch: int = 65536,
+    progress: bool = False,
 ) -> Mesh: ...
 def metrics(
     vertices: npt.ArrayLike, faces: npt.ArrayLike, *, self_intersections: bool = True, threads: Optional[int] = None
@@ -87,3 +97,5 @@ def mesh_labels(
     options: Optional[Mapping[str, Any]] = ...,
     threads: Optional[int] = ...,
 ) -> LabelMeshes: ...
+
+def _index_to_world(affine: Optional[npt.NDArray[Any]], spacing: Optional[Sequence[float]]) -> Optional[List[List[float]]]: ...

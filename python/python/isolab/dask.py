@@ -22,6 +22,7 @@ Needs ``dask`` (and ``distributed`` for a cluster; ``zarr`` to read zarr stores)
 (True, 12)
 """
 import contextlib
+import importlib.util
 import json
 import os
 import tempfile
@@ -33,10 +34,9 @@ import numpy as np
 from . import LabelMeshes, Mesh, _index_to_world, _isolab
 from .errors import raises_isolab_errors
 
-try:
-    import dask
-except ImportError as e:  # pragma: no cover - the message is the point
-    raise ImportError("isolab.dask needs dask: pip install \"./python[dask]\" (dask, distributed, zarr)") from e
+if importlib.util.find_spec("dask") is None:  # pragma: no cover - the message is the point
+    raise ImportError("isolab.dask needs dask: pip install \"./python[dask]\" (dask, distributed, zarr)")
+import dask  # noqa: E402
 
 __all__ = ["mesh_volume", "mesh_labels", "bake_world", "load_fragment", "save_fragment", "load_label_fragment",
            "save_label_fragment"]
@@ -140,7 +140,7 @@ def _compute(tasks, client, progress: bool) -> Sequence[Any]:
             from distributed import progress as show
             show(futures)
         return client.gather(futures)
-    bar = contextlib.nullcontext()
+    bar: Any = contextlib.nullcontext()
     if progress:
         from dask.diagnostics import ProgressBar
         bar = ProgressBar()
@@ -319,6 +319,7 @@ def bake_world(field: str = "terrain", size: Sequence[int] = (8192, 512, 8192), 
     if field not in [name for name, _ in _isolab.fields()]:
         raise ValueError(f"unknown field '{field}' (isolab.fields() lists them)")
     out_dir = _open_out(out, params, blocks, counts, apron)
+    assert out_dir is not None, "out is required here"
     tasks, fragment_paths = [], []
     for block_id, lo, bdims in blocks:
         x, y, z = block_id

@@ -109,6 +109,20 @@ pub fn fill(readme: &str, ctx: &Context, experiments: &[Box<dyn Experiment>]) ->
     Ok(text)
 }
 
+/// Rewrites the workspace's `README.md` generated blocks from `ctx`'s data; whether it changed.
+/// Both the main job and each experiment's own binary call it after assembling, so a run time
+/// an experiment records reaches the README's table at once.
+pub fn write_workspace_readme(ctx: &Context) -> Result<bool, String> {
+    let path = crate::provenance::root().join("README.md");
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let filled = fill(&text, ctx, &crate::experiment::all())?;
+    if filled == text {
+        return Ok(false);
+    }
+    std::fs::write(&path, filled).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(true)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -28,19 +28,6 @@ struct Args {
     assemble_only: bool,
 }
 
-/// Rewrites the README's generated blocks (the commands' times, the experiments table) from the
-/// report's data, when the report is the workspace's own.
-fn write_readme(ctx: &Context) -> Result<(), String> {
-    let path = isolab_experiments::provenance::root().join("README.md");
-    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let filled = isolab_experiments::readme::fill(&text, ctx, &experiment::all())?;
-    if filled != text {
-        std::fs::write(&path, filled).map_err(|e| format!("{}: {e}", path.display()))?;
-        eprintln!("wrote the generated parts of {}", path.display());
-    }
-    Ok(())
-}
-
 fn main() -> ExitCode {
     let args = Args::parse();
     let writes_the_readme = args.out == experiment::default_report_dir();
@@ -69,9 +56,13 @@ fn main() -> ExitCode {
         Ok(path) => {
             eprintln!("wrote {} in {:.1} s", path.display(), start.elapsed().as_secs_f64());
             if writes_the_readme {
-                if let Err(e) = write_readme(&ctx) {
-                    eprintln!("error: {e}");
-                    return ExitCode::FAILURE;
+                match isolab_experiments::readme::write_workspace_readme(&ctx) {
+                    Ok(true) => eprintln!("wrote the generated parts of README.md"),
+                    Ok(false) => {}
+                    Err(e) => {
+                        eprintln!("error: {e}");
+                        return ExitCode::FAILURE;
+                    }
                 }
             }
             ExitCode::SUCCESS

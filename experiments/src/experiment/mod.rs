@@ -271,7 +271,13 @@ pub fn run_and_assemble(name: &str) -> std::process::ExitCode {
         .find(|e| e.name() == name)
         .ok_or_else(|| ExperimentError::Missing(format!("no experiment called {name}")))
         .and_then(|e| run_one(&ctx, e.as_ref()).map(|_| ()))
-        .and_then(|()| assemble(&ctx));
+        .and_then(|()| assemble(&ctx))
+        .and_then(|path| {
+            // The README's table holds each experiment's minutes from the run times just recorded.
+            crate::readme::write_workspace_readme(&ctx)
+                .map_err(|reason| ExperimentError::Failed { what: "writing README.md's generated parts".into(), reason })?;
+            Ok(path)
+        });
     match result {
         Ok(path) => {
             eprintln!("wrote {}", path.display());

@@ -29,7 +29,9 @@ use super::boundary::{boundary_split, SPLIT};
 use super::cells::{place, split_least_folded, Tables};
 use super::smoothing::{build_adjacency, smooth_within, SmoothBuffers};
 use super::{DualEngine, Placement, Smoothing};
-use crate::chunks::lod::{DualLevels, DualLodCounts, LodGrid};
+use crate::chunks::lod::DualLevels;
+// Their home is chunks::lod now; named here too, where they were first public.
+pub use crate::chunks::lod::{DualLodCounts, LodGrid};
 use crate::geometry::trilinear_gradient;
 use crate::mesh::TriMesh;
 use crate::tables::marching_cubes::{face_edges, opposite_face, Case, CORNERS, EDGES, FACES, RING_FACES};

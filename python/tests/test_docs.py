@@ -3,6 +3,7 @@ in one namespace, in a fresh folder that holds the small zarr stores they name (
 ball; seg.zarr, two labels), with the Dask cluster a block starts closed afterwards. A block
 that cannot run here says why in a `<!-- not run: REASON -->` line just above it."""
 
+import faulthandler
 import os
 import re
 from pathlib import Path
@@ -12,6 +13,8 @@ import pytest
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 NOT_RUN = re.compile(r"<!-- not run: (.+?) -->\s*$")
+# A page's examples, its Dask cluster included, end within this or the run stops with their stacks.
+TIME_BOUND_S = 300
 
 
 def examples(page):
@@ -55,6 +58,7 @@ def test_a_guides_python_examples_run(page, tmp_path, monkeypatch):
     make_stores(tmp_path)
     monkeypatch.chdir(tmp_path)
     namespace = {}
+    faulthandler.dump_traceback_later(TIME_BOUND_S, exit=True)
     try:
         for line, code, why in examples(page):
             if why is None:
@@ -66,6 +70,7 @@ def test_a_guides_python_examples_run(page, tmp_path, monkeypatch):
             client.close()
             if cluster is not None:
                 cluster.close()
+        faulthandler.cancel_dump_traceback_later()
     made = sorted(os.listdir(tmp_path))
     assert made, "the examples wrote nothing"
     if page.name == "python.md":

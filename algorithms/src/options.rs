@@ -48,6 +48,11 @@ impl Options {
         self
     }
 
+    /// The value given for `name`, as text, if any.
+    pub fn get(&self, name: &str) -> Option<&str> {
+        self.values.get(name).map(String::as_str)
+    }
+
     /// Whether no option is set.
     pub fn is_empty(&self) -> bool {
         self.values.is_empty()

@@ -123,7 +123,7 @@ pub fn run(job: &Job) -> Result<(), RunError> {
         Some(Target::Folder(dir, ext)) => {
             for (&label, mesh) in &outcome.meshes {
                 let path = dir.join(name(label)).with_extension(ext);
-                io::write_mesh_with(&path, mesh, io::MeshExtras { colours: None, space: outcome.space_tag })?;
+                isolab_pipeline::files::write_meshes(&path, mesh, &Default::default(), &[], outcome.space_tag)?;
             }
         }
         Some(Target::Neuroglancer(_)) | None => {}

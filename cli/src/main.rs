@@ -6,11 +6,11 @@
 //! field, bad arguments) or a mesh `isolab metrics` cannot read.
 
 use clap::{Parser, Subcommand};
-use isolab_algorithms::{extractors, fields, post};
+use isolab_algorithms::fields;
 use isolab_io as io;
-use isolab_io::volume::{Inside, VolumeOptions};
+use isolab_io::volume::Inside;
 use isolab_metrics::MeshMetrics;
-use isolab_pipeline::{run, write_json, LatticeKind, Measure, OutputSpace, RunConfig, RunError, Sparse, VolumeGrid};
+use isolab_pipeline::{run, write_json, LatticeKind, Measure, OutputSpace, RunConfig, RunError, Sparse};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -228,71 +228,32 @@ fn parse_dims(text: &str) -> Result<[usize; 3], String> {
     <[usize; 3]>::try_from(dims).map_err(|_| format!("'{text}': expected three numbers, like 75,40,56"))
 }
 
-/// The names whose flag is set, joined, or `none` when no flag is.
-fn promised(flags: &[(&str, bool)], none: &str) -> String {
-    let on: Vec<&str> = flags.iter().filter(|(_, on)| *on).map(|(name, _)| *name).collect();
-    if on.is_empty() {
-        none.into()
-    } else {
-        on.join(", ")
-    }
-}
-
-/// One line: the lattices an extractor meshes and what it promises (checked by the contract test).
-fn guarantees(g: &isolab_algorithms::Guarantees) -> String {
-    let flags = [
-        ("closed", g.closed),
-        ("manifold", g.manifold),
-        ("outward", g.outward),
-        ("free of self-intersections", g.intersection_free),
-        ("the trilinear interpolant's topology in every cell", g.trilinear_topology),
-        ("every part of the inside, however small", g.keeps_small_parts),
-    ];
-    let dihedral = g
-        .dihedral
-        .map_or(String::new(), |d| format!("; every dihedral angle in [{}°, {}°], none inverted", d.min_degrees, d.max_degrees));
-    format!("lattices: {}; guarantees: {}{dihedral}", g.lattices().join(", "), promised(&flags, "none"))
-}
-
+/// `isolab list`: the registry's entries ([`isolab_pipeline::registry`]), a few lines each.
 fn list() {
-    println!("algorithms (options: --set NAME=VALUE):");
-    for e in extractors::INFOS {
-        println!("  {:<34} {}", e.name, e.description);
-        if !e.options.is_empty() {
-            println!("  {:<34} options: {}", "", e.options.join(", "));
+    use isolab_pipeline::registry::{field_listing, listing, EntryKind};
+    let entries = listing();
+    let headings = [
+        (EntryKind::Extractor, "algorithms (options: --set NAME=VALUE):"),
+        (EntryKind::PostProcess, "post-processes:"),
+        (EntryKind::Labels, "label extractors (isolab labels -a NAME; options: --set NAME=VALUE):"),
+    ];
+    for (kind, heading) in headings {
+        println!("{heading}");
+        for e in entries.iter().filter(|e| e.kind == kind) {
+            println!("  {:<34} {}", e.name, e.description);
+            if !e.options.is_empty() {
+                println!("  {:<34} options: {}", "", e.options.join(", "));
+            }
+            println!("  {:<34} {}", "", e.promises);
         }
-        println!("  {:<34} {}", "", guarantees(&e.guarantees));
-    }
-    println!("post-processes:");
-    for p in post::POST_INFOS {
-        println!("  {:<34} {}", p.name, p.description);
-        if !p.options.is_empty() {
-            println!("  {:<34} options: {}", "", p.options.join(", "));
-        }
-        let g = &p.guarantees;
-        let flags = [
-            ("closed manifold", g.keeps_closed_manifold),
-            ("every component (so the Euler characteristic)", g.keeps_every_component),
-            ("orientation", g.keeps_outward),
-            ("no new self-intersection", g.adds_no_intersection),
-        ];
-        println!("  {:<34} keeps: {}", "", promised(&flags, "nothing promised"));
-    }
-    println!("label extractors (isolab labels -a NAME; options: --set NAME=VALUE):");
-    for e in isolab_algorithms::labels::LABEL_INFOS {
-        println!("  {:<34} {}", e.name, e.description);
-        println!("  {:<34} options: {}", "", e.options.join(", "));
-        let g = &e.guarantees;
-        let flags = [("closed", g.closed), ("manifold", g.manifold), ("outward", g.outward)];
-        println!("  {:<34} every label's mesh: {}", "", promised(&flags, "nothing promised"));
     }
     println!(
         "fields (or a path to a mesh file: .obj .ply .stl .glb .gltf; or a volume file: .nii .nii.gz .nrrd .nhdr .mhd .mha .zarr):"
     );
-    for f in fields::registry() {
+    for f in field_listing() {
         println!("  {:<34} {}", f.name, f.description);
         // What lets a large grid of it be sampled near its surface only (`--sparse`).
-        if let Some(l) = (f.make)(fields::FieldParams::default()).lipschitz() {
+        if let Some(l) = f.lipschitz {
             println!("  {:<34} Lipschitz bound {l:.3}: sampled near its surface on large grids", "");
         }
     }
@@ -372,48 +333,32 @@ fn main() -> ExitCode {
             self_intersections,
             samples_out,
         } => {
-            let mut options = isolab_algorithms::Options::new();
-            for (k, v) in set
-                .iter()
-                .map(|(k, v)| (k.as_str(), v.as_str()))
-                .chain(smoothing.as_deref().map(|v| ("smoothing", v)))
-                .chain(iterations.as_deref().map(|v| ("iterations", v)))
-                .chain(spacing.as_deref().map(|v| ("spacing", v)))
-                .chain(offset_ratio.as_deref().map(|v| ("offset-ratio", v)))
-                .chain(perturbations.as_deref().map(|v| ("perturbations", v)))
-            {
-                options.set(k, v);
-            }
-            let volume_grid = if resolution.is_some() || dims.is_some() { VolumeGrid::Resampled } else { VolumeGrid::Native };
-            let config = RunConfig {
-                algorithm,
-                field,
-                resolution: resolution.unwrap_or(64),
-                dims,
-                lattice,
-                iso,
-                inside,
-                volume: VolumeOptions { index: volume },
-                volume_grid,
-                space,
-                seed,
-                post,
-                options,
-                chunk,
-                materials,
-                measure: match (self_intersections, &metrics) {
-                    (true, _) => Measure::All,
-                    (false, Some(_)) => Measure::Metrics,
-                    (false, None) => Measure::Counts,
-                },
+            let shorthands = [
+                ("smoothing", smoothing),
+                ("iterations", iterations),
+                ("spacing", spacing),
+                ("offset-ratio", offset_ratio),
+                ("perturbations", perturbations),
+            ];
+            let config = RunConfig::builder(&algorithm, &field)
+                .resolution(resolution)
+                .dims(dims)
+                .lattice(lattice)
+                .iso(iso)
+                .inside(inside)
+                .volume(volume)
+                .space(space)
+                .seed(seed)
+                .post(post)
+                .options(set)
+                .options(shorthands.into_iter().filter_map(|(k, v)| Some((k, v?))))
+                .chunk(chunk)
+                .materials(materials)
+                .measure(Measure::asked(metrics.is_some(), self_intersections))
                 // --samples-out needs every sample.
-                sparse: match (sparse, dense || samples_out.is_some()) {
-                    (true, _) => Sparse::Always,
-                    (false, true) => Sparse::Never,
-                    (false, false) => Sparse::Auto,
-                },
-                lipschitz,
-            };
+                .sparse(Sparse::asked(sparse, dense || samples_out.is_some()))
+                .lipschitz(lipschitz)
+                .build();
             extract(&config, stream, output, metrics, samples_out).map_err(|e| (e.exit_code(), e.to_string()))
         }
         Command::Labels {
@@ -440,7 +385,7 @@ fn main() -> ExitCode {
             let job = labels::Job { input: field, volume, config, output, format, neuroglancer, metrics };
             labels::run(&job).map_err(|e| (e.exit_code(), e.to_string()))
         }
-        Command::Metrics { file } => io::read_mesh(&file)
+        Command::Metrics { file } => isolab_pipeline::files::read_mesh_file(&file)
             .map(|mesh| {
                 let m = MeshMetrics::measure(&mesh, None);
                 println!("{}", serde_json::to_string_pretty(&m).unwrap_or_default());
@@ -465,7 +410,7 @@ fn render(
     size: u32,
 ) -> Result<(), (i32, String)> {
     use isolab_render::{self as render, RenderOptions, Shading};
-    let mesh = io::read_mesh(file).map_err(|e| (2, e.to_string()))?;
+    let mesh = isolab_pipeline::files::read_mesh_file(file).map_err(|e| (2, e.to_string()))?;
     let bad = mesh.positions.iter().filter(|p| !p.is_finite()).count();
     if bad > 0 {
         return Err((
@@ -528,22 +473,8 @@ fn extract(
     samples_out: Option<PathBuf>,
 ) -> Result<(), RunError> {
     // Refuse unwritable outputs before spending time on extraction.
+    isolab_pipeline::files::check_outputs(output.as_deref(), metrics.iter().chain(samples_out.iter()).map(PathBuf::as_path))?;
     let metrics = metrics.filter(|p| p.as_os_str() != "-");
-    for path in output.iter().chain(metrics.iter()).chain(samples_out.iter()) {
-        let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
-        if !dir.is_dir() {
-            return Err(io::IoError::Write {
-                path: path.clone(),
-                source: std::io::Error::new(std::io::ErrorKind::NotFound, "directory does not exist"),
-            }
-            .into());
-        }
-    }
-    if let Some(path) = &output {
-        if io::MeshFormat::from_extension(path).is_none() {
-            return Err(io::IoError::UnknownFormat { path: path.clone() }.into());
-        }
-    }
     if config.sparse == Sparse::Always && samples_out.is_some() {
         let reason = "--samples-out needs every sample (drop --sparse)".into();
         return Err(RunError::Sparse { field: config.field.clone(), reason });
@@ -586,12 +517,7 @@ fn extract(
         eprintln!("warning: {warning}");
     }
     if let Some(path) = &output {
-        let colours: Vec<[u8; 3]> = outcome.vertex_materials.iter().map(|&m| isolab_algorithms::materials::colour(m)).collect();
-        let extras = io::MeshExtras { colours: (!colours.is_empty()).then_some(colours.as_slice()), space: outcome.space_tag };
-        io::write_mesh_with(path, &outcome.extraction.surface, extras)?;
-        if !outcome.extraction.volume.tetrahedra.is_empty() {
-            io::write_vtk_tets(&io::tetrahedra_path(path), &outcome.extraction.volume, outcome.space_tag)?;
-        }
+        outcome.write_meshes(path)?;
     }
     if let (Some(path), Some(samples)) = (&samples_out, &outcome.samples) {
         io::write_samples(path, samples, outcome.samples_to_world.as_ref())?;

@@ -13,6 +13,7 @@
 //! Every reader has a `parse_*` form taking bytes (and the path only to name it in errors), so
 //! readers can be fed any bytes in tests; none panics on malformed input.
 
+pub mod choice;
 pub mod gltf;
 pub mod neuroglancer;
 pub mod obj;
@@ -22,6 +23,7 @@ pub mod stream;
 pub mod volume;
 pub mod vtk;
 
+pub use choice::UnknownChoice;
 pub use obj::{parse_obj, write_obj_coloured};
 pub use ply::{parse_ply, write_ply, write_ply_coloured};
 pub use stream::PlyStream;
@@ -111,6 +113,16 @@ pub enum MeshFormat {
 }
 
 impl MeshFormat {
+    /// The format's name as reports give it: `OBJ`, `PLY`, `STL`, `glTF`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Obj => "OBJ",
+            Self::Ply => "PLY",
+            Self::Stl => "STL",
+            Self::Glb | Self::Gltf => "glTF",
+        }
+    }
+
     /// The format an output path's extension names.
     pub fn from_extension(path: &Path) -> Option<Self> {
         Some(match extension(path).as_deref()? {

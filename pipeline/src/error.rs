@@ -15,6 +15,9 @@ pub enum RunError {
         /// Valid names.
         valid: String,
     },
+    /// A setting named by a word (`lattice`, `inside`, `space`, ...) got a word it does not take.
+    #[error(transparent)]
+    Choice(#[from] isolab_io::UnknownChoice),
     /// An algorithm option is unknown or out of range.
     #[error(transparent)]
     Option(#[from] OptionError),
@@ -94,6 +97,7 @@ impl RunError {
             RunError::UnknownAlgorithm { .. }
             | RunError::UnknownPost { .. }
             | RunError::Option(_)
+            | RunError::Choice(_)
             | RunError::Field(FieldError::Unknown { .. }) => 2,
             _ => 1,
         }

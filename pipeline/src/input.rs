@@ -9,10 +9,11 @@
 //! field still has an inside: the generalized winding number decides it).
 
 use crate::error::RunError;
+use crate::files::{read_file, FileContents};
 use isolab_algorithms::fields::{self, MeshField, Volume, VolumeField};
 use isolab_algorithms::{Field, TriMesh};
 use isolab_io::volume::{self, Inside, VolumeFile, VolumeOptions};
-use isolab_io::{self as io, Coordinates};
+use isolab_io::Coordinates;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -114,28 +115,19 @@ pub fn load_input(spec: &str, seed: i32, volume_options: VolumeOptions, checks: 
         });
     }
     let path = Path::new(spec);
-    let zarr = volume::zarr::is_zarr(path);
-    let bytes = if zarr { Vec::new() } else { io::read_bytes(path)? };
-    if zarr || volume::detect(path, &bytes).is_some() {
-        let file = Arc::new(if zarr {
-            volume::read_volume(path, volume_options)?
-        } else {
-            volume::read_volume_bytes(&bytes, path, volume_options)?
-        });
-        let field: Arc<dyn Field> = Arc::new(VolumeField::new(file.volume.clone()));
-        return Ok(Input {
-            field,
-            kind: InputKind::Volume,
-            volume: Some(file),
-            mesh_format: None,
-            warnings: Vec::new(),
-            read_time: start.elapsed(),
-        });
-    }
-    let format = io::MeshFormat::detect(&bytes, path);
-    let mesh = match format {
-        io::MeshFormat::Glb | io::MeshFormat::Gltf => io::gltf::parse_gltf_beside(&bytes, path)?,
-        _ => io::parse_mesh(&bytes, path, Coordinates::Finite)?,
+    let (mesh, format) = match read_file(path, volume_options, Coordinates::Finite)? {
+        FileContents::Volume(file) => {
+            let file = Arc::new(file);
+            return Ok(Input {
+                field: Arc::new(VolumeField::new(file.volume.clone())),
+                kind: InputKind::Volume,
+                volume: Some(file),
+                mesh_format: None,
+                warnings: Vec::new(),
+                read_time: start.elapsed(),
+            });
+        }
+        FileContents::Mesh(mesh, format) => (mesh, format),
     };
     let name = volume::stem(path);
     let field = MeshField::new(name.clone(), &mesh.positions, &mesh.triangles)?;
@@ -149,17 +141,11 @@ pub fn load_input(spec: &str, seed: i32, volume_options: VolumeOptions, checks: 
     if checks == MeshChecks::Warn {
         warnings.extend(mesh_warnings(&name, &mesh));
     }
-    let format_name = match format {
-        io::MeshFormat::Obj => "OBJ",
-        io::MeshFormat::Ply => "PLY",
-        io::MeshFormat::Stl => "STL",
-        io::MeshFormat::Glb | io::MeshFormat::Gltf => "glTF",
-    };
     Ok(Input {
         field: Arc::new(field),
         kind: InputKind::Mesh,
         volume: None,
-        mesh_format: Some(format_name),
+        mesh_format: Some(format.name()),
         warnings,
         read_time: start.elapsed(),
     })

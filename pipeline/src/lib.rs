@@ -9,10 +9,13 @@
 //! Depends on `isolab-algorithms`, `isolab-metrics` and `isolab-io` only: no command-line parser
 //! (the `clap` feature derives `clap::ValueEnum` for the CLI's enums), no plotting.
 
+pub mod config;
 pub mod error;
+pub mod files;
 pub mod input;
 pub mod labels;
 pub mod neuroglancer;
+pub mod registry;
 pub mod stream;
 
 pub use crate::input::load_field;
@@ -21,8 +24,8 @@ use crate::input::{load_input, InputKind, MeshChecks};
 use glam::{DAffine3, DMat3, DVec3};
 use isolab_algorithms::chunks::extract_chunked;
 use isolab_algorithms::fields::Complement;
-use isolab_algorithms::{extractors, fields, post, Extraction, Field, Grid, Lattice, Options, Samples, TetMesh, TriMesh};
-use isolab_io::volume::{Inside, Space, VolumeOptions};
+use isolab_algorithms::{extractors, post, Extraction, Field, Grid, Lattice, Samples, TetMesh, TriMesh};
+use isolab_io::volume::{Inside, Space};
 use isolab_io::{self as io, IoError};
 use isolab_metrics::{volume_metrics, MeshMetrics, VolumeMetrics};
 use rayon::prelude::*;
@@ -39,153 +42,11 @@ use memory::check_volume_size;
 pub use memory::{available_memory, check_memory, check_memory_against, volume_file_need};
 use report::{empty_mesh_warning, no_inside_warning};
 
+pub use crate::config::{LatticeKind, Measure, OutputSpace, RunConfig, RunConfigBuilder, VolumeGrid};
 pub use crate::error::RunError;
 
 pub use report::{ChunkReport, InputReport, MeshCounts, RunReport, TimesMs};
 pub use sparse::{Sparse, SparseReport};
-
-/// Which lattice to sample on.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
-#[serde(rename_all = "lowercase")]
-pub enum LatticeKind {
-    /// A cubic grid.
-    #[default]
-    Cubic,
-    /// A body-centred cubic lattice (twice the samples).
-    Bcc,
-}
-
-/// Where a volume file is meshed.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum VolumeGrid {
-    /// On its own voxel grid: no value is interpolated (`resolution` and `dims` are ignored).
-    #[default]
-    Native,
-    /// Resampled trilinearly on an isotropic grid of `resolution` (or `dims`) over its world box.
-    Resampled,
-}
-
-/// The coordinate system meshes of anatomical volumes are written in.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
-pub enum OutputSpace {
-    /// Right, Anterior, Superior: NIfTI's world, FreeSurfer's, what 3D Slicer displays.
-    #[default]
-    #[serde(rename = "RAS")]
-    Ras,
-    /// Left, Posterior, Superior: ITK's and DICOM's world, what 3D Slicer assumes of a file
-    /// that does not say.
-    #[serde(rename = "LPS")]
-    Lps,
-}
-
-impl OutputSpace {
-    /// The tag written into mesh files (`SPACE=RAS`).
-    pub fn tag(self) -> &'static str {
-        match self {
-            OutputSpace::Ras => "RAS",
-            OutputSpace::Lps => "LPS",
-        }
-    }
-
-    /// The map from RAS to this space.
-    pub(crate) fn map_from_ras(self) -> Option<DAffine3> {
-        match self {
-            OutputSpace::Ras => None,
-            OutputSpace::Lps => {
-                Some(DAffine3 { matrix3: DMat3::from_diagonal(DVec3::new(-1.0, -1.0, 1.0)), translation: DVec3::ZERO })
-            }
-        }
-    }
-}
-
-/// Which measures of the mesh a run computes. The run's own numbers (stage times, counts,
-/// active cells, buffer bytes) are always there; the mesh metrics cost as much as the extraction
-/// or (self-intersections) many times it, so a run computes them only when asked.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Measure {
-    /// None: the report has the vertex and triangle counts only.
-    Counts,
-    /// Every mesh metric but the exact self-intersection test.
-    Metrics,
-    /// Every mesh metric, self-intersections included (what the report's experiments use).
-    #[default]
-    All,
-}
-
-/// What to run.
-#[derive(Clone, Debug)]
-pub struct RunConfig {
-    /// Extractor name.
-    pub algorithm: String,
-    /// Built-in field name, or a path to a mesh (`.obj`, `.ply`, `.stl`, `.glb`) or volume
-    /// (`.nii[.gz]`, `.nrrd`, `.nhdr`, `.mhd`, `.mha`, or a `--samples-out` grid) file.
-    pub field: String,
-    /// Samples along the domain's longest side.
-    pub resolution: usize,
-    /// Exact samples per axis, overriding `resolution` (e.g. the RMT paper's 75x40x56 bunny).
-    pub dims: Option<[usize; 3]>,
-    /// Lattice kind.
-    pub lattice: LatticeKind,
-    /// Iso-value in the input's own values; `None`: the input's default (the iso-value an
-    /// isolab grid carries, Otsu's threshold for a scan, 0 otherwise).
-    pub iso: Option<f32>,
-    /// Which side of the iso-value is inside; `None`: above for scans, below otherwise.
-    pub inside: Option<Inside>,
-    /// Which volume of a 4-D file.
-    pub volume: VolumeOptions,
-    /// Where a volume file is meshed.
-    pub volume_grid: VolumeGrid,
-    /// The coordinate system of meshes of anatomical volumes.
-    pub space: OutputSpace,
-    /// Seed of noise fields.
-    pub seed: i32,
-    /// Post-processes to apply in order.
-    pub post: Vec<String>,
-    /// Algorithm options by name (`smoothing`, `iterations`, ...).
-    pub options: Options,
-    /// Mesh in chunks of this many cells per side and weld (`--chunk N`).
-    pub chunk: Option<usize>,
-    /// Give every vertex the field's material (`--materials`).
-    pub materials: bool,
-    /// Which measures of the mesh to compute (`RunConfig::new`: all of them).
-    pub measure: Measure,
-    /// Whether to sample only near the surface. `RunConfig::new` says [`Sparse::Never`], so
-    /// that a run measures the extractor on the dense grid as the experiments compare them; the
-    /// CLI and the Python package say [`Sparse::Auto`].
-    pub sparse: Sparse,
-    /// A Lipschitz bound of the field to prune with, replacing the field's own.
-    pub lipschitz: Option<f64>,
-}
-
-impl RunConfig {
-    /// A config with defaults for everything but the algorithm, field and resolution.
-    pub fn new(algorithm: &str, field: &str, resolution: usize) -> Self {
-        Self {
-            algorithm: algorithm.into(),
-            field: field.into(),
-            resolution,
-            dims: None,
-            lattice: LatticeKind::Cubic,
-            iso: None,
-            inside: None,
-            volume: VolumeOptions::default(),
-            volume_grid: VolumeGrid::Native,
-            space: OutputSpace::Ras,
-            seed: fields::DEFAULT_SEED,
-            post: Vec::new(),
-            options: Options::new(),
-            chunk: None,
-            materials: false,
-            measure: Measure::All,
-            sparse: Sparse::Never,
-            lipschitz: None,
-        }
-    }
-}
 
 /// Where a volume's iso-value came from when none was given: the grid's own, Otsu's threshold,
 /// or the one value of a constant volume (the in-memory and the streamed run say it alike).
@@ -565,6 +426,7 @@ pub fn write_json(path: &Path, value: &impl Serialize) -> Result<(), IoError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use isolab_algorithms::fields;
 
     #[test]
     fn lattices_larger_than_memory_are_refused_with_sizes() {

@@ -32,6 +32,23 @@ pub enum Sparse {
     Never,
 }
 
+impl Sparse {
+    /// The words that name each choice, as serialized.
+    pub const CHOICES: [(&'static str, Sparse); 3] =
+        [("auto", Sparse::Auto), ("always", Sparse::Always), ("never", Sparse::Never)];
+
+    /// The CLI's rule: `--sparse` asks for always, `--dense` (or anything that needs every
+    /// sample) for never, neither for auto.
+    pub fn asked(sparse: bool, dense: bool) -> Sparse {
+        match (sparse, dense) {
+            (true, _) => Sparse::Always,
+            (false, true) => Sparse::Never,
+            (false, false) => Sparse::Auto,
+        }
+    }
+}
+crate::config::words!(Sparse, "sparse");
+
 /// The dense grid's size above which [`Sparse::Auto`] meshes sparsely: 512³ samples (512 MiB
 /// as `f32`). Measured with `isolab extract -a marching-cubes -o mesh.ply`, one run each: at
 /// 256³ the sphere took 189 ms sparse and 84 ms dense; at 512³, 0.95 s and 1.03 s (75 and 602

@@ -9,15 +9,14 @@
 //! Errors are the pipeline's messages (the CLI prints the same), raised as `ValueError` (bad
 //! names, options or data), `OSError` (files) or `MemoryError`; nothing here panics on user input.
 
-use isolab_algorithms::{extractors, fields as builtin_fields, Options, TetMesh, TriMesh};
+use isolab_algorithms::{extractors, fields as builtin_fields, Options, TetMesh};
 use isolab_io::volume::Inside;
-use isolab_pipeline::{measure, run, run_input, Input, LatticeKind, Measure, RunConfig, RunError, Truth, VolumeGrid};
+use isolab_pipeline::{measure, run, run_input, Input, LatticeKind, Measure, RunConfig, RunError, Truth};
 use numpy::PyUntypedArray;
 use pyo3::exceptions::{PyMemoryError, PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::collections::BTreeMap;
-use std::path::Path;
 
 mod arrays;
 mod blocks;
@@ -49,80 +48,16 @@ pub(crate) fn value_error(e: impl std::fmt::Display) -> PyErr {
 }
 
 /// The registered extractors, post-processes and label extractors, with their options and
-/// guarantees.
+/// guarantees, as the JSON of `isolab_pipeline::registry::listing` (what `isolab list` prints).
 #[pyfunction]
-fn algorithms(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
-    let mut out = Vec::new();
-    for e in extractors::INFOS {
-        let d = PyDict::new(py);
-        d.set_item("name", e.name)?;
-        d.set_item("kind", "extractor")?;
-        d.set_item("description", e.description)?;
-        d.set_item("options", e.options.to_vec())?;
-        let g = PyDict::new(py);
-        g.set_item("lattices", e.guarantees.lattices())?;
-        g.set_item("closed", e.guarantees.closed)?;
-        g.set_item("manifold", e.guarantees.manifold)?;
-        g.set_item("outward", e.guarantees.outward)?;
-        g.set_item("intersection_free", e.guarantees.intersection_free)?;
-        g.set_item("trilinear_topology", e.guarantees.trilinear_topology)?;
-        g.set_item("keeps_small_parts", e.guarantees.keeps_small_parts)?;
-        // Volume extractors' dihedral interval in degrees, [min, max], or None.
-        g.set_item("dihedral_degrees", e.guarantees.dihedral.map(|d| vec![d.min_degrees, d.max_degrees]))?;
-        d.set_item("guarantees", g)?;
-        // How it reads a numpy array: in place ("borrowed"), or "copies: REASON".
-        d.set_item("samples", e.samples.describe())?;
-        // How it meshes in blocks (isolab.dask, chunk=) with its default options.
-        let chunking = extractors::build(e.name, &Options::new()).ok().flatten().map(|x| x.chunking());
-        let (kind, apron) = match chunking {
-            Some(isolab_algorithms::Chunking::CellLocal) => ("cell-local", 0),
-            Some(isolab_algorithms::Chunking::Apron(a)) => ("apron", a),
-            _ => ("unsupported", 0),
-        };
-        d.set_item("chunking", kind)?;
-        d.set_item("apron", apron)?;
-        out.push(d);
-    }
-    for p in isolab_algorithms::post::POST_INFOS {
-        let d = PyDict::new(py);
-        d.set_item("name", p.name)?;
-        d.set_item("kind", "post-process")?;
-        d.set_item("description", p.description)?;
-        d.set_item("options", p.options.to_vec())?;
-        let g = PyDict::new(py);
-        g.set_item("keeps_closed_manifold", p.guarantees.keeps_closed_manifold)?;
-        g.set_item("keeps_outward", p.guarantees.keeps_outward)?;
-        g.set_item("adds_no_intersection", p.guarantees.adds_no_intersection)?;
-        g.set_item("keeps_every_component", p.guarantees.keeps_every_component)?;
-        d.set_item("guarantees", g)?;
-        out.push(d);
-    }
-    for e in isolab_algorithms::labels::LABEL_INFOS {
-        let d = PyDict::new(py);
-        d.set_item("name", e.name)?;
-        d.set_item("kind", "labels")?;
-        d.set_item("description", e.description)?;
-        d.set_item("options", e.options.to_vec())?;
-        let g = PyDict::new(py);
-        g.set_item("closed", e.guarantees.closed)?;
-        g.set_item("manifold", e.guarantees.manifold)?;
-        g.set_item("outward", e.guarantees.outward)?;
-        d.set_item("guarantees", g)?;
-        out.push(d);
-    }
-    Ok(out)
-}
-
-/// The display colour of every material id (what the CLI writes as vertex colours).
-#[pyfunction]
-fn material_colours() -> Vec<[u8; 3]> {
-    (0..=255u8).map(isolab_algorithms::materials::colour).collect()
+fn algorithms() -> PyResult<String> {
+    serde_json::to_string(&isolab_pipeline::registry::listing()).map_err(value_error)
 }
 
 /// The built-in fields: `(name, description)`.
 #[pyfunction]
 fn fields() -> Vec<(&'static str, &'static str)> {
-    builtin_fields::registry().iter().map(|f| (f.name, f.description)).collect()
+    isolab_pipeline::registry::field_listing().into_iter().map(|f| (f.name, f.description)).collect()
 }
 
 /// `parallelism=serial` for an extractor that has the option (what `threads=1` means).
@@ -226,29 +161,20 @@ fn extract<'py>(
     chunk: Option<usize>,
     materials: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let inside = match inside.as_deref() {
-        None => None,
-        Some("below") => Some(Inside::Below),
-        Some("above") => Some(Inside::Above),
-        Some(other) => return Err(PyValueError::new_err(format!("inside '{other}': expected 'below' or 'above'"))),
-    };
-    let lattice = match lattice.as_deref() {
-        None | Some("cubic") => LatticeKind::Cubic,
-        Some("bcc") => LatticeKind::Bcc,
-        Some(other) => return Err(PyValueError::new_err(format!("lattice '{other}': expected 'cubic' or 'bcc'"))),
-    };
-    let mut config = RunConfig::new(&algorithm, "", resolution.unwrap_or(64));
-    config.dims = dims;
-    config.lattice = lattice;
-    config.iso = level.map(|l| l as f32);
-    config.inside = inside;
-    config.volume_grid = if resolution.is_some() || dims.is_some() { VolumeGrid::Resampled } else { VolumeGrid::Native };
-    config.seed = seed.unwrap_or(builtin_fields::DEFAULT_SEED);
-    config.post = post;
-    config.options = options_from(options);
-    config.chunk = chunk;
-    config.materials = materials;
-    config.measure = Measure::Counts;
+    let inside = inside.map(|word| word.parse::<Inside>()).transpose().map_err(value_error)?;
+    let lattice = lattice.map(|word| word.parse::<LatticeKind>()).transpose().map_err(value_error)?;
+    let mut config = RunConfig::builder(&algorithm, "")
+        .resolution(resolution)
+        .dims(dims)
+        .lattice(lattice.unwrap_or_default())
+        .iso(level.map(|l| l as f32))
+        .inside(inside)
+        .seed(seed)
+        .post(post)
+        .options(options.unwrap_or_default())
+        .chunk(chunk)
+        .materials(materials)
+        .build();
     if threads == Some(1) {
         serial_where_possible(&mut config.options, &algorithm);
     }
@@ -284,10 +210,10 @@ fn extract<'py>(
             })
         })?
     } else {
-        config.field = data.extract::<String>().or_else(|_| data.str().map(|s| s.to_string()))?;
         // A built-in or mesh field above 512³ samples is sampled near its surface where its
-        // Lipschitz bound certifies the same mesh (`isolab_pipeline::sparse`), as on the CLI.
-        config.sparse = isolab_pipeline::Sparse::Auto;
+        // Lipschitz bound certifies the same mesh (`isolab_pipeline::sparse`, the builder's
+        // default), as on the CLI.
+        config.field = data.extract::<String>().or_else(|_| data.str().map(|s| s.to_string()))?;
         py.allow_threads(|| pools::install(pool.as_deref(), || run(&config).map_err(run_error)))?
     };
     let d = PyDict::new(py);
@@ -384,10 +310,12 @@ fn metrics(
     serde_json::to_string(&json).map_err(value_error)
 }
 
-/// Writes a mesh given as arrays in the format `path`'s extension names (`.obj`, `.ply`,
-/// `.stl`, `.glb`, `.gltf`), atomically; tetrahedra, when given, beside it as `.vtk`.
+/// Writes a mesh given as arrays as the CLI writes a run's ([`isolab_pipeline::files::write_meshes`]):
+/// in the format `path`'s extension names (`.obj`, `.ply`, `.stl`, `.glb`, `.gltf`),
+/// atomically, each vertex coloured by its material when `materials` are given, tagged with
+/// `space`; tetrahedra, when given, beside it as `.vtk`.
 #[pyfunction]
-#[pyo3(signature = (path, vertices, faces, normals=None, colours=None, tet_vertices=None, tetrahedra=None, space=None))]
+#[pyo3(signature = (path, vertices, faces, normals=None, materials=None, tet_vertices=None, tetrahedra=None, space=None))]
 #[allow(clippy::too_many_arguments)]
 fn save(
     py: Python<'_>,
@@ -395,53 +323,46 @@ fn save(
     vertices: &Bound<'_, PyAny>,
     faces: &Bound<'_, PyAny>,
     normals: Option<&Bound<'_, PyAny>>,
-    colours: Option<Vec<[u8; 3]>>,
+    materials: Option<Vec<u8>>,
     tet_vertices: Option<&Bound<'_, PyAny>>,
     tetrahedra: Option<&Bound<'_, PyAny>>,
     space: Option<String>,
 ) -> PyResult<()> {
     let surface = arrays::tri_mesh(vertices, faces, normals)?;
-    if isolab_io::MeshFormat::from_extension(&path).is_none() {
-        return Err(run_error(isolab_io::IoError::UnknownFormat { path }.into()));
-    }
     let volume = match (tet_vertices, tetrahedra) {
-        (Some(v), Some(t)) => Some(arrays::tet_mesh(v, t)?),
-        _ => None,
+        (Some(v), Some(t)) => arrays::tet_mesh(v, t)?,
+        _ => TetMesh::default(),
     };
-    py.allow_threads(|| {
-        let extras = isolab_io::MeshExtras { colours: colours.as_deref(), space: space.as_deref() };
-        isolab_io::write_mesh_with(&path, &surface, extras)?;
-        if let Some(volume) = volume.filter(|v| !v.tetrahedra.is_empty()) {
-            isolab_io::write_vtk_tets(&isolab_io::tetrahedra_path(&path), &volume, space.as_deref())?;
-        }
-        Ok::<(), isolab_io::IoError>(())
-    })
-    .map_err(|e| run_error(e.into()))
+    let materials = materials.unwrap_or_default();
+    if !materials.is_empty() && materials.len() != surface.positions.len() {
+        return Err(value_error(format!(
+            "materials: {} values for {} vertices (one per vertex)",
+            materials.len(),
+            surface.positions.len()
+        )));
+    }
+    py.allow_threads(|| isolab_pipeline::files::write_meshes(&path, &surface, &volume, &materials, space.as_deref()))
+        .map_err(run_error)
 }
 
 /// Reads a volume file as `("volume", array, affine)` (the array in numpy index order `[i, j,
 /// k]`, Fortran-ordered over isolab's own buffer, no copy; the 4 x 4 index-to-world affine, RAS
-/// for anatomical files) or a mesh file as `("mesh", vertices, faces)`.
+/// for anatomical files) or a mesh file as `("mesh", vertices, faces)`: whichever the file
+/// holds, decided as the CLI decides it ([`isolab_pipeline::files::read_file`]).
 #[pyfunction]
 fn load<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
-    let bytes = isolab_io::read_bytes(&path).map_err(|e| run_error(e.into()))?;
-    if isolab_io::volume::detect(&path, &bytes).is_some() {
-        let file = py
-            .allow_threads(|| isolab_io::volume::read_volume_bytes(&bytes, &path, Default::default()))
-            .map_err(|e| run_error(e.into()))?;
-        let volume = &file.volume;
-        let array = out::fortran_volume(py, volume.values_f32().into_owned(), volume.dims)?;
-        let affine = out::affine_rows(&volume.index_to_world);
-        return ("volume", array, affine).into_pyobject(py);
-    }
-    let mesh = py.allow_threads(|| read_mesh_bytes(&bytes, &path)).map_err(|e| run_error(e.into()))?;
-    ("mesh", out::vec3_array(py, mesh.positions)?, out::faces_array(py, mesh.triangles)?).into_pyobject(py)
-}
-
-fn read_mesh_bytes(bytes: &[u8], path: &Path) -> Result<TriMesh, isolab_io::IoError> {
-    match isolab_io::MeshFormat::detect(bytes, path) {
-        isolab_io::MeshFormat::Glb | isolab_io::MeshFormat::Gltf => isolab_io::gltf::parse_gltf_beside(bytes, path),
-        _ => isolab_io::parse_mesh(bytes, path, isolab_io::Coordinates::Any),
+    use isolab_pipeline::files::{read_file, FileContents};
+    let contents = py.allow_threads(|| read_file(&path, Default::default(), isolab_io::Coordinates::Any)).map_err(run_error)?;
+    match contents {
+        FileContents::Volume(file) => {
+            let volume = &file.volume;
+            let array = out::fortran_volume(py, volume.values_f32().into_owned(), volume.dims)?;
+            let affine = out::affine_rows(&volume.index_to_world);
+            ("volume", array, affine).into_pyobject(py)
+        }
+        FileContents::Mesh(mesh, _) => {
+            ("mesh", out::vec3_array(py, mesh.positions)?, out::faces_array(py, mesh.triangles)?).into_pyobject(py)
+        }
     }
 }
 
@@ -450,7 +371,6 @@ fn read_mesh_bytes(bytes: &[u8], path: &Path) -> Result<TriMesh, isolab_io::IoEr
 fn _isolab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(algorithms, m)?)?;
     m.add_function(wrap_pyfunction!(fields, m)?)?;
-    m.add_function(wrap_pyfunction!(material_colours, m)?)?;
     m.add_function(wrap_pyfunction!(marching_cubes, m)?)?;
     m.add_function(wrap_pyfunction!(extract, m)?)?;
     m.add_function(wrap_pyfunction!(extract_function, m)?)?;

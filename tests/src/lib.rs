@@ -296,3 +296,8 @@ pub fn position_ids(positions: &[Vec3], ids: &mut std::collections::HashMap<[u32
 #[doc = include_str!("../../README.md")]
 #[cfg(doctest)]
 pub struct ReadmeQuickStart;
+
+/// docs/rust.md, the Rust guide, whose Rust blocks run as this crate's doc tests.
+#[doc = include_str!("../../docs/rust.md")]
+#[cfg(doctest)]
+pub struct RustGuide;

@@ -40,6 +40,24 @@ pub enum Inside {
     Below,
 }
 
+impl Inside {
+    /// The words that name each side (`--inside`, `inside=`), as serialized.
+    pub const CHOICES: [(&'static str, Inside); 2] = [("above", Inside::Above), ("below", Inside::Below)];
+}
+
+impl std::str::FromStr for Inside {
+    type Err = crate::UnknownChoice;
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        crate::choice::parse_choice("inside", text, &Inside::CHOICES)
+    }
+}
+
+impl std::fmt::Display for Inside {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(crate::choice::choice_name(self, &Inside::CHOICES))
+    }
+}
+
 /// The coordinate system of a volume's world.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub enum Space {

@@ -250,12 +250,9 @@ class Mesh:
         ``.vtk``. Raises ``OSError`` for an unwritable path, ``ValueError`` for another
         extension.
         """
-        colours = None
-        if self.materials is not None:
-            palette = np.asarray(_isolab.material_colours(), dtype=np.uint8)
-            colours = [tuple(c) for c in palette[self.materials]]
-        _isolab.save(os.fspath(path), self.vertices, self.faces, self.normals, colours, self.tet_vertices, self.tetrahedra,
-                     self._space)
+        materials = None if self.materials is None else np.asarray(self.materials, dtype=np.uint8).tolist()
+        _isolab.save(os.fspath(path), self.vertices, self.faces, self.normals, materials, self.tet_vertices,
+                     self.tetrahedra, self._space)
 
 
 def _batch_caller(fn: Callable[[np.ndarray], Any], progress: bool) -> Callable[[np.ndarray], np.ndarray]:
@@ -566,7 +563,8 @@ def algorithms() -> List[Dict[str, Any]]:
     (blocks share their boundary samples), 'apron' (blocks also read ``apron`` samples of their
     neighbours) or 'unsupported'; and ``samples``, how they read a numpy array: 'borrowed' (where
     it lies, in its own dtype and memory order, no copy) or 'copies: REASON' (converted once into
-    float32 samples, and why).
+    float32 samples, and why). Every entry also has ``promises``, its guarantees as the one line
+    ``isolab list`` prints: both read one listing, ``isolab_pipeline::registry``.
 
     >>> import isolab
     >>> [(a["chunking"], a["apron"]) for a in isolab.algorithms() if a["name"] == "marching-cubes"]
@@ -574,7 +572,7 @@ def algorithms() -> List[Dict[str, Any]]:
     >>> [a["samples"] for a in isolab.algorithms() if a["name"] == "marching-cubes-33"]
     ['borrowed']
     """
-    return _isolab.algorithms()
+    return json.loads(_isolab.algorithms())
 
 
 def fields() -> List[Tuple[str, str]]:

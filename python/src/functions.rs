@@ -78,7 +78,7 @@ pub fn extract_function<'py>(py: Python<'py>, function: Py<PyAny>, call: Functio
         (true, Some(l)) => Pruning::Lipschitz(l),
         (true, None) => Pruning::SignChange { margin: 1 },
     };
-    let extractor = crate::blocks::extractor(&call.algorithm, call.options.clone(), call.threads == Some(1))?;
+    let extractor = crate::blocks::volume::extractor(&call.algorithm, call.options.clone(), call.threads == Some(1))?;
     let chunk = call.chunk.unwrap_or_else(|| SparseOptions::default_chunk(extractor.as_ref()));
     let options = SparseOptions { chunk, batch: call.batch, pruning };
     let pool = pools::pool(call.threads)?;

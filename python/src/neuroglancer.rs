@@ -10,11 +10,12 @@ use std::path::PathBuf;
 use isolab_algorithms::labels::{LabelBlockPlan, LabelExtractor};
 use isolab_io::neuroglancer::ShardingSpec;
 use isolab_pipeline::neuroglancer::{self as ngp, BoxIndex, Layout, NgError, SegmentFragments};
-use numpy::{PyUntypedArray, PyUntypedArrayMethods};
+use numpy::PyUntypedArray;
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 
-use crate::label_blocks::{block_values, extractor};
+use crate::blocks::check_block;
+use crate::blocks::labels::{block_values, extractor};
 use crate::{pools, value_error};
 
 /// The octree a job writes: `(algorithm, options, dims (x, y, z), chunk, lods, bits)`.
@@ -50,13 +51,7 @@ fn block_samples(
         .widened(ngp::MARGIN)
         .block(id)
         .ok_or_else(|| PyValueError::new_err(format!("block {id:?} is outside the plan's {:?} blocks", plan.counts)))?;
-    let want: Vec<usize> = bounds.dims.into_iter().rev().collect();
-    if !block.is_c_contiguous() || block.shape() != want.as_slice() {
-        return Err(PyValueError::new_err(format!(
-            "block {id:?}: expected a C-ordered array of {want:?} labels (numpy shape), got shape {:?}",
-            block.shape()
-        )));
-    }
+    check_block(block, id, bounds.dims, "labels")?;
     let values = block_values(block)?;
     Ok(match select {
         Some(s) => {

@@ -148,17 +148,32 @@ def _compute(tasks, client, progress: bool) -> Sequence[Any]:
         return dask.compute(*tasks)
 
 
-def _mesh_task(source, slices, block_id, job: Dict[str, Any], path: Optional[str]):
-    """One Dask task: read a block, mesh it, write or return its fragment."""
+def _mesh_volume_block(block: np.ndarray, block_id, job: Dict[str, Any]) -> Dict[str, Any]:
+    return _isolab.mesh_block(block, job["algorithm"], job["options"], job["dims"], job["chunk"], block_id, job["level"],
+                              job["inside"] == "above", job["threads"])
+
+
+def _mesh_label_block(block: np.ndarray, block_id, job: Dict[str, Any]) -> Dict[str, Any]:
+    return _isolab.mesh_label_block(block, job["algorithm"], job["options"], job["dims"], job["chunk"], block_id,
+                                    job["labels"], job["threads"])
+
+
+def _read_block(source, slices) -> np.ndarray:
+    """A block's samples as a C-ordered numpy array: ``source[slices]`` (a zarr or numpy array
+    read on the worker), or ``source`` itself (a dask array's block, computed by Dask)."""
+    block = source if slices is None else source[slices]
+    return np.ascontiguousarray(np.asarray(block))
+
+
+def _block_task(kind: str, source, slices, block_id, job: Dict[str, Any], path: Optional[str]):
+    """One Dask task of either kind: read a block, mesh it, write or return its fragment."""
     if path is not None and os.path.exists(path):
         return path  # a rerun of a task whose fragment was written (a worker died after writing)
-    block = source if slices is None else source[slices]
-    block = np.ascontiguousarray(np.asarray(block))
-    fragment = _isolab.mesh_block(block, job["algorithm"], job["options"], job["dims"], job["chunk"], block_id,
-                                  job["level"], job["inside"] == "above", job["threads"])
+    mesh, save = _KINDS[kind]
+    fragment = mesh(_read_block(source, slices), block_id, job)
     if path is None:
         return fragment
-    save_fragment(path, fragment)
+    save(path, fragment)
     return path
 
 
@@ -235,7 +250,7 @@ def mesh_volume(array, level: float, algorithm: str = "marching-cubes", *, chunk
     out_dir = _open_out(out, params, blocks, counts, apron)
     affine_ = _index_to_world(affine, spacing)
 
-    fragments, paths = _run_blocks(array, blocks, _mesh_task, job, client, out_dir, "isolab-volume", progress)
+    fragments, paths = _run_blocks(array, blocks, "volume", job, client, out_dir, progress)
     if out_dir is not None:
         _write_manifest(out_dir, params, blocks, counts, apron, [os.path.basename(p) for p in paths])
     if not merge:
@@ -366,38 +381,41 @@ def load_label_fragment(path: str) -> Dict[str, Any]:
                 "counts": {int(k): int(n) for k, n in zip(z["count_labels"], z["count_samples"])}}
 
 
-def _label_task(source, slices, block_id, job: Dict[str, Any], path: Optional[str]):
-    """One Dask task: read a block of labels, mesh it, write or return its fragment."""
-    if path is not None and os.path.exists(path):
-        return path
-    block = source if slices is None else source[slices]
-    block = np.ascontiguousarray(np.asarray(block))
-    fragment = _isolab.mesh_label_block(block, job["algorithm"], job["options"], job["dims"], job["chunk"], block_id,
-                                        job["labels"], job["threads"])
-    if path is None:
-        return fragment
-    save_label_fragment(path, fragment)
-    return path
+# Each kind's block meshing and fragment writer, which :func:`_block_task` looks up by name (a
+# name pickles into a task; the functions are this module's).
+_KINDS = {"volume": (_mesh_volume_block, save_fragment), "labels": (_mesh_label_block, save_label_fragment)}
 
 
-def _run_blocks(array, blocks, task, job, client, out_dir, name, progress):
-    """One task per block (``task(source, slices, id, job, path)``), skipping those whose file
-    is in ``out_dir``: the results (or paths) in plan order, and every block's path."""
-    source = array
+def _shared_source(array, client, name: str):
+    """What the tasks read blocks from: a numpy array shared once (``client.scatter`` on a
+    cluster, else one delayed value), any other array as it is (a zarr array pickles as its
+    store's address; a dask array's blocks become the tasks' inputs)."""
     if not _is_dask_array(array) and isinstance(array, np.ndarray):
-        source = client.scatter(array, broadcast=True) if client is not None else dask.delayed(array, name=name)
+        return client.scatter(array, broadcast=True) if client is not None else dask.delayed(array, name=name)
+    return array
+
+
+def _block_input(array, source, lo, bdims):
+    """A task's ``(source, slices)`` for the block of ``bdims`` samples at ``lo`` (isolab's x, y,
+    z; numpy's axes reversed): a dask array's own block with no slices, else the shared source
+    and the slices the task reads."""
+    slices = tuple(slice(lo[a], lo[a] + bdims[a]) for a in (2, 1, 0))
+    return (array[slices], None) if _is_dask_array(array) else (source, slices)
+
+
+def _run_blocks(array, blocks, kind: str, job, client, out_dir, progress):
+    """One task per block (:func:`_block_task` of ``kind``), skipping those whose file is in
+    ``out_dir``: the results (or paths) in plan order, and every block's path."""
+    source = _shared_source(array, client, f"isolab-{kind}")
     tasks, paths = [], []
     for block_id, lo, bdims in blocks:
-        slices = tuple(slice(lo[a], lo[a] + bdims[a]) for a in (2, 1, 0))
         path = None if out_dir is None else os.path.join(out_dir, _fragment_name(block_id))
         paths.append(path)
         if path is not None and os.path.exists(path):
             tasks.append(path)
             continue
-        if _is_dask_array(array):
-            tasks.append(dask.delayed(task, pure=False)(array[slices], None, tuple(block_id), job, path))
-        else:
-            tasks.append(dask.delayed(task, pure=False)(source, slices, tuple(block_id), job, path))
+        tasks.append(dask.delayed(_block_task, pure=False)(kind, *_block_input(array, source, lo, bdims),
+                                                          tuple(block_id), job, path))
     results = iter(_compute([t for t in tasks if not isinstance(t, str)], client, progress))
     return [t if isinstance(t, str) else next(results) for t in tasks], paths
 
@@ -507,7 +525,7 @@ def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] =
     params.pop("threads")
     out_dir = _open_out(out, params, blocks, counts, apron)
     affine_ = _index_to_world(affine, spacing)
-    fragments, paths = _run_blocks(array, blocks, _label_task, job, client, out_dir, "isolab-labels", progress)
+    fragments, paths = _run_blocks(array, blocks, "labels", job, client, out_dir, progress)
     if out_dir is not None:
         _write_manifest(out_dir, params, blocks, counts, apron, [os.path.basename(p) for p in paths])
     if not merge:
@@ -524,9 +542,7 @@ def _ng_level0_task(source, slices, block_id, job, work: str, select, threads: i
     done = _isolab.ng_box_index(work, 0, list(block_id))
     if done is not None:
         return done
-    block = source if slices is None else source[slices]
-    block = np.ascontiguousarray(np.asarray(block))
-    return _isolab.ng_level0(job, block, list(block_id), work, select, threads)
+    return _isolab.ng_level0(job, _read_block(source, slices), list(block_id), work, select, threads)
 
 
 def _ng_coarser_task(job, level: int, position, work: str, *children):
@@ -566,19 +582,11 @@ def _neuroglancer(array, algorithm, opts, dims, chunk, counts, lods, sharded, bi
     out_dir = os.fspath(out)
     work = os.path.join(out_dir, ".isolab-work")
     os.makedirs(work, exist_ok=True)
-    source = array
-    if not _is_dask_array(array) and isinstance(array, np.ndarray):
-        source = client.scatter(array, broadcast=True) if client is not None else dask.delayed(array, name="isolab-ng")
+    source = _shared_source(array, client, "isolab-ng")
     tasks: Dict[Any, Any] = {}
     for block_id, lo, bdims in windows:
-        slices = tuple(slice(lo[a], lo[a] + bdims[a]) for a in (2, 1, 0))
-        key = (0, tuple(block_id))
-        if _is_dask_array(array):
-            tasks[key] = dask.delayed(_ng_level0_task, pure=False)(array[slices], None, tuple(block_id), job, work,
-                                                                   chosen, threads)
-        else:
-            tasks[key] = dask.delayed(_ng_level0_task, pure=False)(source, slices, tuple(block_id), job, work, chosen,
-                                                                   threads)
+        tasks[(0, tuple(block_id))] = dask.delayed(_ng_level0_task, pure=False)(
+            *_block_input(array, source, lo, bdims), tuple(block_id), job, work, chosen, threads)
     for level in range(1, lods):
         cx, cy, cz = level_counts[level]
         below = level_counts[level - 1]
@@ -630,9 +638,7 @@ def _neuroglancer(array, algorithm, opts, dims, chunk, counts, lods, sharded, bi
 
 def _ng_legacy_task(source, slices, block_id, job, out_dir: str, transform, select, threads: int):
     """One Dask task: a block's legacy fragments."""
-    block = source if slices is None else source[slices]
-    block = np.ascontiguousarray(np.asarray(block))
-    return _isolab.ng_legacy_block(job, block, list(block_id), out_dir, transform, select, threads)
+    return _isolab.ng_legacy_block(job, _read_block(source, slices), list(block_id), out_dir, transform, select, threads)
 
 
 def _neuroglancer_legacy(array, algorithm, opts, dims, chunk, chosen, affine_, client, out, progress,
@@ -644,18 +650,11 @@ def _neuroglancer_legacy(array, algorithm, opts, dims, chunk, chosen, affine_, c
     out_dir = os.fspath(out)
     os.makedirs(out_dir, exist_ok=True)
     transform = _ng_transform(affine_)
-    source = array
-    if not _is_dask_array(array) and isinstance(array, np.ndarray):
-        source = client.scatter(array, broadcast=True) if client is not None else dask.delayed(array, name="isolab-ngl")
+    source = _shared_source(array, client, "isolab-ngl")
     tasks, ids = [], []
     for block_id, lo, bdims in windows:
-        slices = tuple(slice(lo[a], lo[a] + bdims[a]) for a in (2, 1, 0))
-        if _is_dask_array(array):
-            tasks.append(dask.delayed(_ng_legacy_task, pure=False)(array[slices], None, tuple(block_id), job, out_dir,
-                                                                   transform, chosen, threads))
-        else:
-            tasks.append(dask.delayed(_ng_legacy_task, pure=False)(source, slices, tuple(block_id), job, out_dir,
-                                                                   transform, chosen, threads))
+        tasks.append(dask.delayed(_ng_legacy_task, pure=False)(*_block_input(array, source, lo, bdims), tuple(block_id),
+                                                               job, out_dir, transform, chosen, threads))
         ids.append(list(block_id))
     results = _compute(tasks, client, progress)
     segments: Dict[int, List[Any]] = {}

@@ -1,12 +1,8 @@
-//! Blocks of a label map meshed one at a time, for `isolab.dask.mesh_labels`: the plan (which
-//! samples each block reads), one block's labels to a fragment of numpy arrays (its interface
-//! triangles in the map's sample indices, their label pairs, each vertex's integer weld key and
-//! the block's own label counts), and the weld of fragments into the per-label meshes
+//! Blocks of a label map (the driver is [`super`]): the plan, one block's labels to a fragment
+//! (its interface triangles in the map's sample indices, their label pairs, each vertex's weld
+//! key and the block's own label counts), and the weld into the per-label meshes
 //! `isolab.mesh_labels` returns. The engine is `isolab_algorithms::labels::blocks`, whose weld
 //! equals the whole map's surface.
-//!
-//! Axes as in `blocks`: a block arrives C-ordered, so isolab's x is numpy's last axis; plans and
-//! ids are in isolab's (x, y, z).
 
 use std::collections::BTreeMap;
 
@@ -14,11 +10,12 @@ use isolab_algorithms::labels::blocks;
 use isolab_algorithms::labels::{LabelBlockPlan, LabelExtractor, LabelFragment, LabelSamples, LabelValues};
 use isolab_algorithms::TriMesh;
 use isolab_pipeline::labels::{self, LabelConfig, LabelOutcome};
-use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
+use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use super::{check_block, field, keys_array, keys_from, rows, PlanListing};
 use crate::arrays::{self, Layout};
 use crate::{out, pools, run_error, value_error};
 
@@ -35,13 +32,12 @@ fn plan_for(e: &dyn LabelExtractor, dims: [usize; 3], chunk: usize) -> PyResult<
 /// cells: `(counts, apron, [(id, lo, dims), ...])` in weld order.
 #[pyfunction]
 #[pyo3(signature = (algorithm, options, dims, chunk))]
-#[allow(clippy::type_complexity)]
 pub fn label_block_plan(
     algorithm: &str,
     options: Option<BTreeMap<String, String>>,
     dims: [usize; 3],
     chunk: usize,
-) -> PyResult<([usize; 3], usize, Vec<([usize; 3], [usize; 3], [usize; 3])>)> {
+) -> PyResult<PlanListing> {
     let e = extractor(algorithm, options)?;
     let plan = plan_for(e.as_ref(), dims, chunk)?;
     Ok((plan.counts, plan.apron, plan.blocks().map(|b| (b.id, b.lo, b.dims)).collect()))
@@ -99,14 +95,7 @@ pub fn mesh_label_block<'py>(
     let bounds = plan
         .block(id)
         .ok_or_else(|| PyValueError::new_err(format!("block {id:?} is outside the plan's {:?} blocks", plan.counts)))?;
-    let want: Vec<usize> = bounds.dims.into_iter().rev().collect();
-    if !block.is_c_contiguous() || block.shape() != want.as_slice() {
-        return Err(PyValueError::new_err(format!(
-            "block {id:?}: expected a C-ordered array of {want:?} labels (numpy shape), got shape {:?}{}",
-            block.shape(),
-            if block.is_c_contiguous() { "" } else { " not in C order" }
-        )));
-    }
+    check_block(block, id, bounds.dims, "labels")?;
     let values = block_values(block)?;
     let pool = pools::pool(threads)?;
     let (fragment, counts) = py
@@ -126,12 +115,10 @@ pub fn mesh_label_block<'py>(
 
 fn fragment_dict(py: Python<'_>, f: LabelFragment, counts: BTreeMap<u32, usize>) -> PyResult<Bound<'_, PyDict>> {
     let d = PyDict::new(py);
-    let n = f.keys.len();
-    let keys: Vec<u64> = f.keys.iter().flat_map(|&k| [k as u64, (k >> 64) as u64]).collect();
     d.set_item("id", f.id)?;
     d.set_item("active_cells", f.surface.active_cells)?;
     d.set_item("counts", counts)?;
-    d.set_item("keys", PyArray1::from_vec(py, keys).reshape([n, 2])?)?;
+    d.set_item("keys", keys_array(py, f.keys.iter().copied())?)?;
     let TriMesh { positions, triangles, .. } = f.surface.mesh;
     d.set_item("positions", out::vec3_array(py, positions)?)?;
     d.set_item("triangles", out::u32_rows(py, triangles)?)?;
@@ -139,32 +126,15 @@ fn fragment_dict(py: Python<'_>, f: LabelFragment, counts: BTreeMap<u32, usize>)
     Ok(d)
 }
 
-/// An M x N array of unsigned integers, converted to `dtype`, as rows.
-fn rows<T: numpy::Element + Copy, const N: usize>(a: &Bound<'_, PyAny>, what: &str, dtype: &str) -> PyResult<Vec<[T; N]>> {
-    let np = a.py().import("numpy")?;
-    let a = np.call_method1("ascontiguousarray", (a, dtype))?;
-    let a = a.downcast::<PyArrayDyn<T>>()?;
-    let ro = a.readonly();
-    let shape = ro.shape();
-    if shape.len() != 2 || shape[1] != N {
-        return Err(PyValueError::new_err(format!("fragment {what} must be an M x {N} array; its shape is {shape:?}")));
-    }
-    let flat = ro.as_slice().map_err(value_error)?;
-    Ok(flat.chunks_exact(N).map(|c| std::array::from_fn(|i| c[i])).collect())
-}
-
 /// A fragment dict (as `mesh_label_block` made it, or as loaded back from a file) as a
 /// `LabelFragment` and its counts.
 fn fragment_from(d: &Bound<'_, PyDict>) -> PyResult<(LabelFragment, BTreeMap<u32, usize>)> {
-    let item = |k: &str| d.get_item(k)?.ok_or_else(|| PyValueError::new_err(format!("label fragment has no '{k}'")));
+    let item = |k: &str| field(d, k, "label fragment");
     let mut fragment = LabelFragment { id: item("id")?.extract()?, ..LabelFragment::default() };
     fragment.surface.mesh = arrays::tri_mesh(&item("positions")?, &item("triangles")?, None)?;
     fragment.surface.pairs = rows::<u32, 2>(&item("pairs")?, "pairs", "uint32")?;
     fragment.surface.active_cells = item("active_cells")?.extract()?;
-    fragment.keys = rows::<u64, 2>(&item("keys")?, "keys", "uint64")?
-        .into_iter()
-        .map(|[lo, hi]| u128::from(lo) | u128::from(hi) << 64)
-        .collect();
+    fragment.keys = keys_from(&item("keys")?)?;
     let (n, t) = (fragment.surface.mesh.positions.len(), fragment.surface.mesh.triangles.len());
     if fragment.keys.len() != n || fragment.surface.pairs.len() != t {
         return Err(PyValueError::new_err(format!(

@@ -1,19 +1,18 @@
-//! Blocks of a volume meshed one at a time, for `isolab.dask`: the plan (which samples each block
-//! reads), one block's samples to a fragment of numpy arrays (its mesh in the volume's sample
-//! indices and each shareable vertex's integer weld key), and the weld of fragments into one mesh
-//! in world coordinates. The engine is `isolab_algorithms::chunks` (`BlockPlan`, `mesh_block`,
-//! `weld_fragments`), whose weld equals the one-process chunked extraction.
-//!
-//! Axes: a block arrives as a C-ordered numpy array, so isolab's x is numpy's last axis, as for
-//! any C-ordered array `isolab.extract` meshes; plans, ids and sample offsets here are in
-//! isolab's (x, y, z).
+//! Blocks of a volume (the driver is [`super`]): the plan, one block's samples (any numeric
+//! dtype, read where they lie when the extractor can) to a fragment (its mesh in the volume's
+//! sample indices, each shareable vertex's weld key, and whether the block was meshed, empty or
+//! full), and the weld into one mesh in world coordinates. The engine is
+//! `isolab_algorithms::chunks` (`BlockPlan`, `mesh_block`, `weld_fragments`), whose weld equals
+//! the one-process chunked extraction. Also the blocks of a built-in field's world
+//! (`field_block`), which `isolab.dask.bake_world` samples.
 
+use super::{field, keys_array, keys_from, wrong_block, PlanListing};
 use crate::arrays::{self, Layout, VolumeArray};
 use crate::{out, pools, run_error, value_error, views, Run};
 use isolab_algorithms::chunks::{self, BlockPlan, ChunkState, Fragment};
 use isolab_algorithms::{extractors, Extraction, Extractor, TriMesh};
 use isolab_pipeline::RunError;
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -42,13 +41,12 @@ fn plan_for(extractor: &dyn Extractor, dims: [usize; 3], chunk: usize) -> PyResu
 /// `(counts, apron, [(id, lo, dims), ...])` in weld order.
 #[pyfunction]
 #[pyo3(signature = (algorithm, options, dims, chunk))]
-#[allow(clippy::type_complexity)]
 pub fn block_plan(
     algorithm: &str,
     options: Option<BTreeMap<String, String>>,
     dims: [usize; 3],
     chunk: usize,
-) -> PyResult<([usize; 3], usize, Vec<([usize; 3], [usize; 3], [usize; 3])>)> {
+) -> PyResult<PlanListing> {
     let e = extractor(algorithm, options, true)?;
     let plan = plan_for(e.as_ref(), dims, chunk)?;
     Ok((plan.counts, plan.apron, plan.blocks().map(|b| (b.id, b.lo, b.dims)).collect()))
@@ -80,14 +78,8 @@ pub fn mesh_block<'py>(
     let pool = pools::pool(threads)?;
     let expected = plan.block(id).map(|b| b.dims);
     let wrong = |layout: Layout, dims: [usize; 3]| {
-        (layout != Layout::C || Some(dims) != expected).then(|| {
-            PyValueError::new_err(format!(
-                "block {id:?}: expected a C-ordered array of {:?} samples (numpy shape), got shape {:?}{}",
-                expected.map(|[x, y, z]| [z, y, x]),
-                block.shape(),
-                if layout == Layout::C { "" } else { " in Fortran order" }
-            ))
-        })
+        (layout != Layout::C || Some(dims) != expected)
+            .then(|| wrong_block(id, expected, block.shape(), layout == Layout::C, "samples"))
     };
     let iso = sign * level as f32;
     // The block where it lies, in its own dtype (no copy for an extractor that reads it in place).
@@ -125,14 +117,12 @@ fn state_name(state: ChunkState) -> &'static str {
 
 fn fragment_dict(py: Python<'_>, f: Fragment) -> PyResult<Bound<'_, PyDict>> {
     let d = PyDict::new(py);
-    let keys: Vec<u64> = f.keys.iter().flat_map(|k| k.map_or([0, 0], |k| [k as u64, (k >> 64) as u64])).collect();
     let keyed: Vec<bool> = f.keys.iter().map(Option::is_some).collect();
-    let n = f.keys.len();
     d.set_item("id", f.id)?;
     d.set_item("state", state_name(f.state))?;
     d.set_item("active_cells", f.active_cells)?;
     d.set_item("discarded_triangles", f.discarded_triangles)?;
-    d.set_item("keys", PyArray1::from_vec(py, keys).reshape([n, 2])?)?;
+    d.set_item("keys", keys_array(py, f.keys.iter().map(|k| k.unwrap_or(0)))?)?;
     d.set_item("keyed", PyArray1::from_vec(py, keyed))?;
     let TriMesh { positions, normals, triangles, .. } = f.surface;
     d.set_item("positions", out::vec3_array(py, positions)?)?;
@@ -143,17 +133,14 @@ fn fragment_dict(py: Python<'_>, f: Fragment) -> PyResult<Bound<'_, PyDict>> {
 
 /// A fragment dict (as `mesh_block` made it, or as loaded back from a file) as a `Fragment`.
 fn fragment_from(d: &Bound<'_, PyDict>) -> PyResult<Fragment> {
-    let item = |k: &str| d.get_item(k)?.ok_or_else(|| PyValueError::new_err(format!("fragment has no '{k}'")));
+    let item = |k: &str| field(d, k, "fragment");
     let state = match item("state")?.extract::<String>()?.as_str() {
         "empty" => ChunkState::Empty,
         "full" => ChunkState::Full,
         "meshed" => ChunkState::Meshed,
         other => return Err(PyValueError::new_err(format!("fragment state '{other}': expected meshed, empty or full"))),
     };
-    let keys_array = item("keys")?;
-    let keys = keys_array.downcast::<PyArray2<u64>>().map_err(|_| PyValueError::new_err("fragment keys must be N x 2 uint64"))?;
-    let keys = keys.readonly();
-    let keys = keys.as_array();
+    let keys = keys_from(&item("keys")?)?;
     let keyed_array = item("keyed")?;
     let keyed = keyed_array.downcast::<PyArray1<bool>>().map_err(|_| PyValueError::new_err("fragment 'keyed' must be bool"))?;
     let keyed = keyed.readonly();
@@ -161,16 +148,15 @@ fn fragment_from(d: &Bound<'_, PyDict>) -> PyResult<Fragment> {
     let normals = item("normals")?;
     let has_normals = normals.len()? > 0;
     let surface = arrays::tri_mesh(&item("positions")?, &item("triangles")?, has_normals.then_some(&normals))?;
-    if keys.nrows() != surface.positions.len() || keyed.len() != surface.positions.len() || keys.ncols() != 2 {
+    if keys.len() != surface.positions.len() || keyed.len() != surface.positions.len() {
         return Err(PyValueError::new_err(format!(
             "fragment has {} vertices but {} keys ({} keyed flags)",
             surface.positions.len(),
-            keys.nrows(),
+            keys.len(),
             keyed.len()
         )));
     }
-    let keys =
-        keys.rows().into_iter().zip(keyed.iter()).map(|(k, &on)| on.then(|| u128::from(k[0]) | u128::from(k[1]) << 64)).collect();
+    let keys = keys.into_iter().zip(keyed.iter()).map(|(k, &on)| on.then_some(k)).collect();
     Ok(Fragment {
         id: item("id")?.extract()?,
         state,

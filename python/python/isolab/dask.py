@@ -169,7 +169,7 @@ def _block_task(kind: str, source, slices, block_id, job: Dict[str, Any], path: 
     """One Dask task of either kind: read a block, mesh it, write or return its fragment."""
     if path is not None and os.path.exists(path):
         return path  # a rerun of a task whose fragment was written (a worker died after writing)
-    mesh, save = _KINDS[kind]
+    mesh, save, _ = _KINDS[kind]
     fragment = mesh(_read_block(source, slices), block_id, job)
     if path is None:
         return fragment
@@ -245,17 +245,10 @@ def mesh_volume(array, level: float, algorithm: str = "marching-cubes", *, chunk
     counts, apron, blocks = _isolab.block_plan(algorithm, opts, dims, int(chunk))
     job = {"algorithm": algorithm, "options": opts, "dims": dims, "chunk": int(chunk), "level": float(level),
            "inside": inside, "threads": int(threads)}
-    params = dict(job, shape=list(shape), dtype=str(array.dtype))
-    params.pop("threads")
-    out_dir = _open_out(out, params, blocks, counts, apron)
-    affine_ = _index_to_world(affine, spacing)
-
-    fragments, paths = _run_blocks(array, blocks, "volume", job, client, out_dir, progress)
-    if out_dir is not None:
-        _write_manifest(out_dir, params, blocks, counts, apron, [os.path.basename(p) for p in paths])
+    loaded = _mesh_blocks(array, "volume", job, (counts, apron, blocks), client, out, progress, merge)
     if not merge:
-        return list(paths)
-    loaded = [load_fragment(f) if isinstance(f, str) else f for f in fragments]
+        return loaded
+    affine_ = _index_to_world(affine, spacing)
     report = {"algorithm": algorithm, "driver": "isolab.dask", "shape": list(shape), "dims": dims, "iso": float(level),
               "inside": inside, "chunk": int(chunk), "apron": apron, "block_counts": counts}
     return Mesh(_isolab.weld_fragments(loaded, affine_, json.dumps(report)))
@@ -381,9 +374,27 @@ def load_label_fragment(path: str) -> Dict[str, Any]:
                 "counts": {int(k): int(n) for k, n in zip(z["count_labels"], z["count_samples"])}}
 
 
-# Each kind's block meshing and fragment writer, which :func:`_block_task` looks up by name (a
-# name pickles into a task; the functions are this module's).
-_KINDS = {"volume": (_mesh_volume_block, save_fragment), "labels": (_mesh_label_block, save_label_fragment)}
+# Each kind's block mesher, fragment writer and reader, which :func:`_block_task` and
+# :func:`_mesh_blocks` look up by name (a name pickles into a task; the functions are this module's).
+_KINDS = {"volume": (_mesh_volume_block, save_fragment, load_fragment),
+          "labels": (_mesh_label_block, save_label_fragment, load_label_fragment)}
+
+
+def _mesh_blocks(array, kind: str, job: Dict[str, Any], plan, client, out, progress: bool, merge: bool) -> List[Any]:
+    """Either kind's run: ``out``'s manifest opened (or a rerun's checked), a task per block
+    still to mesh, the manifest's list of blocks done; the fragments in plan order (loaded
+    back where they were written) for the weld, or with ``merge=False`` their paths."""
+    counts, apron, blocks = plan
+    params = dict(job, shape=[int(s) for s in array.shape], dtype=str(array.dtype))
+    params.pop("threads")
+    out_dir = _open_out(out, params, blocks, counts, apron)
+    fragments, paths = _run_blocks(array, blocks, kind, job, client, out_dir, progress)
+    if out_dir is not None:
+        _write_manifest(out_dir, params, blocks, counts, apron, [os.path.basename(p) for p in paths])
+    if not merge:
+        return list(paths)
+    load = _KINDS[kind][2]
+    return [load(f) if isinstance(f, str) else f for f in fragments]
 
 
 def _shared_source(array, client, name: str):
@@ -521,17 +532,10 @@ def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] =
                              progress, int(threads), keep_work)
     job = {"kind": "labels", "algorithm": algorithm, "options": opts, "dims": dims, "chunk": int(chunk),
            "labels": chosen, "threads": int(threads)}
-    params = dict(job, shape=list(shape), dtype=str(array.dtype))
-    params.pop("threads")
-    out_dir = _open_out(out, params, blocks, counts, apron)
-    affine_ = _index_to_world(affine, spacing)
-    fragments, paths = _run_blocks(array, blocks, "labels", job, client, out_dir, progress)
-    if out_dir is not None:
-        _write_manifest(out_dir, params, blocks, counts, apron, [os.path.basename(p) for p in paths])
+    loaded = _mesh_blocks(array, "labels", job, (counts, apron, blocks), client, out, progress, merge)
     if not merge:
-        return list(paths)
-    loaded = [load_label_fragment(f) if isinstance(f, str) else f for f in fragments]
-    result = LabelMeshes(_isolab.weld_label_fragments(loaded, affine_, chosen, algorithm))
+        return loaded
+    result = LabelMeshes(_isolab.weld_label_fragments(loaded, _index_to_world(affine, spacing), chosen, algorithm))
     if result.missing:
         warnings.warn(f"labels {result.missing} do not occur in the label map: no mesh for them", stacklevel=2)
     return result

@@ -149,8 +149,8 @@ pub fn utc_date(secs: u64) -> String {
     format!("{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z", rem / 3600, rem % 3600 / 60, rem % 60)
 }
 
-/// The experiment's own source files: `experiments/src/experiment/<name>.rs`, or every file
-/// under `experiments/src/experiment/<name>/`, sorted by path.
+/// The experiment's own source files: every file under `experiments/src/experiment/<name>/`
+/// (or a single `<name>.rs`, as experiments once were), sorted by path.
 pub fn source_files(root: &Path, name: &str) -> Vec<PathBuf> {
     let dir = root.join("experiments/src/experiment");
     let single = dir.join(format!("{name}.rs"));

@@ -170,3 +170,47 @@ fn the_doc_section_check_sees_what_it_looks_for() {
         vec!["the paper (a quoted title and a year)", "**Non-guarantees**", "an example"]
     );
 }
+
+/// The experiments `experiment::all()` lists, by module name.
+fn listed_experiments(mod_rs: &str) -> Vec<String> {
+    let body = mod_rs.split("pub fn all()").nth(1).unwrap_or("");
+    let body = body.split("\n}").next().unwrap_or("");
+    body.split("Box::new(").skip(1).filter_map(|s| s.split("::").next()).map(str::to_owned).collect()
+}
+
+/// What an experiment's folder lacks of the three files every experiment has: `mod.rs` (its
+/// run: `impl Experiment for`), `data.rs` (its data file's types: `struct Data`) and `page.rs`
+/// (its page: `fn section(`).
+fn missing_experiment_files(folder: &Path) -> Vec<String> {
+    [("mod.rs", "impl Experiment for"), ("data.rs", "struct Data"), ("page.rs", "fn section(")]
+        .into_iter()
+        .filter(|(file, holds)| std::fs::read_to_string(folder.join(file)).map_or(true, |text| !text.contains(holds)))
+        .map(|(file, holds)| format!("{file} with `{holds}`"))
+        .collect()
+}
+
+#[test]
+fn every_experiment_is_a_run_a_data_file_and_a_page() {
+    let dir = workspace().join("experiments/src/experiment");
+    let listed = listed_experiments(&std::fs::read_to_string(dir.join("mod.rs")).expect("experiment/mod.rs"));
+    assert!(listed.len() >= 20, "experiment::all() lists {listed:?}");
+    let lacking: Vec<String> = listed
+        .iter()
+        .filter_map(|name| {
+            let missing = missing_experiment_files(&dir.join(name));
+            (!missing.is_empty()).then(|| format!("{name}: {}", missing.join(", ")))
+        })
+        .collect();
+    assert!(lacking.is_empty(), "experiments without their three files: {lacking:#?}");
+}
+
+#[test]
+fn the_experiment_layout_check_sees_what_it_looks_for() {
+    let listed =
+        listed_experiments("pub fn all() -> Vec<Box<dyn Experiment>> {\n    vec![Box::new(a::A), Box::new(b_c::B)]\n}\n");
+    assert_eq!(listed, ["a", "b_c"]);
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    std::fs::write(dir.path().join("mod.rs"), "impl Experiment for X {}").expect("write");
+    std::fs::write(dir.path().join("page.rs"), "fn page() {}").expect("write");
+    assert_eq!(missing_experiment_files(dir.path()), ["data.rs with `struct Data`", "page.rs with `fn section(`"]);
+}

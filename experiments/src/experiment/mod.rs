@@ -4,8 +4,10 @@
 //! The front page `report/REPORT.md` links the pages and answers "which extractor for my case?"
 //! from their data ([`choosing`]).
 //!
-//! Adding an experiment: a file here implementing [`Experiment`], one line in [`all`], and a
-//! two-line binary in `src/bin/` calling [`run_and_assemble`].
+//! Every experiment is a folder here of the same three files: `mod.rs`, its run (a type
+//! implementing [`Experiment`]); `data.rs`, its data file's types; `page.rs`, its page rendered
+//! from the data alone (`tests/tests/house.rs` checks the layout). Adding one: the folder, one
+//! line in [`all`], and a two-line binary in `src/bin/` calling [`run_and_assemble`].
 
 pub mod choosing;
 pub mod compare_algorithms;

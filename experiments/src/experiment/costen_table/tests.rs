@@ -1,3 +1,5 @@
+use super::page::paper_edge_bytes_per_sample;
+use super::reading::{differences, reading};
 use super::*;
 
 #[test]

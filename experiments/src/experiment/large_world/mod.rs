@@ -22,60 +22,35 @@
 //! ground, or below it and the cave floor, from their column heights and the noise bound; those
 //! chunks are skipped unsampled ([`isolab_algorithms::field::Field::block_side`]).
 
-mod reading;
-mod volume;
+mod data;
+mod page;
 
 use super::context::{Context, Experiment, ExperimentError};
-use crate::figures::plot::{self, BarChart, BarSeries};
-use crate::figures::series_color;
-use crate::report::markdown_table;
+use data::Data;
 use isolab_algorithms::chunks::stream_chunked;
 use isolab_algorithms::{extractors, fields, Grid};
 use isolab_io::PlyStream;
-use reading::reading;
-use serde::{Deserialize, Serialize};
 use std::time::Instant;
-use volume::{run_volume, volume_section, VolumeData, VOLUME_DATA};
+use volume::{run_volume, VolumeData};
+
+mod reading;
+
+mod volume;
 
 /// The experiment.
 pub struct LargeWorld;
 
 const NAME: &str = "large_world";
+
 /// The data file of a run at [`TARGET_WORLD_CELLS`].
 const ISSUE_DATA: &str = "large_world_issue";
+
 const CHUNK: usize = 32;
+
 const DEFAULT_DIMS: [usize; 3] = [2049, 513, 2049];
+
 /// The issue's example world, cells (samples are one more a side).
 const TARGET_WORLD_CELLS: [usize; 3] = [8192, 512, 8192];
-
-#[derive(Clone, Debug, Serialize, Deserialize)]
-struct Data {
-    dims: [usize; 3],
-    chunk: usize,
-    algorithm: String,
-    samples: u64,
-    dense_gib: f64,
-    machine_gib: Option<f64>,
-    seconds: f64,
-    samples_per_second: f64,
-    triangles_per_second: f64,
-    vertices: u64,
-    triangles: u64,
-    welded: u64,
-    chunks: [usize; 3],
-    meshed: usize,
-    empty: usize,
-    full: usize,
-    /// Empty or full chunks proven so by the field and skipped unsampled (absent in older runs).
-    #[serde(default)]
-    proven: Option<usize>,
-    file_gib: f64,
-    rss_before_mib: Option<f64>,
-    peak_rss_mib: Option<f64>,
-    peak_reset: bool,
-    peak_keys: usize,
-    peak_slab_mib: f64,
-}
 
 /// `ISOLAB_WORLD=X,Y,Z` cells (multiples of 32), else the default.
 fn world_dims() -> Result<[usize; 3], ExperimentError> {
@@ -158,108 +133,6 @@ impl Experiment for LargeWorld {
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
-        let d: Data = ctx.read_data(NAME)?;
-        let issue: Option<Data> = ctx.data_path(ISSUE_DATA).exists().then(|| ctx.read_data(ISSUE_DATA)).transpose()?;
-        let runs: Vec<&Data> = std::iter::once(&d).chain(issue.as_ref()).collect();
-        let mut md = String::from("## Larger than memory on one machine: a world of billions of samples and volumes streamed block by block (`large_world`)\n\n");
-        md.push_str(&format!(
-            "The `terrain` field continued over a world of samples, meshed by {} in {}³-cell chunks, one slab of chunks along \
-             z at a time: each chunk samples the field itself, slabs are meshed in parallel, welded to the previous slab's top \
-             face and streamed to a binary PLY in the temporary directory (deleted after the run). The terrain samples its \
-             height field once per column, and chunks it proves wholly above the ground, or below the ground and the cave \
-             floor, from their columns' heights and the noise's bound are skipped unsampled (`Field::block_side`; the \
-             streamed mesh equals the sampled volume's, tested). Peak memory is the process's resident peak during the run \
-             (`VmHWM`), which includes the report process's own baseline{}.\n\n",
-            d.algorithm,
-            d.chunk,
-            d.machine_gib.map_or(String::new(), |m| format!("; this machine has {m:.1} GiB")),
-        ));
-        let volume: Option<VolumeData> = ctx.data_path(VOLUME_DATA).exists().then(|| ctx.read_data(VOLUME_DATA)).transpose()?;
-        md.push_str(&reading(&runs, volume.as_ref()));
-        md.push_str(&super::context::default_options(&[d.algorithm.as_str()]));
-        let headers: Vec<String> = std::iter::once("measure".to_owned())
-            .chain(runs.iter().map(|r| format!("{}×{}×{} samples", r.dims[0], r.dims[1], r.dims[2])))
-            .collect();
-        let row = |label: &str, cell: &dyn Fn(&Data) -> String| -> Vec<String> {
-            std::iter::once(label.to_owned()).chain(runs.iter().map(|r| cell(r))).collect()
-        };
-        let rows = vec![
-            row("samples", &|r| format!("{:.1} G ({:.1} GiB as a dense `f32` grid)", r.samples as f64 / 1e9, r.dense_gib)),
-            row("wall time", &|r| format!("{:.0} s", r.seconds)),
-            row("throughput", &|r| {
-                format!("{:.1} M samples/s, {:.2} M triangles/s", r.samples_per_second / 1e6, r.triangles_per_second / 1e6)
-            }),
-            row("output", &|r| format!("{} vertices, {} triangles, {:.2} GiB PLY", r.vertices, r.triangles, r.file_gib)),
-            row("chunks", &|r| {
-                format!(
-                    "{}×{}×{}: {} meshed, {} empty, {} full",
-                    r.chunks[0], r.chunks[1], r.chunks[2], r.meshed, r.empty, r.full
-                )
-            }),
-            row("of those, skipped unsampled", &|r| r.proven.map_or("not counted in this run".into(), |p| p.to_string())),
-            row("vertices welded at seams", &|r| r.welded.to_string()),
-            row("peak resident memory", &|r| {
-                let peak = r.peak_rss_mib.map_or("not reported by the OS".into(), |m| {
-                    format!("{m:.0} MiB ({:.2} % of the dense grid)", 100.0 * m / (r.dense_gib * 1024.0))
-                });
-                let reset = if r.peak_reset { "" } else { ", not resettable here: the process's peak so far" };
-                let before = r.rss_before_mib.map_or(String::new(), |m| format!("; {m:.0} MiB before the run"));
-                format!("{peak}{reset}{before}")
-            }),
-            row("most seam keys held", &|r| format!("{} (one slab's top face)", r.peak_keys)),
-            row("most chunk-mesh memory held", &|r| format!("{:.0} MiB (one slab)", r.peak_slab_mib)),
-        ];
-        md.push_str(&markdown_table(&headers.iter().map(String::as_str).collect::<Vec<_>>(), &rows));
-        md.push_str(&memory_figure(ctx, &runs)?);
-        md.push_str(
-            "\nThe run holds one slab of chunks at a time (the world's x and y extent, not its z extent), so its memory is \
-             bounded by a slab by design; the peak resident memory in the table is what it held. How the time splits between \
-             sampling the noise field and meshing is not measured here.",
-        );
-        if issue.is_none() {
-            md.push_str(&format!(
-                " `ISOLAB_WORLD={},{},{} cargo run --release -p isolab-experiments --bin large_world` runs the size a streamed \
-                 world is meant for and adds it to this table.",
-                TARGET_WORLD_CELLS[0], TARGET_WORLD_CELLS[1], TARGET_WORLD_CELLS[2],
-            ));
-        } else {
-            md.push_str(&format!(
-                " The larger world is the size a streamed world is meant for, run with `ISOLAB_WORLD={},{},{} cargo run --release -p \
-                 isolab-experiments --bin large_world` (the report's main job runs the default size only).",
-                TARGET_WORLD_CELLS[0], TARGET_WORLD_CELLS[1], TARGET_WORLD_CELLS[2],
-            ));
-        }
-        md.push('\n');
-        md.push_str(&volume_section(ctx)?);
-        Ok(md)
+        page::section(ctx)
     }
-}
-
-/// The page's figure, drawn at assembly: each run's peak resident memory beside the dense grid
-/// it meshed (what an in-memory run would hold).
-fn memory_figure(ctx: &Context, runs: &[&Data]) -> Result<String, ExperimentError> {
-    let with: Vec<&&Data> = runs.iter().filter(|r| r.peak_rss_mib.is_some()).collect();
-    if with.is_empty() {
-        return Ok(String::new());
-    }
-    let chart = BarChart {
-        title: "Peak memory against the grid it meshed".into(),
-        y_label: "GiB".into(),
-        categories: with.iter().map(|r| format!("{}×{}×{}", r.dims[0], r.dims[1], r.dims[2])).collect(),
-        series: vec![
-            BarSeries {
-                label: "dense f32 grid".into(),
-                color: series_color(0),
-                values: with.iter().map(|r| r.dense_gib).collect(),
-            },
-            BarSeries {
-                label: "peak resident, streamed".into(),
-                color: series_color(1),
-                values: with.iter().map(|r| r.peak_rss_mib.unwrap_or(f64::NAN) / 1024.0).collect(),
-            },
-        ],
-    };
-    let stem = ctx.figure_dir(NAME)?.join("memory");
-    plot::bars(&stem, &chart).map_err(ExperimentError::Figure)?;
-    Ok(format!("\n![peak memory against the grid]({})\n", ctx.link(&stem.with_extension("png"))))
 }

@@ -212,8 +212,8 @@ pub(super) fn peak_reading(data: &Data) -> Option<String> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::data::{Floor, Peak};
     use super::super::tests::{data, row};
-    use super::super::{Floor, Peak};
     use super::*;
 
     #[test]

@@ -28,117 +28,38 @@
 //! The volumes themselves are not committed (the Python peers' environment installs them);
 //! without them the section says so.
 
+mod data;
+mod page;
+
 use super::context::{Context, Experiment, ExperimentError};
 use crate::figures::plot::caption;
 use crate::peers::python::{PythonPeer, PythonServer};
 use crate::peers::{Job, Peer, Protocol};
-use crate::report::markdown_table;
 use crate::report::Spread;
+use data::EndToEnd;
+pub(crate) use data::{Data, Level, Row};
 use glam::Vec3;
+use islands::islands;
 use isolab_algorithms::fields::{volume::otsu_threshold, Complement, VolumeField};
 use isolab_algorithms::{extractors, Extraction, Field, TriMesh};
 use isolab_io::volume::{read_volume, Inside, VolumeOptions};
 use isolab_metrics::MeshMetrics;
 use isolab_pipeline::{volume_samples, LatticeKind};
 use isolab_render::{grid, render, save_png, RenderOptions, Shading};
-use serde::{Deserialize, Serialize};
-use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
 mod islands;
-mod lewiner;
-mod page;
-mod second;
 
-use islands::{islands, Islands};
-use page::{comparison_notes, islands_section, own_scan_commands, yes_no};
+mod lewiner;
+
+mod second;
 
 /// The experiment.
 pub struct RealVolumes;
 
 const NAME: &str = "real_volumes";
-
-/// An iso-value and how it was found.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub(crate) struct Level {
-    pub(crate) name: String,
-    pub(crate) iso: f32,
-    pub(crate) how: String,
-}
-
-/// One implementation at one iso-value.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub(crate) struct Row {
-    pub(crate) implementation: String,
-    pub(crate) ours: bool,
-    pub(crate) level: String,
-    /// Extraction time on one thread (ours in a one-thread rayon pool; VTK's Sequential backend).
-    pub(crate) time_1: Spread,
-    /// On two threads (rayon's pool; VTK's STDThread backend); none for single-threaded peers.
-    pub(crate) time_2: Option<Spread>,
-    pub(crate) vertices: usize,
-    pub(crate) triangles: usize,
-    pub(crate) min_angle_deg: f64,
-    pub(crate) aspect_mean: f64,
-    pub(crate) aspect_max: f64,
-    pub(crate) components: usize,
-    pub(crate) genus: Option<i64>,
-    pub(crate) closed: bool,
-    pub(crate) manifold: bool,
-    pub(crate) outward: bool,
-    pub(crate) oriented: bool,
-    pub(crate) self_intersections: usize,
-    /// Mean and max distance of vertices to the trilinear level set, in voxels (1 mm).
-    pub(crate) distance_mean: f64,
-    pub(crate) distance_max: f64,
-    /// Its components and what `keep-components` keeps (absent from runs before it existed).
-    #[serde(default)]
-    pub(crate) islands: Option<Islands>,
-}
-
-#[derive(Clone, Debug, Serialize, Deserialize)]
-struct EndToEnd {
-    level: String,
-    /// Threads on both sides.
-    threads: usize,
-    ours_ms: Spread,
-    peer_ms: Spread,
-    /// Peer median over ours.
-    ratio: f64,
-    ours_triangles: usize,
-    peer_triangles: usize,
-}
-
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub(crate) struct Data {
-    pub(crate) source: String,
-    pub(crate) shape: [usize; 3],
-    pub(crate) data_type: String,
-    pub(crate) spacing: [f64; 3],
-    pub(crate) file_bytes: u64,
-    /// Voxels that are exactly 0 (outside the brain mask of a brain-extracted template).
-    pub(crate) zero_fraction: f64,
-    pub(crate) levels: Vec<Level>,
-    pub(crate) rows: Vec<Row>,
-    end_to_end: Vec<EndToEnd>,
-    pub(crate) images: Vec<(String, String)>,
-    pub(crate) versions: BTreeMap<String, String>,
-    pub(crate) skipped: Vec<String>,
-    pub(crate) repeats: usize,
-    pub(crate) threads: usize,
-    /// The second volume, of another kind (absent from runs before it was added).
-    #[serde(default)]
-    pub(crate) second: Option<second::SecondVolume>,
-    /// Each of our extractors' options as it ran (absent from runs before they were recorded).
-    #[serde(default)]
-    pub(crate) settings: Vec<(String, String)>,
-    /// `marching-cubes-33` against scikit-image's Lewiner, cell by cell, per level (absent from
-    /// runs before it was added).
-    #[serde(default)]
-    pub(crate) lewiner_cells: Vec<lewiner::CellCounts>,
-}
 
 /// The iso-values: Otsu of all voxels, then Otsu of the voxels above the first.
 fn levels(values: &[f32]) -> Vec<Level> {
@@ -432,135 +353,7 @@ impl Experiment for RealVolumes {
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
-        let data: Data = ctx.read_data(NAME)?;
-        let mut s = String::from("## A real MRI (`real_volumes`)\n\n");
-        if data.levels.is_empty() {
-            s.push_str(&format!("_Not run: {}._\n", data.skipped.join("; ")));
-            return Ok(s);
-        }
-        s.push_str(&page::reading(&data));
-        s.push_str(&own_scan_commands(&data));
-        let [a, b, c] = data.shape;
-        s.push_str(&format!(
-            "The MNI ICBM152 2009a symmetric T1 template, {}: {a} x {b} x {c} voxels of {} ({:.0} x {:.0} x {:.0} mm), {:.1} MB \
-             gzipped, read by isolab's NIfTI reader and meshed on its own voxel grid (no resampling) in RAS world coordinates. \
-             This copy is brain-extracted ({:.0}% of its voxels are zero), so it has no skin to mesh, and the \"skin\" \
-             level a scan user would ask for is the brain's outer surface here. Iso-values, computed by the experiment: {}. Inside is above the \
-             iso-value (`--inside above`, the default for volume files).\n\n",
-            data.source,
-            data.data_type,
-            data.spacing[0],
-            data.spacing[1],
-            data.spacing[2],
-            data.file_bytes as f64 / 1e6,
-            100.0 * data.zero_fraction,
-            data.levels.iter().map(|l| format!("**{}** {:.1} ({})", l.name, l.iso, l.how)).collect::<Vec<_>>().join("; ")
-        ));
-        s.push_str(&format!(
-            "Protocol: one-shot, {} alternating runs, median (min-max) in ms, on one thread and on {}: ours in a rayon pool of \
-             that size, VTK's flying edges on its Sequential backend for one thread and its STDThread backend for two \
-             (scikit-image is single-threaded). Extraction only: a fresh extractor and output per run for ours, a fresh \
-             `vtkFlyingEdges3D` and a fresh scikit-image call on the array nibabel loaded. VTK meshes that \
-             array as stored ({}); isolab's samples are f32 (four bytes a voxel), converted \
-             beforehand (the conversion is in the end-to-end times below). Distance: the mean over vertices of the first-order distance \
-             `|f - iso| / |grad f|` to the trilinear interpolant's level set, in voxels ({:.0} mm; the maximum is not shown: \
-             where the interpolant is nearly flat this estimate is meaningless). Every mesh is measured by isolab's metrics, which the Rust tests check \
-             against CGAL, pymeshlab and VTK (golden values in `tests/reference/golden/`).\n\n",
-            data.repeats, data.threads, data.data_type, data.spacing[0]
-        ));
-        s.push_str(&super::context::options_as_run(&data.settings));
-        for level in &data.levels {
-            s.push_str(&format!("**{} (iso {:.1})**\n\n", level.name, level.iso));
-            let rows: Vec<Vec<String>> = data
-                .rows
-                .iter()
-                .filter(|r| r.level == level.name)
-                .map(|r| {
-                    vec![
-                        if r.ours { r.implementation.clone() } else { format!("_{}_", r.implementation) },
-                        r.triangles.to_string(),
-                        format!("{:.1} ({:.1}-{:.1})", r.time_1.median, r.time_1.min, r.time_1.max),
-                        r.time_2.as_ref().map_or("-".into(), |t| format!("{:.1} ({:.1}-{:.1})", t.median, t.min, t.max)),
-                        format!("{:.1}", r.min_angle_deg),
-                        format!("{:.2} / {:.0}", r.aspect_mean, r.aspect_max),
-                        r.components.to_string(),
-                        r.genus.map_or("-".into(), |g| g.to_string()),
-                        yes_no(r.closed),
-                        yes_no(r.manifold),
-                        if r.outward {
-                            "outward".into()
-                        } else if r.oriented {
-                            "inward".into()
-                        } else {
-                            "no".into()
-                        },
-                        r.self_intersections.to_string(),
-                        format!("{:.3}", r.distance_mean),
-                    ]
-                })
-                .collect();
-            s.push_str(&markdown_table(
-                &[
-                    "implementation",
-                    "triangles",
-                    "ms, one thread",
-                    &format!("ms, {} threads", data.threads),
-                    "min angle",
-                    "aspect mean / max",
-                    "components",
-                    "genus",
-                    "closed",
-                    "manifold",
-                    "oriented",
-                    "self-int.",
-                    "mean distance",
-                ],
-                &rows,
-            ));
-            s.push('\n');
-        }
-        s.push_str(&comparison_notes(&data));
-        s.push_str(&islands_section(&data));
-        s.push_str(&lewiner::section(&data));
-        let rows: Vec<Vec<String>> = data
-            .end_to_end
-            .iter()
-            .map(|e| {
-                vec![
-                    e.level.clone(),
-                    e.threads.to_string(),
-                    format!("{:.1} ({:.1}-{:.1})", e.ours_ms.median, e.ours_ms.min, e.ours_ms.max),
-                    format!("{:.1} ({:.1}-{:.1})", e.peer_ms.median, e.peer_ms.min, e.peer_ms.max),
-                    format!("{:.2}x", e.ratio),
-                    format!("{} / {}", e.ours_triangles, e.peer_triangles),
-                ]
-            })
-            .collect();
-        s.push_str(
-            "End to end, one process each, one-shot: isolab reading the `.nii.gz`, taking the voxels as samples, marching cubes \
-             and the map to world coordinates, against nibabel loading the same file, the array into a `vtkImageData` and \
-             `vtkFlyingEdges3D`, both on the same number of threads (ratio: peer time over ours, above one when isolab is \
-             faster):\n\n",
-        );
-        s.push_str(&markdown_table(
-            &["level", "threads", "isolab ms", "nibabel + VTK ms", "ratio", "triangles (ours / VTK)"],
-            &rows,
-        ));
-        s.push('\n');
-        if let Some(second) = &data.second {
-            s.push_str(&second::section(second));
-        }
-        for (label, path) in &data.images {
-            s.push_str(&format!("![{label}]({path})\n\n_{label}_\n\n"));
-        }
-        if !data.skipped.is_empty() {
-            s.push_str(&format!("Skipped: {}.\n\n", data.skipped.join("; ")));
-        }
-        s.push_str(&format!(
-            "Versions: {}.\n",
-            data.versions.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
-        ));
-        Ok(s)
+        page::section(ctx)
     }
 }
 

@@ -158,7 +158,7 @@ mod tests {
         ];
         rows[0].core_ms = Some(vec![50.0, 60.0, 70.0]);
         rows[2].core_ms = Some(vec![90.0]);
-        let s = super::super::target_sentences(&data(rows.clone())).join(" ");
+        let s = super::super::page::target_sentences(&data(rows.clone())).join(" ");
         assert!(
             s.contains(
                 "VTK SurfaceNets3D takes 1.20× the time of `isolab surface-nets` (missed), its meshing step alone 1.50× ours;"
@@ -168,7 +168,7 @@ mod tests {
         // zmesh's row has a meshing step, ours unsmoothed none: the verdict alone.
         assert!(s.contains("zmesh takes 2.00× the time of `isolab surface-nets unsmoothed` (met)."), "{s}");
         rows[0].core_ms = None;
-        let s = super::super::target_sentences(&data(rows)).join(" ");
+        let s = super::super::page::target_sentences(&data(rows)).join(" ");
         assert!(!s.contains("meshing step"), "{s}");
     }
 }

@@ -21,185 +21,68 @@
 //! Table 1 as data, ours against it), `table_two` (Table 2 and the paper's, volume fidelity),
 //! `checks` (the checks and the ablations), [`relaxation`] (the relaxation study).
 
+mod data;
+mod page;
+
 use super::context::{load_object, Context, Experiment, ExperimentError};
 use crate::report::median;
+pub use data::{Ablation, OffsetSurface, PeerRow, Row};
+pub(crate) use data::{Data, Peers};
 use isolab_algorithms::extractors::bcc_sculpt::{sculpt_surface, SculptOptions};
 use isolab_metrics::topology;
 use isolab_metrics::volume_mesh::volume_metrics;
 use isolab_render::{self as render, RenderOptions, Shading};
-use serde::{Deserialize, Serialize};
-
-mod checks;
-mod reading;
-pub mod relaxation;
-mod table_one;
-mod table_two;
-
-use checks::{ablation_table, checks};
-use table_one::{against_table_one, table_one};
 #[cfg(test)]
 use table_one::{paper_converged, paper_min_angle_range, paper_series, rising_with_resolution, PAPER_TABLE1_MIN_ANGLE};
 #[cfg(test)]
 use table_two::paper_table2_tet_ratio;
-use table_two::table_two;
 pub(crate) use table_two::{cgal_count_against_paper, tet_ratios, CGAL_MATCHED};
+
+mod checks;
+
+mod reading;
+
+pub mod relaxation;
+
+mod table_one;
+
+mod table_two;
 
 /// The experiment.
 pub struct StuartTables;
 
 const NAME: &str = "stuart_tables";
+
 /// The shipped models (the paper's banana, humanoid, sculpture and dragon are not shipped).
 const MODELS: [&str; 5] = ["stanford-bunny", "spot", "rocker-arm", "fandisk", "cheburashka"];
+
 /// Lattice cells along the model's longest side, coarse to fine.
 const CELLS: [usize; 4] = [8, 10, 12, 14];
+
 /// The paper's offset band ratios `d_offset / h`.
 const RATIOS: [f32; 4] = [0.2, 0.4, 0.6, 0.8];
+
 /// Perturbed lattices per configuration (the best is kept).
 pub const PERTURBATIONS: usize = 4;
+
 /// Cells of the benchmark configuration on the bunny (about 2,500 tetrahedra).
 const BENCH_CELLS: usize = 8;
+
 /// The configuration set beside the peers in Table 2 (and on the front page): cells along the
 /// longest side and offset ratio.
 pub(crate) const TABLE2_CELLS: usize = 10;
+
 /// See [`TABLE2_CELLS`].
 pub(crate) const TABLE2_RATIO: f32 = 0.6;
+
 /// The paper's best-of runs per configuration ("between 3 and 13 times depending on the example").
 const PAPER_RUNS: (usize, usize) = (3, 13);
+
 /// The issue's floor on the minimum dihedral angle at ratio [`TABLE2_RATIO`], degrees.
 const TARGET_MIN_DIHEDRAL: f64 = 20.0;
+
 /// The ablation's clearance option, in h.
 const ABLATION_CLEARANCE: f32 = 0.5;
-
-/// One configuration.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct Row {
-    /// Model.
-    pub model: String,
-    /// Cells along the longest side.
-    pub cells: usize,
-    /// Lattice spacing.
-    pub h: f64,
-    /// `d_offset / h`.
-    pub ratio: f32,
-    /// Tetrahedra.
-    pub tetrahedra: usize,
-    /// Smallest dihedral angle, degrees.
-    pub min_dihedral: f64,
-    /// Largest dihedral angle, degrees.
-    pub max_dihedral: f64,
-    /// Distance of boundary vertices to `S`: min, max, mean (model units).
-    pub distance: [f64; 3],
-    /// Tetrahedral volume / volume of `S`.
-    pub volume_ratio: f64,
-    /// Every vertex of `S` inside.
-    pub encloses: bool,
-    /// Inverted tetrahedra.
-    pub inverted: usize,
-    /// Relaxation met the offset.
-    pub converged: bool,
-    /// Relaxation iterations of the chosen attempt.
-    pub iterations: usize,
-    /// Which attempt won (0: unperturbed).
-    pub attempt: usize,
-    /// Bombs after sculpting, and tetrahedra restored to defuse them.
-    pub bombs: usize,
-    /// Tetrahedra restored.
-    pub restored: usize,
-    /// The snowflake search was exhaustive.
-    pub exhaustive: bool,
-    /// Boundary: closed and manifold.
-    pub boundary_manifold: bool,
-    /// Boundary genus.
-    pub boundary_genus: Option<i64>,
-    /// Wall time of all attempts, ms.
-    pub ms: f64,
-}
-
-/// One peer mesher's result (written by `stuart_tables/peers.py`).
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct PeerRow {
-    /// Model.
-    pub model: String,
-    /// "TetGen" or "CGAL Mesh_3".
-    pub tool: String,
-    /// Tetrahedra.
-    #[serde(default)]
-    pub tetrahedra: Option<usize>,
-    /// Smallest dihedral angle, degrees.
-    #[serde(default)]
-    pub dihedral_min: Option<f64>,
-    /// Largest dihedral angle, degrees.
-    #[serde(default)]
-    pub dihedral_max: Option<f64>,
-    /// Wall time, s.
-    #[serde(default)]
-    pub seconds: Option<f64>,
-    /// Tetrahedral volume / volume of `S`.
-    #[serde(default)]
-    pub volume_ratio: Option<f64>,
-    /// Every vertex of `S` inside the mesh.
-    #[serde(default)]
-    pub encloses: Option<bool>,
-    /// For the matched run: our tetrahedron count it aimed at.
-    #[serde(default)]
-    pub target: Option<usize>,
-    /// Settings used.
-    #[serde(default)]
-    pub settings: Option<String>,
-    /// Why it produced nothing.
-    #[serde(default)]
-    pub error: Option<String>,
-}
-
-/// The offset surface every peer meshed, per model (written by `stuart_tables/peers.py`).
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct OffsetSurface {
-    /// Model.
-    pub model: String,
-    /// Its triangles after remeshing.
-    pub triangles: usize,
-    /// Closed and manifold.
-    pub closed_manifold: bool,
-    /// Every vertex of `S` inside it.
-    pub encloses: bool,
-    /// Its distance from `S`, model units.
-    pub d_offset: f64,
-}
-
-#[derive(Serialize, Deserialize)]
-pub(crate) struct Peers {
-    /// Package versions by tool.
-    pub(crate) versions: std::collections::BTreeMap<String, String>,
-    /// Signed-distance samples per `h` for the offset surface.
-    pub(crate) grid_per_h: usize,
-    /// The offset surface's target edge length, in `h`.
-    pub(crate) surface_edge_h: f64,
-    /// The matched CGAL run's tolerance on the tetrahedron count (a fraction of ours).
-    pub(crate) match_tolerance: f64,
-    pub(crate) surfaces: Vec<OffsetSurface>,
-    pub(crate) rows: Vec<PeerRow>,
-}
-
-/// One ablation run: our additions to the paper's relaxation switched off one at a time.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct Ablation {
-    /// Model.
-    pub model: String,
-    /// Which variant.
-    pub variant: String,
-    /// Tetrahedra.
-    pub tetrahedra: usize,
-    /// Smallest and largest dihedral angle, degrees.
-    pub dihedral: [f64; 2],
-    /// Met the offset.
-    pub converged: bool,
-    /// Farthest boundary vertex from `S`, in `h`.
-    pub max_distance_h: f64,
-    /// Relaxation iterations.
-    pub iterations: usize,
-    /// Every vertex of `S` inside.
-    pub encloses: bool,
-}
 
 /// The ablation's variant that runs the paper's update alone (the front page cites it).
 pub(crate) const NO_FLOOR_VARIANT: &str = "the paper's update (no quality floor)";
@@ -215,28 +98,6 @@ fn variants() -> Vec<(String, SculptOptions)> {
         ("default + attract=true".into(), SculptOptions { attract: true, ..base }),
         (format!("default + clearance={c} + attract=true"), SculptOptions { clearance: c, attract: true, ..base }),
     ]
-}
-
-#[derive(Serialize, Deserialize)]
-pub(crate) struct Data {
-    pub(crate) perturbations: usize,
-    pub(crate) rows: Vec<Row>,
-    /// Our additions switched off one at a time.
-    pub(crate) ablation: Vec<Ablation>,
-    /// Median wall time of the whole pipeline (one lattice) on the bunny at `BENCH_CELLS`, ms.
-    pub(crate) bench_ms: f64,
-    /// Its tetrahedra.
-    pub(crate) bench_tetrahedra: usize,
-    /// Runs timed.
-    pub(crate) bench_runs: usize,
-    /// Pictures, one grid per model.
-    pub(crate) figures: Vec<(String, String)>,
-    /// The relaxation traced: the paper's update at several time steps, and ours.
-    #[serde(default)]
-    pub(crate) relaxation: Vec<relaxation::StudyRun>,
-    /// Link to the plot of the traces.
-    #[serde(default)]
-    pub(crate) relaxation_plot: Option<String>,
 }
 
 impl Experiment for StuartTables {
@@ -362,56 +223,7 @@ impl Experiment for StuartTables {
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
-        let data: Data = ctx.read_data(NAME)?;
-        let mut md = String::from("## Coarse enclosing tetrahedral meshes: Stuart et al. 2013 (`stuart_tables`)\n\n");
-        md.push_str(&format!(
-            "`bcc-sculpt` on the shipped models: a BCC lattice sculpted to the surface, bombs defused with the fewest \
-             snowflakes, then ODT relaxation that never lets the boundary cross the surface (exact collision tests on the \
-             swept region), until every boundary vertex is within `d_offset = ratio · h`. Each configuration is the best of \
-             {} lattices (the first unperturbed, the others randomly rotated and shifted; the paper ran {} to {}). \
-             One addition to the paper's relaxation is on by default: a step never leaves a tetrahedron it changes below \
-             {}° of dihedral angle (`quality-floor`; the paper has none, and its unguarded update lowers the worst minimum \
-             dihedral angle to {:.1}° in the ablation below). Two more are options, off by default because the ablation shows \
-             no gain: a boundary vertex keeping a clearance from the surface (`clearance`), and a boundary vertex whose ODT \
-             step fails stepping toward the surface instead (`attract`). Sculpting's pinches (parts touching along an edge or at a vertex) are repaired by \
-             completing snowflakes, so every boundary is a closed manifold. Distances are in model units, as in the paper; \
-             `h` is the model's longest side over {}. A dash marks a configuration that did not converge \
-             (the paper's dashes); its mesh is still produced and listed below the table.\n\n",
-            data.perturbations,
-            PAPER_RUNS.0,
-            PAPER_RUNS.1,
-            SculptOptions::default().quality_floor,
-            data.ablation
-                .iter()
-                .filter(|a| a.variant.starts_with("the paper's update"))
-                .map(|a| a.dihedral[0])
-                .fold(f64::INFINITY, f64::min),
-            CELLS.map(|c| c.to_string()).join(", "),
-        ));
-        let peers: Option<Peers> = ctx.read_data("stuart_tables_peers").ok();
-        md.push_str(&reading::reading(&data));
-        md.push_str(&table_one(&data.rows));
-        md.push_str(&checks(&data));
-        md.push_str(&against_table_one(&data));
-        md.push_str(&ablation_table(&data.ablation));
-        if !data.relaxation.is_empty() {
-            md.push_str(&relaxation::section(
-                &data.relaxation,
-                SculptOptions::default().quality_floor,
-                data.relaxation_plot.as_deref(),
-            ));
-        }
-        md.push_str(&table_two(ctx, &data.rows));
-        md.push_str(&reading::differences(&data, peers.as_ref()));
-        md.push_str(&format!(
-            "\n**Figures 7-10 of the paper, for our models**: boundary surfaces, spacing from coarse (top) to fine, offset ratio {} (left) to {}.\n\n",
-            RATIOS[RATIOS.len() - 1],
-            RATIOS[0]
-        ));
-        for (model, link) in &data.figures {
-            md.push_str(&format!("_{model}_\n\n![{model}: bcc-sculpt grid]({link})\n\n"));
-        }
-        Ok(md)
+        page::section(ctx)
     }
 }
 

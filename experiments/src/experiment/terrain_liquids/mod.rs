@@ -10,109 +10,48 @@
 //! vertex shared, no crossing pair (exact), no liquid inside the solid, and the masses against the
 //! brushes' books. A GIF shows the edits.
 
+mod data;
+mod page;
+
 use super::context::{Context, Experiment, ExperimentError};
+use data::{Data, EditRun, Row};
 use isolab_algorithms::liquids::{
     extract_layers, extract_layers_without_untangling, lake_and_cave, ChunkedLayers, Layers, Phases,
 };
 use isolab_algorithms::random::Random;
 use isolab_algorithms::{extractors, Extraction, Extractor, Lattice, Samples, TriMesh, Vec3};
-use isolab_metrics::layers::{layer_contact, LayerContact};
+use isolab_metrics::layers::layer_contact;
 use isolab_render::{self as render, RenderOptions, Shading};
-use serde::{Deserialize, Serialize};
-
-mod page;
 use std::time::Instant;
 
 /// The experiment.
 pub struct TerrainLiquids;
 
 const NAME: &str = "terrain_liquids";
+
 /// Samples along x and y of the compared scene (half as many along z).
 const SCENE: usize = 96;
+
 /// Samples along x and y of the edited scene.
 const EDIT_SCENE: usize = 64;
+
 /// Brushes in the edit script (dig, pour, drain in turn).
 const EDITS: usize = 200;
+
 /// Cells per chunk of the edited terrain (the last chunk along an axis takes what remains).
 const EDIT_CHUNK: usize = 16;
+
 /// A GIF frame every this many edits.
 const GIF_EVERY: usize = 10;
+
 /// Timed runs per extractor.
 const RUNS: usize = 9;
+
 /// The extractors of the edit script: marching cubes (the post's), and marching tetrahedra, whose
 /// layers provably do not overlap. The GIF shows the first.
 const EDIT_EXTRACTORS: [&str; 2] = ["marching-cubes", "marching-tetrahedra"];
+
 const SEED: u64 = 37;
-
-#[derive(Clone, Debug, Serialize, Deserialize)]
-struct Row {
-    method: String,
-    solid_triangles: usize,
-    liquid_triangles: usize,
-    solid_closed_manifold: bool,
-    liquid_closed_manifold: bool,
-    contact: LayerContact,
-    median_ms: f64,
-    /// Cells where the layers crossed after the post's rule, and of those the ones filled again
-    /// (`liquids::extract_layers`' untangling).
-    #[serde(default)]
-    crossing_cells: usize,
-    #[serde(default)]
-    retiled_cells: usize,
-}
-
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-struct EditRun {
-    extractor: String,
-    edits: usize,
-    /// Edits after which a layer was not closed and manifold.
-    open_after: usize,
-    /// The most unshared contact vertices, crossing pairs and liquid vertices inside the solid
-    /// after any edit.
-    worst: LayerContact,
-    /// The fewest contact vertices after any edit (the check is not vacuous).
-    fewest_contact: usize,
-    poured: f64,
-    drained: f64,
-    dug: f64,
-    /// Largest relative difference between a mass and its books over the script.
-    mass_drift: f64,
-    solid_mass: [f64; 2],
-    liquid_mass: [f64; 2],
-    /// Re-meshing the chunks each edit touched, ms.
-    remesh_ms: Vec<f64>,
-    /// Chunks each edit re-meshed.
-    #[serde(default)]
-    chunks_remeshed: Vec<usize>,
-    /// Chunks per axis.
-    #[serde(default)]
-    chunk_counts: [usize; 3],
-    /// The most cells filled again (where the layers crossed after the rule) after an edit.
-    #[serde(default)]
-    most_retiled_cells: usize,
-}
-
-#[derive(Serialize, Deserialize)]
-struct Data {
-    scene: [usize; 3],
-    /// The extractors that take the rule.
-    rows: Vec<Row>,
-    /// The post's naive solution.
-    naive: Row,
-    /// The extractors whose layers crossed after the rule, meshed with the rule alone (no cell
-    /// filled again), timed alternating with their row.
-    #[serde(default)]
-    rule_alone: Vec<Row>,
-    /// Extractors `extract_layers` refuses (vertices off the lattice edges).
-    refused: Vec<String>,
-    edits: Vec<EditRun>,
-    edit_scene: [usize; 3],
-    picture: String,
-    gif: String,
-    /// Each extractor's options as it ran (absent from runs before they were recorded).
-    #[serde(default)]
-    settings: Vec<(String, String)>,
-}
 
 fn build(name: &str) -> Result<Box<dyn Extractor>, ExperimentError> {
     extractors::by_name(name).ok_or_else(|| ExperimentError::Missing(format!("extractor {name}")))
@@ -326,6 +265,6 @@ impl Experiment for TerrainLiquids {
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
-        Ok(page::page(&ctx.read_data(NAME)?))
+        page::section(ctx)
     }
 }

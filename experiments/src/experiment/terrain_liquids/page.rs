@@ -1,9 +1,16 @@
 //! The `terrain_liquids` page: the method paragraph, the reading and the untangling's cost
 //! (generated from the rows), the scene's table and the edit script's.
 
-use super::{Data, EditRun, Row, EDIT_CHUNK, NAME, RUNS};
+use super::data::{Data, EditRun, Row};
+use super::{EDIT_CHUNK, NAME, RUNS};
+use crate::experiment::context::{Context, ExperimentError};
 use crate::report::markdown_table;
 use isolab_metrics::layers::LayerContact;
+
+/// The page, from the data file alone.
+pub(super) fn section(ctx: &Context) -> Result<String, ExperimentError> {
+    Ok(page(&ctx.read_data(NAME)?))
+}
 
 /// The page's opening reading: who keeps the layers clean with the rule, what the naive two
 /// meshes leave, and what the edit script keeps (closed layers, crossings, the mass books).
@@ -256,7 +263,6 @@ pub(super) fn page(d: &Data) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::super::*;
     use super::*;
 
     fn row(method: &str, unshared: usize, crossing: usize) -> Row {

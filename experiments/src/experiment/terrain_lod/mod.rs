@@ -9,30 +9,39 @@
 //! of the triangles along seams between levels, time, and the cost of switching one chunk's
 //! level; pictures coloured by level.
 
+mod data;
 mod page;
-mod transvoxel_peer;
 
 use super::context::{Context, Experiment, ExperimentError};
 use crate::report::Spread;
+use data::{Data, Row, Switch};
 use isolab_algorithms::chunks::lod::{balance_levels, extract_lod, open_edges_away_from_bounds, open_edges_off_bounds};
 use isolab_algorithms::{extractors, fields, Extraction, Extractor, Grid, Lattice, LevelsOfDetail, Samples, TriMesh, Vec3};
 use isolab_render::{self as render, Image, RenderOptions, Shading};
-use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::time::Instant;
+
+mod transvoxel_peer;
 
 /// The experiment.
 pub struct TerrainLod;
 
 const NAME: &str = "terrain_lod";
+
 const DIMS: [usize; 3] = [257, 129, 257];
+
 const CHUNK: usize = 32;
+
 const COUNTS: [usize; 3] = [8, 4, 8];
+
 const RUNS: usize = 5;
+
 /// The viewer-distance pattern: full resolution within this many chunks of the viewer's corner,
 /// half resolution within twice as many, a quarter beyond.
 const NEAR_CHUNKS: f32 = 2.5;
+
 const CRATE: &str = "transvoxel crate (transition cells)";
+
 /// The version of the `transvoxel` crate the peer runs (Cargo.toml's).
 const TRANSVOXEL_VERSION: &str = "2.0.0";
 
@@ -49,66 +58,6 @@ fn implementation_name(e: &dyn Extractor) -> String {
 /// The registered extractors (default options) that take levels of detail.
 fn lod_extractors() -> Vec<Box<dyn Extractor>> {
     extractors::registry().into_iter().filter(|e| !matches!(e.levels_of_detail(), LevelsOfDetail::Unsupported(_))).collect()
-}
-
-#[derive(Clone, Debug, Serialize, Deserialize)]
-struct Row {
-    implementation: String,
-    pattern: String,
-    /// Chunks at each level (0: full resolution).
-    per_level: Vec<usize>,
-    triangles: usize,
-    /// Ours only: seam edges stitched (marching cubes) or polygons on minimal edges between
-    /// levels (dual methods).
-    stitched: Option<usize>,
-    /// Ours only: vertices the dual methods split where two rings met on a seam.
-    #[serde(default)]
-    pinched: Option<usize>,
-    seam_boundary_edges: usize,
-    non_manifold_edges: usize,
-    #[serde(default)]
-    non_manifold_vertices: usize,
-    misoriented_edges: usize,
-    self_intersecting_pairs: usize,
-    /// Triangles along a face between chunks of different levels (module doc of `seam_triangles`).
-    seam_triangles: usize,
-    seam_aspect_mean: f64,
-    seam_aspect_max: f64,
-    /// `None` without seam triangles.
-    seam_min_angle_deg: Option<f64>,
-    /// Whole world, ms.
-    time_ms: Spread,
-}
-
-/// Switching one chunk's level in the viewer-distance pattern.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-struct Switch {
-    chunk: [usize; 3],
-    from: u8,
-    to: u8,
-    /// Ours, per extractor: `extract_lod` on the chunks within one chunk of it (what its seams
-    /// can reach), ms.
-    ours: Vec<(String, Spread)>,
-    /// Chunks our re-run meshes.
-    ours_chunks: usize,
-    /// The crate: the chunk and the face neighbours whose transition faces change, ms.
-    crate_ms: Spread,
-    /// Chunks the crate re-meshes.
-    crate_chunks: usize,
-}
-
-#[derive(Serialize, Deserialize)]
-struct Data {
-    rows: Vec<Row>,
-    switch: Option<Switch>,
-    picture: String,
-    crate_picture: String,
-    /// Surface nets' and dual contouring's close-ups.
-    #[serde(default)]
-    dual_picture: String,
-    /// Each of our extractors' settings as it ran.
-    #[serde(default)]
-    options: Vec<(String, String)>,
 }
 
 fn flat(id: [usize; 3]) -> usize {
@@ -456,7 +405,6 @@ impl Experiment for TerrainLod {
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
-        let d: Data = ctx.read_data(NAME)?;
-        Ok(page::page(&d))
+        page::section(ctx)
     }
 }

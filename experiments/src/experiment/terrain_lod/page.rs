@@ -1,8 +1,16 @@
 //! The `terrain_lod` page: the method paragraph, the options as run, the table, the reading
 //! (generated from the rows), the switching cost and the pictures.
 
-use super::{Data, Row, CHUNK, CRATE, DIMS, RUNS, TRANSVOXEL_VERSION};
+use super::data::{Data, Row};
+use super::{CHUNK, CRATE, DIMS, NAME, RUNS, TRANSVOXEL_VERSION};
+use crate::experiment::context::{Context, ExperimentError};
 use crate::report::{first_seen, markdown_table};
+
+/// The page, from the data file alone.
+pub(super) fn section(ctx: &Context) -> Result<String, ExperimentError> {
+    let d: Data = ctx.read_data(NAME)?;
+    Ok(page(&d))
+}
 
 /// The page's Markdown from the run's data.
 pub(super) fn page(d: &Data) -> String {

@@ -10,63 +10,25 @@
 //! The page itself is written by the assembler ([`page`]), from `REPORT.md` and this experiment's
 //! data, with the viewer's JavaScript pinned in `report/vendor/` (see `viewer/README.md`).
 
+mod data;
+mod page;
+
 use super::context::{Context, Experiment, ExperimentError};
-use crate::report::markdown_table;
+pub use data::{Data, Mesh};
 use isolab_algorithms::{extractors, fields, Extraction, Samples};
 use isolab_io::{write_atomic, IoError};
 use isolab_pipeline::{lattice_for, load_field, RunConfig};
-use serde::{Deserialize, Serialize};
 
 /// The experiment.
 pub struct Viewer;
 
 const NAME: &str = "viewer";
+
 /// The most bytes of meshes the report commits for the page.
 pub const MESH_BUDGET_BYTES: usize = 10 << 20;
 
 /// The coarsest resolution an input is meshed at to fit the budget before it is left out.
 pub const MIN_RESOLUTION: usize = 12;
-
-/// One mesh on the page.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub struct Mesh {
-    /// Extractor.
-    pub algorithm: String,
-    /// Input (built-in field or shipped model).
-    pub input: String,
-    /// Samples along the longest side.
-    pub resolution: usize,
-    /// Triangles.
-    pub triangles: usize,
-    /// The `.glb`, relative to the report.
-    pub path: String,
-    /// Its size.
-    pub bytes: usize,
-    /// Closed (no boundary edge).
-    #[serde(default)]
-    pub closed: bool,
-    /// Edge- and vertex-manifold.
-    #[serde(default)]
-    pub manifold: bool,
-    /// Self-intersecting triangle pairs.
-    #[serde(default)]
-    pub intersecting_pairs: usize,
-    /// The triangles of the first listed intersecting pairs (`metrics::intersections`), sorted.
-    #[serde(default)]
-    pub intersecting_triangles: Vec<u32>,
-    /// Mean and largest aspect ratio (1 for equilateral).
-    #[serde(default)]
-    pub aspect: [f64; 2],
-}
-
-/// The experiment's data.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub struct Data {
-    /// The meshes written, input by input.
-    pub meshes: Vec<Mesh>,
-    /// Inputs left out by the budget, with their meshes' total size.
-    pub left_out: Vec<(String, usize)>,
-}
 
 /// The inputs: (name, field spec, resolution), as `compare_algorithms` pictures them (its lowest
 /// resolution).
@@ -194,101 +156,8 @@ impl Experiment for Viewer {
     }
 
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError> {
-        let data: Data = ctx.read_data(NAME)?;
-        let mut md = String::from("## Meshes to turn in 3D (`viewer`)\n\n");
-        let total: usize = data.meshes.iter().map(|m| m.bytes).sum();
-        md.push_str(&format!(
-            "[`index.html`](index.html) shows the front page beside a viewer that turns any two of these meshes side by side \
-             (wireframe on or off, both sides of open meshes shaded), with each mesh's measures; it colours triangles by \
-             shape or marks the boundary, non-manifold and self-intersecting ones, and keeps what it shows in the address, \
-             so a view can be linked. Each is an extractor's mesh of an input at the lowest resolution `compare_algorithms` \
-             pictures, as binary glTF with {}-bit quantized positions (`KHR_mesh_quantization`), {} meshes and {:.1} MB in all \
-             (budget {:.1} MB). The page loads them with `fetch`, which browsers refuse for `file://` pages: serve the \
-             directory, for example `python3 -m http.server --directory report`, and open the address it prints.\n\n",
-            isolab_io::gltf::QUANT_BITS,
-            data.meshes.len(),
-            total as f64 / 1e6,
-            MESH_BUDGET_BYTES as f64 / 1e6,
-        ));
-        md.push_str(&reading(&data));
-        let names: Vec<&str> = crate::report::first_seen(data.meshes.iter().map(|m| m.algorithm.as_str()));
-        md.push_str(&super::context::default_options(&names));
-        if !data.left_out.is_empty() {
-            md.push_str(&format!(
-                "Left out by the budget: {}.\n\n",
-                data.left_out.iter().map(|(n, b)| format!("`{n}` ({:.1} MB)", *b as f64 / 1e6)).collect::<Vec<_>>().join(", ")
-            ));
-        }
-        let rows: Vec<Vec<String>> = data
-            .meshes
-            .iter()
-            .map(|m| {
-                let yes = |b: bool| if b { "yes" } else { "no" }.to_owned();
-                vec![
-                    m.input.clone(),
-                    m.algorithm.clone(),
-                    m.resolution.to_string(),
-                    m.triangles.to_string(),
-                    yes(m.closed),
-                    yes(m.manifold),
-                    m.intersecting_pairs.to_string(),
-                    format!("{:.2} / {:.1}", m.aspect[0], m.aspect[1]),
-                    format!("[{:.0} KB]({})", m.bytes as f64 / 1e3, m.path),
-                ]
-            })
-            .collect();
-        md.push_str(&markdown_table(
-            &[
-                "input",
-                "extractor",
-                "samples",
-                "triangles",
-                "closed",
-                "manifold",
-                "self-intersecting pairs",
-                "aspect mean / max",
-                "glb",
-            ],
-            &rows,
-        ));
-        Ok(md)
+        page::section(ctx)
     }
-}
-
-/// The page's opening reading: what the viewer offers, by input, and what the budget left out.
-fn reading(data: &Data) -> String {
-    if data.meshes.is_empty() {
-        return String::new();
-    }
-    let inputs = crate::report::first_seen(data.meshes.iter().map(|m| m.input.as_str()));
-    let extractors = crate::report::first_seen(data.meshes.iter().map(|m| m.algorithm.as_str()));
-    let largest = data
-        .meshes
-        .iter()
-        .max_by_key(|m| m.triangles)
-        .map_or(String::new(), |m| format!(" The largest is {} of {} ({} triangles).", m.algorithm, m.input, m.triangles));
-    let count = |keep: &dyn Fn(&Mesh) -> bool| data.meshes.iter().filter(|m| keep(m)).count();
-    let coarser: Vec<String> = inputs
-        .iter()
-        .filter_map(|i| {
-            let m = data.meshes.iter().find(|m| m.input == *i)?;
-            let lowest = super::context::compared_inputs().into_iter().find(|c| c.0 == *i).map(|c| c.2[0])?;
-            (m.resolution < lowest).then(|| format!("{i} at {} instead of {lowest}", m.resolution))
-        })
-        .collect();
-    format!(
-        "**Reading.** {} meshes: {} inputs ({}) by up to {} extractors.{largest} Closed: {} of them; manifold: {}; \
-         with self-intersections: {}. Meshed coarser to fit the budget: {}. Inputs left out by the budget: {}.\n\n",
-        data.meshes.len(),
-        inputs.len(),
-        inputs.join(", "),
-        extractors.len(),
-        count(&|m| m.closed),
-        count(&|m| m.manifold),
-        count(&|m| m.intersecting_pairs > 0),
-        crate::report::listed(&coarser),
-        crate::report::listed(&data.left_out.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>())
-    )
 }
 
 /// The viewer's own script, written beside the page.
@@ -308,6 +177,7 @@ const TEMPLATE: &str = include_str!("viewer.html");
 
 #[cfg(test)]
 mod tests {
+    use super::page::reading;
     use super::*;
 
     #[test]

@@ -540,7 +540,8 @@ def metrics(vertices: np.ndarray, faces: np.ndarray, *, self_intersections: bool
 
 @raises_isolab_errors
 def load(path: Union[str, os.PathLike]) -> Tuple[np.ndarray, np.ndarray]:
-    """Reads a file the CLI reads. A volume file (NIfTI, NRRD, MetaImage, isolab's grid) gives
+    """Reads a file the CLI reads, deciding what it holds as the CLI does. A volume file (NIfTI,
+    NRRD, MetaImage, isolab's grid, or a zarr store's folder: its last axis is x) gives
     ``(array, affine)``: the voxels in index order ``[i, j, k]`` (float32, Fortran-ordered over
     the buffer isolab read, no copy) and the 4 x 4 index-to-world affine (RAS for anatomical
     files, as nibabel's). A mesh file gives ``(vertices, faces)``. Raises ``OSError`` or

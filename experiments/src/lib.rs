@@ -18,3 +18,4 @@ mod readme_check;
 pub mod report;
 #[cfg(test)]
 mod report_check;
+pub mod verdict;

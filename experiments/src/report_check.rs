@@ -362,15 +362,35 @@ fn letter_initial_numbers(word: &str) -> Vec<String> {
 /// a verdict no data chose.
 const COMPARISONS: [&str; 9] = ["faster", "slower", "better", "worse", "above", "below", "matches", "reproduced", "reproduces"];
 
-/// Whether a literal is a typed comparison: a sentence (six words or more) with a comparison word
-/// and no placeholder, so that no number or choice from the data is in it.
+/// Whether a literal is a typed comparison: a sentence (six words or more) with a comparison
+/// word, placeholders or not (a placeholder fills in a number, not the word that judges it).
+/// `above` and `below` followed by punctuation or the literal's end name a place on the page
+/// ("the tables below"), not a comparison.
 fn typed_comparison(text: &str) -> Option<&'static str> {
-    if text.contains('{') || text.split_whitespace().count() < 6 {
+    if text.split_whitespace().count() < 6 {
         return None;
     }
-    let words: Vec<String> =
-        text.split(|c: char| !c.is_alphanumeric()).filter(|w| !w.is_empty()).map(str::to_lowercase).collect();
-    COMPARISONS.iter().copied().find(|c| words.iter().any(|w| w == c))
+    let lower = text.to_lowercase();
+    let mut words = Vec::new();
+    let mut start = None;
+    for (i, c) in lower.char_indices().chain([(lower.len(), ' ')]) {
+        match (c.is_alphanumeric(), start) {
+            (true, None) => start = Some(i),
+            (false, Some(s)) => {
+                words.push((s, &lower[s..i]));
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    let place = |end: usize| {
+        let next = lower[end..].trim_start_matches([' ', '\\', '\n']).chars().next();
+        !next.is_some_and(|c| c.is_alphanumeric() || c == '{')
+    };
+    COMPARISONS
+        .iter()
+        .copied()
+        .find(|c| words.iter().any(|&(s, w)| w == *c && !((w == "above" || w == "below") && place(s + w.len()))))
 }
 
 /// Whether a reviewed entry's place names the file `rel` (relative to `experiment/`): the file
@@ -426,7 +446,10 @@ fn the_detectors_catch_what_they_look_for() {
         typed_numbers("f32 MNI152 x86_64 v1.2")
     );
     assert_eq!(typed_comparison("our marching cubes is faster than VTK on every grid"), Some("faster"));
-    assert_eq!(typed_comparison("at {n} cells ours is faster than VTK"), None);
+    assert_eq!(typed_comparison("at {n} cells ours is faster than VTK"), Some("faster"), "placeholders hide no verdict");
+    assert_eq!(typed_comparison("ours took {} ms, below the {} ms of VTK"), Some("below"));
+    assert_eq!(typed_comparison("and {} more inputs in the tables below"), None, "a place on the page");
+    assert_eq!(typed_comparison("the wake-up times are measured below)."), None);
     assert_eq!(typed_comparison("faster"), None);
 }
 
@@ -476,13 +499,56 @@ fn experiment_sources(dir: &std::path::Path) -> Vec<PathBuf> {
 /// verdict).
 const REVIEWED_COMPARISONS: &[(&str, &str, &str)] = &[
     ("real_volumes/", "the voxels above the first level", "a place (the voxels brighter than a level), not a verdict"),
-    ("real_volumes/page.rs", "above one when isolab is", "how to read the ratio column, by its definition"),
+    ("real_volumes/", "above one when isolab is", "how to read the ratio column, by its definition"),
+    ("real_volumes/page.rs", "Inside is above the", "which side is inside: a setting (`--inside above`), not a verdict"),
+    ("real_volumes/second.rs", "the meshes \\\n         below overlay", "a place on the page"),
     ("stuart_tables/checks.rs", "from the rows above", "a place on the page"),
     (
         "stuart_tables/table_two.rs",
         "claim of the fewest elements is not reproduced",
         "the branch taken when the data counts CGAL fewer on some model (`ours_fewer > 0`)",
     ),
+    ("stuart_tables/table_two.rs", "is below ours", "a count the data make (`matched_lower` of `matched_n` models)"),
+    ("stuart_tables/", "below", "a dihedral-angle threshold (`quality-floor`, the sliver bound): a definition, not a verdict"),
+    ("compare_algorithms/mod.rs", "lower and to the left is better", "how to read the plot's axes, by their definition"),
+    ("decimation/page.rs", "lower and to \\\n         the left is better", "how to read the plot's axes, by their definition"),
+    ("surface_nets_smoothing/page.rs", "(lower is better shaped)", "what the aspect ratio measures, by its definition"),
+    (
+        "surface_nets_smoothing/page.rs",
+        "Not reproduced, and not fully explained",
+        "the post's ratios are Unity C# on unstated hardware at an unstated iteration count, so they are not \
+         reproducible by construction; the one comparable claim, the order, is judged in the same sentence by the data",
+    ),
+    ("terrain_lod/page.rs", "better shaped (lower mean aspect ratio) on", "a count the data make (`better_shaped` of the pairs)"),
+    ("sphere_convergence/page.rs", "Below the exact volume at every resolution", "a category whose members the data list"),
+    ("sphere_convergence/page.rs", "Above it at every resolution", "a category whose members the data list"),
+    ("costen_table/sphere_match.rs", "is below the paper's in", "a category whose members the data list (`below`)"),
+    ("costen_table/sphere_match.rs", "It is above the paper's in", "a category whose members the data list (`above`)"),
+    (
+        "costen_table/questionnaire.rs",
+        "reproduces it (largest difference",
+        "the column the search over left-out columns found, its difference printed beside the word",
+    ),
+    (
+        "costen_table/reading.rs",
+        "the sphere matches its",
+        "points to the section (*Matching the paper's sphere*) whose data test it",
+    ),
+    ("peers/page.rs", "(above one means we are faster)", "how to read the ratio column, by its definition"),
+    ("peers/page.rs", "Above one, the CLI is slower", "how to read the ratio column, by its definition"),
+    ("peers/reading.rs", "(the peer faster on {})", "a category whose members the data list (`below`)"),
+    ("peers/reading.rs", "(slower with it on {})", "a category whose members the data list (`below`)"),
+    ("python_users/page.rs", "faster than ours on every one: {}; slower on every one", "categories whose members the data list"),
+    (
+        "python_users/targets.rs",
+        "at least {VTK_TARGET}× faster than",
+        "the issue's target, by its definition; met and missed are counted",
+    ),
+    ("python_users/targets.rs", "MiB above the input", "a measured amount over the input's size, printed beside the word"),
+    ("scaling/mod.rs", "{} above {n}³", "the grids past a size the budget skipped: a place in the sweep"),
+    ("large_world/page.rs", "wholly above the ground, or below", "places in the terrain, not verdicts"),
+    ("mesh_fields/page.rs", "not bounded below", "a bound in the winding number's definition"),
+    ("connectomics/page.rs", "the eight below it", "a place in the octree of boxes"),
 ];
 
 #[test]

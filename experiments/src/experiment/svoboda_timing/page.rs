@@ -5,6 +5,7 @@ use super::paper;
 use super::{ALGORITHMS, NAME, PAPER, PAPER_CPU_GHZ, SIZES};
 use crate::experiment::context::{Context, ExperimentError};
 use crate::report::markdown_table;
+use crate::verdict::times_faster;
 
 /// The page, from the data file alone.
 pub(super) fn section(ctx: &Context) -> Result<String, ExperimentError> {
@@ -128,15 +129,15 @@ pub(super) fn like_section(rows: &[LikeRow]) -> String {
     if let Some(last) = rows.last() {
         let p = PAPER.iter().find(|p| p.0 == last.cubes).map_or(f64::NAN, |p| p.1);
         md.push_str(&format!(
-            "\nAt {}³ the paper's algorithm runs {:.0}× faster here than in the paper (Rust against Unity C#, and this \
-             machine against the paper's; the algorithm is the same), and sharing vertices makes ours a further {:.1}× \
-             faster on one thread. The paper itself warns that its times carry the Unity editor's overhead (\"The Unity \
+            "\nAt {}³ the paper's algorithm runs {} here than in the paper (Rust against Unity C#, and this \
+             machine against the paper's; the algorithm is the same), and sharing vertices makes ours {} on one \
+             thread. The paper itself warns that its times carry the Unity editor's overhead (\"The Unity \
              Editor itself also adds overhead, a fact that likely affected the reported numbers during testing\") and that \
              rendering, not marching cubes, slowed its application most at larger grids; how much of the ratio is the \
              editor's, we cannot say.\n",
             last.cubes,
-            p / last.unshared_ms.max(1e-9),
-            last.unshared_ms / last.shared_ms.max(1e-9)
+            times_faster(p / last.unshared_ms.max(1e-9), 0),
+            times_faster(last.unshared_ms / last.shared_ms.max(1e-9), 1)
         ));
     }
     md
@@ -156,10 +157,10 @@ pub(super) fn reading(data: &Data) -> String {
     let like = data.like_for_like.iter().find(|r| r.cubes == largest);
     if let Some(l) = like {
         lines.push(format!(
-            "Like for like, the paper's own algorithm on its field runs {:.0}× faster here than in the paper, and sharing \
-             vertices makes ours a further {:.1}× faster.",
-            paper / l.unshared_ms.max(1e-9),
-            l.unshared_ms / l.shared_ms.max(1e-9)
+            "Like for like, the paper's own algorithm on its field runs {} here than in the paper, and sharing \
+             vertices makes ours {}.",
+            times_faster(paper / l.unshared_ms.max(1e-9), 0),
+            times_faster(l.unshared_ms / l.shared_ms.max(1e-9), 1)
         ));
     }
     let mut here: Vec<&Row> = ALGORITHMS.iter().filter_map(|a| at(a)).collect();

@@ -208,6 +208,10 @@ mod tests {
         assert!(r.contains("target of 10x is met on 1 of 2."), "{r}");
         assert!(r.contains("cause unverified: b (4 samples, open: capped)"), "{r}");
         assert!(r.contains("on 2 of 2 models"), "{r}");
+        // Fast enough but with a sign of its own: the target (same inside/outside) is missed.
+        data.rows.push(row("c", 10.0, 300.0, 3, false));
+        assert!(reading(&data).contains("target of 10x is met on 1 of 3."), "{}", reading(&data));
+        data.rows.pop();
         data.rows[1].sign_differs = Some(0);
         assert!(reading(&data).contains("agree on every sample of every model"));
     }

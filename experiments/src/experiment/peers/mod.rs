@@ -70,7 +70,8 @@ struct Entry {
 }
 
 /// Our two extractors and the options they run with here: no normals for marching cubes, as VTK
-/// runs with ComputeNormalsOff and the other marching cubes peers make none; surface nets without
+/// runs with ComputeNormalsOff and PyMCubes, libigl and the `isosurface` crate make none
+/// (scikit-image computes normals and values in its call, which the page says); surface nets without
 /// smoothing, as `fast-surface-nets` and the other peers do not smooth (its usual normals kept).
 const MC: &str = "marching-cubes";
 

@@ -130,8 +130,9 @@ pub(super) fn page_body(data: &Data) -> String {
          filter, `Modified()` then `Update()`; `fast-surface-nets`: its buffer), after one unrecorded warm-up call. The slower \
          peers keep nothing between calls and run one-shot only. Ratios are peer median / our median under the same protocol \
          (above one means we are faster); the times tables give each median with its fastest and slowest run. \
-         Our marching cubes makes no normals here, as VTK runs with ComputeNormalsOff and the other marching cubes peers make \
-         none; surface nets makes its usual normals, as `fast-surface-nets` does, and does not smooth, as no peer does. Threads: our one-thread runs are serial on the \
+         Our marching cubes makes no normals here, as VTK runs with ComputeNormalsOff and PyMCubes, libigl and the \
+         `isosurface` crate make none; scikit-image's `marching_cubes` computes each vertex's normal and value inside its \
+         timed call (it has no option to leave them out), so its times include work ours skips. Surface nets makes its usual normals, as `fast-surface-nets` does, and does not smooth, as no peer does. Threads: our one-thread runs are serial on the \
          experiment's own thread; {} Pool set-ups tried before (the caller as a pool thread, the caller left out, a new pool \
          per call, pinned threads) are described, with what they measured, in `experiments/src/peers/ours.rs`. Each one-shot output is freed when its call returns, so the allocator may hand the \
          next call pages already touched, on both sides; a process's very first call gets fresh pages from the kernel and costs \

@@ -6,6 +6,7 @@
 //! from `isolab-pipeline`, pictures from `isolab-cli`'s renderer.
 
 pub mod alloc_meter;
+pub mod bibliography;
 pub mod experiment;
 pub mod figures;
 pub mod html;

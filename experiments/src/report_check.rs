@@ -73,7 +73,9 @@ fn without_registry_list(text: &str) -> String {
 fn pages_assemble_from_the_committed_data_and_match_what_is_committed() {
     let tmp = assembled();
     let mut names: Vec<String> = all().iter().flat_map(|e| [format!("{}.md", e.name()), format!("{}.html", e.name())]).collect();
-    names.extend(["REPORT.md", "REPORT.html", "index.html", "viewer.js"].map(String::from));
+    names.extend(
+        ["REPORT.md", "REPORT.html", "index.html", "viewer.js", "bibliography.md", "bibliography.html"].map(String::from),
+    );
     for name in &names {
         let fresh = std::fs::read_to_string(tmp.path().join(name)).expect("assembled page");
         assert!(!fresh.contains("Not generated yet"), "{name}: a section is missing its data");

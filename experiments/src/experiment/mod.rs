@@ -82,7 +82,11 @@ pub fn assemble(ctx: &Context) -> Result<PathBuf, ExperimentError> {
         };
         let title = page_title(&section).unwrap_or(e.name()).to_owned();
         let provenance = crate::provenance::recorded(&ctx.data_path(e.name()));
-        let body = under_title(&promote_headings(&section), &crate::provenance::line(e.name(), provenance.as_ref()));
+        let mut body = under_title(&promote_headings(&section), &crate::provenance::line(e.name(), provenance.as_ref()));
+        // The works it follows, last (the page opens with its findings).
+        if let Some(sources) = crate::bibliography::sources_of(e.name()) {
+            body = format!("{}\n\n{sources}\n", body.trim_end());
+        }
         let page = format!("[isolab report](REPORT.md) › {title}\n\n{}", body.trim_end()) + "\n";
         let path = ctx.report_dir.join(format!("{}.md", e.name()));
         write_atomic(&path, |w| std::io::Write::write_all(w, page.as_bytes()))?;
@@ -100,6 +104,10 @@ pub fn assemble(ctx: &Context) -> Result<PathBuf, ExperimentError> {
     let html = viewer::page(ctx, &md);
     write_atomic(&ctx.report_dir.join("index.html"), |w| std::io::Write::write_all(w, html.as_bytes()))?;
     write_atomic(&ctx.report_dir.join("viewer.js"), |w| std::io::Write::write_all(w, viewer::SCRIPT.as_bytes()))?;
+    let bibliography = crate::bibliography::page();
+    write_atomic(&ctx.report_dir.join("bibliography.md"), |w| std::io::Write::write_all(w, bibliography.as_bytes()))?;
+    let bibliography_html = crate::html::html_page("Bibliography", &bibliography);
+    write_atomic(&ctx.report_dir.join("bibliography.html"), |w| std::io::Write::write_all(w, bibliography_html.as_bytes()))?;
     Ok(path)
 }
 
@@ -146,7 +154,8 @@ fn front_page(ctx: &Context, pages: &[Page]) -> String {
         "Each page's data were made at the commit listed (`+changes`: with uncommitted changes outside `report/`); \
          \"changed since\" means the experiment's own source files differ from those that made its data, so the page may \
          not show what its code does now (changes to the engine it measures are not tracked here). Each page states \
-         its machine and the command that regenerates it under its title.\n\n",
+         its machine and the command that regenerates it under its title. The papers and posts the extractors follow \
+         and the pages reproduce are in the [bibliography](bibliography.md).\n\n",
     );
     let root = crate::provenance::root();
     let rows: Vec<Vec<String>> = pages

@@ -145,6 +145,11 @@ mod tests {
         assert!(
             matches!(read_file(&grid, VolumeOptions::default(), Coordinates::Any), Ok(FileContents::Volume(v)) if v.volume.dims == [2, 2, 2])
         );
+        // A mesh with its metrics beside it (`-o m.ply -m m.ply.json`) is still a mesh.
+        let ply = dir.path().join("m.ply");
+        io::write_mesh(&ply, &mesh).unwrap();
+        std::fs::write(dir.path().join("m.ply.json"), "{}").unwrap();
+        assert_eq!(read_mesh_file(&ply).expect("a mesh").triangles.len(), 4);
         let err = read_mesh_file(&grid).expect_err("a volume is not a mesh").to_string();
         assert!(err.contains("g.raw") && err.contains("is a volume, not a mesh"), "{err}");
     }

@@ -268,7 +268,9 @@ pub fn detect(path: &Path, bytes: &[u8]) -> Option<VolumeFormat> {
     if name.ends_with(".nii") || name.ends_with(".nii.gz") || name.ends_with(".hdr") || name.ends_with(".hdr.gz") {
         return Some(VolumeFormat::Nifti);
     }
-    if samples::header_path(path).is_file() {
+    // A grid `--samples-out` wrote has its header beside it (`NAME.json`); a mesh file never is
+    // one, even with a JSON beside it (`-o m.ply -m m.ply.json`).
+    if samples::header_path(path).is_file() && crate::MeshFormat::from_extension(path).is_none() {
         return Some(VolumeFormat::Samples);
     }
     let head = if is_gzip(bytes) { gunzip_prefix(bytes, 4, path).ok()? } else { bytes.get(..4)?.to_vec() };

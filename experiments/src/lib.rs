@@ -19,4 +19,6 @@ mod readme_check;
 pub mod report;
 #[cfg(test)]
 mod report_check;
+#[cfg(test)]
+mod reviewed_literals;
 pub mod verdict;

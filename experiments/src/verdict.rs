@@ -4,15 +4,21 @@
 
 /// How one time compares with another, as a page says it: `ratio` is the other's time over this
 /// one's; `decimals` is the precision of the factor. `2.5× faster` above one, `2.5× slower` (the
-/// inverse factor) below it, and `as fast` when the factor rounds to one.
+/// inverse factor) below it. A factor that rounds to one at that precision is shown to two
+/// decimals instead (`1.20× faster`: 20% is not "as fast"), and only one that still rounds to one
+/// is `as fast`.
 pub fn times_faster(ratio: f64, decimals: usize) -> String {
     if !ratio.is_finite() || ratio <= 0.0 {
         return "not comparable (no time on one side)".into();
     }
     let (factor, word) = if ratio >= 1.0 { (ratio, "faster") } else { (1.0 / ratio, "slower") };
-    let shown = format!("{factor:.decimals$}");
-    if shown.parse::<f64>().is_ok_and(|f| f == 1.0) {
-        return "as fast".into();
+    let rounds_to_one = |shown: &str| shown.parse::<f64>().is_ok_and(|f| f == 1.0);
+    let mut shown = format!("{factor:.decimals$}");
+    if rounds_to_one(&shown) {
+        shown = format!("{factor:.2}");
+        if rounds_to_one(&shown) {
+            return "as fast".into();
+        }
     }
     format!("{shown}× {word}")
 }
@@ -25,8 +31,10 @@ mod tests {
     fn the_word_follows_the_ratio() {
         assert_eq!(times_faster(194.2, 0), "194× faster");
         assert_eq!(times_faster(0.25, 1), "4.0× slower");
-        assert_eq!(times_faster(1.04, 1), "as fast");
-        assert_eq!(times_faster(1.2, 0), "as fast", "a factor that rounds to one says neither word");
+        assert_eq!(times_faster(1.04, 1), "1.04× faster", "a factor that rounds to one is shown finer");
+        assert_eq!(times_faster(1.2, 0), "1.20× faster", "20% is not as fast");
+        assert_eq!(times_faster(1.001, 1), "as fast");
+        assert_eq!(times_faster(1.0 / 1.3, 0), "1.30× slower");
         assert_eq!(times_faster(2.04, 1), "2.0× faster");
         assert!(times_faster(f64::NAN, 0).starts_with("not comparable"));
         assert!(times_faster(0.0, 0).starts_with("not comparable"));

@@ -111,6 +111,7 @@
 
   const loader = new THREE.GLTFLoader();
   const GREY = [0.79, 0.84, 0.91];
+  const DEFECT = { boundary: [0.9, 0.1, 0.1], nonManifold: [1.0, 0.55, 0.0], intersecting: [0.85, 0.1, 0.8] };
   // Colour of a radius ratio R/2r (1 for equilateral): green at 1, red from 4 on.
   function shapeColour(ratio) {
     const t = Math.min(1, Math.max(0, Math.log(ratio) / Math.log(4)));
@@ -147,9 +148,9 @@
       const [a, b, c] = [index[3 * t], index[3 * t + 1], index[3 * t + 2]];
       const uses = [key(a, b), key(b, c), key(c, a)].map((e) => edges.get(e));
       let mark = GREY;
-      if (crossing.has(t)) { mark = [0.85, 0.1, 0.8]; counts.intersecting++; }
-      else if (uses.some((u) => u > 2)) { mark = [1.0, 0.55, 0.0]; counts.nonManifold++; }
-      else if (uses.some((u) => u === 1)) { mark = [0.9, 0.1, 0.1]; counts.boundary++; }
+      if (crossing.has(t)) { mark = DEFECT.intersecting; counts.intersecting++; }
+      else if (uses.some((u) => u > 2)) { mark = DEFECT.nonManifold; counts.nonManifold++; }
+      else if (uses.some((u) => u === 1)) { mark = DEFECT.boundary; counts.boundary++; }
       const q = shapeColour(radiusRatio(p, scale, a, b, c));
       for (let k = 0; k < 3; k++) {
         shape.set(q, 9 * t + 3 * k);
@@ -157,6 +158,23 @@
       }
     }
     return { shape, defects, counts };
+  }
+  // The legend of the colouring chosen: what each colour means.
+  const css = (c) => "rgb(" + c.map((x) => Math.round(255 * x)).join(",") + ")";
+  function legend() {
+    const box = document.getElementById("legend");
+    if (!box) return;
+    const swatch = (c, text) => '<span class="swatch" style="background:' + css(c) + '"></span>' + text;
+    if (colour.value === "quality") {
+      const stops = [1, 1.5, 2, 3, 4].map((r) => css(shapeColour(r)));
+      box.innerHTML = "Triangle shape, radius ratio R/2r: 1 (equilateral)" +
+        '<span class="ramp" style="background:linear-gradient(to right,' + stops.join(",") + ')"></span>4 or more';
+    } else if (colour.value === "defects") {
+      box.innerHTML = "Triangles:" + swatch(DEFECT.boundary, "on an open edge") + swatch(DEFECT.nonManifold, "on a non-manifold edge") +
+        swatch(DEFECT.intersecting, "self-intersecting") + swatch(GREY, "none of these");
+    } else {
+      box.innerHTML = "";
+    }
   }
   function paint(v) {
     for (const m of v.meshes) {
@@ -171,7 +189,7 @@
   const yes = (b) => (b ? "yes" : "no");
   function caption(mesh, counts) {
     const a = mesh.aspect || [NaN, NaN];
-    return mesh.algorithm + ": " + mesh.triangles + " triangles; closed " + yes(mesh.closed) + ", manifold " +
+    return mesh.algorithm + " at " + mesh.resolution + " samples along the longest side: " + mesh.triangles + " triangles; closed " + yes(mesh.closed) + ", manifold " +
       yes(mesh.manifold) + ", " + (mesh.intersecting_pairs || 0) + " self-intersecting pairs; aspect ratio mean " +
       a[0].toFixed(2) + ", max " + a[1].toFixed(1) + " (marked: " + counts.boundary + " boundary, " + counts.nonManifold +
       " non-manifold, " + counts.intersecting + " self-intersecting triangles)";
@@ -261,6 +279,7 @@
   });
   colour.addEventListener("change", () => {
     views.forEach(paint);
+    legend();
     remember();
   });
   views.forEach((v) => v.controls.addEventListener("end", remember));
@@ -275,5 +294,6 @@
     requestAnimationFrame(loop);
   })();
   resize();
+  legend();
   update();
 })();

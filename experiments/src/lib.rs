@@ -11,6 +11,7 @@ pub mod experiment;
 pub mod figures;
 pub mod html;
 pub mod memory;
+pub mod peer_versions;
 pub mod peers;
 pub mod provenance;
 pub mod readme;

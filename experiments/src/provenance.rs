@@ -43,6 +43,13 @@ pub struct Provenance {
     pub command: String,
     /// FNV-1a digest of the experiment's source files ([`source_digest`]).
     pub source_digest: String,
+    /// The versions of the peers the experiment runs, library and wrapper apart
+    /// ([`crate::peer_versions`]); empty in data made before they were recorded.
+    #[serde(default)]
+    pub peers: Vec<crate::peer_versions::PeerVersion>,
+    /// Made by `report --quick` (every experiment at its smallest sizes): not the report's data.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub quick: bool,
 }
 
 /// The workspace root (the experiments crate's parent), whose sources [`code_since`] digests.
@@ -56,9 +63,9 @@ pub fn command(name: &str) -> String {
 }
 
 impl Provenance {
-    /// This machine and checkout, for a run of `experiment` that started at `started` and took
-    /// `seconds`.
-    pub fn collect(experiment: &str, started: SystemTime, seconds: f64) -> Self {
+    /// This machine and checkout, for a run of `experiment` (which runs `peers`) that started at
+    /// `started` and took `seconds`.
+    pub fn collect(experiment: &str, peers: &[&str], started: SystemTime, seconds: f64) -> Self {
         let root = root();
         let git = |args: &[&str]| command_output(Command::new("git").arg("-C").arg(&root).args(args));
         let commit = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
@@ -82,6 +89,8 @@ impl Provenance {
             isolab: env!("CARGO_PKG_VERSION").to_owned(),
             command: command(experiment),
             source_digest: source_digest(&root, experiment),
+            peers: crate::peer_versions::versions_of(peers),
+            quick: false,
         }
     }
 
@@ -231,12 +240,17 @@ pub fn recorded(path: &Path) -> Option<Provenance> {
     serde_json::from_value(value.get("provenance")?.clone()).ok()
 }
 
-/// The line a page states under its title: where, when and on what its data ran, and the
-/// command that regenerates it.
+/// The line a page states under its title: where, when and on what its data ran, the versions
+/// of the peers it ran, and the command that regenerates it.
 pub fn line(name: &str, provenance: Option<&Provenance>) -> String {
     match provenance {
+        Some(p) if p.quick => format!(
+            "**A quick run** (`report --quick`: every experiment at its smallest sizes, one extraction each; the text \
+             may name the full run's sizes): not the report's numbers. {}",
+            line(name, Some(&Provenance { quick: false, ..p.clone() }))
+        ),
         Some(p) => format!(
-            "_Data made at commit `{}` on {} in {:.0} s: {}, {} threads, {:.1} GiB, {}; {}; {}; isolab {}. Regenerate: `{}`._",
+            "_Data made at commit `{}` on {} in {:.0} s: {}, {} threads, {:.1} GiB, {}; {}; {}; isolab {}{}. Regenerate: `{}`._",
             p.short_commit(),
             p.date_utc,
             p.seconds,
@@ -247,10 +261,20 @@ pub fn line(name: &str, provenance: Option<&Provenance>) -> String {
             p.rustc,
             p.python,
             p.isolab,
+            peers_clause(&p.peers),
             p.command
         ),
         None => format!("_Provenance not recorded (the data predate it). Regenerate: `{}`._", command(name)),
     }
+}
+
+/// `; peers: A 1.0, B 2 (package b 2.1)` for the page's line, empty without peers.
+fn peers_clause(peers: &[crate::peer_versions::PeerVersion]) -> String {
+    if peers.is_empty() {
+        return String::new();
+    }
+    let described: Vec<String> = peers.iter().map(crate::peer_versions::PeerVersion::describe).collect();
+    format!("; peers: {}", described.join(", "))
 }
 
 /// Whether experiment `name`'s source changed since its data were made: `Some(true)` when the
@@ -329,6 +353,17 @@ mod tests {
         assert!(l.contains("`0123456789+changes`") && l.contains("2026-12-05T20:17:31Z") && l.contains("Test CPU"), "{l}");
         assert!(l.contains("--bin peers"), "{l}");
         assert!(line("peers", None).contains("not recorded"));
+        let vtk = crate::peer_versions::PeerVersion {
+            name: "VTK".into(),
+            package: "vtk".into(),
+            package_version: Some("9.7.2".into()),
+            library: "VTK".into(),
+            library_version: Some("9.7.1".into()),
+        };
+        let l = line("peers", Some(&Provenance { peers: vec![vtk], ..sample() }));
+        assert!(l.contains("; peers: VTK 9.7.1 (package vtk 9.7.2). Regenerate"), "{l}");
+        let l = line("peers", Some(&Provenance { quick: true, ..sample() }));
+        assert!(l.starts_with("**A quick run**") && l.contains("Test CPU"), "{l}");
     }
 
     fn sample() -> Provenance {
@@ -347,6 +382,8 @@ mod tests {
             isolab: "0.1.0".into(),
             command: command("peers"),
             source_digest: "none".into(),
+            peers: Vec::new(),
+            quick: false,
         }
     }
 }

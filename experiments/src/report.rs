@@ -87,6 +87,44 @@ mod tests {
     use super::*;
 
     #[test]
+    fn lists_read_as_sentences() {
+        let l = |v: &[&str]| and_list(&v.iter().map(|s| s.to_string()).collect::<Vec<_>>());
+        assert_eq!(
+            (l(&[]), l(&["a"]), l(&["a", "b"]), l(&["a", "b", "c"])),
+            ("".into(), "a".into(), "a and b".into(), "a, b and c".into())
+        );
+    }
+
+    #[test]
+    fn ratio_ranges_pair_runs_of_the_same_round() {
+        assert_eq!(ratio_range(&[1.0, 2.0, 4.0], &[3.0, 3.0, 4.0]), Some((1.0, 3.0)));
+        assert_eq!(ratio_range(&[1.0, 2.0], &[2.0]), Some((2.0, 2.0)));
+        assert_eq!(ratio_range(&[], &[1.0]), None);
+    }
+
+    #[test]
+    fn a_wide_cell_gets_rounds_up_to_the_bound_and_then_a_flag() {
+        let narrow = rounds_until_narrow::<()>(3, || Ok(10.0)).unwrap();
+        assert_eq!((narrow.runs.len(), narrow.rounds, narrow.wide, narrow.flag()), (3, 1, false, String::new()));
+        // A wide first round, a narrow second: two rounds, every run kept, no flag.
+        let mut times = [30.0, 10.0, 10.0, 11.0, 10.0, 10.0].into_iter();
+        let settled = rounds_until_narrow::<()>(3, || Ok(times.next().unwrap())).unwrap();
+        assert_eq!((settled.runs.len(), settled.rounds, settled.wide), (6, 2, false));
+        assert_eq!(settled.spread().max, 30.0);
+        // Wide every round: the bound, then the flag.
+        let mut k = 0.0;
+        let wide = rounds_until_narrow::<()>(2, || {
+            k += 1.0;
+            Ok(if k % 2.0 == 0.0 { 30.0 } else { 10.0 })
+        })
+        .unwrap();
+        assert_eq!((wide.runs.len(), wide.rounds, wide.wide), (2 * MAX_ROUNDS, MAX_ROUNDS, true));
+        assert_eq!(wide.flag(), " (wide: 10.0-30.0 ms)");
+        // One run a round cannot be judged: never wide.
+        assert!(!rounds_until_narrow::<()>(1, || Ok(1.0)).unwrap().wide);
+    }
+
+    #[test]
     fn median_of_odd_and_even() {
         let d = |v: u64| Duration::from_millis(v);
         assert_eq!(median(vec![d(3), d(1), d(2)]), d(2));
@@ -127,7 +165,82 @@ pub struct Spread {
     pub runs: Vec<f64>,
 }
 
+/// A round of runs is wide when its slowest run takes more than this many times its fastest: the
+/// cell gets another round ([`rounds_until_narrow`]) and, if its last round stays wide, a flag on
+/// its page ([`Rounds::flag`]).
+pub const WIDE: f64 = 2.0;
+
+/// The most rounds a cell gets.
+pub const MAX_ROUNDS: usize = 3;
+
+/// A cell's runs over its rounds, every one kept.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Rounds {
+    /// Every run, in order.
+    pub runs: Vec<f64>,
+    /// Rounds run.
+    pub rounds: usize,
+    /// Whether its last round was still wide after [`MAX_ROUNDS`].
+    pub wide: bool,
+}
+
+impl Rounds {
+    /// The spread over every run.
+    pub fn spread(&self) -> Spread {
+        Spread::of(self.runs.clone())
+    }
+
+    /// `" (wide: 1.2-9.8 ms)"` after a cell's median on a page when it stayed wide, else empty.
+    pub fn flag(&self) -> String {
+        if self.wide {
+            let s = self.spread();
+            format!(" (wide: {}-{} ms)", ms(s.min), ms(s.max))
+        } else {
+            String::new()
+        }
+    }
+}
+
+/// Runs `run` in rounds of `repeats` until a round is not wide ([`WIDE`]) or [`MAX_ROUNDS`] have
+/// run; keeps every run.
+pub fn rounds_until_narrow<E>(repeats: usize, mut run: impl FnMut() -> Result<f64, E>) -> Result<Rounds, E> {
+    let repeats = repeats.max(1);
+    let mut out = Rounds::default();
+    loop {
+        let round: Vec<f64> = (0..repeats).map(|_| run()).collect::<Result<_, E>>()?;
+        out.runs.extend(&round);
+        out.rounds += 1;
+        out.wide = repeats > 1 && Spread::of(round).is_wide();
+        if !out.wide || out.rounds == MAX_ROUNDS {
+            return Ok(out);
+        }
+    }
+}
+
+/// `a`, `a and b`, `a, b and c`: a list in a sentence.
+pub fn and_list(items: &[String]) -> String {
+    match items {
+        [] => String::new(),
+        [one] => one.clone(),
+        [rest @ .., last] => format!("{} and {last}", rest.join(", ")),
+    }
+}
+
+/// The range of `theirs[i] / ours[i]` over the rounds both ran (runs paired by their index, so
+/// both ends come from the same rounds), or `None` without a shared round.
+pub fn ratio_range(ours: &[f64], theirs: &[f64]) -> Option<(f64, f64)> {
+    let ratios: Vec<f64> = ours.iter().zip(theirs).map(|(o, t)| t / o).filter(|r| r.is_finite()).collect();
+    let lo = ratios.iter().copied().reduce(f64::min)?;
+    let hi = ratios.iter().copied().reduce(f64::max)?;
+    Some((lo, hi))
+}
+
 impl Spread {
+    /// Whether its slowest run took more than [`WIDE`] times its fastest.
+    pub fn is_wide(&self) -> bool {
+        self.max > WIDE * self.min
+    }
+
     /// The spread of `runs` (non-finite runs dropped).
     pub fn of(mut runs: Vec<f64>) -> Spread {
         runs.retain(|v| v.is_finite());

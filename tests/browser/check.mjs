@@ -83,6 +83,7 @@ try {
   // The captions give each mesh's measures.
   const captions = await page.evaluate(() => ["label-left", "label-right"].map((id) => document.getElementById(id).textContent));
   captions.forEach((c, k) => { if (!/closed (yes|no), manifold (yes|no), \d+ self-intersecting pairs; aspect ratio mean/.test(c)) problems.push(`caption ${k} lacks the measures: ${c}`); });
+  captions.forEach((c, k) => { if (!/ at \d+ samples along the longest side: /.test(c)) problems.push(`caption ${k} lacks the mesh's resolution: ${c}`); });
   // A picture's signature: the left view's mean colour over its pixels.
   const signature = () => page.evaluate(() => {
     const c = document.getElementById("canvas-left");
@@ -114,6 +115,10 @@ try {
     await settle();
     looks[mode] = await signature();
     if (!differ(looks[mode], plain)) problems.push(`colouring '${mode}' does not change the picture`);
+    // Each colouring says what its colours mean.
+    const key = await page.evaluate(() => document.getElementById("legend").textContent);
+    const wanted = mode === "quality" ? /radius ratio/ : /open edge.*non-manifold.*self-intersecting/;
+    if (!wanted.test(key)) problems.push(`colouring '${mode}' has no legend: '${key}'`);
   }
   await page.selectOption("#colour", "plain");
   await settle();

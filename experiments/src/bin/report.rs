@@ -1,6 +1,10 @@
 //! The main job: runs every experiment (a progress bar each) and assembles `report/REPORT.md`.
 //!
-//! `cargo run --release -p isolab-experiments --bin report [-- --only NAME] [--assemble-only] [--repeats N]`
+//! `cargo run --release -p isolab-experiments --bin report [-- --only NAME] [--assemble-only] [--repeats N] [--quick]`
+//!
+//! `--quick` runs every experiment at its smallest sizes, one extraction a configuration, into
+//! `target/report-quick/` (never `report/`, and never committed): a contributor's view of a
+//! change across the whole report in minutes.
 
 use clap::Parser;
 use isolab_experiments::experiment::{self, Context};
@@ -14,12 +18,15 @@ isolab_experiments::install_meter!();
 #[derive(Parser)]
 #[command(about = "Regenerate the isolab report: every experiment, then REPORT.md")]
 struct Args {
-    /// Report directory.
-    #[arg(long, default_value_os_t = experiment::default_report_dir())]
-    out: PathBuf,
-    /// Extractions per configuration for the timing medians.
-    #[arg(long, default_value_t = 5)]
-    repeats: usize,
+    /// Report directory (default `report/`; `target/report-quick/` with `--quick`).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Extractions per configuration for the timing medians (default 5; 1 with `--quick`).
+    #[arg(long)]
+    repeats: Option<usize>,
+    /// Every experiment at its smallest sizes, into a folder of its own (not `report/`).
+    #[arg(long)]
+    quick: bool,
     /// Run only this experiment (repeatable).
     #[arg(long)]
     only: Vec<String>,
@@ -30,8 +37,16 @@ struct Args {
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    let writes_the_readme = args.out == experiment::default_report_dir();
-    let ctx = Context::new(args.out, args.repeats);
+    let out =
+        args.out.unwrap_or_else(|| if args.quick { experiment::quick_report_dir() } else { experiment::default_report_dir() });
+    let is_the_report = same_dir(&out, &experiment::default_report_dir());
+    if args.quick && is_the_report {
+        eprintln!("error: --out {}: a quick run never writes the report's folder; give another --out", out.display());
+        return ExitCode::from(2);
+    }
+    let writes_the_readme = is_the_report;
+    let ctx =
+        if args.quick { Context::quick(out, args.repeats.unwrap_or(1)) } else { Context::new(out, args.repeats.unwrap_or(5)) };
     let names: Vec<&'static str> = experiment::all().iter().map(|e| e.name()).collect();
     if let Some(bad) = args.only.iter().find(|o| !names.contains(&o.as_str())) {
         eprintln!("error: unknown experiment '{bad}'; valid experiments: {}", names.join(", "));
@@ -72,4 +87,12 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// Whether `a` and `b` name one folder (compared as absolute paths, `..` resolved where they exist).
+fn same_dir(a: &std::path::Path, b: &std::path::Path) -> bool {
+    let canonical = |p: &std::path::Path| {
+        std::fs::canonicalize(p).unwrap_or_else(|_| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf()))
+    };
+    canonical(a) == canonical(b)
 }

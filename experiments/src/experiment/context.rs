@@ -85,6 +85,10 @@ pub struct Context {
     pub report_dir: PathBuf,
     /// Extractions per configuration for timing medians.
     pub repeats: usize,
+    /// A quick run (`report --quick`): every experiment at its smallest sizes ([`Context::sizes`],
+    /// [`Context::pick`]), into a folder of its own, to see a change across the whole report;
+    /// its numbers are not the report's.
+    pub quick: bool,
     /// Progress bars, one per experiment.
     pub progress: MultiProgress,
     /// The data files written since [`Context::take_written`] last ran (names, in order).
@@ -94,7 +98,31 @@ pub struct Context {
 impl Context {
     /// A context writing into `report_dir`.
     pub fn new(report_dir: PathBuf, repeats: usize) -> Self {
-        Self { report_dir, repeats: repeats.max(1), progress: MultiProgress::new(), written: Default::default() }
+        Self { report_dir, repeats: repeats.max(1), quick: false, progress: MultiProgress::new(), written: Default::default() }
+    }
+
+    /// A quick run's context ([`Context::quick`]) writing into `report_dir`.
+    pub fn quick(report_dir: PathBuf, repeats: usize) -> Self {
+        Self { quick: true, ..Self::new(report_dir, repeats) }
+    }
+
+    /// The sizes (resolutions, models, cases) an experiment runs: all of `full`, or in a quick
+    /// run its first, which each experiment lists as its smallest.
+    pub fn sizes<'a, T>(&self, full: &'a [T]) -> &'a [T] {
+        if self.quick {
+            &full[..full.len().min(1)]
+        } else {
+            full
+        }
+    }
+
+    /// `full`, or `quick` in a quick run: a single size or count an experiment shrinks.
+    pub fn pick<T>(&self, full: T, quick: T) -> T {
+        if self.quick {
+            quick
+        } else {
+            full
+        }
     }
 
     /// `data/<name>.json`.
@@ -162,11 +190,21 @@ pub trait Experiment: Send + Sync {
     fn question(&self) -> &'static str;
     /// Its page (`report/<name>.md`, headed by one `## ` title), from its data file.
     fn section(&self, ctx: &Context) -> Result<String, ExperimentError>;
+    /// The peers it runs, by their names in [`crate::peer_versions::PEERS`]: its data record
+    /// their versions and its page states them.
+    fn peers(&self) -> &'static [&'static str] {
+        &[]
+    }
 }
 
 /// `report/` at the workspace root.
 pub fn default_report_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join("report")
+}
+
+/// `target/report-quick/` at the workspace root: where `report --quick` writes (git ignores it).
+pub fn quick_report_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join("target").join("report-quick")
 }
 
 /// Path of a shipped model by name (`models/<name>.obj`).
@@ -199,8 +237,17 @@ pub struct Measured {
     pub spacing: f64,
     /// One parallel sampling pass, ms.
     pub sampling_ms: f64,
-    /// Median extraction time, ms.
+    /// Median extraction time over every run, ms.
     pub extraction_ms: f64,
+    /// Every extraction run, ms, in rounds until one is not wide ([`crate::report::rounds_until_narrow`]);
+    /// absent from data written before runs were kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extraction_runs: Option<crate::report::Rounds>,
+    /// Median extraction time on the same sample values without the field, ms: gradients then
+    /// come from the samples' interpolant, so the difference is the time spent querying the field
+    /// (`compare_algorithms` measures it at the middle resolution; absent elsewhere).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub without_field_ms: Option<f64>,
     /// Extractions timed.
     pub repeats: usize,
     /// Analytic volume, where known.
@@ -209,7 +256,8 @@ pub struct Measured {
     pub metrics: MeshMetrics,
 }
 
-/// Extracts `repeats` times (keeping the last mesh), measures it, and returns it with the row.
+/// Extracts `repeats` times a round, in rounds until one is not wide (keeping the last mesh),
+/// measures it, and returns it with the row.
 pub fn measure(
     extractor: &dyn Extractor,
     field: &Arc<dyn Field>,
@@ -217,11 +265,10 @@ pub fn measure(
     repeats: usize,
 ) -> Result<(Measured, Extraction), ExperimentError> {
     let mut out = Extraction::default();
-    let mut times = Vec::with_capacity(repeats);
-    for _ in 0..repeats.max(1) {
+    let rounds = crate::report::rounds_until_narrow(repeats, || -> Result<f64, ExperimentError> {
         extractor.extract(samples, &mut out)?;
-        times.push(out.stats.times.extraction());
-    }
+        Ok(out.stats.times.extraction().as_secs_f64() * 1e3)
+    })?;
     let row = Measured {
         algorithm: extractor.name().into(),
         field: field.name().into(),
@@ -229,12 +276,27 @@ pub fn measure(
         dims: samples.grid().dims,
         spacing: f64::from(samples.grid().spacing),
         sampling_ms: samples.sampling_time().as_secs_f64() * 1e3,
-        extraction_ms: crate::report::median(times).as_secs_f64() * 1e3,
+        extraction_ms: rounds.spread().median,
+        extraction_runs: Some(rounds),
+        without_field_ms: None,
         repeats: repeats.max(1),
         analytic_volume: field.analytic_volume(samples.iso()),
         metrics: MeshMetrics::measure(&out.surface, Some((field.as_ref(), samples.iso()))),
     };
     Ok((row, out))
+}
+
+/// The median time of `repeats` extractions by `extractor` of `samples`' values alone (no field:
+/// an extractor that asks the field for gradients takes them from the samples' interpolant), ms.
+pub fn time_without_field(extractor: &dyn Extractor, samples: &Samples, repeats: usize) -> Result<f64, ExperimentError> {
+    let bare = Samples::from_values(*samples.lattice(), samples.values().to_vec(), samples.iso())?;
+    let mut out = Extraction::default();
+    let mut times = Vec::with_capacity(repeats);
+    for _ in 0..repeats.max(1) {
+        extractor.extract(&bare, &mut out)?;
+        times.push(out.stats.times.extraction());
+    }
+    Ok(crate::report::median(times).as_secs_f64() * 1e3)
 }
 
 pub use crate::report::ms;

@@ -36,7 +36,8 @@ pub mod viewer;
 
 pub use context::{
     compared_inputs, corner_distances_h, default_options, default_report_dir, load_object, measure, model_path, ms,
-    options_as_run, settings_of, Context, Experiment, ExperimentError, Measured, FIELD_LEVELS, MODELS, MODEL_LEVELS,
+    options_as_run, quick_report_dir, settings_of, Context, Experiment, ExperimentError, Measured, FIELD_LEVELS, MODELS,
+    MODEL_LEVELS,
 };
 
 use isolab_io::write_atomic;
@@ -82,7 +83,8 @@ pub fn assemble(ctx: &Context) -> Result<PathBuf, ExperimentError> {
         };
         let title = page_title(&section).unwrap_or(e.name()).to_owned();
         let provenance = crate::provenance::recorded(&ctx.data_path(e.name()));
-        let mut body = under_title(&promote_headings(&section), &crate::provenance::line(e.name(), provenance.as_ref()));
+        let mut body =
+            under_title(&promote_headings(&findings_first(&section)), &crate::provenance::line(e.name(), provenance.as_ref()));
         // The works it follows, last (the page opens with its findings).
         if let Some(sources) = crate::bibliography::sources_of(e.name()) {
             body = format!("{}\n\n{sources}\n", body.trim_end());
@@ -118,6 +120,12 @@ fn front_page(ctx: &Context, pages: &[Page]) -> String {
     let fields: Vec<String> = isolab_algorithms::fields::registry().iter().map(|f| format!("`{}`", f.name)).collect();
     let models: Vec<String> = context::MODELS.iter().map(|m| format!("`{m}`")).collect();
     let mut md = String::from("# isolab report\n\n");
+    if pages.iter().any(|p| p.provenance.as_ref().is_some_and(|v| v.quick)) {
+        md.push_str(
+            "**A quick run** (`report --quick`): every experiment at its smallest sizes, to see a change across the \
+             report; its numbers are not the report's, and its text may name the full run's sizes.\n\n",
+        );
+    }
     md.push_str(&format!(
         "Which isosurface extractor for which job? This report compares isolab's {} extractors ({}) on {} built-in \
          fields ({}), {} shipped models ({}) and a real MRI, against peer libraries run on the same inputs, and \
@@ -206,6 +214,22 @@ fn under_title(page: &str, line: &str) -> String {
     }
 }
 
+/// `section` with its reading (the paragraph that opens `**Reading.**`) moved up to follow its
+/// title: each page opens with its findings, the protocol after them.
+fn findings_first(section: &str) -> String {
+    let paragraphs: Vec<&str> = section.split("\n\n").collect();
+    let Some(reading) = paragraphs.iter().position(|p| p.starts_with("**Reading.**")) else { return section.to_owned() };
+    let title = paragraphs.iter().position(|p| p.starts_with("## ")).unwrap_or(0);
+    if reading <= title + 1 {
+        return section.to_owned();
+    }
+    let mut moved: Vec<&str> = Vec::with_capacity(paragraphs.len());
+    moved.extend(&paragraphs[..=title]);
+    moved.push(paragraphs[reading]);
+    moved.extend(paragraphs[title + 1..].iter().enumerate().filter(|(k, _)| title + 1 + k != reading).map(|(_, p)| *p));
+    moved.join("\n\n")
+}
+
 /// The section's title: its first `## ` heading.
 fn page_title(section: &str) -> Option<&str> {
     section.lines().find_map(|l| l.strip_prefix("## ")).map(str::trim)
@@ -267,7 +291,10 @@ pub fn run_one(ctx: &Context, e: &dyn Experiment) -> Result<f64, ExperimentError
     let seconds = t.elapsed().as_secs_f64();
     let written = ctx.take_written();
     record_run_time(ctx, e.name(), seconds)?;
-    let provenance = crate::provenance::Provenance::collect(e.name(), started, seconds);
+    let provenance = crate::provenance::Provenance {
+        quick: ctx.quick,
+        ..crate::provenance::Provenance::collect(e.name(), e.peers(), started, seconds)
+    };
     for name in written.iter().filter(|n| n.as_str() != RUN_TIMES) {
         crate::provenance::stamp(&ctx.data_path(name), &provenance)?;
     }
@@ -311,6 +338,15 @@ mod tests {
         assert_eq!(promote_headings(s), "# Title (`x`)\n\ntext # not a heading\n## Sub\n### Deeper\n#hashtag\n| a |\n");
         assert_eq!(page_title(s), Some("Title (`x`)"));
         assert_eq!(page_title("no heading"), None);
+    }
+
+    #[test]
+    fn the_reading_moves_up_to_follow_the_title() {
+        let s = "## T\n\nprotocol\n\nmore protocol\n\n**Reading.** it works.\n\n| table |\n";
+        assert_eq!(findings_first(s), "## T\n\n**Reading.** it works.\n\nprotocol\n\nmore protocol\n\n| table |\n");
+        let first = "## T\n\n**Reading.** first.\n\nprotocol\n";
+        assert_eq!(findings_first(first), first);
+        assert_eq!(findings_first("## T\n\nno reading\n"), "## T\n\nno reading\n");
     }
 
     #[test]

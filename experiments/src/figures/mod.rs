@@ -44,27 +44,96 @@ pub fn series_color(k: usize) -> (u8, u8, u8) {
     }
 }
 
-/// The colours the report's figures have always given the registered algorithms.
-const NAMED: [(&str, (u8, u8, u8)); 7] = [
-    ("marching-cubes", PALETTE[0]),
-    ("marching-cubes-decider", PALETTE[1]),
-    ("surface-nets", PALETTE[2]),
-    ("dual-contouring", PALETTE[3]),
-    ("marching-tetrahedra", PALETTE[4]),
-    ("regularised-marching-tetrahedra", PALETTE[5]),
-    ("bcc-sculpt", PALETTE[6]),
+/// The one table of implementation colours: every registered extractor and every peer the
+/// report's charts draw, by [`implementation_key`], so an implementation has one colour on every
+/// chart (libigl grey, VTK's flying edges cyan, ...). Ours keep the colours the report's figures
+/// have always given them; a peer takes a shade apart from the extractors.
+const NAMED: [(&str, (u8, u8, u8)); 34] = [
+    ("marching cubes", PALETTE[0]),
+    ("marching cubes decider", PALETTE[1]),
+    ("surface nets", PALETTE[2]),
+    ("dual contouring", PALETTE[3]),
+    ("marching tetrahedra", PALETTE[4]),
+    ("regularised marching tetrahedra", PALETTE[5]),
+    ("bcc sculpt", PALETTE[6]),
+    ("marching cubes 33", (0x39, 0x3b, 0x79)),
+    ("manifold dual contouring", (0xbd, 0x9e, 0x39)),
+    ("isosurface stuffing", (0xa5, 0x51, 0x94)),
+    // Ours as the Python package and the CLI name them.
+    ("isolab marching cubes", PALETTE[0]),
+    ("isolab lorensen", PALETTE[0]),
+    ("isolab lewiner", MORE[2]),
+    ("isolab surface nets", PALETTE[2]),
+    // Peers.
+    ("vtk flying edges", PALETTE[7]),
+    ("vtk flying edges + normals", MORE[9]),
+    ("vtk marching cubes", (0x31, 0x82, 0xbd)),
+    ("pyvista contour", (0x63, 0x79, 0x39)),
+    ("libigl", MORE[0]),
+    ("pymcubes", MORE[1]),
+    ("skimage lorensen", MORE[3]),
+    ("skimage lewiner", MORE[6]),
+    ("zmesh", MORE[7]),
+    ("meshlib", MORE[8]),
+    ("warp lang (cpu)", MORE[11]),
+    ("marching cubes numpy", MORE[10]),
+    ("fast surface nets", MORE[4]),
+    ("isosurface crate", MORE[5]),
+    ("cgal edge collapse (lindstrom turk)", (0x84, 0x3c, 0x39)),
+    ("openmesh decimater (quadric)", (0x7b, 0x41, 0x73)),
+    ("pymeshlab quadric edge collapse", (0x52, 0x54, 0xa3)),
+    ("edge collapse (paper sweep, 0.5 h)", (0xe7, 0xba, 0x52)),
+    ("edge collapse safe (shortest first)", (0x6b, 0x6e, 0xcf)),
+    ("edge collapse safe, intersections=allow", (0xd6, 0x61, 0x6b)),
 ];
 
-/// The colour of an algorithm (or any name), the same in every figure and stable as the registry
-/// grows: the colours above for the algorithms that have them, otherwise a hue from a hash of
-/// the name (FNV-1a), so a new algorithm gets its own colour without a line here and without
-/// recolouring the others.
-pub fn color_of(name: &str) -> (u8, u8, u8) {
-    if let Some((_, c)) = NAMED.iter().find(|(n, _)| *n == name) {
-        return *c;
+/// Aliases: a peer named two ways across the experiments (its key after [`implementation_key`]).
+const ALIASES: [(&str, &str); 2] = [("vtk vtkflyingedges3d", "vtk flying edges"), ("libigl signed distance", "libigl")];
+
+/// An implementation's name as the colour table knows it: lower case, `-` and `_` as spaces, a
+/// thread count suffix (` (2 threads)`) dropped, aliases resolved; and whether the suffix named
+/// more than one thread.
+pub fn implementation_key(label: &str) -> (String, bool) {
+    let mut key = label.trim().to_lowercase().replace(['-', '_'], " ");
+    let mut threaded = false;
+    if let Some(open) = key.rfind(" (") {
+        let suffix = &key[open + 2..];
+        if suffix.ends_with(" thread)") || suffix.ends_with(" threads)") {
+            threaded = !suffix.starts_with("1 ");
+            key.truncate(open);
+        }
     }
-    let hash = name.bytes().fold(0xcbf29ce484222325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100000001b3));
-    hsv((hash % 360) as f32, 0.65, 0.8)
+    if let Some((_, to)) = ALIASES.iter().find(|(from, _)| *from == key) {
+        key = (*to).to_owned();
+    }
+    (key, threaded)
+}
+
+/// The colour of an implementation (an extractor, a peer, or any name), the same on every chart:
+/// [`NAMED`]'s for the implementations it lists, a darker shade of it for a run on more than one
+/// thread, otherwise a hue from a hash of the name (FNV-1a), so a new extractor gets its own
+/// colour without a line here and without recolouring the others.
+pub fn color_of(name: &str) -> (u8, u8, u8) {
+    let (key, threaded) = implementation_key(name);
+    let base = match NAMED.iter().find(|(n, _)| *n == key) {
+        Some((_, c)) => *c,
+        None => {
+            let hash = key.bytes().fold(0xcbf29ce484222325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100000001b3));
+            hsv((hash % 360) as f32, 0.65, 0.8)
+        }
+    };
+    if threaded {
+        let dark = |v: u8| (f32::from(v) * 0.6).round() as u8;
+        (dark(base.0), dark(base.1), dark(base.2))
+    } else {
+        base
+    }
+}
+
+/// Whether the colour table lists `label` (by [`implementation_key`]).
+pub fn has_named_color(label: &str) -> bool {
+    let key = implementation_key(label).0;
+    NAMED.iter().any(|(n, _)| *n == key)
 }
 
 /// An sRGB colour from hue (degrees), saturation and value in [0, 1].
@@ -103,6 +172,45 @@ mod tests {
         assert_ne!(color_of("a-new-extractor"), color_of("another-new-extractor"));
         assert_eq!(hsv(0.0, 1.0, 1.0), (255, 0, 0));
         assert_eq!(hsv(120.0, 1.0, 1.0), (0, 255, 0));
+    }
+
+    #[test]
+    fn an_implementation_has_one_colour_on_every_chart() {
+        assert_eq!(color_of("pymcubes (1 thread)"), color_of("PyMCubes"));
+        assert_eq!(color_of("skimage-lewiner (1 thread)"), color_of("skimage lewiner"));
+        assert_eq!(color_of("VTK vtkFlyingEdges3D (1 thread)"), color_of("VTK flying edges"));
+        assert_eq!(color_of("isolab marching-cubes (1 thread)"), color_of("marching-cubes"));
+        assert_ne!(color_of("VTK vtkFlyingEdges3D (2 threads)"), color_of("VTK vtkFlyingEdges3D (1 thread)"));
+        assert_eq!(implementation_key("warp-lang (CPU)"), ("warp lang (cpu)".to_owned(), false));
+        // Apart from ours under their Python names, every entry has a colour of its own.
+        let ours_again = ["isolab marching cubes", "isolab lorensen", "isolab surface nets"];
+        let entries: Vec<&(&str, (u8, u8, u8))> = NAMED.iter().filter(|(n, _)| !ours_again.contains(n)).collect();
+        for (i, (a, ca)) in entries.iter().enumerate() {
+            for (b, cb) in entries.iter().skip(i + 1) {
+                assert_ne!(ca, cb, "{a} and {b} share a colour");
+            }
+        }
+    }
+
+    #[test]
+    fn every_implementation_the_committed_data_chart_has_a_colour_from_the_table() {
+        let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../report/data");
+        let read = |name: &str| -> serde_json::Value {
+            serde_json::from_str(&std::fs::read_to_string(data.join(name)).unwrap()).unwrap()
+        };
+        let mut labels: Vec<String> = Vec::new();
+        for (file, list, key) in [
+            ("peers.json", "timings", "implementation"),
+            ("python_users.json", "rows", "implementation"),
+            ("decimation.json", "rows", "decimator"),
+        ] {
+            let v = read(file);
+            labels.extend(v[list].as_array().unwrap().iter().map(|r| r[key].as_str().unwrap().to_owned()));
+        }
+        labels.extend(isolab_algorithms::extractors::INFOS.iter().map(|i| i.name.to_owned()));
+        let charted = |l: &String| !l.contains(" CLI");
+        let missing: Vec<&String> = labels.iter().filter(|l| charted(l) && !has_named_color(l)).collect();
+        assert!(missing.is_empty(), "no colour in the table for {missing:?}");
     }
 
     #[test]

@@ -6,7 +6,8 @@ mod data;
 mod page;
 
 use super::context::{
-    compared_inputs as inputs, measure, Context, Experiment, ExperimentError, Measured, FIELD_LEVELS, MODEL_LEVELS,
+    compared_inputs as inputs, measure, time_without_field, Context, Experiment, ExperimentError, Measured, FIELD_LEVELS,
+    MODEL_LEVELS,
 };
 use crate::figures::color_of;
 use crate::figures::plot::{self, HistogramPlot, Scale, Series, Style, XyPlot};
@@ -41,10 +42,10 @@ impl Experiment for CompareAlgorithms {
         let dir = ctx.figure_dir(NAME)?;
         let extractors = extractors::registry();
         let inputs = inputs();
-        let bar = ctx.bar(NAME, (inputs.len() * 3 * extractors.len()) as u64);
+        let bar = ctx.bar(NAME, (inputs.len() * ctx.sizes(&FIELD_LEVELS).len() * extractors.len()) as u64);
         let mut data = Data {
-            field_levels: FIELD_LEVELS.to_vec(),
-            model_levels: MODEL_LEVELS.to_vec(),
+            field_levels: ctx.sizes(&FIELD_LEVELS).to_vec(),
+            model_levels: ctx.sizes(&MODEL_LEVELS).to_vec(),
             repeats: ctx.repeats,
             rows: Vec::new(),
             images: Vec::new(),
@@ -58,12 +59,18 @@ impl Experiment for CompareAlgorithms {
         };
         for (name, spec, levels) in &inputs {
             let field = load_field(spec, fields::DEFAULT_SEED)?;
+            let levels = ctx.sizes(levels);
             for (level, &resolution) in levels.iter().enumerate() {
                 let lattice = lattice_for(field.as_ref(), &RunConfig::new("", spec, resolution))?;
                 let samples = Samples::sample(field.clone(), lattice, 0.0)?;
                 for extractor in &extractors {
                     bar.set_message(format!("{} {name} {resolution}", extractor.name()));
-                    let (row, out) = measure(extractor.as_ref(), &field, &samples, ctx.repeats)?;
+                    let (mut row, out) = measure(extractor.as_ref(), &field, &samples, ctx.repeats)?;
+                    // At the middle resolution, the time without field queries too (the glance
+                    // table's split), right after the runs above.
+                    if level == levels.len() / 2 && !extractor.produces_volume() {
+                        row.without_field_ms = Some(time_without_field(extractor.as_ref(), &samples, ctx.repeats)?);
+                    }
                     if level == 0 {
                         let path = dir.join(format!("{}-{name}.png", extractor.name()));
                         let opts = RenderOptions {
@@ -122,7 +129,12 @@ pub fn front_figure(ctx: &Context) -> Result<String, ExperimentError> {
         inputs = inputs.max(rows.len());
         let time = Spread::of(rows.iter().map(|r| r.extraction_ms).collect()).median;
         let aspect = Spread::of(rows.iter().map(|r| r.metrics.quality.aspect_ratio.mean).collect()).median;
-        series.push(Series { label: e.name().to_owned(), color: color_of(e.name()), points: vec![(time, aspect)] });
+        series.push(Series {
+            label: e.name().to_owned(),
+            color: color_of(e.name()),
+            points: vec![(time, aspect)],
+            ranges: Vec::new(),
+        });
     }
     let chart = XyPlot {
         title: "Every extractor: triangle quality against extraction time".into(),
@@ -141,8 +153,8 @@ pub fn front_figure(ctx: &Context) -> Result<String, ExperimentError> {
          its triangles' mean aspect ratio; lower and to the left is better. Every input's point is in \
          [compare_algorithms](compare_algorithms.md)._\n\n",
         ctx.link(&stem.with_extension("png")),
-        data.field_levels[1],
-        data.model_levels[1],
+        data.middle_levels().0,
+        data.middle_levels().1,
     ))
 }
 
@@ -153,7 +165,7 @@ fn tint(name: &str) -> [f32; 3] {
 }
 
 fn middle(data: &Data) -> impl Iterator<Item = &Measured> {
-    let (f, m) = (data.field_levels[1], data.model_levels[1]);
+    let (f, m) = data.middle_levels();
     data.rows.iter().filter(move |r| {
         let is_field = fields::registry().iter().any(|x| x.name == r.field);
         let level = if is_field { f } else { m };
@@ -171,6 +183,7 @@ fn figures(ctx: &Context, dir: &std::path::Path, data: &mut Data) -> Result<(), 
                 label: a.to_string(),
                 color: color_of(a),
                 points: middle(data).filter(|r| r.algorithm == *a).map(f).collect(),
+                ranges: Vec::new(),
             })
             .collect()
     };
@@ -213,6 +226,7 @@ fn figures(ctx: &Context, dir: &std::path::Path, data: &mut Data) -> Result<(), 
     let chart = plot::BarChart {
         title: "Triangles per mesh (middle resolution)".into(),
         y_label: "triangles".into(),
+        y_scale: plot::Scale::Linear,
         categories: categories.clone(),
         series: algorithms
             .iter()

@@ -44,7 +44,10 @@ pub(super) fn summary(data: &Data) -> String {
                 a.clone(),
                 rows.len().to_string(),
                 format!("{}/{}", manifold.count(), rows.len()),
-                rows.iter().map(|r| r.metrics.intersecting_pairs()).sum::<usize>().to_string(),
+                {
+                    let i = data.intersections(a);
+                    format!("{} / {}", i.middle_pairs, i.all_pairs)
+                },
                 format!("{:.2}", median(rows.iter().map(|r| r.metrics.quality.aspect_ratio.mean).collect())),
                 format!("{:.1}", median(rows.iter().map(|r| r.metrics.quality.min_angle_deg).collect())),
                 format!(
@@ -54,6 +57,14 @@ pub(super) fn summary(data: &Data) -> String {
                 format!("{:.2}", median(rows.iter().map(|r| r.metrics.overdraw.overshading).collect())),
                 format!("{:.2}", triangles_of(a) / reference),
                 ms(median(rows.iter().map(|r| r.extraction_ms).collect())),
+                {
+                    let bare: Vec<f64> = rows.iter().filter_map(|r| r.without_field_ms).collect();
+                    if bare.is_empty() {
+                        "–".to_owned()
+                    } else {
+                        ms(median(bare))
+                    }
+                },
             ]
         })
         .collect();
@@ -62,17 +73,23 @@ pub(super) fn summary(data: &Data) -> String {
             "algorithm",
             "inputs",
             "manifold + oriented",
-            "self-int. pairs (all)",
+            "self-int. pairs: these inputs / every resolution",
             "median aspect mean",
             "median min angle",
             "median dist / h",
             "median overshading",
             format!("triangles vs {first}").as_str(),
             "median extract ms",
+            "without field queries",
         ],
         &rows,
     );
-    s.push_str("\nMedians are over the inputs (so one bad field does not hide the rest); the triangle ratio sums every input.\n");
+    s.push_str(
+        "\nMedians are over the inputs (so one bad field does not hide the rest); the triangle ratio sums every input. \
+         \"Without field queries\" times the same extraction of the same sample values with the field withheld: an \
+         extractor that asks the field for gradients (dual contouring's vertex placement) then takes them from the \
+         samples' interpolant, so the difference is the time its field queries take.\n",
+    );
     s.push_str(&settings_line(data));
     s
 }
@@ -126,11 +143,19 @@ pub(super) fn page_body(data: &Data) -> String {
     let view = isolab_metrics::View::default();
     s.push_str(&format!(
         "Every registered extractor on every built-in field (at {:?} samples along the longest side) and every shipped model \
-         (at {:?}), sampled once per resolution. Extraction time is the median of {} runs on the same samples. Meshes of the \
+         (at {:?}), sampled once per resolution. Extraction time is the median of every run on the same samples, in rounds of {} \
+         runs until a round's slowest run is within {}x its fastest (at most {} rounds; a time still spread wider is \
+         marked *wide* with its fastest and slowest run). Meshes of the \
          gyroid and the terrain are cut by the domain, so they are open there by design. Distances are in grid spacings `h`; \
          *normal dev.* is the mean angle between vertex normals and the field's gradient; *overshading* is pixel-shader \
          invocations per covered pixel when GPUs shade 2x2 quads ({}x{}, early depth test; 1 is ideal).\n\n",
-        data.field_levels, data.model_levels, data.repeats, view.width, view.height
+        data.field_levels,
+        data.model_levels,
+        data.repeats,
+        crate::report::WIDE,
+        crate::report::MAX_ROUNDS,
+        view.width,
+        view.height
     ));
     s.push_str(&reading::reading(data));
     s.push_str("### At a glance (middle resolution, every field and model)\n\n");
@@ -155,7 +180,7 @@ pub(super) fn page_body(data: &Data) -> String {
                 m.normal_deviation.map_or("-".into(), |d| format!("{:.2}°", d.mean_deg)),
                 r.analytic_volume.map_or("-".into(), |v| format!("{:+.3}%", 100.0 * (m.volume - v) / v)),
                 format!("{:.2}", m.overdraw.overshading),
-                ms(r.extraction_ms),
+                format!("{}{}", ms(r.extraction_ms), r.extraction_runs.as_ref().map(|x| x.flag()).unwrap_or_default()),
             ]
         })
         .collect();
@@ -196,7 +221,7 @@ pub(super) fn page_body(data: &Data) -> String {
                 format!("{:.2}", m.quality.aspect_ratio.mean),
                 format!("{:.2}", m.overdraw.overshading),
                 format!("{:.1}", r.sampling_ms),
-                ms(r.extraction_ms),
+                format!("{}{}", ms(r.extraction_ms), r.extraction_runs.as_ref().map(|x| x.flag()).unwrap_or_default()),
                 format!("{:.1}", m.triangles as f64 / (r.extraction_ms / 1e3).max(1e-12) / 1e6),
             ]
         })

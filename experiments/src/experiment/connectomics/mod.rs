@@ -49,19 +49,24 @@ impl Experiment for Connectomics {
         "Can a billion-voxel label volume become neuroglancer's multi-resolution meshes on Dask, no label gathered, and how does it compare with igneous?"
     }
 
+    fn peers(&self) -> &'static [&'static str] {
+        &["igneous", "cloud-volume", "DracoPy", "neuroglancer", "zmesh", "dask", "distributed", "zarr", "numpy", "meshopt"]
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
-        let root = ctx.report_dir.join("..");
+        let root = crate::provenance::root();
         let py = python::reference_python(&root).map_err(ExperimentError::Python)?;
         python::install_package(&py, &root).map_err(ExperimentError::Python)?;
         let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/experiment/connectomics/bench.py");
         let work = root.join("target").join("connectomics");
         let shots = ctx.figure_dir(NAME)?;
         let args: Vec<String> = [
-            ("--n", N.to_string()),
-            ("--cells", CELLS.to_string()),
-            ("--chunk", CHUNK.to_string()),
+            // A quick run: a 256³ volume of 100 cells, in 64³ blocks and 128³ igneous tasks.
+            ("--n", ctx.pick(N, 256).to_string()),
+            ("--cells", ctx.pick(CELLS, 100).to_string()),
+            ("--chunk", ctx.pick(CHUNK, 64).to_string()),
             ("--memory-limit-mib", MEMORY_LIMIT_MIB.to_string()),
-            ("--igneous-shape", IGNEOUS_SHAPE.to_string()),
+            ("--igneous-shape", ctx.pick(IGNEOUS_SHAPE, 128).to_string()),
             ("--screenshot-segments", SHOWN.to_string()),
             ("--work", work.to_string_lossy().into_owned()),
             ("--shots", shots.to_string_lossy().into_owned()),

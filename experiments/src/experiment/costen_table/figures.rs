@@ -106,6 +106,7 @@ pub(super) fn charts(dir: &std::path::Path, rows: &[Row]) -> Result<(), Experime
             BarChart {
                 title: "Triangles per configuration (Fig. 25)".into(),
                 y_label: "triangles".into(),
+                y_scale: crate::figures::plot::Scale::Linear,
                 categories: categories.clone(),
                 series: vec![
                     series("isolab", ours, paper_rows.iter().map(|r| r.n_triangles as f64).collect()),
@@ -122,6 +123,7 @@ pub(super) fn charts(dir: &std::path::Path, rows: &[Row]) -> Result<(), Experime
             BarChart {
                 title: "Vertex and geometry pass, median ms (Fig. 26)".into(),
                 y_label: "ms".into(),
+                y_scale: crate::figures::plot::Scale::Linear,
                 categories: categories.clone(),
                 series: vec![
                     series("isolab vertex", ours, paper_rows.iter().map(|r| r.t_vertex).collect()),
@@ -148,6 +150,7 @@ pub(super) fn charts(dir: &std::path::Path, rows: &[Row]) -> Result<(), Experime
             BarChart {
                 title: "Mean aspect ratio, log10 (Fig. 27)".into(),
                 y_label: "log10 mean Verdict aspect ratio".into(),
+                y_scale: crate::figures::plot::Scale::Linear,
                 categories,
                 series: vec![
                     series("isolab", ours, paper_rows.iter().map(|r| r.metrics.quality.aspect_ratio.mean.log10()).collect()),

@@ -164,6 +164,10 @@ impl Experiment for CostenTable {
         "Does regularised marching tetrahedra reproduce Costen's benchmark: counts, times and quality?"
     }
 
+    fn peers(&self) -> &'static [&'static str] {
+        &["ferreus_rmt"]
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let dir = ctx.figure_dir(NAME)?;
         let repeats = ctx.repeats;

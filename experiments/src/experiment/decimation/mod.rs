@@ -124,9 +124,13 @@ impl Experiment for Decimation {
         "How does our edge collapse compare with established decimators at equal triangle counts?"
     }
 
+    fn peers(&self) -> &'static [&'static str] {
+        &["CGAL (C++)", "OpenMesh", "pymeshlab"]
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let repeats = ctx.repeats.min(3);
-        let root = ctx.report_dir.join("..");
+        let root = crate::provenance::root();
         let (native, mut skipped) = native_decimators(&root);
         let mut pymeshlab = match PythonServer::start(&root) {
             Ok((server, _)) => Some(PythonPeer::new(&server, "pymeshlab-quadric")),

@@ -78,12 +78,12 @@ pub(super) fn figure(ctx: &Context, rows: &[Row]) -> Result<String, ExperimentEr
     }
     let series = decimators
         .iter()
-        .enumerate()
-        .map(|(k, d)| (d, crate::figures::series_color(k)))
+        .map(|d| (d, crate::figures::color_of(d)))
         .map(|(d, color)| Series {
             label: (*d).to_owned(),
             color,
             points: rows.iter().filter(|r| r.decimator == *d).map(|r| (r.ms, r.hausdorff_h)).collect(),
+            ranges: Vec::new(),
         })
         .collect();
     let chart = XyPlot {

@@ -45,17 +45,22 @@ impl Experiment for Distributed {
         "Does a volume larger than a worker's memory mesh block by block on a Dask cluster, seam-exact, and how does it scale?"
     }
 
+    fn peers(&self) -> &'static [&'static str] {
+        &["dask", "distributed", "zarr", "zmesh", "numpy"]
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
-        let root = ctx.report_dir.join("..");
+        let root = crate::provenance::root();
         let py = python::reference_python(&root).map_err(ExperimentError::Python)?;
         python::install_package(&py, &root).map_err(ExperimentError::Python)?;
         let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/experiment/distributed/bench.py");
         let args: Vec<String> = [
             ("--repeats", ctx.repeats.clamp(1, 3).to_string()),
             ("--memory-limit-mib", MEMORY_LIMIT_MIB.to_string()),
-            ("--chunks", CHUNKS.map(|c| c.to_string()).join(",")),
-            ("--synthetic-n", SYNTHETIC_N.to_string()),
-            ("--tiles", TILES.map(|t| t.to_string()).join(",")),
+            ("--chunks", ctx.sizes(&CHUNKS).iter().map(|c| c.to_string()).collect::<Vec<_>>().join(",")),
+            // A quick run: a 256³ synthetic volume and the MRI untiled.
+            ("--synthetic-n", ctx.pick(SYNTHETIC_N, 256).to_string()),
+            ("--tiles", ctx.pick(TILES, [1, 1, 1]).map(|t| t.to_string()).join(",")),
         ]
         .into_iter()
         .flat_map(|(k, v)| [k.to_owned(), v])

@@ -36,7 +36,7 @@ pub(super) struct Equality {
     pub(super) dense_evaluations: u64,
 }
 
-/// One fresh-process run of `functions_peers.py`.
+/// One fresh-process run of `functions/bench.py`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub(super) struct PeerRun {
     #[serde(default)]
@@ -64,7 +64,7 @@ pub(super) struct PeerRow {
     pub(super) runs: Vec<PeerRun>,
 }
 
-/// What `functions_peers.py` wrote.
+/// What `functions/bench.py` wrote.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub(super) struct PythonSide {
     pub(super) versions: std::collections::BTreeMap<String, Option<String>>,

@@ -17,7 +17,7 @@
 //! `gyroid` (not a distance; bound `k √6`) and the shipped `spot` model's signed distance
 //! (closed, so 1-Lipschitz).
 //!
-//! **From Python** (`functions_peers.py`, in the reference environment with this commit's
+//! **From Python** (`functions/bench.py`, in the reference environment with this commit's
 //! package): numpy callables (a sphere and a small MLP signed distance whose bound comes from its
 //! layers' spectral norms) meshed by `isolab.extract(fn, ...)`, warp's `sparse_marching_cubes` on
 //! the CPU, scikit-image on the dense grid and PyMCubes' `marching_cubes_func`, each run a fresh
@@ -44,6 +44,10 @@ const FIELDS: [(&str, usize); 5] = [("sphere", 2048), ("torus", 2048), ("asteroi
 
 /// Samples per side, up to each field's largest.
 const SIZES: [usize; 4] = [256, 512, 1024, 2048];
+
+/// A quick run's one size, for the sparse runs and the equality checks alike (a mesh field's
+/// dense mode at the smallest full size asks millions of exact distances).
+const QUICK_SIZES: [usize; 1] = [128];
 
 /// Dense runs up to this size (a 1024³ grid is 4 GiB of samples).
 const DENSE_UP_TO: usize = 512;
@@ -178,6 +182,10 @@ impl Experiment for Functions {
         "How few evaluations does a function need when only its surface is sampled, and is the mesh still the dense one?"
     }
 
+    fn peers(&self) -> &'static [&'static str] {
+        &["PyMCubes", "scikit-image", "libigl", "warp", "numpy"]
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let mc = extractors::by_name("marching-cubes").ok_or_else(|| failed("marching-cubes".into(), "not registered"))?;
         let chunking: Vec<Box<dyn Extractor>> =
@@ -186,7 +194,7 @@ impl Experiment for Functions {
         let (mut rows, mut equal) = (Vec::new(), Vec::new());
         for (name, largest) in FIELDS {
             let field = load_object(name)?;
-            for &n in SIZES.iter().filter(|&&n| n <= largest) {
+            for &n in ctx.pick(&SIZES[..], &QUICK_SIZES).iter().filter(|&&n| n <= largest) {
                 // Alternating: the dense run first, then the sparse one, on the same grid.
                 if n <= DENSE_UP_TO {
                     rows.push(dense_row(&field, n, mc.as_ref())?);
@@ -196,7 +204,7 @@ impl Experiment for Functions {
             // A mesh field's dense mode asks the exact distance at every sample (no narrow band):
             // every extractor at the smallest size, marching cubes above it.
             let expensive = field.surface_mesh().is_some();
-            for &n in EQUALITY_AT.iter().filter(|&&n| n <= largest) {
+            for &n in ctx.pick(&EQUALITY_AT[..], &QUICK_SIZES).iter().filter(|&&n| n <= largest) {
                 let all = !expensive || n == EQUALITY_AT[0];
                 for e in chunking.iter().filter(|e| all || e.name() == mc.name()) {
                     equal.push(equality(&field, n, e.as_ref())?);
@@ -226,14 +234,14 @@ const PYMCUBES_UP_TO: usize = 64;
 /// Rounds per cell up to this size (alternating order), one above.
 const PYTHON_REPEAT_UP_TO: usize = 256;
 
-/// Runs `functions_peers.py` in the reference environment with this commit's package installed.
+/// Runs `functions/bench.py` in the reference environment with this commit's package installed.
 fn python_side(ctx: &Context) -> Result<PythonSide, String> {
     use crate::peers::python;
-    let root = ctx.report_dir.join("..");
+    let root = crate::provenance::root();
     let py = python::reference_python(&root)?;
     python::install_package(&py, &root)?;
-    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/experiment/functions_peers.py");
-    let sizes: Vec<String> = PYTHON_SIZES.iter().map(usize::to_string).collect();
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/experiment/functions/bench.py");
+    let sizes: Vec<String> = ctx.sizes(&PYTHON_SIZES).iter().map(usize::to_string).collect();
     let args: Vec<String> = [
         "--sizes",
         &sizes.join(","),

@@ -80,7 +80,8 @@ impl Experiment for LargeWorld {
     }
 
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
-        let dims = world_dims()?;
+        // A quick run: a 512x128x512-cell world.
+        let dims = if ctx.quick { [513, 129, 513] } else { world_dims()? };
         let field = fields::builtin("terrain", Default::default())?;
         let domain = field.domain();
         let spacing = (domain.max.y - domain.min.y) / (dims[1] - 1) as f32;

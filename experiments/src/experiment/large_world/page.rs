@@ -94,6 +94,7 @@ pub(super) fn memory_figure(ctx: &Context, runs: &[&Data]) -> Result<String, Exp
     let chart = BarChart {
         title: "Peak memory against the grid it meshed".into(),
         y_label: "GiB".into(),
+        y_scale: crate::figures::plot::Scale::Log,
         categories: with.iter().map(|r| format!("{}×{}×{}", r.dims[0], r.dims[1], r.dims[2])).collect(),
         series: vec![
             BarSeries {

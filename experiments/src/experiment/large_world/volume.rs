@@ -247,21 +247,24 @@ pub(super) fn run_volume(ctx: &Context) -> Result<(), ExperimentError> {
     let dir = ScratchDir::new()?;
     let (big, small, store) = (dir.0.join("volume.nrrd"), dir.0.join("compare.nrrd"), dir.0.join("volume.zarr"));
     let out = dir.0.join("mesh.ply");
-    let bar = ctx.bar("large_world volume", 3 + 2 * COMPARE_RUNS as u64);
-    let file_bytes = write_volume_file(&big, VOLUME_SIDE)?;
+    // A quick run: a 256³ volume, and a 129³ one compared once.
+    let (volume_side, compare_side, compare_runs) =
+        (ctx.pick(VOLUME_SIDE, 256), ctx.pick(COMPARE_SIDE, 129), ctx.pick(COMPARE_RUNS, 1));
+    let bar = ctx.bar("large_world volume", 3 + 2 * compare_runs as u64);
+    let file_bytes = write_volume_file(&big, volume_side)?;
     let streamed = streamed_run(&big, &out, None)?;
-    let in_place = in_place_run(&big, &out, VOLUME_SIDE)?;
+    let in_place = in_place_run(&big, &out, volume_side)?;
     std::fs::remove_file(&big).map_err(|source| isolab_io::IoError::Write { path: big.clone(), source })?;
     bar.inc(1);
-    let store_bytes = write_zarr_store(&store, VOLUME_SIDE)?;
+    let store_bytes = write_zarr_store(&store, volume_side)?;
     let zarr = streamed_run(&store, &out, None)?;
     std::fs::remove_dir_all(&store).map_err(|source| isolab_io::IoError::Write { path: store.clone(), source })?;
     bar.inc(1);
-    write_volume_file(&small, COMPARE_SIDE)?;
+    write_volume_file(&small, compare_side)?;
     bar.inc(1);
     let (mut memory_seconds, mut memory_peak, mut stream_seconds, mut stream_peak) = (vec![], vec![], vec![], vec![]);
     let mut compare_triangles = [0, 0];
-    for _ in 0..COMPARE_RUNS {
+    for _ in 0..compare_runs {
         let (seconds, peak, triangles) = in_memory_run(&small, &out)?;
         memory_seconds.push(seconds);
         memory_peak.extend(peak);
@@ -275,15 +278,15 @@ pub(super) fn run_volume(ctx: &Context) -> Result<(), ExperimentError> {
     }
     bar.finish();
     let data = VolumeData {
-        side: VOLUME_SIDE,
+        side: volume_side,
         file_gib: file_bytes as f64 / (1u64 << 30) as f64,
-        in_memory_need_mib: isolab_pipeline::volume_file_need([VOLUME_SIDE; 3], 1) >> 20,
+        in_memory_need_mib: isolab_pipeline::volume_file_need([volume_side; 3], 1) >> 20,
         available_mib: isolab_pipeline::available_memory().map(|b| b >> 20),
         chunk: VOLUME_CHUNK,
         algorithm: "marching-cubes".into(),
         streamed,
         zarr: Some((zarr, store_bytes)),
-        compare_side: COMPARE_SIDE,
+        compare_side,
         compare_iso: COMPARE_ISO,
         memory_seconds: Spread::of(memory_seconds),
         memory_peak_mib: Spread::of(memory_peak),

@@ -55,8 +55,12 @@ impl Experiment for MeshFields {
         "How fast is a mesh turned into a signed distance field, against libigl, and what does the narrow band change?"
     }
 
+    fn peers(&self) -> &'static [&'static str] {
+        &["libigl"]
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
-        let root = ctx.report_dir.join("..");
+        let root = crate::provenance::root();
         let (server, libigl) = match PythonServer::start(&root) {
             Ok((server, hello)) => match hello["available"]["libigl"].as_str() {
                 Some(v) => (Some(server), v.to_owned()),
@@ -66,9 +70,11 @@ impl Experiment for MeshFields {
         };
         let tmp = std::env::temp_dir().join(format!("isolab-mesh-fields-{}.f32", std::process::id()));
         let tmp_exact = tmp.with_extension("exact.f32");
-        let bar = ctx.bar(NAME, MODELS.len() as u64);
+        // A quick run: the first model, runs as repeats.
+        let (models, runs) = (ctx.sizes(&MODELS), ctx.pick(RUNS, ctx.repeats));
+        let bar = ctx.bar(NAME, models.len() as u64);
         let mut rows = Vec::new();
-        for model in MODELS {
+        for &model in models {
             let path = super::model_path(model);
             let mesh = read_mesh(Path::new(&path))?;
             let field = MeshField::new(model, &mesh.positions, &mesh.triangles)?;
@@ -77,14 +83,14 @@ impl Experiment for MeshFields {
             let (mut narrow_ms, mut exact_ms, mut igl_ms) = (Vec::new(), Vec::new(), Vec::new());
             let (mut narrow, mut exact) = (Vec::new(), Vec::new());
             let mut igl_error = None;
-            for run in 0..RUNS {
+            for run in 0..runs {
                 narrow_ms.push(time_ms(|| narrow = sampled(&field, &grid)));
                 exact_ms.push(time_ms(|| exact = sampled(&exact_field, &grid)));
                 if let Some(server) = &server {
                     let request = serde_json::json!({
                         "peer": "libigl-signed-distance", "mesh": path, "origin": grid.origin.to_array(),
                         "spacing": grid.spacing, "dims": grid.dims, "out": tmp,
-                        "exact_out": if run + 1 == RUNS { Some(&tmp_exact) } else { None },
+                        "exact_out": if run + 1 == runs { Some(&tmp_exact) } else { None },
                     });
                     match server.borrow_mut().request(&request) {
                         Ok((ms, _, _)) => igl_ms.push(ms),

@@ -32,13 +32,14 @@ pub(super) fn figure(ctx: &Context, data: &Data) -> Result<String, ExperimentErr
     if data.rows.iter().any(|r| r.libigl.is_some()) {
         series.push(BarSeries {
             label: "libigl signed_distance".into(),
-            color: series_color(2),
+            color: crate::figures::color_of("libigl"),
             values: medians(&|r| r.libigl.as_ref().map(|s| s.median)),
         });
     }
     let chart = BarChart {
         title: format!("A mesh to {} samples a side of signed distance", data.resolution),
         y_label: "time, ms (median)".into(),
+        y_scale: crate::figures::plot::Scale::Linear,
         categories: data.rows.iter().map(|r| r.model.clone()).collect(),
         series,
     };

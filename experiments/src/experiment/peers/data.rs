@@ -17,8 +17,11 @@ pub struct Timing {
     pub n: usize,
     /// How it was timed.
     pub protocol: Protocol,
-    /// Extraction time, ms: median and spread.
+    /// Extraction time, ms: median and spread over every run, in rounds until one was not wide.
     pub ms: Spread,
+    /// Whether its last round was still wide after the most rounds ([`crate::report::MAX_ROUNDS`]).
+    #[serde(default)]
+    pub wide: bool,
     /// Vertices of its output.
     pub vertices: usize,
     /// Triangles.

@@ -29,7 +29,7 @@ use crate::peers::isosurface_crate::IsosurfaceCrate;
 use crate::peers::ours::Ours;
 use crate::peers::python::{PythonPeer, PythonServer};
 use crate::peers::{Job, Peer, PeerError, Protocol};
-use crate::report::{median, Spread};
+use crate::report::{median, Spread, MAX_ROUNDS};
 use data::Data;
 pub use data::{Floor, Timing};
 use isolab_algorithms::{fields, Grid, Samples};
@@ -126,6 +126,11 @@ fn entries(python: Option<&std::rc::Rc<std::cell::RefCell<PythonServer>>>, root:
     list
 }
 
+/// Whether a cell's last round of `repeats` runs was wide ([`crate::report::WIDE`]).
+fn last_round_wide(times: &[f64], repeats: usize) -> bool {
+    repeats > 1 && times.len() >= repeats && Spread::of(times[times.len() - repeats..].to_vec()).is_wide()
+}
+
 impl Experiment for Peers {
     fn name(&self) -> &'static str {
         NAME
@@ -135,8 +140,12 @@ impl Experiment for Peers {
         "How fast are our extractors against the peer libraries on the same grids, one-shot and steady state?"
     }
 
+    fn peers(&self) -> &'static [&'static str] {
+        &["fast-surface-nets", "isosurface crate", "VTK", "scikit-image", "PyMCubes", "libigl", "numpy"]
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
-        let root = ctx.report_dir.join("..");
+        let root = crate::provenance::root();
         let repeats = ctx.repeats.max(1);
         let mut versions = BTreeMap::new();
         let mut skipped = Vec::new();
@@ -160,8 +169,11 @@ impl Experiment for Peers {
         let mut entries = entries(server.as_ref(), &root);
         let tmp = std::env::temp_dir().join(format!("isolab-peers-{}", std::process::id()));
         std::fs::create_dir_all(&tmp).map_err(|source| isolab_io::IoError::Write { path: tmp.clone(), source })?;
-        let mut grids: Vec<(&str, usize)> = FIELDS.iter().flat_map(|&f| SIZES.iter().map(move |&n| (f, n))).collect();
-        grids.extend(LARGE.1.iter().map(|&f| (f, LARGE.0)));
+        let sizes = ctx.sizes(&SIZES);
+        let mut grids: Vec<(&str, usize)> = FIELDS.iter().flat_map(|&f| sizes.iter().map(move |&n| (f, n))).collect();
+        if !ctx.quick {
+            grids.extend(LARGE.1.iter().map(|&f| (f, LARGE.0)));
+        }
         let bar = ctx.bar(NAME, grids.len() as u64);
         let mut timings = Vec::new();
         let mut floors = Vec::new();
@@ -196,10 +208,24 @@ impl Experiment for Peers {
                     }
                 }
             }
-            for _ in 0..repeats {
+            // Rounds of `repeats`; after each, only the cells whose last round was wide run again,
+            // up to MAX_ROUNDS rounds (every run kept).
+            let mut again: Option<Vec<(usize, Protocol)>> = None;
+            for round in 0..repeats * MAX_ROUNDS {
+                if round > 0 && round % repeats == 0 {
+                    let wide: Vec<(usize, Protocol)> =
+                        runs.iter().filter(|(_, (times, _, _))| last_round_wide(times, repeats)).map(|(cell, _)| *cell).collect();
+                    if wide.is_empty() {
+                        break;
+                    }
+                    again = Some(wide);
+                }
                 for protocol in PROTOCOLS {
                     for (k, e) in entries.iter_mut().enumerate() {
                         if failed[k] || (large && e.slow) || (protocol == Protocol::SteadyState && !e.steady) {
+                            continue;
+                        }
+                        if again.as_ref().is_some_and(|cells| !cells.contains(&(k, protocol))) {
                             continue;
                         }
                         let job = Job::Grid { samples: &samples, file: &raw, threads: e.threads };
@@ -228,6 +254,7 @@ impl Experiment for Peers {
                     field: field_name.into(),
                     n,
                     protocol,
+                    wide: last_round_wide(&times, repeats),
                     ms: Spread::of(times),
                     vertices,
                     triangles,
@@ -281,20 +308,20 @@ fn charts(dir: &Path, data: &Data) -> Result<(), ExperimentError> {
         labels.dedup();
         let series = labels
             .iter()
-            .enumerate()
-            .map(|(k, label)| Series {
+            .map(|label| Series {
                 label: (*label).to_owned(),
-                color: crate::figures::series_color(k),
+                color: crate::figures::color_of(label),
                 points: one_shot()
                     .filter(|t| t.implementation == *label)
                     .map(|t| (((t.n - 1) as f64).powi(3), t.ms.median))
                     .collect(),
+                ranges: one_shot().filter(|t| t.implementation == *label).map(|t| (t.ms.min, t.ms.max)).collect(),
             })
             .collect();
         let chart = XyPlot {
             title: format!("One-shot extraction time against cells, {field}"),
             x_label: "cells".into(),
-            y_label: "ms (median)".into(),
+            y_label: "ms (median; bars: fastest to slowest run)".into(),
             x_scale: Scale::Log,
             y_scale: Scale::Log,
             style: Style::Lines,

@@ -60,10 +60,14 @@ pub(super) fn cli_columns() -> Vec<Column> {
     ]
 }
 
-/// Peer median over ours, or a dash.
+/// Peer median over ours with the range of the per-round ratios (runs of the same round paired),
+/// or a dash.
 pub(super) fn ratio(a: Option<&Timing>, b: Option<&Timing>) -> String {
     match (a, b) {
-        (Some(a), Some(b)) => format!("{:.2}×", b.ms.median / a.ms.median),
+        (Some(a), Some(b)) => match crate::report::ratio_range(&a.ms.runs, &b.ms.runs) {
+            Some((lo, hi)) if a.ms.runs.len() > 1 => format!("{:.2}× ({lo:.2}-{hi:.2})", b.ms.median / a.ms.median),
+            _ => format!("{:.2}×", b.ms.median / a.ms.median),
+        },
         _ => "-".into(),
     }
 }
@@ -84,10 +88,10 @@ pub(super) fn ratio_table(data: &Data, grids: &[(String, usize)], protocol: Prot
     markdown_table(&header, &body)
 }
 
-/// Median (fastest-slowest) in ms.
+/// Median (fastest-slowest) in ms, marked *wide* when its last round stayed wide.
 pub(super) fn spread(t: &Timing) -> String {
     use crate::experiment::context::ms;
-    format!("{} ({}-{})", ms(t.ms.median), ms(t.ms.min), ms(t.ms.max))
+    format!("{} ({}-{}){}", ms(t.ms.median), ms(t.ms.min), ms(t.ms.max), if t.wide { " *wide*" } else { "" })
 }
 
 /// A times table under `protocol`: every implementation measured under it, median and spread.
@@ -122,14 +126,16 @@ pub(super) fn page_body(data: &Data) -> String {
     let mut md = String::from("## Against the peers, in one run (`peers`)\n\n");
     md.push_str(&format!(
         "Every implementation on the same sampled grid (built-in fields on their default domains, n samples a side), extraction \
-         only, alternating, {} runs each per protocol{}; Python peers read the very grid isolab sampled (`tests/reference/peers.py`). \
+         only, alternating, {} runs each per protocol{}, and again in rounds of as many for a cell whose last round's \
+         slowest run took more than {}x its fastest, up to {} rounds (every run kept; a cell still that spread is marked \
+         *wide*); Python peers read the very grid isolab sampled (`tests/reference/peers.py`). \
          **One-shot**: fresh output and fresh state every call, as a CLI user or a first library call meets it (ours: a new \
          extractor and a new `Extraction`; VTK: a new filter; `fast-surface-nets`: a new buffer), each freed when its call \
          returns (freeing it just before the next call instead would hand that call pages already touched). **Steady state**: the same \
          call repeated with what the implementation lets a caller keep (ours: extractor and output buffers; VTK: the same \
          filter, `Modified()` then `Update()`; `fast-surface-nets`: its buffer), after one unrecorded warm-up call. The slower \
          peers keep nothing between calls and run one-shot only. Ratios are peer median / our median under the same protocol \
-         (above one means we are faster); the times tables give each median with its fastest and slowest run. \
+         (above one means we are faster), with the range of the ratios of the runs of each round in brackets; the times tables give each median with its fastest and slowest run. \
          Our marching cubes makes no normals here, as VTK runs with ComputeNormalsOff and PyMCubes, libigl and the \
          `isosurface` crate make none; scikit-image's `marching_cubes` computes each vertex's normal and value inside its \
          timed call (it has no option to leave them out), so its times include work ours skips. Surface nets makes its usual normals, as `fast-surface-nets` does, and does not smooth, as no peer does. Threads: our one-thread runs are serial on the \
@@ -143,6 +149,8 @@ pub(super) fn page_body(data: &Data) -> String {
             ", each call after {ms} ms idle (so that no call overlaps what the previous one, often in another process, still \
              does after it answered; every thread pool has then slept)"
         )),
+        crate::report::WIDE,
+        crate::report::MAX_ROUNDS,
         match data.two_threads_global {
             Some(true) => "our two-thread runs call from that thread on rayon's global pool of two threads, so the caller \
                            wakes both pool threads at once and sleeps until they are done, as VTK's caller does with its pool \

@@ -83,6 +83,7 @@ mod tests {
             n: 64,
             protocol: Protocol::OneShot,
             ms: Spread::of(vec![ms]),
+            wide: false,
             vertices: 0,
             triangles: 0,
         }

@@ -74,16 +74,32 @@ impl Experiment for PythonUsers {
         "How fast is isolab's marching cubes from Python, and how much memory does it take, against scikit-image, VTK and the other marching cubes a Python user can install, on the same numpy arrays?"
     }
 
+    fn peers(&self) -> &'static [&'static str] {
+        &[
+            "VTK",
+            "scikit-image",
+            "PyMCubes",
+            "libigl",
+            "marching-cubes-numpy",
+            "meshlib",
+            "warp",
+            "zmesh",
+            "nibabel",
+            "nilearn",
+            "numpy",
+        ]
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
-        let root = ctx.report_dir.join("..");
+        let root = crate::provenance::root();
         let python = python::reference_python(&root).map_err(ExperimentError::Python)?;
         python::install_package(&python, &root).map_err(ExperimentError::Python)?;
         let repeats = ctx.repeats.max(1);
-        let sizes: Vec<String> = SIZES.iter().map(usize::to_string).collect();
-        let uint8 = UINT8_SIZE.to_string();
+        let sizes: Vec<String> = ctx.sizes(&SIZES).iter().map(usize::to_string).collect();
+        let uint8 = ctx.pick(UINT8_SIZE, SIZES[0]).to_string();
         let mut data =
             bench(&python, &[&["--sizes", &sizes.join(","), "--mni", "nilearn", "--uint8", &uint8, "--peak"]], repeats, None)?;
-        let large: Vec<String> = HUGE_PAGE_SIZES.iter().map(usize::to_string).collect();
+        let large: Vec<String> = ctx.sizes(&HUGE_PAGE_SIZES).iter().map(usize::to_string).collect();
         let only = HUGE_PAGE_IMPLEMENTATIONS.join(",");
         let huge = bench(
             &python,
@@ -143,24 +159,26 @@ fn figures(ctx: &Context, data: &Data) -> Result<(), ExperimentError> {
         crate::report::first_seen(data.rows.iter().filter(|r| r.threads == 1).map(|r| r.implementation.clone()));
     let series = implementations
         .iter()
-        .enumerate()
-        .map(|(k, implementation)| Series {
-            label: implementation.clone(),
-            color: crate::figures::series_color(k),
-            points: data
+        .map(|implementation| {
+            let rows: Vec<_> = data
                 .rows
                 .iter()
                 .filter(|r| {
                     r.environment == "default" && r.input == "gyroid" && r.threads == 1 && &r.implementation == implementation
                 })
-                .map(|r| ((r.n as f64).powi(3), spread(r).median))
-                .collect(),
+                .collect();
+            Series {
+                label: implementation.clone(),
+                color: crate::figures::color_of(implementation),
+                points: rows.iter().map(|r| ((r.n as f64).powi(3), spread(r).median)).collect(),
+                ranges: rows.iter().map(|r| (spread(r).min, spread(r).max)).collect(),
+            }
         })
         .collect();
     let chart = XyPlot {
         title: "Gyroid, one thread, numpy array in and out".into(),
         x_label: "samples".into(),
-        y_label: "ms (median)".into(),
+        y_label: "ms (median; bars: fastest to slowest run)".into(),
         x_scale: Scale::Log,
         y_scale: Scale::Log,
         style: Style::Lines,

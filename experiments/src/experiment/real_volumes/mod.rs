@@ -134,8 +134,12 @@ impl Experiment for RealVolumes {
         "Do the extractors mesh a real MRI cleanly, and how fast against VTK and scikit-image?"
     }
 
+    fn peers(&self) -> &'static [&'static str] {
+        &["VTK", "scikit-image", "PyMCubes", "libigl", "pymeshlab", "nibabel", "nilearn"]
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
-        let root = ctx.report_dir.join("..");
+        let root = crate::provenance::root();
         let mut data = Data { repeats: ctx.repeats, threads: 2, ..Default::default() };
         let pools: Vec<rayon::ThreadPool> = [1, 2]
             .iter()

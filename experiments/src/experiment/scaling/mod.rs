@@ -114,8 +114,10 @@ impl Experiment for Scaling {
         if !metered {
             skipped.push("peak memory: this binary does not install the counting allocator".to_owned());
         }
-        let bar = ctx.bar(NAME, (SIZES.len() * INFOS.len()) as u64);
-        for n in SIZES {
+        // A quick run: up to 128³.
+        let sizes = ctx.pick(&SIZES[..], &SIZES[..3]);
+        let bar = ctx.bar(NAME, (sizes.len() * INFOS.len()) as u64);
+        for &n in sizes {
             let grid = Grid::covering(&field.domain(), n)?;
             let samples = Samples::sample_cubic(field.clone(), grid, 0.0)?;
             let grid_bytes = samples.values().len() * 4;
@@ -176,9 +178,9 @@ impl Experiment for Scaling {
                     peak_bytes: peak,
                 });
                 let one_thread_s = ms[0].max(first.as_secs_f64() * 1e3) / 1e3;
-                if one_thread_s > BUDGET_S && n != *SIZES.last().unwrap_or(&n) {
+                if one_thread_s > BUDGET_S && n != *sizes.last().unwrap_or(&n) {
                     alive[index] = false;
-                    let next = SIZES.iter().find(|&&m| m > n).copied().unwrap_or(n);
+                    let next = sizes.iter().find(|&&m| m > n).copied().unwrap_or(n);
                     skipped.push(format!(
                         "{} above {n}³: one thread took {one_thread_s:.1} s at {n}³ (over the {BUDGET_S} s budget; the next grid has {}× the cells)",
                         info.name,
@@ -212,6 +214,13 @@ fn figures(ctx: &Context, data: &Data) -> Result<(), ExperimentError> {
                 label: name.clone(),
                 color: crate::figures::color_of(name),
                 points: data.rows.iter().filter(|r| &r.algorithm == name).map(|r| (r.cells as f64, r.ms[thread])).collect(),
+                // Rows written before spreads were kept have none: no bars then.
+                ranges: data
+                    .rows
+                    .iter()
+                    .filter(|r| &r.algorithm == name)
+                    .map_while(|r| r.spread.get(thread).map(|s| (s[0], s[1])))
+                    .collect(),
             })
             .collect()
     };
@@ -219,7 +228,7 @@ fn figures(ctx: &Context, data: &Data) -> Result<(), ExperimentError> {
         let chart = XyPlot {
             title: format!("Extraction time against cells, {}, {t} thread{}", data.field, if t == 1 { "" } else { "s" }),
             x_label: "cells".into(),
-            y_label: "ms (median)".into(),
+            y_label: "ms (median; bars: fastest to slowest run)".into(),
             x_scale: Scale::Log,
             y_scale: Scale::Log,
             style: Style::Lines,

@@ -59,8 +59,12 @@ impl Experiment for Segmentations {
         "How fast, closed and gap-free are isolab's label-map surfaces against VTK's SurfaceNets3D, zmesh and per-label marching cubes?"
     }
 
+    fn peers(&self) -> &'static [&'static str] {
+        &["VTK", "scikit-image", "zmesh", "nibabel", "nilearn", "numpy"]
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
-        let root = ctx.report_dir.join("..");
+        let root = crate::provenance::root();
         let python = python::reference_python(&root).map_err(ExperimentError::Python)?;
         python::install_package(&python, &root).map_err(ExperimentError::Python)?;
         let repeats = ctx.repeats.max(1);
@@ -69,7 +73,7 @@ impl Experiment for Segmentations {
         std::fs::create_dir_all(&maps).map_err(|source| isolab_io::IoError::Write { path: maps.clone(), source })?;
         let tissue = maps.join("mni-tissue.nii.gz");
         let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/experiment/segmentations/bench.py");
-        let voronoi: Vec<String> = VORONOI.iter().map(|(n, l)| format!("{n}:{l}")).collect();
+        let voronoi: Vec<String> = ctx.sizes(&VORONOI).iter().map(|(n, l)| format!("{n}:{l}")).collect();
         let args: Vec<String> = [
             "--repeats",
             &repeats.to_string(),

@@ -66,6 +66,7 @@ impl Experiment for SphereConvergence {
                     .filter(|r| r.algorithm == e.name())
                     .map(|r| (r.resolution as f64, r.volume_error.abs()))
                     .collect(),
+                ranges: Vec::new(),
             })
             .collect();
         let plot = XyPlot {

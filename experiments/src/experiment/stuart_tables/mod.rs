@@ -32,6 +32,7 @@ use isolab_algorithms::extractors::bcc_sculpt::{sculpt_surface, SculptOptions};
 use isolab_metrics::topology;
 use isolab_metrics::volume_mesh::volume_metrics;
 use isolab_render::{self as render, RenderOptions, Shading};
+pub(crate) use table_one::convergence_short_of_paper;
 #[cfg(test)]
 use table_one::{paper_converged, paper_min_angle_range, paper_series, rising_with_resolution, PAPER_TABLE1_MIN_ANGLE};
 #[cfg(test)]
@@ -109,16 +110,22 @@ impl Experiment for StuartTables {
         "Does bcc-sculpt reproduce Stuart et al.'s coarse enclosing tetrahedral meshes, and how do TetGen and CGAL compare?"
     }
 
+    fn peers(&self) -> &'static [&'static str] {
+        &["TetGen", "CGAL (Python)", "NETGEN", "fTetWild", "libigl", "pymeshlab", "scikit-image"]
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
-        let bar = ctx.bar(NAME, (MODELS.len() * CELLS.len() * RATIOS.len()) as u64);
+        // A quick run: the bunny at the coarsest lattice.
+        let (models, cell_counts) = (ctx.sizes(&MODELS), ctx.sizes(&CELLS));
+        let bar = ctx.bar(NAME, (models.len() * cell_counts.len() * RATIOS.len()) as u64);
         let dir = ctx.figure_dir(NAME)?;
         let mut rows = Vec::new();
         let mut figures = Vec::new();
-        for model in MODELS {
+        for &model in models {
             let field = load_object(model)?;
             let surface = field.surface_mesh().expect("shipped models are mesh fields");
             let mut pictures = Vec::new();
-            for cells in CELLS {
+            for &cells in cell_counts {
                 // Columns as in the paper's figures: offset ratio decreasing left to right.
                 for &ratio in RATIOS.iter().rev() {
                     let options =
@@ -169,7 +176,7 @@ impl Experiment for StuartTables {
             figures.push((model.to_string(), ctx.link(&path)));
         }
         let mut ablation = Vec::new();
-        for model in MODELS {
+        for &model in models {
             let field = load_object(model)?;
             let surface = field.surface_mesh().expect("shipped models are mesh fields");
             for (variant, options) in variants() {
@@ -193,7 +200,7 @@ impl Experiment for StuartTables {
         let bunny = load_object("stanford-bunny")?;
         let surface = bunny.surface_mesh().expect("the bunny is a mesh field");
         let options = SculptOptions { cells: BENCH_CELLS, ..Default::default() };
-        let runs = ctx.repeats.max(5);
+        let runs = ctx.pick(ctx.repeats.max(5), ctx.repeats);
         let mut times = Vec::with_capacity(runs);
         let mut bench_tetrahedra = 0;
         for _ in 0..runs {
@@ -202,7 +209,7 @@ impl Experiment for StuartTables {
             times.push(start.elapsed());
             bench_tetrahedra = result.report.tetrahedra;
         }
-        let relaxation = relaxation::run(&MODELS)?;
+        let relaxation = relaxation::run(models)?;
         let relaxation_plot = relaxation::plot(&relaxation, &dir)?.map(|p| ctx.link(&p));
         bar.finish();
         let bench_ms = median(times).as_secs_f64() * 1e3;

@@ -187,6 +187,7 @@ pub(super) fn plot(runs: &[StudyRun], dir: &Path) -> Result<Option<std::path::Pa
             },
             color: crate::figures::series_color(k),
             points: r.trace.iter().map(|t| (f64::from(t.0), t.1.max(0.01))).collect(),
+            ranges: Vec::new(),
         })
         .collect();
     if series.is_empty() {

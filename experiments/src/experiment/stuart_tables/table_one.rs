@@ -94,6 +94,22 @@ pub(super) fn paper_converged(column: usize) -> (usize, usize) {
     (PAPER_TABLE1_MIN_ANGLE.iter().filter(|r| r.2[column].is_some()).count(), n)
 }
 
+/// Per offset ratio where our share of converged runs falls below the paper's Table 1 share:
+/// (ratio, ours converged, our runs, paper converged, paper configurations).
+pub(crate) fn convergence_short_of_paper(rows: &[Row]) -> Vec<(f32, usize, usize, usize, usize)> {
+    RATIOS
+        .iter()
+        .enumerate()
+        .filter_map(|(k, &ratio)| {
+            let (pc, pn) = paper_converged(k);
+            let ours: Vec<&Row> = rows.iter().filter(|r| r.ratio == ratio).collect();
+            let oc = ours.iter().filter(|r| r.converged).count();
+            // oc / on < pc / pn, in integers.
+            (!ours.is_empty() && oc * pn < pc * ours.len()).then_some((ratio, oc, ours.len(), pc, pn))
+        })
+        .collect()
+}
+
 /// Of the (model, ratio) series with at least two converged spacings, how many have a larger
 /// minimum dihedral angle at the finest converged spacing than at the coarsest: (rising, series).
 pub(super) fn rising_with_resolution(series: &[Vec<f64>]) -> (usize, usize) {

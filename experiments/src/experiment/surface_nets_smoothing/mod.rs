@@ -147,6 +147,7 @@ impl Experiment for SurfaceNetsSmoothing {
         let chart = BarChart {
             title: format!("Smoothing time on terrain chunks ({ITERATIONS} iterations), ms"),
             y_label: "ms (median)".into(),
+            y_scale: crate::figures::plot::Scale::Linear,
             categories: CHUNKS.iter().map(|c| format!("{c}^3")).collect(),
             series: METHODS[1..]
                 .iter()

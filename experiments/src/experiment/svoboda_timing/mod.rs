@@ -143,12 +143,14 @@ impl Experiment for SvobodaTiming {
                     .filter(|r| r.algorithm == *a && r.cubes > 1)
                     .map(|r| ((r.cubes as f64).powi(3), r.extraction_ms))
                     .collect(),
+                ranges: Vec::new(),
             })
             .collect();
         series.push(Series {
             label: "Svoboda 2020 (Unity, C#)".into(),
             color: (0, 0, 0),
             points: PAPER.iter().filter(|p| p.0 > 1).map(|&(c, ms)| ((c as f64).powi(3), ms)).collect(),
+            ranges: Vec::new(),
         });
         let chart = XyPlot {
             title: "Time to triangulate a noise terrain once".into(),

@@ -115,6 +115,8 @@ fn picture(layers: &Layers, opts: &RenderOptions) -> render::Image {
 fn edit_run(ctx: &Context, name: &str) -> Result<(EditRun, Vec<render::Image>, render::Image), ExperimentError> {
     let mut phases = lake_and_cave(EDIT_SCENE);
     let extractor = build(name)?;
+    // A quick run: the first 20 edits.
+    let edits = ctx.pick(EDITS, 20);
     let [nx, ny, nz] = phases.grid().dims;
     let mut random = Random::new(SEED);
     let mut range = |lo: f32, hi: f32| lo + (hi - lo) * random.unit_f32();
@@ -122,7 +124,7 @@ fn edit_run(ctx: &Context, name: &str) -> Result<(EditRun, Vec<render::Image>, r
     let start_masses = phases.masses();
     let mut run = EditRun {
         extractor: name.into(),
-        edits: EDITS,
+        edits,
         fewest_contact: usize::MAX,
         solid_mass: [start_masses.solid, 0.0],
         liquid_mass: [start_masses.liquid, 0.0],
@@ -132,9 +134,9 @@ fn edit_run(ctx: &Context, name: &str) -> Result<(EditRun, Vec<render::Image>, r
     run.chunk_counts = chunked.counts();
     let mut frames = vec![picture(&chunked.welded(), &opts)];
     let (mut books_solid, mut books_liquid) = (start_masses.solid, start_masses.liquid);
-    let bar = ctx.bar(&format!("{NAME} {name}"), EDITS as u64);
+    let bar = ctx.bar(&format!("{NAME} {name}"), edits as u64);
     let mut last = Layers::default();
-    for edit in 0..EDITS {
+    for edit in 0..edits {
         let ground = nz as f32 * 0.5;
         let centre = Vec3::new(range(4.0, nx as f32 - 5.0), range(4.0, ny as f32 - 5.0), range(ground - 6.0, ground + 3.0));
         let radius = range(2.0, 5.0);
@@ -216,7 +218,7 @@ impl Experiment for TerrainLiquids {
             let both = layers.crossing_cells > 0;
             let (mut times, mut alone_times) = (Vec::new(), Vec::new());
             let mut alone = Layers::default();
-            for _ in 0..RUNS {
+            for _ in 0..ctx.pick(RUNS, ctx.repeats) {
                 let start = Instant::now();
                 std::hint::black_box(extract_layers(extractor.as_ref(), &phases)?);
                 times.push(start.elapsed().as_secs_f64() * 1e3);

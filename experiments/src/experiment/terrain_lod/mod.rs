@@ -324,6 +324,10 @@ impl Experiment for TerrainLod {
         "Do three levels of detail meet without cracks for marching cubes, surface nets and dual contouring, how do they compare with Transvoxel's transition cells, and how many triangles do they save?"
     }
 
+    fn peers(&self) -> &'static [&'static str] {
+        &["transvoxel"]
+    }
+
     fn run(&self, ctx: &Context) -> Result<(), ExperimentError> {
         let field = fields::builtin("terrain", Default::default())?;
         let grid = Grid::with_dims(&field.domain(), DIMS)?;

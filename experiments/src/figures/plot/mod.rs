@@ -21,6 +21,9 @@ pub struct Series {
     pub color: (u8, u8, u8),
     /// Points `(x, y)`.
     pub points: Vec<(f64, f64)>,
+    /// Each point's spread in y, `(fastest, slowest)` of its runs, drawn as a bar through it; one
+    /// per point, or empty for none.
+    pub ranges: Vec<(f64, f64)>,
 }
 
 /// What kind of XY plot.
@@ -198,6 +201,14 @@ fn marker_of(i: usize) -> Marker {
     MARKERS[i % MARKERS.len()]
 }
 
+/// The marker of an implementation, the same on every chart: from a hash of its name as the
+/// colour table knows it ([`super::implementation_key`]).
+fn marker_for(label: &str) -> Marker {
+    let key = super::implementation_key(label).0;
+    let hash = key.bytes().fold(0xcbf29ce484222325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100000001b3));
+    marker_of((hash % MARKERS.len() as u64) as usize)
+}
+
 /// A marker centred at pixel `(x, y)` of `area`.
 fn draw_marker<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
@@ -261,26 +272,39 @@ fn draw_legend_panel<DB: DrawingBackend>(
     Ok(())
 }
 
+/// A series with its points and its spread bars `(x, fastest, slowest)`, in plotted units.
+type Plotted = (Series, Vec<(f64, f64)>, Vec<(f64, f64, f64)>);
+
 fn draw_xy<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, plot: &XyPlot) -> Result<(), String> {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(err)?;
-    let series: Vec<(Series, Vec<(f64, f64)>)> = plot
+    let series: Vec<Plotted> = plot
         .series
         .iter()
         .map(|s| {
             let pts =
                 s.points.iter().filter_map(|&(x, y)| Some((transform(x, plot.x_scale)?, transform(y, plot.y_scale)?))).collect();
-            (s.clone(), pts)
+            let bars = s
+                .points
+                .iter()
+                .zip(&s.ranges)
+                .filter_map(|(&(x, _), &(lo, hi))| {
+                    Some((transform(x, plot.x_scale)?, transform(lo, plot.y_scale)?, transform(hi, plot.y_scale)?))
+                })
+                .collect();
+            (s.clone(), pts, bars)
         })
         .collect();
-    let all = series.iter().flat_map(|(_, p)| p.iter());
+    let spans = series.iter().flat_map(|(_, _, b)| b.iter().flat_map(|&(x, lo, hi)| [(x, lo), (x, hi)]));
+    let all: Vec<(f64, f64)> = series.iter().flat_map(|(_, p, _)| p.iter().copied()).chain(spans).collect();
+    let all = all.iter();
     let (x0, x1) = padded(
         all.clone().map(|p| p.0).fold(f64::INFINITY, f64::min),
         all.clone().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max),
     );
     let (y0, y1) =
         padded(all.clone().map(|p| p.1).fold(f64::INFINITY, f64::min), all.map(|p| p.1).fold(f64::NEG_INFINITY, f64::max));
-    let labels: Vec<&str> = series.iter().map(|(s, _)| s.label.as_str()).collect();
+    let labels: Vec<&str> = series.iter().map(|(s, _, _)| s.label.as_str()).collect();
     // The title over the whole width (legend panel included), so a long one is not cut.
     let body = root.titled(&plot.title, ("sans-serif", 20)).map_err(err)?;
     let (w, _) = body.dim_in_pixel();
@@ -304,7 +328,7 @@ fn draw_xy<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, plot: &XyPlot) -> 
         .draw()
         .map_err(err)?;
     let mut entries = Vec::new();
-    for (i, (s, pts)) in series.iter().enumerate() {
+    for (i, (s, pts, bars)) in series.iter().enumerate() {
         let color = RGBColor(s.color.0, s.color.1, s.color.2);
         let dashed = i % 2 == 1;
         if plot.style == Style::Lines {
@@ -314,7 +338,18 @@ fn draw_xy<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, plot: &XyPlot) -> 
                 chart.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2))).map_err(err)?;
             }
         }
-        let m = marker_of(i);
+        // Each point's spread: a bar from its fastest to its slowest run, capped.
+        for &(x, lo, hi) in bars {
+            let (ox, oy) = plot_area.get_base_pixel();
+            let (a, b) = (chart.backend_coord(&(x, lo)), chart.backend_coord(&(x, hi)));
+            let (a, b) = ((a.0 - ox, a.1 - oy), (b.0 - ox, b.1 - oy));
+            let style = color.stroke_width(1);
+            plot_area.draw(&PathElement::new(vec![a, b], style)).map_err(err)?;
+            for end in [a, b] {
+                plot_area.draw(&PathElement::new(vec![(end.0 - 3, end.1), (end.0 + 3, end.1)], style)).map_err(err)?;
+            }
+        }
+        let m = marker_for(&s.label);
         for p in pts {
             let px = chart.backend_coord(p);
             let (ox, oy) = plot_area.get_base_pixel();
@@ -356,7 +391,7 @@ impl HistogramPlot {
                         h.counts.iter().enumerate().map(|(i, &c)| (h.edge(i) + 0.5 * width, c as f64 / total)).collect();
                     // Values above the range, as one last point past the end.
                     points.push((h.max + 0.5 * width, h.above as f64 / total));
-                    Series { label: format!("{label} (last point: > {})", h.max), color: *color, points }
+                    Series { label: format!("{label} (last point: > {})", h.max), color: *color, points, ranges: Vec::new() }
                 })
                 .collect(),
         }
@@ -370,6 +405,9 @@ pub struct BarChart {
     pub title: String,
     /// Y axis label.
     pub y_label: String,
+    /// The y axis: linear from zero, or log (bars from below the smallest value) where values
+    /// span decades.
+    pub y_scale: Scale,
     /// Category names along x.
     pub categories: Vec<String>,
     /// One bar per category in each series.
@@ -392,9 +430,20 @@ fn draw_bars<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart_spec: &Bar
     root.fill(&WHITE).map_err(err)?;
     let n = chart_spec.categories.len().max(1);
     let k = chart_spec.series.len().max(1);
-    let top =
-        chart_spec.series.iter().flat_map(|s| s.values.iter().copied()).filter(|v| v.is_finite()).fold(0.0, f64::max).max(1e-12)
-            * 1.1;
+    let scale = chart_spec.y_scale;
+    let plotted: Vec<f64> = chart_spec.series.iter().flat_map(|s| s.values.iter().filter_map(|&v| transform(v, scale))).collect();
+    let (y0, y1) = match scale {
+        Scale::Linear => (0.0, plotted.iter().copied().fold(0.0, f64::max).max(1e-12) * 1.1),
+        Scale::Log => {
+            let lo = plotted.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = plotted.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            if lo.is_finite() {
+                ((lo - 0.1).floor(), hi + 0.1)
+            } else {
+                (0.0, 1.0)
+            }
+        }
+    };
     let labels: Vec<&str> = chart_spec.series.iter().map(|s| s.label.as_str()).collect();
     // The title over the whole width (legend panel included), so a long one is not cut.
     let body = root.titled(&chart_spec.title, ("sans-serif", 20)).map_err(err)?;
@@ -404,7 +453,7 @@ fn draw_bars<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart_spec: &Bar
         .margin(12)
         .x_label_area_size(70)
         .y_label_area_size(70)
-        .build_cartesian_2d(0.0..n as f64, 0.0..top)
+        .build_cartesian_2d(0.0..n as f64, Axis { lo: y0, hi: y1, scale })
         .map_err(err)?;
     chart
         .configure_mesh()
@@ -413,7 +462,7 @@ fn draw_bars<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart_spec: &Bar
         .y_desc(&chart_spec.y_label)
         .label_style(("sans-serif", 13))
         .axis_desc_style(("sans-serif", 15))
-        .y_label_formatter(&|v| label(*v, Scale::Linear))
+        .y_label_formatter(&|v| label(*v, scale))
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
         .map_err(err)?;
@@ -422,9 +471,9 @@ fn draw_bars<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart_spec: &Bar
     for (j, BarSeries { label: name, color, values }) in chart_spec.series.iter().enumerate() {
         let color = RGBColor(color.0, color.1, color.2);
         chart
-            .draw_series(values.iter().enumerate().filter(|(_, v)| v.is_finite()).map(|(i, &v)| {
+            .draw_series(values.iter().enumerate().filter_map(|(i, &v)| transform(v, scale).map(|t| (i, t))).map(|(i, t)| {
                 let x0 = i as f64 + 0.1 + j as f64 * width;
-                Rectangle::new([(x0, 0.0), (x0 + width * 0.92, v)], color.filled())
+                Rectangle::new([(x0, y0), (x0 + width * 0.92, t)], color.filled())
             }))
             .map_err(err)?;
         entries.push((name.clone(), color, Swatch::Bar));
@@ -487,86 +536,4 @@ pub fn histogram(stem: &Path, plot: &HistogramPlot) -> Result<(), String> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn writes_svg_and_png_with_text() {
-        let dir = tempfile::tempdir().unwrap();
-        let stem = dir.path().join("plot");
-        let plot = XyPlot {
-            title: "quality against cost".into(),
-            x_label: "time".into(),
-            y_label: "aspect".into(),
-            x_scale: Scale::Log,
-            y_scale: Scale::Linear,
-            style: Style::Scatter,
-            series: vec![Series { label: "marching-cubes".into(), color: (10, 20, 30), points: vec![(1.0, 2.0), (10.0, 3.0)] }],
-        };
-        xy(&stem, &plot).unwrap();
-        let svg = std::fs::read_to_string(stem.with_extension("svg")).unwrap();
-        assert!(svg.contains("quality against cost") && svg.contains("marching-cubes"));
-        let png = std::fs::read(stem.with_extension("png")).unwrap();
-        assert_eq!(&png[1..4], b"PNG");
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2, "no temporary files left");
-    }
-
-    #[test]
-    fn bar_chart_names_its_categories() {
-        let dir = tempfile::tempdir().unwrap();
-        let stem = dir.path().join("bars");
-        let chart = BarChart {
-            title: "triangles".into(),
-            y_label: "count".into(),
-            categories: vec!["sphere".into(), "torus".into()],
-            series: vec![
-                BarSeries { label: "marching-cubes".into(), color: (1, 2, 3), values: vec![10.0, 20.0] },
-                BarSeries { label: "other".into(), color: (4, 5, 6), values: vec![5.0, f64::NAN] },
-            ],
-        };
-        bars(&stem, &chart).unwrap();
-        let svg = std::fs::read_to_string(stem.with_extension("svg")).unwrap();
-        assert!(svg.contains("sphere") && svg.contains("torus") && svg.contains("other"));
-        assert!(stem.with_extension("png").exists());
-    }
-
-    #[test]
-    fn captions_write_dark_text_on_the_corner_only() {
-        let (w, h) = (120u32, 60u32);
-        let mut rgb = vec![128u8; (w * h * 3) as usize];
-        caption(&mut rgb, (w, h), "surface-nets").unwrap();
-        let dark = |x: u32, y: u32| rgb[((y * w + x) * 3) as usize] < 100;
-        assert!((0..20).any(|y| (0..100).any(|x| dark(x, y))), "no text drawn");
-        assert!((30..h).all(|y| (0..w).all(|x| rgb[((y * w + x) * 3) as usize] == 128)), "drawn outside the band");
-    }
-
-    #[test]
-    fn log_ticks_sit_at_round_values() {
-        let values = |lo: f64, hi: f64, max: usize| -> Vec<String> {
-            log_ticks(lo.log10(), hi.log10(), max).iter().map(|&t| label(t, Scale::Log)).collect()
-        };
-        // The range that drew 15.8, 25.1 and 39.8 before: now round values only.
-        assert_eq!(values(12.0, 45.0, 2), ["20"]);
-        assert_eq!(values(12.0, 45.0, 4), ["20", "30", "40"]);
-        assert_eq!(values(0.5, 300.0, 6), ["1", "10", "100"]);
-        assert_eq!(values(0.5, 300.0, 12), ["0.5", "1", "2", "5", "10", "20", "50", "100", "200"]);
-        assert_eq!(values(16.0, 256.0, 20), ["20", "50", "100", "200"], "more than a decade: no crowding 7-8-9");
-        assert_eq!(values(1.0, 1e9, 4), ["1", "1000", "1e6", "1e9"]);
-    }
-
-    #[test]
-    fn the_legend_has_room_beside_the_plot() {
-        assert_eq!(legend_width(&[]), 0);
-        assert!(legend_width(&["marching-cubes"]) > 100 && legend_width(&["x".repeat(500).as_str()]) <= SIZE.0 / 2);
-        assert_eq!(marker_of(0), Marker::Circle);
-        assert_ne!(marker_of(1), marker_of(0));
-    }
-
-    #[test]
-    fn log_labels() {
-        assert_eq!(label(2.0, Scale::Log), "100");
-        assert_eq!(label(0.5f64.log10(), Scale::Log), "0.5");
-        assert_eq!(label(5.0, Scale::Log), "1e5");
-        assert_eq!(label(0.5, Scale::Linear), "0.5");
-    }
-}
+mod tests;

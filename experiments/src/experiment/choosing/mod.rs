@@ -276,7 +276,7 @@ fn sharp(data: &sharp_features::Data, compared: &compare_algorithms::Data) -> Re
         data.rows.iter().filter(|r| r.resolution == finest && r.manifold && r.self_intersections == 0).collect();
     at.sort_by(|a, b| a.worst_corner_h.total_cmp(&b.worst_corner_h));
     let sharpest = *at.first().ok_or_else(|| missing("clean sharp-feature row"))?;
-    let clean_everywhere = |r: &&&sharp_features::Row| middle_intersections(&r.algorithm, compared).0 == 0;
+    let clean_everywhere = |r: &&&sharp_features::Row| compared.intersections(&r.algorithm).all_pairs == 0;
     let keeping: Vec<&sharp_features::Row> =
         at.iter().copied().filter(|r| r.worst_corner_h <= sharp_features::CORNER_KEPT_H).collect();
     let best = keeping.iter().find(clean_everywhere).copied().unwrap_or(sharpest);
@@ -289,13 +289,15 @@ fn sharp(data: &sharp_features::Data, compared: &compare_algorithms::Data) -> Re
     } else {
         format!(
             "On the `csg` shape at {finest} samples, of the clean meshes that come within {} h of every corner, the one \
-             free of self-intersections on every compared input too: {} h at the worst corner (`{}`, the sharpest, {} h, \
-             has {} self-intersecting pairs on the compared inputs at the middle resolution)",
+             free of self-intersections on every compared input at every resolution too: {} h at the worst corner (`{}`, \
+             the sharpest, {} h, has {} self-intersecting pairs on the compared inputs at the middle resolution, {} over \
+             every resolution)",
             spacings(sharp_features::CORNER_KEPT_H),
             spacings(best.worst_corner_h),
             sharpest.algorithm,
             spacings(sharpest.worst_corner_h),
-            middle_intersections(&sharpest.algorithm, compared).0
+            compared.intersections(&sharpest.algorithm).middle_pairs,
+            compared.intersections(&sharpest.algorithm).all_pairs
         )
     };
     if let Some(next) = at.iter().find(|r| r.worst_corner_h > sharp_features::CORNER_KEPT_H.max(best.worst_corner_h)) {
@@ -304,34 +306,46 @@ fn sharp(data: &sharp_features::Data, compared: &compare_algorithms::Data) -> Re
         why.push('.');
     }
     why.push_str(&intersection_caveat(&best.algorithm, compared));
+    why.push_str(&time_split(&best.algorithm, compared));
     Ok(Choice { pick: best.algorithm.clone(), why, pages: vec!["sharp_features", "compare_algorithms"] })
 }
 
-/// `algorithm`'s self-intersecting pairs over the compared inputs at the middle resolution, the
-/// inputs that have any, and the inputs compared.
-fn middle_intersections(algorithm: &str, compared: &compare_algorithms::Data) -> (usize, usize, usize) {
-    let level = compared.field_levels.get(1).copied().unwrap_or(0);
-    let model_level = compared.model_levels.get(1).copied().unwrap_or(0);
-    let middle: Vec<&super::Measured> = compared
-        .rows
-        .iter()
-        .filter(|r| r.algorithm == algorithm && (r.resolution == level || r.resolution == model_level))
-        .collect();
-    let pairs: usize = middle.iter().map(|r| r.metrics.intersecting_pairs()).sum();
-    let hit = middle.iter().filter(|r| r.metrics.intersecting_pairs() > 0).count();
-    (pairs, hit, middle.len())
-}
-
-/// A sentence on `algorithm`'s self-intersecting pairs over the compared inputs at the middle
-/// resolution, or nothing when it has none.
+/// A sentence on `algorithm`'s self-intersecting pairs over the compared inputs, at the middle
+/// resolution and over every resolution, or nothing when it has none.
 fn intersection_caveat(algorithm: &str, compared: &compare_algorithms::Data) -> String {
-    let (pairs, hit, inputs) = middle_intersections(algorithm, compared);
-    if pairs == 0 {
+    let i = compared.intersections(algorithm);
+    if i.all_pairs == 0 {
         return String::new();
     }
     format!(
-        " Its vertex placement costs self-intersections elsewhere: {pairs} pairs on {hit} of the {inputs} compared inputs at \
-         the middle resolution."
+        " Its vertex placement costs self-intersections elsewhere: {} pairs on {} of the {} compared inputs at the middle \
+         resolution, {} pairs on {} of its {} meshes over every resolution.",
+        i.middle_pairs, i.middle_hit, i.middle_inputs, i.all_pairs, i.all_hit, i.all_meshes
+    )
+}
+
+/// A sentence splitting `algorithm`'s median extraction time at the middle resolution between its
+/// field queries and the rest (the glance table's two time columns), or nothing when the data has
+/// no split.
+fn time_split(algorithm: &str, compared: &compare_algorithms::Data) -> String {
+    let (level, model_level) = compared.middle_levels();
+    let rows: Vec<&super::Measured> = compared
+        .rows
+        .iter()
+        .filter(|r| r.algorithm == algorithm && (r.resolution == level || r.resolution == model_level))
+        .filter(|r| r.without_field_ms.is_some())
+        .collect();
+    if rows.is_empty() {
+        return String::new();
+    }
+    let with = crate::report::Spread::of(rows.iter().map(|r| r.extraction_ms).collect()).median;
+    let without = crate::report::Spread::of(rows.iter().filter_map(|r| r.without_field_ms).collect()).median;
+    format!(
+        " Its median extraction time over the {} compared inputs at the middle resolution, {} ms, is {} ms on the same \
+         samples with the field withheld (gradients from the samples' interpolant): the rest is its queries of the field.",
+        rows.len(),
+        super::ms(with),
+        super::ms(without)
     )
 }
 
@@ -371,8 +385,10 @@ fn tetrahedra(data: &stuart_tables::Data, peers: &stuart_tables::Peers) -> Resul
     }
     let (pick, floor) = scores.iter().max_by(|a, b| a.1.total_cmp(&b.1)).cloned().ok_or_else(|| missing("scores"))?;
     let mut why = format!(
-        "Over the {} shipped models every mesher meshed, the highest worst minimum dihedral angle: {floor:.1}°",
-        shared.len()
+        "Over the {} of the {} shipped models every mesher meshed{}, the highest worst minimum dihedral angle: {floor:.1}°",
+        shared.len(),
+        ours.len(),
+        unmeshed(&ours, &tools, &|t, m| peer(t, m).is_some())
     );
     let others: Vec<String> = scores.iter().filter(|s| s.0 != pick).map(|(t, f)| format!("{t} {f:.1}°")).collect();
     why.push_str(&format!(" ({}).", others.join(", ")));
@@ -404,10 +420,45 @@ fn tetrahedra(data: &stuart_tables::Data, peers: &stuart_tables::Peers) -> Resul
             ));
         }
         if let Some(c) = stuart_tables::cgal_count_against_paper(&data.rows, peers) {
-            why.push_str(&format!(" Against the paper: {c}"));
+            why.push_str(&format!(" Against the paper, over all {} models: {c}", ours.len()));
         }
+        why.push_str(&convergence_misses(&stuart_tables::convergence_short_of_paper(&data.rows)));
     }
     Ok(Choice { pick, why, pages: vec!["stuart_tables"] })
+}
+
+/// `" (not the stanford-bunny: NETGEN failed)"`-style clause naming the models some mesher did not
+/// mesh, empty when every mesher meshed every model.
+fn unmeshed(ours: &[&stuart_tables::Row], tools: &[&str], meshed: &dyn Fn(&str, &str) -> bool) -> String {
+    let missed: Vec<String> = ours
+        .iter()
+        .filter_map(|r| {
+            let failed: Vec<&str> = tools.iter().copied().filter(|t| !meshed(t, &r.model)).collect();
+            (!failed.is_empty()).then(|| format!("`{}`: no mesh from {}", r.model, failed.join(", ")))
+        })
+        .collect();
+    if missed.is_empty() {
+        String::new()
+    } else {
+        format!(" (left out: {})", missed.join("; "))
+    }
+}
+
+/// The sentence on where `bcc-sculpt` converges less often than the paper's Table 1, from
+/// [`stuart_tables::convergence_short_of_paper`]; empty when it falls short nowhere.
+fn convergence_misses(short: &[(f32, usize, usize, usize, usize)]) -> String {
+    if short.is_empty() {
+        return String::new();
+    }
+    let ours: Vec<String> =
+        short.iter().map(|(ratio, oc, on, _, _)| format!("at offset ratio {ratio} on {oc} of {on} runs")).collect();
+    let paper: Vec<String> = short.iter().map(|(_, _, _, pc, pn)| format!("{pc} of {pn}")).collect();
+    format!(
+        " Where it falls short: over the paper's Table 1 grid (every model, spacing and ratio) it converges {}, against the \
+         paper's {}; an unconverged run keeps the best mesh it reached.",
+        crate::report::and_list(&ours),
+        crate::report::and_list(&paper)
+    )
 }
 
 /// Triangles an extractor needs on the sphere for `|volume error| <= target`, by log-log
@@ -460,6 +511,7 @@ fn fewest(
     }
     why.push_str(" (interpolated between resolutions in log-log).");
     why.push_str(&intersection_caveat(pick, compared));
+    why.push_str(&time_split(pick, compared));
     let objects = first_seen(decimation.rows.iter().map(|r| (r.object.as_str(), r.target)));
     let mut wins: Vec<(&str, usize)> = Vec::new();
     for (object, target) in &objects {
@@ -481,34 +533,34 @@ fn fewest(
              manifold results free of self-intersections, in {k} of {} decimations.",
             objects.len()
         ));
+        why.push_str(&sliver_caveat(d, &decimation.rows));
     }
     Ok(Choice { pick: pick.into(), why, pages: vec!["sphere_convergence", "decimation", "compare_algorithms"] })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn interpolates_between_bracketing_resolutions() {
-        // Error halves as triangles double: 1e-3 sits half-way (in log) between 100 and 400.
-        let pts = [(100, 2e-3), (400, 5e-4), (1600, 1.25e-4)];
-        let (t, bound) = triangles_at_error(&pts, 1e-3).unwrap();
-        assert!(!bound);
-        assert!((t - 200.0).abs() < 1e-6, "{t}");
+/// The smallest triangle angle `decimator` leaves over every decimation, where, and the
+/// decimator whose worst smallest angle is largest: a decimator picked for its distance can
+/// still leave slivers.
+fn sliver_caveat(decimator: &str, rows: &[decimation::Row]) -> String {
+    let worst_of =
+        |name: &str| rows.iter().filter(|r| r.decimator == name).min_by(|a, b| a.min_angle_deg.total_cmp(&b.min_angle_deg));
+    let Some(worst) = worst_of(decimator) else { return String::new() };
+    let mut s = format!(
+        " Its smallest triangle angle falls to {:.3}° at worst ({}, {} triangles)",
+        worst.min_angle_deg, worst.object, worst.target
+    );
+    let best = first_seen(rows.iter().map(|r| r.decimator.as_str()))
+        .into_iter()
+        .filter_map(worst_of)
+        .max_by(|a, b| a.min_angle_deg.total_cmp(&b.min_angle_deg));
+    match best {
+        Some(b) if b.decimator != decimator => {
+            s.push_str(&format!(", where {} keeps {:.1}° at its worst ({}).", b.decimator, b.min_angle_deg, b.object))
+        }
+        _ => s.push('.'),
     }
-
-    #[test]
-    fn small_distances_keep_their_digits() {
-        assert_eq!(spacings(0.0), "0.00");
-        assert_eq!(spacings(0.2637), "0.26");
-        assert_eq!(spacings(2.8e-6), "2.8e-6");
-    }
-
-    #[test]
-    fn coarsest_within_target_is_a_bound_and_unreached_is_none() {
-        assert_eq!(triangles_at_error(&[(50, -1e-4), (200, 1e-5)], 1e-3), Some((50.0, true)));
-        assert_eq!(triangles_at_error(&[(50, 1e-1), (200, -1e-2)], 1e-3), None);
-        assert_eq!(triangles_at_error(&[], 1e-3), None);
-    }
+    s
 }
+
+#[cfg(test)]
+mod tests;

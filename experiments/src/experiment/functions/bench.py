@@ -20,7 +20,7 @@ The mlp runs on smaller grids (--mlp-up-to, --mlp-dense-up-to): at 512³ warp's 
 peaked at 5.4 GiB (its batches are large, and each holds the network's 64-wide layers), so 1024³
 would not fit this machine; scikit-image's dense 512³ would take minutes of evaluations.
 
-Usage: functions_peers.py OUT.json --sizes 256,512 --repeats 3 [--dense-up-to 512]
+Usage: functions/bench.py OUT.json --sizes 256,512 --repeats 3 [--dense-up-to 512]
        [--pymcubes-up-to 64] [--repeat-up-to 512] [--mlp-up-to 512] [--mlp-dense-up-to 256]
 """
 

@@ -63,13 +63,11 @@ pub fn command(name: &str) -> String {
 }
 
 impl Provenance {
-    /// This machine and checkout, for a run of `experiment` (which runs `peers`) that started at
-    /// `started` and took `seconds`.
-    pub fn collect(experiment: &str, peers: &[&str], started: SystemTime, seconds: f64) -> Self {
+    /// This machine and `checkout` (read when the run started: [`Checkout::now`]), for a run of
+    /// `experiment` (which runs `peers`) that started at `started` and took `seconds`.
+    pub fn collect(experiment: &str, peers: &[&str], started: SystemTime, seconds: f64, checkout: Checkout) -> Self {
         let root = root();
-        let git = |args: &[&str]| command_output(Command::new("git").arg("-C").arg(&root).args(args));
-        let commit = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
-        let dirty = git(&["status", "--porcelain", "--", ".", ":!report"]).is_some_and(|s| !s.is_empty());
+        let Checkout { commit, dirty } = checkout;
         let venv = root.join("tests/reference/.venv/bin/python");
         let python =
             command_output(Command::new(if venv.exists() { venv.as_os_str() } else { "python3".as_ref() }).arg("--version"))
@@ -101,6 +99,28 @@ impl Provenance {
             format!("{short}+changes")
         } else {
             short
+        }
+    }
+}
+
+/// The commit checked out and whether the tree has changes outside `report/`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Checkout {
+    /// `git rev-parse HEAD` (`unknown` outside a git checkout).
+    pub commit: String,
+    /// Uncommitted changes outside `report/`.
+    pub dirty: bool,
+}
+
+impl Checkout {
+    /// The checkout now: read before an experiment runs, so edits made while it runs do not
+    /// count against code it was built from.
+    pub fn now() -> Self {
+        let root = root();
+        let git = |args: &[&str]| command_output(Command::new("git").arg("-C").arg(&root).args(args));
+        Checkout {
+            commit: git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into()),
+            dirty: git(&["status", "--porcelain", "--", ".", ":!report"]).is_some_and(|s| !s.is_empty()),
         }
     }
 }

@@ -285,6 +285,7 @@ fn main_job_time(ctx: &Context, names: &[&str]) -> String {
 /// file it wrote with its [`Provenance`](crate::provenance::Provenance); returns the seconds.
 pub fn run_one(ctx: &Context, e: &dyn Experiment) -> Result<f64, ExperimentError> {
     let started = std::time::SystemTime::now();
+    let checkout = crate::provenance::Checkout::now();
     let t = std::time::Instant::now();
     ctx.take_written();
     e.run(ctx)?;
@@ -293,7 +294,7 @@ pub fn run_one(ctx: &Context, e: &dyn Experiment) -> Result<f64, ExperimentError
     record_run_time(ctx, e.name(), seconds)?;
     let provenance = crate::provenance::Provenance {
         quick: ctx.quick,
-        ..crate::provenance::Provenance::collect(e.name(), e.peers(), started, seconds)
+        ..crate::provenance::Provenance::collect(e.name(), e.peers(), started, seconds, checkout)
     };
     for name in written.iter().filter(|n| n.as_str() != RUN_TIMES) {
         crate::provenance::stamp(&ctx.data_path(name), &provenance)?;

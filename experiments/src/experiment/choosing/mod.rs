@@ -272,8 +272,14 @@ fn defect(r: &real_volumes::Row) -> String {
 /// stated, since sharpness is bought with vertex placement.
 fn sharp(data: &sharp_features::Data, compared: &compare_algorithms::Data) -> Result<Choice, ExperimentError> {
     let finest = data.rows.iter().map(|r| r.resolution).max().ok_or_else(|| missing("sharp-feature rows"))?;
-    let mut at: Vec<&sharp_features::Row> =
-        data.rows.iter().filter(|r| r.resolution == finest && r.manifold && r.self_intersections == 0).collect();
+    let worst = sharp_features::worst_over_shapes(&data.rows, finest);
+    let shapes = first_seen(data.rows.iter().map(|r| r.shape.as_str()));
+    let on = if shapes.len() > 1 {
+        format!("On the `csg` shape in its {} placements ({}), the worst of them,", shapes.len(), shapes.join(", "))
+    } else {
+        "On the `csg` shape".to_owned()
+    };
+    let mut at: Vec<&sharp_features::Row> = worst.iter().filter(|r| r.manifold && r.self_intersections == 0).collect();
     at.sort_by(|a, b| a.worst_corner_h.total_cmp(&b.worst_corner_h));
     let sharpest = *at.first().ok_or_else(|| missing("clean sharp-feature row"))?;
     let clean_everywhere = |r: &&&sharp_features::Row| compared.intersections(&r.algorithm).all_pairs == 0;
@@ -282,13 +288,13 @@ fn sharp(data: &sharp_features::Data, compared: &compare_algorithms::Data) -> Re
     let best = keeping.iter().find(clean_everywhere).copied().unwrap_or(sharpest);
     let mut why = if best.algorithm == sharpest.algorithm {
         format!(
-            "On the `csg` shape at {finest} samples, the smallest distance from a true corner to the mesh among clean \
+            "{on} at {finest} samples, the smallest distance from a true corner to the mesh among clean \
              meshes: {} h at the worst corner",
             spacings(best.worst_corner_h)
         )
     } else {
         format!(
-            "On the `csg` shape at {finest} samples, of the clean meshes that come within {} h of every corner, the one \
+            "{on} at {finest} samples, of the clean meshes that come within {} h of every corner, the one \
              free of self-intersections on every compared input at every resolution too: {} h at the worst corner (`{}`, \
              the sharpest, {} h, has {} self-intersecting pairs on the compared inputs at the middle resolution, {} over \
              every resolution)",

@@ -5,11 +5,19 @@ use serde::{Deserialize, Serialize};
 #[derive(Serialize, Deserialize)]
 pub(crate) struct Row {
     pub(crate) algorithm: String,
+    /// The shape as placed (`csg`, turned, moved off the grid); `csg` in data made before the
+    /// others ran.
+    #[serde(default = "csg")]
+    pub(crate) shape: String,
     pub(crate) resolution: usize,
     pub(crate) worst_corner_h: f64,
     pub(crate) mean_corner_h: f64,
     pub(crate) self_intersections: usize,
     pub(crate) manifold: bool,
+}
+
+fn csg() -> String {
+    "csg".into()
 }
 
 #[derive(Serialize, Deserialize)]

@@ -265,10 +265,11 @@ fn defect(r: &real_volumes::Row) -> String {
     d.join(", ")
 }
 
-/// Sharp CAD: among manifold meshes free of self-intersections on the `csg` shape at the finest
-/// resolution, those that keep every corner ([`sharp_features::CORNER_KEPT_H`]); of these, the one with the
-/// smallest worst-corner error among those free of self-intersections on every compared input
-/// too, else the smallest error overall. The self-intersections of a pick that has some are
+/// Sharp CAD: among manifold meshes free of self-intersections on the `csg` shape in every
+/// placement at the finest resolution (each extractor's worst placement), those as sharp as the
+/// sharpest (every corner within [`sharp_features::CORNER_KEPT_H`], or within [`SHARP_TIE`] of the
+/// sharpest's worst corner); of these, the sharpest free of self-intersections on every compared
+/// input too, else the sharpest overall. The self-intersections of a pick that has some are
 /// stated, since sharpness is bought with vertex placement.
 fn sharp(data: &sharp_features::Data, compared: &compare_algorithms::Data) -> Result<Choice, ExperimentError> {
     let finest = data.rows.iter().map(|r| r.resolution).max().ok_or_else(|| missing("sharp-feature rows"))?;
@@ -283,8 +284,10 @@ fn sharp(data: &sharp_features::Data, compared: &compare_algorithms::Data) -> Re
     at.sort_by(|a, b| a.worst_corner_h.total_cmp(&b.worst_corner_h));
     let sharpest = *at.first().ok_or_else(|| missing("clean sharp-feature row"))?;
     let clean_everywhere = |r: &&&sharp_features::Row| compared.intersections(&r.algorithm).all_pairs == 0;
-    let keeping: Vec<&sharp_features::Row> =
-        at.iter().copied().filter(|r| r.worst_corner_h <= sharp_features::CORNER_KEPT_H).collect();
+    // As sharp as the sharpest: within the kept-corner bound, or within a tenth of the sharpest's
+    // worst corner when no mesh keeps every corner.
+    let threshold = sharp_features::CORNER_KEPT_H.max(sharpest.worst_corner_h * (1.0 + SHARP_TIE));
+    let keeping: Vec<&sharp_features::Row> = at.iter().copied().filter(|r| r.worst_corner_h <= threshold).collect();
     let best = keeping.iter().find(clean_everywhere).copied().unwrap_or(sharpest);
     let mut why = if best.algorithm == sharpest.algorithm {
         format!(
@@ -298,7 +301,7 @@ fn sharp(data: &sharp_features::Data, compared: &compare_algorithms::Data) -> Re
              free of self-intersections on every compared input at every resolution too: {} h at the worst corner (`{}`, \
              the sharpest, {} h, has {} self-intersecting pairs on the compared inputs at the middle resolution, {} over \
              every resolution)",
-            spacings(sharp_features::CORNER_KEPT_H),
+            spacings(threshold),
             spacings(best.worst_corner_h),
             sharpest.algorithm,
             spacings(sharpest.worst_corner_h),
@@ -306,7 +309,7 @@ fn sharp(data: &sharp_features::Data, compared: &compare_algorithms::Data) -> Re
             compared.intersections(&sharpest.algorithm).all_pairs
         )
     };
-    if let Some(next) = at.iter().find(|r| r.worst_corner_h > sharp_features::CORNER_KEPT_H.max(best.worst_corner_h)) {
+    if let Some(next) = at.iter().find(|r| r.worst_corner_h > threshold.max(best.worst_corner_h)) {
         why.push_str(&format!(", against {} h for the next best, `{}`.", spacings(next.worst_corner_h), next.algorithm));
     } else {
         why.push('.');
@@ -315,6 +318,10 @@ fn sharp(data: &sharp_features::Data, compared: &compare_algorithms::Data) -> Re
     why.push_str(&time_split(&best.algorithm, compared));
     Ok(Choice { pick: best.algorithm.clone(), why, pages: vec!["sharp_features", "compare_algorithms"] })
 }
+
+/// Meshes whose worst corner is within this fraction of the sharpest's count as sharp as it (the
+/// sharp-CAD pick then prefers one free of self-intersections).
+const SHARP_TIE: f64 = 0.1;
 
 /// A sentence on `algorithm`'s self-intersecting pairs over the compared inputs, at the middle
 /// resolution and over every resolution, or nothing when it has none.

@@ -103,4 +103,14 @@ pub(crate) const REVIEWED_COMPARISONS: &[(&str, &str, &str)] = &[
     ("large_world/page.rs", "wholly above the ground, or below", "places in the terrain, not verdicts"),
     ("mesh_fields/page.rs", "not bounded below", "a bound in the winding number's definition"),
     ("connectomics/page.rs", "the eight below it", "a place in the octree of boxes"),
+    (
+        "large_world/reading.rs",
+        "its peak resident memory not above the",
+        "chosen by `peak_phrase` from the peak against the baseline (tested both ways)",
+    ),
+    (
+        "large_world/reading.rs",
+        "MiB above the process's before the run",
+        "a measured amount over the baseline, printed beside the word, chosen by `peak_phrase`",
+    ),
 ];

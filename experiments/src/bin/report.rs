@@ -53,6 +53,12 @@ fn main() -> ExitCode {
         return ExitCode::from(2);
     }
     let start = Instant::now();
+    if args.quick {
+        if let Err(e) = experiment::copy_made_outside(&ctx) {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    }
     if !args.assemble_only {
         for e in experiment::all() {
             if !args.only.is_empty() && !args.only.iter().any(|o| o == e.name()) {

@@ -43,6 +43,26 @@ pub use context::{
 use isolab_io::write_atomic;
 use std::path::PathBuf;
 
+/// Data files no experiment writes, made by a script of their own and committed (the Table 2
+/// peers of `stuart_tables`, run by its `peers.py`): a quick run copies them from `report/data/`.
+pub const MADE_OUTSIDE: [&str; 1] = ["stuart_tables_peers"];
+
+/// Copies the [`MADE_OUTSIDE`] data files from the report into `ctx`'s folder (a quick run's),
+/// where they are missing.
+pub fn copy_made_outside(ctx: &Context) -> Result<(), ExperimentError> {
+    let report = Context::new(default_report_dir(), 1);
+    for name in MADE_OUTSIDE {
+        let (from, to) = (report.data_path(name), ctx.data_path(name));
+        if from.exists() && !to.exists() {
+            if let Some(dir) = to.parent() {
+                std::fs::create_dir_all(dir).map_err(|source| isolab_io::IoError::Write { path: dir.into(), source })?;
+            }
+            std::fs::copy(&from, &to).map_err(|source| isolab_io::IoError::Write { path: to.clone(), source })?;
+        }
+    }
+    Ok(())
+}
+
 /// Every experiment, in report order.
 pub fn all() -> Vec<Box<dyn Experiment>> {
     vec![

@@ -50,7 +50,8 @@ pub(super) fn section(ctx: &Context) -> Result<String, ExperimentError> {
         row("vertices welded at seams", &|r| r.welded.to_string()),
         row("peak resident memory", &|r| {
             let peak = r.peak_rss_mib.map_or("not reported by the OS".into(), |m| {
-                format!("{m:.0} MiB ({:.2} % of the dense grid)", 100.0 * m / (r.dense_gib * 1024.0))
+                let phrase = super::reading::peak_phrase(m, r.rss_before_mib, r.dense_gib);
+                phrase.strip_prefix("its peak resident memory ").unwrap_or(&phrase).to_owned()
             });
             let reset = if r.peak_reset { "" } else { ", not resettable here: the process's peak so far" };
             let before = r.rss_before_mib.map_or(String::new(), |m| format!("; {m:.0} MiB before the run"));
@@ -103,7 +104,7 @@ pub(super) fn memory_figure(ctx: &Context, runs: &[&Data]) -> Result<String, Exp
                 values: with.iter().map(|r| r.dense_gib).collect(),
             },
             BarSeries {
-                label: "peak resident, streamed".into(),
+                label: "peak resident of the report process, streamed".into(),
                 color: series_color(1),
                 values: with.iter().map(|r| r.peak_rss_mib.unwrap_or(f64::NAN) / 1024.0).collect(),
             },

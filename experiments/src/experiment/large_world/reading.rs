@@ -15,10 +15,7 @@ pub(super) fn reading(runs: &[&Data], volume: Option<&VolumeData>) -> String {
                 r.dense_gib,
                 r.seconds,
                 r.triangles,
-                r.peak_rss_mib.map_or(String::new(), |m| format!(
-                    ", its peak resident memory {m:.0} MiB, {:.2} % of the dense grid",
-                    100.0 * m / (r.dense_gib * 1024.0)
-                ))
+                r.peak_rss_mib.map_or(String::new(), |m| format!(", {}", peak_phrase(m, r.rss_before_mib, r.dense_gib)))
             )
         })
         .collect();
@@ -59,11 +56,45 @@ pub(super) fn reading(runs: &[&Data], volume: Option<&VolumeData>) -> String {
     format!("**Reading.** {}\n\n", lines.join(" "))
 }
 
+/// The world's peak resident memory in words. The peak is the process's (`VmHWM`): when it did not
+/// rise above what the process held before the run, it is that baseline, not the run's own, and
+/// the run's peak is only known to be at most it.
+pub(super) fn peak_phrase(peak_mib: f64, before_mib: Option<f64>, dense_gib: f64) -> String {
+    let share = |m: f64| 100.0 * m / (dense_gib * 1024.0);
+    match before_mib {
+        Some(before) if peak_mib <= before + PEAK_RISE_MIB => format!(
+            "its peak resident memory not above the {before:.0} MiB the report process held before the run (the run's own \
+             peak is at most that, {:.2} % of the dense grid, and is not measured apart)",
+            share(before)
+        ),
+        Some(before) => format!(
+            "its peak resident memory {peak_mib:.0} MiB, {:.0} MiB above the process's before the run, {:.2} % of the dense grid",
+            peak_mib - before,
+            share(peak_mib)
+        ),
+        None => format!("its peak resident memory {peak_mib:.0} MiB, {:.2} % of the dense grid", share(peak_mib)),
+    }
+}
+
+/// A peak within this of the baseline did not rise above it.
+const PEAK_RISE_MIB: f64 = 1.0;
+
 #[cfg(test)]
 mod tests {
     use super::super::volume::StreamedRun;
     use super::*;
     use crate::report::Spread;
+
+    #[test]
+    fn a_peak_equal_to_the_baseline_is_not_called_the_runs_peak() {
+        // The old wording gave the baseline as the world's peak: "its peak resident memory 665 MiB".
+        let p = peak_phrase(665.0, Some(665.0), 8.0);
+        assert!(!p.starts_with("its peak resident memory 665 MiB"), "{p}");
+        assert!(p.contains("not above the 665 MiB the report process held before the run"), "{p}");
+        let p = peak_phrase(900.0, Some(665.0), 8.0);
+        assert!(p.contains("900 MiB, 235 MiB above the process's before the run"), "{p}");
+        assert!(peak_phrase(512.0, None, 8.0).contains("512 MiB, 6.25 %"));
+    }
 
     #[test]
     fn the_reading_follows_the_data() {

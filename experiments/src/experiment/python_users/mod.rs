@@ -97,18 +97,26 @@ impl Experiment for PythonUsers {
         let repeats = ctx.repeats.max(1);
         let sizes: Vec<String> = ctx.sizes(&SIZES).iter().map(usize::to_string).collect();
         let uint8 = ctx.pick(UINT8_SIZE, SIZES[0]).to_string();
-        let mut data =
-            bench(&python, &[&["--sizes", &sizes.join(","), "--mni", "nilearn", "--uint8", &uint8, "--peak"]], repeats, None)?;
-        let large: Vec<String> = ctx.sizes(&HUGE_PAGE_SIZES).iter().map(usize::to_string).collect();
-        let only = HUGE_PAGE_IMPLEMENTATIONS.join(",");
-        let huge = bench(
-            &python,
-            &[&["--sizes", &large.join(","), "--environment", HUGE_PAGES, "--only", &only]],
-            repeats,
-            Some(HUGE_PAGES_TUNABLE),
-        )?;
-        data.rows.extend(huge.rows);
-        data.notes.extend(huge.notes.into_iter().map(|n| format!("{HUGE_PAGES}: {n}")));
+        // A quick run leaves out the peak memory (a fresh process per implementation and input)
+        // and the huge pages run.
+        let sizes = sizes.join(",");
+        let mut first: Vec<&str> = vec!["--sizes", &sizes, "--mni", "nilearn", "--uint8", &uint8];
+        if !ctx.quick {
+            first.push("--peak");
+        }
+        let mut data = bench(&python, &[&first], repeats, None)?;
+        if !ctx.quick {
+            let large: Vec<String> = HUGE_PAGE_SIZES.iter().map(usize::to_string).collect();
+            let only = HUGE_PAGE_IMPLEMENTATIONS.join(",");
+            let huge = bench(
+                &python,
+                &[&["--sizes", &large.join(","), "--environment", HUGE_PAGES, "--only", &only]],
+                repeats,
+                Some(HUGE_PAGES_TUNABLE),
+            )?;
+            data.rows.extend(huge.rows);
+            data.notes.extend(huge.notes.into_iter().map(|n| format!("{HUGE_PAGES}: {n}")));
+        }
         ctx.write_data(NAME, &data)?;
         figures(ctx, &data)
     }

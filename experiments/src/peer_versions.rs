@@ -216,8 +216,17 @@ fn python_versions() -> BTreeMap<String, Found> {
 
 /// What `versions.py`, run by `python`, says of the distributions `dists`.
 fn ask_python(python: &std::path::Path, dists: &[&str]) -> BTreeMap<String, Found> {
+    ask_python_in(python, dists, None)
+}
+
+/// [`ask_python`] with `path` first on Python's `sys.path` (`PYTHONPATH`), if given.
+fn ask_python_in(python: &std::path::Path, dists: &[&str], path: Option<&std::path::Path>) -> BTreeMap<String, Found> {
     let script = crate::provenance::root().join("experiments/src/peers/versions.py");
-    Command::new(python)
+    let mut command = Command::new(python);
+    if let Some(p) = path {
+        command.env("PYTHONPATH", p);
+    }
+    command
         .arg(script)
         .args(dists)
         .output()
@@ -281,10 +290,14 @@ mod tests {
 
     #[test]
     fn the_script_answers_for_installed_and_missing_packages() {
-        // The system Python: pip is there, a made-up distribution is not.
-        let found = ask_python(std::path::Path::new("python3"), &["pip", "isolab-no-such-package"]);
-        assert!(found["pip"].package.as_deref().is_some_and(|v| v.chars().next().is_some_and(|c| c.is_ascii_digit())));
-        assert_eq!(found["pip"].library, None, "pip has no library probe");
+        // A distribution made for the test (its metadata alone) on the system Python's path.
+        let dir = tempfile::tempdir().unwrap();
+        let info = dir.path().join("isolab_probe-1.2.3.dist-info");
+        std::fs::create_dir(&info).unwrap();
+        std::fs::write(info.join("METADATA"), "Metadata-Version: 2.1\nName: isolab-probe\nVersion: 1.2.3\n").unwrap();
+        let found = ask_python_in(std::path::Path::new("python3"), &["isolab-probe", "isolab-no-such-package"], Some(dir.path()));
+        assert_eq!(found["isolab-probe"].package.as_deref(), Some("1.2.3"));
+        assert_eq!(found["isolab-probe"].library, None, "it has no library probe");
         assert_eq!(found["isolab-no-such-package"].package, None);
     }
 

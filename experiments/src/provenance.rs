@@ -1,6 +1,6 @@
 //! Where, when and on what each data file was made. After an experiment runs, every data file it
 //! wrote gets a `provenance` entry ([`stamp`]): the commit and whether the tree had changes
-//! outside `report/`, the date, the CPU, cores, memory, OS, the rustc that built the binary,
+//! outside `report/` and `README.md` (which runs write), the date, the CPU, cores, memory, OS, the rustc that built the binary,
 //! the Python of the reference environment, isolab's version, the command that regenerates it,
 //! and a digest of the experiment's own source files. Pages state it under their title
 //! ([`line()`]); the front page lists each page's commit and flags data whose experiment code
@@ -19,7 +19,7 @@ pub struct Provenance {
     pub experiment: String,
     /// `git rev-parse HEAD` when the run started (`unknown` outside a git checkout).
     pub commit: String,
-    /// Whether the tree had uncommitted changes outside `report/` when the run started.
+    /// Whether the tree had uncommitted changes outside `report/` and `README.md` when the run started.
     pub dirty: bool,
     /// When the run started, UTC (`YYYY-MM-DDTHH:MM:SSZ`).
     pub date_utc: String,
@@ -103,12 +103,12 @@ impl Provenance {
     }
 }
 
-/// The commit checked out and whether the tree has changes outside `report/`.
+/// The commit checked out and whether the tree has changes outside `report/` and `README.md`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Checkout {
     /// `git rev-parse HEAD` (`unknown` outside a git checkout).
     pub commit: String,
-    /// Uncommitted changes outside `report/`.
+    /// Uncommitted changes outside `report/` and `README.md` (which runs write).
     pub dirty: bool,
 }
 
@@ -120,7 +120,8 @@ impl Checkout {
         let git = |args: &[&str]| command_output(Command::new("git").arg("-C").arg(&root).args(args));
         Checkout {
             commit: git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into()),
-            dirty: git(&["status", "--porcelain", "--", ".", ":!report"]).is_some_and(|s| !s.is_empty()),
+            // report/ and README.md's generated parts are what runs write, not what they run.
+            dirty: git(&["status", "--porcelain", "--", ".", ":!report", ":!README.md"]).is_some_and(|s| !s.is_empty()),
         }
     }
 }

@@ -179,7 +179,7 @@ fn front_page(ctx: &Context, pages: &[Page]) -> String {
     md.push_str("## The experiments\n\n");
     md.push_str(&main_job_time(ctx, &pages.iter().map(|p| p.name).collect::<Vec<_>>()));
     md.push_str(
-        "Each page's data were made at the commit listed (`+changes`: with uncommitted changes outside `report/`); \
+        "Each page's data were made at the commit listed (`+changes`: with uncommitted changes outside `report/` and `README.md`, which runs write); \
          \"changed since\" means the experiment's own source files differ from those that made its data, so the page may \
          not show what its code does now (changes to the engine it measures are not tracked here). Each page states \
          its machine and the command that regenerates it under its title. The papers and posts the extractors follow \

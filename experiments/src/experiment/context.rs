@@ -286,14 +286,19 @@ pub fn measure(
     Ok((row, out))
 }
 
-/// The median time of `repeats` extractions by `extractor` of `samples`' values alone (no field:
-/// an extractor that asks the field for gradients takes them from the samples' interpolant), ms.
-pub fn time_without_field(extractor: &dyn Extractor, samples: &Samples, repeats: usize) -> Result<f64, ExperimentError> {
-    let bare = Samples::from_values(*samples.lattice(), samples.values().to_vec(), samples.iso())?;
+/// `samples`' values alone, without their field: an extractor that asks the field for gradients
+/// then takes them from the samples' interpolant ([`time_without_field`]).
+pub fn without_field(samples: &Samples) -> Result<Samples<'static>, ExperimentError> {
+    Ok(Samples::from_values(*samples.lattice(), samples.values().to_vec(), samples.iso())?)
+}
+
+/// The median time of `repeats` extractions by `extractor` of `bare`, samples without their field
+/// ([`without_field`]), ms.
+pub fn time_without_field(extractor: &dyn Extractor, bare: &Samples, repeats: usize) -> Result<f64, ExperimentError> {
     let mut out = Extraction::default();
     let mut times = Vec::with_capacity(repeats);
     for _ in 0..repeats.max(1) {
-        extractor.extract(&bare, &mut out)?;
+        extractor.extract(bare, &mut out)?;
         times.push(out.stats.times.extraction());
     }
     Ok(crate::report::median(times).as_secs_f64() * 1e3)

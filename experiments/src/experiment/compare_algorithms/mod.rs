@@ -6,8 +6,8 @@ mod data;
 mod page;
 
 use super::context::{
-    compared_inputs as inputs, measure, time_without_field, Context, Experiment, ExperimentError, Measured, FIELD_LEVELS,
-    MODEL_LEVELS,
+    compared_inputs as inputs, measure, time_without_field, without_field, Context, Experiment, ExperimentError, Measured,
+    FIELD_LEVELS, MODEL_LEVELS,
 };
 use crate::figures::color_of;
 use crate::figures::plot::{self, HistogramPlot, Scale, Series, Style, XyPlot};
@@ -63,13 +63,15 @@ impl Experiment for CompareAlgorithms {
             for (level, &resolution) in levels.iter().enumerate() {
                 let lattice = lattice_for(field.as_ref(), &RunConfig::new("", spec, resolution))?;
                 let samples = Samples::sample(field.clone(), lattice, 0.0)?;
+                // The same values without the field, once per grid, for the middle resolution's split.
+                let bare = if level == levels.len() / 2 { Some(without_field(&samples)?) } else { None };
                 for extractor in &extractors {
                     bar.set_message(format!("{} {name} {resolution}", extractor.name()));
                     let (mut row, out) = measure(extractor.as_ref(), &field, &samples, ctx.repeats)?;
                     // At the middle resolution, the time without field queries too (the glance
                     // table's split), right after the runs above.
-                    if level == levels.len() / 2 && !extractor.produces_volume() {
-                        row.without_field_ms = Some(time_without_field(extractor.as_ref(), &samples, ctx.repeats)?);
+                    if let Some(bare) = bare.as_ref().filter(|_| !extractor.produces_volume()) {
+                        row.without_field_ms = Some(time_without_field(extractor.as_ref(), bare, ctx.repeats)?);
                     }
                     if level == 0 {
                         let path = dir.join(format!("{}-{name}.png", extractor.name()));

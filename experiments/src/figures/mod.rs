@@ -110,7 +110,7 @@ pub fn implementation_key(label: &str) -> (String, bool) {
 }
 
 /// The colour of an implementation (an extractor, a peer, or any name), the same on every chart:
-/// [`NAMED`]'s for the implementations it lists, a darker shade of it for a run on more than one
+/// `NAMED`'s for the implementations it lists, a darker shade of it for a run on more than one
 /// thread, otherwise a hue from a hash of the name (FNV-1a), so a new extractor gets its own
 /// colour without a line here and without recolouring the others.
 pub fn color_of(name: &str) -> (u8, u8, u8) {

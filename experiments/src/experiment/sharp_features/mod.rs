@@ -6,7 +6,7 @@
 //! The `csg` box's faces are parallel to the grid and its corners sit at the same fraction of a
 //! cell at every resolution (0.25 is three quarters of a cell past a sample at 32, 64 and 128
 //! samples): the best case for a method that places vertices from normals. So the same shape runs
-//! twice more ([`SHAPES`]): turned about a generic axis, so no face is parallel to the grid, and
+//! twice more (`SHAPES`): turned about a generic axis, so no face is parallel to the grid, and
 //! moved by a fraction of a cell that differs at each resolution.
 
 mod data;

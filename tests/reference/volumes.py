@@ -89,6 +89,24 @@ def write_fixtures(out=FIXTURES, data=None):
     sitk.WriteImage(image, os.path.join(out, "mni-small.mhd"), True)
 
 
+BRAIN_MASK = "mni-brain-mask.nii.gz"
+
+
+def write_brain_mask(out=FIXTURES):
+    """The MNI152 whole-brain mask as nilearn makes it (`load_mni152_brain_mask(resolution=2)`: the
+    same T1 template resampled to 2 mm voxels, above 0.2 of its range), 99 x 117 x 95, uint8 0/1,
+    with the template's own affine: the real binary segmentation `isosurface-stuffing` is tested
+    on (tests/tests/stuffing.rs)."""
+    import nibabel as nib
+    from nilearn import datasets
+    mask = datasets.load_mni152_brain_mask(resolution=2)
+    data = np.asarray(mask.dataobj).astype(np.uint8)
+    img = nib.Nifti1Image(data, mask.affine)
+    img.set_sform(mask.affine, code=4)
+    img.set_qform(mask.affine, code=4)
+    nib.save(img, os.path.join(out, BRAIN_MASK))
+
+
 def read_with_library(path):
     """The array (i fastest axis first) and RAS affine as the file's own library reads it."""
     if path.endswith((".nii", ".nii.gz")):
@@ -153,6 +171,7 @@ def library_triangles(path, level=LEVEL):
 
 def golden():
     write_fixtures()
+    write_brain_mask()
     reference, faces = skimage_world(os.path.join(FIXTURES, FILES[0]))
     reference.tofile(os.path.join(GOLDEN, "volumes-skimage.f32"))
     out = {"level": LEVEL, "inside": "above", "source": "MNI ICBM152 2009a T1 (nilearn), every 5th voxel",

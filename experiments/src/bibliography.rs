@@ -140,7 +140,7 @@ pub const WORKS: &[Work] = &[
         venue: "ACM Transactions on Graphics 26(3), SIGGRAPH 2007",
         year: 2007,
         doi: None,
-        used_by: "`isosurface-stuffing`",
+        used_by: "`isosurface-stuffing`; compared in `quality_tets`",
     },
     Work {
         key: "custodio-2013",
@@ -177,7 +177,7 @@ pub const WORKS: &[Work] = &[
         venue: "MIG '13",
         year: 2013,
         doi: None,
-        used_by: "`bcc-sculpt`; reproduced in `stuart_tables`",
+        used_by: "`bcc-sculpt`; reproduced in `stuart_tables`, compared in `quality_tets`",
     },
     Work {
         key: "schroeder-2015",

@@ -21,6 +21,7 @@ pub mod large_world;
 pub mod mesh_fields;
 pub mod peers;
 pub mod python_users;
+pub mod quality_tets;
 pub mod real_volumes;
 pub mod scaling;
 pub mod segmentations;
@@ -44,8 +45,9 @@ use isolab_io::write_atomic;
 use std::path::PathBuf;
 
 /// Data files no experiment writes, made by a script of their own and committed (the Table 2
-/// peers of `stuart_tables`, run by its `peers.py`): a quick run copies them from `report/data/`.
-pub const MADE_OUTSIDE: [&str; 1] = ["stuart_tables_peers"];
+/// peers of `stuart_tables` and the peers of `quality_tets`, each run by its `peers.py`): a quick
+/// run copies them from `report/data/`.
+pub const MADE_OUTSIDE: [&str; 2] = ["stuart_tables_peers", "quality_tets_peers"];
 
 /// Copies the [`MADE_OUTSIDE`] data files from the report into `ctx`'s folder (a quick run's),
 /// where they are missing.
@@ -82,6 +84,7 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
         Box::new(decimation::Decimation),
         Box::new(svoboda_timing::SvobodaTiming),
         Box::new(stuart_tables::StuartTables),
+        Box::new(quality_tets::QualityTets),
         Box::new(terrain_edit::TerrainEdit),
         Box::new(terrain_lod::TerrainLod),
         Box::new(terrain_liquids::TerrainLiquids),

@@ -32,7 +32,7 @@ struct UseCase {
     choose: fn(&Context) -> Result<Choice, ExperimentError>,
 }
 
-const USE_CASES: [UseCase; 6] = [
+const USE_CASES: [UseCase; 7] = [
     UseCase { title: "Deformable game terrain", choose: |ctx| terrain(&ctx.read_data("terrain_edit")?) },
     UseCase { title: "Scans (a real MRI)", choose: |ctx| scans(&ctx.read_data("real_volumes")?) },
     UseCase { title: "Segmentations (label maps)", choose: |ctx| label_maps(&ctx.read_data("segmentations")?) },
@@ -44,6 +44,7 @@ const USE_CASES: [UseCase; 6] = [
         title: "Coarse tetrahedral volumes",
         choose: |ctx| tetrahedra(&ctx.read_data("stuart_tables")?, &ctx.read_data("stuart_tables_peers")?),
     },
+    UseCase { title: "Tetrahedra for simulation", choose: super::quality_tets::pick },
     UseCase {
         title: "Fewest triangles at a given error",
         choose: |ctx| {

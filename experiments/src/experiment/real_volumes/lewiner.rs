@@ -1,5 +1,6 @@
 //! `real_volumes`' cell-by-cell comparison of `marching-cubes-33` with scikit-image's Lewiner on
-//! the MNI template at each of the page's levels: every cell where the two differ, named by the
+//! the MNI template at each of the page's levels and on the second volume (the fMRI series' first
+//! volume) at its own level: every cell where the two differ, named by the
 //! rules of `python/tests/lewiner_cells.py` (the Python test's own, so the page and the test
 //! judge alike), counted by reason. `lewiner_cells.py` beside this file runs them in the
 //! reference environment, on the array nibabel loads, with the package of this commit.
@@ -33,16 +34,19 @@ struct ScriptOut {
     versions: BTreeMap<String, String>,
 }
 
-/// Runs the comparison on `scan` at `levels`; returns the rows and the versions it ran with.
+/// Runs the comparison on `scan` (its volume `volume` when it is a 4D series) at `levels`;
+/// returns the rows and the versions it ran with.
 pub(super) fn classify(
     root: &Path,
     scan: &Path,
+    volume: Option<usize>,
     levels: &[Level],
 ) -> Result<(Vec<CellCounts>, BTreeMap<String, String>), String> {
     let py = python::reference_python(root)?;
     python::install_package(&py, root)?;
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/experiment/real_volumes/lewiner_cells.py");
-    let mut args = vec![scan.to_string_lossy().into_owned()];
+    let scan = scan.to_string_lossy().into_owned();
+    let mut args = vec![volume.map_or(scan.clone(), |v| format!("{scan}:{v}"))];
     args.extend(levels.iter().map(|l| l.iso.to_string()));
     let out: ScriptOut = python::run_script(&py, &script, &args, &[])?;
     let rows = out.rows.into_iter().zip(levels).map(|(row, level)| CellCounts { level: level.name.clone(), ..row }).collect();
@@ -78,7 +82,8 @@ pub(super) fn section(data: &Data) -> String {
         })
         .collect();
     let mut s = format!(
-        "### Cell by cell against scikit-image's Lewiner\n\n`marching-cubes-33` and scikit-image's Lewiner each mesh a cell from its eight corner \
+        "### Cell by cell against scikit-image's Lewiner\n\nOn the MNI template at the page's levels and on the second volume at its \
+         own. `marching-cubes-33` and scikit-image's Lewiner each mesh a cell from its eight corner \
          values alone, so every cell the surface crosses is compared on its own (each cell spread into its own block of a volume twice \
          the size, both libraries masked to those blocks). A cell is the same when both make as many triangles and put the same vertex \
          inside it, if any (ours keeps Lewiner's centre {} of a cell inside its faces). Every other cell is named by the \

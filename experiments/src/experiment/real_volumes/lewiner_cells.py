@@ -2,7 +2,8 @@
 scan at the page's levels; every cell where they differ named by the rules of
 python/tests/lewiner_cells.py (the Python test's own), counted by reason.
 
-Usage: lewiner_cells.py OUT.json SCAN.nii.gz LEVEL [LEVEL ...]. Writes {"rows": [{"iso",
+Usage: lewiner_cells.py OUT.json SCAN.nii.gz[:VOLUME] LEVEL [LEVEL ...] (VOLUME: which volume of a
+4D series, 0 when a 4D scan names none). Writes {"rows": [{"iso",
 "counts", "unnamed", "examples", "seconds"}], "versions": {...}}.
 """
 
@@ -23,7 +24,10 @@ from lewiner_cells import named_differences  # noqa: E402
 
 
 def main(out, scan, *levels):
-    vol = np.asarray(nibabel.load(scan).dataobj, dtype=np.float32)
+    path, _, index = scan.partition(":") if not os.path.exists(scan) else (scan, "", "")
+    vol = np.asarray(nibabel.load(path).dataobj, dtype=np.float32)
+    if vol.ndim == 4:
+        vol = np.ascontiguousarray(vol[..., int(index or 0)])
     rows = []
     for level in levels:
         start = time.perf_counter()

@@ -343,14 +343,21 @@ impl Experiment for RealVolumes {
             }
             _ => data.skipped.push(format!("the second volume: nibabel's example4d.nii.gz not found ({})", hello["errors"])),
         }
-        match lewiner::classify(&root, path, &data.levels) {
-            Ok((rows, versions)) => {
-                data.lewiner_cells = rows;
-                for (k, v) in versions {
-                    data.versions.entry(k).or_insert(v);
+        let mut scans = vec![(path.to_path_buf(), None, data.levels.clone())];
+        if let (Some(epi), Some(s)) = (hello["epi"].as_str(), &data.second) {
+            let level = Level { name: format!("second volume, volume {}", s.volume_index), iso: s.iso, how: s.iso_from.clone() };
+            scans.push((std::path::PathBuf::from(epi), Some(s.volume_index), vec![level]));
+        }
+        for (scan, volume, levels) in scans {
+            match lewiner::classify(&root, &scan, volume, &levels) {
+                Ok((rows, versions)) => {
+                    data.lewiner_cells.extend(rows);
+                    for (k, v) in versions {
+                        data.versions.entry(k).or_insert(v);
+                    }
                 }
+                Err(e) => data.skipped.push(format!("the cell-by-cell comparison with scikit-image's Lewiner: {e}")),
             }
-            Err(e) => data.skipped.push(format!("the cell-by-cell comparison with scikit-image's Lewiner: {e}")),
         }
         bar.finish();
         ctx.write_data(NAME, &data)

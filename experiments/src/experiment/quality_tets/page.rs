@@ -271,9 +271,9 @@ pub(super) fn pick_over(data: &Data, peers: Option<&Peers>) -> Option<Choice> {
     let mut why = format!(
         "Of the meshers whose boundary lies on each closed model's surface (every boundary vertex within {ON_SURFACE_H} h) \
          with no inverted tetrahedron, over the {} models all of them meshed, it has the highest worst minimum dihedral angle, \
-         {best_floor:.1}° ({})",
+         {best_floor:.1}°{}",
         shared.len(),
-        others.join(", ")
+        if others.is_empty() { String::new() } else { format!(" ({})", others.join(", ")) }
     );
     if declares(best) {
         why.push_str(&format!(", and it declares every angle within {:.1}-{:.1}°", data.declared[0], data.declared[1]));

@@ -279,6 +279,12 @@ pub(super) fn pick_over(data: &Data, peers: Option<&Peers>) -> Option<Choice> {
         why.push_str(&format!(", and it declares every angle within {:.1}-{:.1}°", data.declared[0], data.declared[1]));
     }
     why.push('.');
+    let failed: Vec<String> = peers
+        .map(|p| p.rows.iter().filter(|r| r.quality.is_none()).map(|r| format!("{} on {}", r.tool, r.model)).collect())
+        .unwrap_or_default();
+    if !failed.is_empty() {
+        why.push_str(&format!(" No mesh from {}.", and_list(&failed)));
+    }
     if !left_out.is_empty() {
         why.push_str(&format!(" Not a mesh of the surface or inverting somewhere: {}.", left_out.join(", ")));
     }

@@ -80,6 +80,7 @@ fn the_pick_is_the_best_worst_angle_of_the_surface_meshers_that_invert_nothing()
     assert!(c.why.contains("14.0°") && c.why.contains("fTetWild 12.0°") && c.why.contains("TetGen 11.0°"), "{}", c.why);
     assert!(c.why.contains(SCULPT) && c.why.contains("Inverter"), "the left out are named: {}", c.why);
     assert!(c.why.contains("declares every angle within 9.3-161.7°"), "{}", c.why);
+    assert!(c.why.contains("No mesh from TetGen on b."), "failures are named: {}", c.why);
     // A peer with a higher floor wins; a tie within a tenth of a degree goes to the declared bound.
     let c = pick_over(&data(10.0), Some(&peers())).expect("a pick");
     assert_eq!(c.pick, "fTetWild");

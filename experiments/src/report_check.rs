@@ -536,3 +536,12 @@ fn sparse_meshes_in_the_report_are_the_dense_ones_from_far_fewer_evaluations() {
         assert!(ratio >= 30.0, "{field} at 1024³: {ratio:.1}x fewer evaluations");
     }
 }
+
+#[test]
+fn every_committed_figure_is_linked_from_the_report() {
+    // The assembler prunes what no page links (`figures::prune`); a figure left over means the
+    // committed report was not reassembled after a run.
+    let names: Vec<&str> = all().iter().map(|e| e.name()).collect();
+    let stale = crate::figures::prune::unlinked(&report_dir(), &names);
+    assert!(stale.is_empty(), "{} figures no page links; rerun `--bin report -- --assemble-only`: {stale:?}", stale.len());
+}

@@ -99,9 +99,13 @@ pub fn all() -> Vec<Box<dyn Experiment>> {
 /// question ("which extractor for my case?") and links to them.
 pub fn assemble(ctx: &Context) -> Result<PathBuf, ExperimentError> {
     let mut pages = Vec::new();
+    let mut rendered = Vec::new();
     for e in all() {
         let section = match e.section(ctx) {
-            Ok(s) => s,
+            Ok(s) => {
+                rendered.push(e.name());
+                s
+            }
             Err(err) => format!("## {}\n\n_Not generated yet: {err}_\n", e.name()),
         };
         let title = page_title(&section).unwrap_or(e.name()).to_owned();
@@ -133,6 +137,8 @@ pub fn assemble(ctx: &Context) -> Result<PathBuf, ExperimentError> {
     write_atomic(&ctx.report_dir.join("bibliography.md"), |w| std::io::Write::write_all(w, bibliography.as_bytes()))?;
     let bibliography_html = crate::html::html_page("Bibliography", &bibliography);
     write_atomic(&ctx.report_dir.join("bibliography.html"), |w| std::io::Write::write_all(w, bibliography_html.as_bytes()))?;
+    // Last, once every page and script that may link a figure is written.
+    crate::figures::prune::prune(&ctx.report_dir, &rendered);
     Ok(path)
 }
 

@@ -3,6 +3,7 @@
 //! because they write files; `metrics` stays a light, read-only library.
 
 pub mod plot;
+pub mod prune;
 pub use isolab_render as render;
 
 /// Eight distinct colours (Tableau's), for series that are not algorithms.

@@ -83,10 +83,12 @@ use rayon::prelude::*;
 use std::collections::HashMap;
 use std::time::Instant;
 
+mod root;
 pub mod stencils;
 #[cfg(test)]
 mod tests;
 
+use root::{refine_root, ROOT_TOLERANCE};
 use stencils::Corner;
 
 /// One line for listings.
@@ -346,15 +348,6 @@ impl Cuts {
     }
 }
 
-/// Regula falsi (Illinois) steps refining a cut point on the field, at most.
-const ROOT_STEPS: usize = 12;
-
-/// A cut point is refined until the field there is within this fraction of the edge's value
-/// range (`|f(a)| + |f(b)|`) of the iso-value: for a distance field, a millionth of an edge, a
-/// thousandth of what the tests allow. Most cut points stop after three or four field queries
-/// instead of twelve (each is an exact distance for a mesh field).
-const ROOT_TOLERANCE: f64 = 1e-6;
-
 /// Every cut point of the lattice ([`Cuts`]).
 pub fn cut_points(lattice: &StuffingLattice, samples: &Samples) -> Cuts {
     let signs = &lattice.signs;
@@ -401,45 +394,6 @@ pub fn cut_points(lattice: &StuffingLattice, samples: &Samples) -> Cuts {
         })
         .unzip();
     Cuts { edges, fractions, positions }
-}
-
-/// The root of `f` between `(t0, f0)` and `(t1, f1)` (opposite signs), from the first guess
-/// `guess`, by the Illinois variant of regula falsi: stays in the bracket, so inside the edge.
-/// Stops where `|f| <= tolerance`.
-fn refine_root(
-    f: impl Fn(f64) -> f64,
-    (mut t0, mut f0): (f64, f64),
-    (mut t1, mut f1): (f64, f64),
-    guess: f64,
-    tolerance: f64,
-) -> f64 {
-    let mut t = guess;
-    let mut side = 0i8;
-    for _ in 0..ROOT_STEPS {
-        let ft = f(t);
-        if !ft.is_finite() || ft.abs() <= tolerance {
-            break;
-        }
-        if (ft < 0.0) == (f0 < 0.0) {
-            (t0, f0) = (t, ft);
-            if side == -1 {
-                f1 *= 0.5;
-            }
-            side = -1;
-        } else {
-            (t1, f1) = (t, ft);
-            if side == 1 {
-                f0 *= 0.5;
-            }
-            side = 1;
-        }
-        t = (t0 * f1 - t1 * f0) / (f1 - f0);
-        if !(t0..=t1).contains(&t) || (t1 - t0) < 1e-12 {
-            t = 0.5 * (t0 + t1);
-            break;
-        }
-    }
-    t
 }
 
 /// Which vertices moved: vertex id to the cut point it moved onto.

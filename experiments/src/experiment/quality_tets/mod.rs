@@ -2,7 +2,7 @@
 //! models (issue "Tetrahedra with proven quality", item 3).
 //!
 //! - **Ours.** `isosurface-stuffing` (Labelle & Shewchuk 2007) fills each model's inside on a
-//!   lattice of spacing `h` = longest side / [`CELLS`], sampling the model's signed distance (the
+//!   lattice of spacing `h` = longest side / `CELLS`, sampling the model's signed distance (the
 //!   generalized winding number signs it, so the bunny's holes close) at the lattice's corners;
 //!   `bcc-sculpt` (Stuart et al. 2013) at the same `h`, its defaults otherwise (it encloses the
 //!   model in an offset band instead of meshing its surface).
@@ -10,7 +10,7 @@
 //!   `data/quality_tets_peers.json` is committed so the report builds without Python): TetGen,
 //!   CGAL Mesh_3, NETGEN and fTetWild on the model's own triangle mesh (the bunny's holes closed by
 //!   pymeshlab), each with its sizing parameter scaled until its tetrahedron count is within a
-//!   tolerance of stuffing's at [`PEER_CELLS`], as closely as its parameter allows.
+//!   tolerance of stuffing's at `PEER_CELLS`, as closely as its parameter allows.
 //! - **Measured by one definition for all** ([`data::Quality`]): dihedral range, radius ratio,
 //!   inverted tetrahedra, the distance both ways between the mesh's boundary and the model's
 //!   surface sampled at vertices (in `h`), volume ratio and enclosure. Ours on one thread (a

@@ -40,7 +40,8 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "stuart_tables"))
-from peers import ROOT, dihedral_range, isolated, read_medit, read_obj, signed_volume, write_off  # noqa: E402
+# CGAL, NETGEN and fTetWild as Table 2 runs them, the size (their `h`) given here.
+from peers import ROOT, dihedral_range, isolated, read_obj, run_cgal, run_ftetwild, run_netgen, signed_volume  # noqa: E402
 
 MODELS = ["stanford-bunny", "spot", "rocker-arm", "fandisk", "cheburashka"]
 CELLS = 32  # quality_tets::PEER_CELLS
@@ -82,72 +83,6 @@ def run_tetgen(v, f, size):
         finally:
             os.chdir(here)
     return nodes, elems, seconds, f"quality (radius-edge <= 2), maximum volume {size:.4g}"
-
-
-def run_cgal(v, f, size):
-    import CGAL.CGAL_Mesh_3 as M
-    from CGAL.CGAL_Polyhedron_3 import Polyhedron_3
-
-    with tempfile.TemporaryDirectory() as d:
-        off = os.path.join(d, "in.off")
-        write_off(off, v, f)
-        poly = Polyhedron_3(off)
-        if not poly.is_closed():
-            raise RuntimeError("the polyhedral domain needs a closed surface")
-        t0 = time.perf_counter()
-        domain = M.Polyhedral_mesh_domain_3(poly)
-        params = M.Mesh_3_parameters()
-        params.no_perturb()
-        params.no_exude()
-        criteria = M.Default_mesh_criteria()
-        criteria.facet_angle(25).facet_size(size).facet_distance(size / 10).cell_radius_edge_ratio(3).cell_size(size)
-        c3t3 = M.make_mesh_3(domain, criteria, params)
-        M.odt_optimize_mesh_3(c3t3, domain, 60.0, 100, 0.02, 0.01)
-        M.exude_mesh_3(c3t3, 60.0, 0.0)
-        seconds = time.perf_counter() - t0
-        medit = os.path.join(d, "out.mesh")
-        c3t3.output_to_medit(medit)
-        points, tets = read_medit(medit)
-    return points, tets, seconds, f"cell and facet size {size:.4g}, facet distance {size / 10:.4g}; ODT, exude"
-
-
-def run_netgen(v, f, size):
-    from netgen.stl import STLGeometry
-
-    with tempfile.TemporaryDirectory() as d:
-        path = os.path.join(d, "in.stl")
-        with open(path, "w") as out:
-            out.write("solid model\n")
-            for t in f:
-                a, b, c = v[t[0]], v[t[1]], v[t[2]]
-                n = np.cross(b - a, c - a)
-                n = n / (np.linalg.norm(n) or 1.0)
-                out.write(f"facet normal {n[0]:.17g} {n[1]:.17g} {n[2]:.17g}\n outer loop\n")
-                for p in (a, b, c):
-                    out.write(f"  vertex {p[0]:.17g} {p[1]:.17g} {p[2]:.17g}\n")
-                out.write(" endloop\nendfacet\n")
-            out.write("endsolid model\n")
-        here = os.getcwd()
-        os.chdir(d)  # NETGEN writes a tracking file into the working directory
-        try:
-            t0 = time.perf_counter()
-            mesh = STLGeometry(path).GenerateMesh(maxh=size)
-            seconds = time.perf_counter() - t0
-        finally:
-            os.chdir(here)
-    points = np.array([list(p) for p in mesh.Points()], dtype=float)
-    tets = np.array([[int(x.nr) - 1 for x in el.vertices] for el in mesh.Elements3D()], dtype=np.int64)
-    if len(tets) == 0:
-        raise RuntimeError("NETGEN produced no tetrahedra")
-    return points, tets, seconds, f"STL geometry, maxh {size:.4g}"
-
-
-def run_ftetwild(v, f, size):
-    import pytetwild
-
-    t0 = time.perf_counter()
-    points, tets = pytetwild.tetrahedralize(v.astype(np.float64), f.astype(np.int32), edge_length_abs=size, num_threads=1, quiet=True)
-    return points, tets, time.perf_counter() - t0, f"ideal edge length {size:.4g}, default envelope, one thread"
 
 
 # Each mesher, its size parameter's first value for a target count, and how the count scales with it.

@@ -46,6 +46,8 @@ enum Target {
     Folder(PathBuf, String),
     /// A folder holding a neuroglancer precomputed mesh source.
     Neuroglancer(PathBuf),
+    /// One `.vtk` unstructured grid: the tetrahedra, a `label` per cell.
+    Tetrahedra(PathBuf),
 }
 
 fn bad_output(path: &Path, reason: &str) -> RunError {
@@ -53,10 +55,27 @@ fn bad_output(path: &Path, reason: &str) -> RunError {
         .into()
 }
 
-/// Checks the output before any work: a `.glb` in an existing folder, or a folder (created) and a
-/// mesh format.
-fn target(output: &Path, format: &str) -> Result<Target, RunError> {
+/// Checks the output before any work: a `.glb` in an existing folder, a `.vtk` there from an
+/// algorithm that makes tetrahedra, or a folder (created) and a mesh format.
+fn target(output: &Path, format: &str, config: &LabelConfig) -> Result<Target, RunError> {
     let ext = io::extension(output);
+    if ext.as_deref() == Some("vtk") {
+        let extractor = labels::build(config)?;
+        if extractor.info().guarantees.dihedral.is_none() {
+            return Err(bad_output(
+                output,
+                &format!(
+                    "a .vtk output holds tetrahedra, and {} makes surfaces only: use -a lattice-cleaving, or give a folder or a .glb",
+                    config.algorithm
+                ),
+            ));
+        }
+        let dir = output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        if !dir.is_dir() {
+            return Err(bad_output(output, "its folder does not exist"));
+        }
+        return Ok(Target::Tetrahedra(output.into()));
+    }
     if ext.as_deref() == Some("glb") {
         let dir = output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
         if !dir.is_dir() {
@@ -88,12 +107,22 @@ fn target(output: &Path, format: &str) -> Result<Target, RunError> {
     Ok(Target::Folder(output.into(), format.to_owned()))
 }
 
+/// The outcome's tetrahedra, a label per cell, as one `.vtk`.
+fn write_tetrahedra(path: &Path, outcome: &labels::LabelOutcome) -> Result<(), RunError> {
+    let mesh = isolab_algorithms::TetMesh {
+        positions: outcome.surface.mesh.positions.clone(),
+        tetrahedra: outcome.surface.tetrahedra.clone(),
+    };
+    io::write_vtk_labelled_tets(path, &mesh, &outcome.surface.tetrahedron_labels, outcome.space_tag)?;
+    Ok(())
+}
+
 /// Runs the job: reads, meshes, writes, reports.
 pub fn run(job: &Job) -> Result<(), RunError> {
     if job.format.starts_with("neuroglancer") {
         check_neuroglancer(job)?;
     }
-    let target = job.output.as_deref().map(|o| target(o, &job.format)).transpose()?;
+    let target = job.output.as_deref().map(|o| target(o, &job.format, &job.config)).transpose()?;
     let volume = LabelVolume::read(&job.input, job.volume)?;
     if let Some(Target::Neuroglancer(dir)) = &target {
         return run_neuroglancer(job, &volume, dir);
@@ -125,7 +154,11 @@ pub fn run(job: &Job) -> Result<(), RunError> {
                 let path = dir.join(name(label)).with_extension(ext);
                 isolab_pipeline::files::write_meshes(&path, mesh, &Default::default(), &[], outcome.space_tag)?;
             }
+            if !outcome.surface.tetrahedra.is_empty() {
+                write_tetrahedra(&dir.join(format!("{}-tetrahedra.vtk", volume.name)), &outcome)?;
+            }
         }
+        Some(Target::Tetrahedra(path)) => write_tetrahedra(path, &outcome)?,
         Some(Target::Neuroglancer(_)) | None => {}
     }
     let metrics = labels::label_metrics(&outcome);
@@ -134,6 +167,9 @@ pub fn run(job: &Job) -> Result<(), RunError> {
         Some(_) => println!("{}", serde_json::to_string_pretty(&metrics).unwrap_or_default()),
         None => {
             println!("{} labels meshed by {} in {:.1} ms", metrics.len(), job.config.algorithm, outcome.extract_ms);
+            if !outcome.surface.tetrahedra.is_empty() {
+                println!("{} tetrahedra filling them", outcome.surface.tetrahedra.len());
+            }
             for m in &metrics {
                 println!(
                     "label {:>6}: {:>8} triangles, {}, {}, area {:.4}, volume {:.4}, neighbours {:?}",

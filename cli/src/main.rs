@@ -141,8 +141,9 @@ enum Command {
         /// labels, 0 the background.
         #[arg(long, short)]
         field: PathBuf,
-        /// Label extractor: surface-nets (Frisken 2022, smoothed) or marching-tetrahedra
-        /// (manifold for every map); see `isolab list`.
+        /// Label extractor: surface-nets (Frisken 2022, smoothed), marching-tetrahedra
+        /// (manifold for every map) or lattice-cleaving (tetrahedra filling every label, dihedral
+        /// angles bounded; write them with `-o NAME.vtk`); see `isolab list`.
         #[arg(long, short, default_value = "surface-nets")]
         algorithm: String,
         /// The labels to mesh, comma-separated (default: every label but 0); the others count as
@@ -160,7 +161,9 @@ enum Command {
         #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_option)]
         set: Vec<(String, String)>,
         /// Where to write: a folder (one mesh file per label, `<name>-label-<n>.<format>`,
-        /// created if missing) or a `.glb` file (one named, coloured node per label).
+        /// created if missing, and `<name>-tetrahedra.vtk` from an algorithm that makes
+        /// tetrahedra), a `.glb` file (one named, coloured node per label), or a `.vtk` file (the
+        /// tetrahedra of lattice-cleaving with their `label` cell array).
         #[arg(long, short)]
         output: Option<PathBuf>,
         /// Format of the per-label files in a folder: ply, obj, stl, glb or gltf; or

@@ -58,7 +58,7 @@ fn a_folder_gets_one_closed_mesh_per_label_sharing_interfaces() {
     let seg = three_labels(dir.path());
     let out = dir.path().join("meshes");
     let m = dir.path().join("m.json");
-    for algorithm in ["surface-nets", "marching-tetrahedra"] {
+    for algorithm in ["surface-nets", "marching-tetrahedra", "lattice-cleaving"] {
         let o = isolab(&[
             "labels",
             "-f",
@@ -87,6 +87,61 @@ fn a_folder_gets_one_closed_mesh_per_label_sharing_interfaces() {
         assert_eq!(rows[0]["neighbours"]["2"].as_u64(), Some(shared as u64), "{algorithm}: {json}");
         assert_eq!(rows[2]["samples"], 1);
     }
+}
+
+#[test]
+fn lattice_cleaving_writes_labelled_tetrahedra_as_vtk() {
+    let dir = tempfile::tempdir().unwrap();
+    let seg = three_labels(dir.path());
+    let vtk = dir.path().join("seg-tets.vtk");
+    let o = isolab(&["labels", "-f", seg.to_str().unwrap(), "-a", "lattice-cleaving", "-o", vtk.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&vtk).unwrap();
+    let mut lines = text.lines();
+    let points: usize =
+        lines.by_ref().find_map(|l| l.strip_prefix("POINTS ")).unwrap().split(' ').next().unwrap().parse().unwrap();
+    let positions: Vec<[f64; 3]> = lines
+        .by_ref()
+        .take(points)
+        .map(|l| {
+            let v: Vec<f64> = l.split(' ').map(|x| x.parse().unwrap()).collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect();
+    let cells: usize = lines.next().unwrap().strip_prefix("CELLS ").unwrap().split(' ').next().unwrap().parse().unwrap();
+    let tets: Vec<[usize; 4]> = lines
+        .by_ref()
+        .take(cells)
+        .map(|l| {
+            let v: Vec<usize> = l.split(' ').map(|x| x.parse().unwrap()).collect();
+            assert_eq!(v[0], 4);
+            [v[1], v[2], v[3], v[4]]
+        })
+        .collect();
+    let rest: Vec<&str> = lines.collect();
+    let at = rest.iter().position(|l| l.starts_with("CELL_DATA")).unwrap();
+    assert_eq!(rest[at], format!("CELL_DATA {cells}"));
+    assert_eq!(rest[at + 1], "SCALARS label unsigned_int 1");
+    let labels: Vec<u32> = rest[at + 3..].iter().map(|l| l.parse().unwrap()).collect();
+    assert_eq!(labels.len(), cells);
+    // Every tetrahedron positive; each label's volume near its samples' count (the map's
+    // spacing is one).
+    let mut volume = std::collections::BTreeMap::new();
+    for (t, l) in tets.iter().zip(&labels) {
+        let [a, b, c, d] = t.map(|i| glam::DVec3::from(positions[i]));
+        let v = (b - a).dot((c - a).cross(d - a)) / 6.0;
+        assert!(v > 0.0, "{t:?}");
+        *volume.entry(*l).or_insert(0.0) += v;
+    }
+    assert_eq!(volume.keys().copied().collect::<Vec<_>>(), [1, 2, 5]);
+    assert!((volume[&1] - 64.0).abs() < 0.15 * 64.0 && (volume[&2] - 64.0).abs() < 0.15 * 64.0, "{volume:?}");
+    // A surface extractor has no tetrahedra: refused before any work, nothing written.
+    let refused = dir.path().join("nets.vtk");
+    let o = isolab(&["labels", "-f", seg.to_str().unwrap(), "-o", refused.to_str().unwrap()]);
+    assert!(o.status.code() == Some(1) && stderr(&o).contains("lattice-cleaving") && !refused.exists(), "{}", stderr(&o));
+    // Lattice cleaving meshes closed borders only, and says so.
+    let o = isolab(&["labels", "-f", seg.to_str().unwrap(), "-a", "lattice-cleaving", "--set", "border=open"]);
+    assert!(o.status.code() == Some(2) && stderr(&o).contains("closed"), "{}", stderr(&o));
 }
 
 #[test]
@@ -132,7 +187,11 @@ fn bad_label_input_is_refused_with_nothing_written() {
     let o = isolab(&["labels", "-f", seg.to_str().unwrap(), "-o", ply.to_str().unwrap()]);
     assert!(o.status.code() == Some(1) && stderr(&o).contains("folder") && !ply.exists(), "{}", stderr(&o));
     let o = isolab(&["labels", "-f", seg.to_str().unwrap(), "-a", "marching-cubes"]);
-    assert!(o.status.code() == Some(2) && stderr(&o).contains("surface-nets, marching-tetrahedra"), "{}", stderr(&o));
+    assert!(
+        o.status.code() == Some(2) && stderr(&o).contains("surface-nets, marching-tetrahedra, lattice-cleaving"),
+        "{}",
+        stderr(&o)
+    );
     let folder = d.join("some");
     let o = isolab(&["labels", "-f", seg.to_str().unwrap(), "--labels", "2,9", "-o", folder.to_str().unwrap()]);
     assert!(o.status.success() && stderr(&o).contains("[9] do not occur"), "{}", stderr(&o));

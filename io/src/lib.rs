@@ -28,7 +28,7 @@ pub use obj::{parse_obj, write_obj_coloured};
 pub use ply::{parse_ply, write_ply, write_ply_coloured};
 pub use stream::PlyStream;
 pub use volume::samples::write_samples;
-pub use vtk::{tetrahedra_path, write_vtk_tets};
+pub use vtk::{tetrahedra_path, write_vtk_labelled_tets, write_vtk_tets};
 
 use isolab_algorithms::TriMesh;
 use std::fs::File;

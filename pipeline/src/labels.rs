@@ -248,9 +248,17 @@ pub fn outcome(
     space: Option<crate::OutputSpace>,
     rest: LabelOutcome,
 ) -> LabelOutcome {
+    let mut flips = index_to_world.matrix3.determinant() < 0.0;
     surface.mesh.transform(&index_to_world);
     if let Some(map) = space.and_then(crate::OutputSpace::map_from_ras) {
+        flips ^= map.matrix3.determinant() < 0.0;
         surface.mesh.transform(&map);
+    }
+    if flips {
+        // The tetrahedra keep a positive orientation in the world.
+        for t in &mut surface.tetrahedra {
+            t.swap(2, 3);
+        }
     }
     let meshes = surface.label_meshes();
     LabelOutcome { surface, meshes, space_tag: space.map(crate::OutputSpace::tag), ..rest }

@@ -145,13 +145,24 @@ fn post_entry(p: &isolab_algorithms::extract::PostInfo) -> Entry {
 fn label_entry(e: &labels::LabelExtractorInfo) -> Entry {
     let g = &e.guarantees;
     let flags = [("closed", g.closed), ("manifold", g.manifold), ("outward", g.outward)];
+    let dihedral = g.dihedral.map_or(String::new(), |d| {
+        format!(
+            "; tetrahedra filling every label, every dihedral angle in [{}°, {}°], none inverted",
+            d.min_degrees, d.max_degrees
+        )
+    });
     Entry {
         name: e.name,
         kind: EntryKind::Labels,
         description: e.description,
         options: e.options.to_vec(),
-        guarantees: json!({ "closed": g.closed, "manifold": g.manifold, "outward": g.outward }),
-        promises: format!("every label's mesh: {}", promised(&flags, "nothing promised")),
+        guarantees: json!({
+            "closed": g.closed,
+            "manifold": g.manifold,
+            "outward": g.outward,
+            "dihedral_degrees": g.dihedral.map(|d| [d.min_degrees, d.max_degrees]),
+        }),
+        promises: format!("every label's mesh: {}{dihedral}", promised(&flags, "nothing promised")),
         samples: None,
         chunking: None,
         apron: None,

@@ -167,6 +167,8 @@ pub(crate) fn to_python<'py>(py: Python<'py>, outcome: LabelOutcome, algorithm: 
     d.set_item("vertices", out::vec3_array(py, surface.mesh.positions)?)?;
     d.set_item("faces", out::faces_array(py, surface.mesh.triangles)?)?;
     d.set_item("pairs", out::u32_rows(py, surface.pairs)?)?;
+    d.set_item("tetrahedra", out::quads_array(py, &surface.tetrahedra)?)?;
+    d.set_item("tetrahedron_labels", numpy::PyArray1::from_vec(py, surface.tetrahedron_labels))?;
     d.set_item("missing", outcome.missing)?;
     d.set_item("notes", outcome.notes)?;
     d.set_item("extract_ms", outcome.extract_ms)?;

@@ -48,6 +48,12 @@ def assert_same_label_meshes(blocks, whole, what):
         assert blocks[label].stats["samples"] == whole[label].stats["samples"], f"{what}: label {label}"
     assert len(blocks.faces) == len(whole.faces), what
     np.testing.assert_array_equal(np.unique(blocks.pairs, axis=0), np.unique(whole.pairs, axis=0))
+    # Tetrahedra (lattice cleaving's): the same, as labelled rows of corner coordinates.
+    def tets(m):
+        corners = np.sort(m.vertices[m.tetrahedra].reshape(len(m.tetrahedra), 12).view("f4,f4,f4"), axis=1)
+        return sorted(zip(map(bytes, corners), m.tetrahedron_labels.tolist()))
+    assert len(blocks.tetrahedra) == len(whole.tetrahedra), what
+    assert tets(blocks) == tets(whole), what
 
 
 @pytest.mark.parametrize("algorithm, smoothing", CASES)

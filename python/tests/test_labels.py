@@ -42,9 +42,70 @@ def same_mesh(va, fa, vb, fb, tol=1e-4):
 
 
 def test_the_label_extractors_are_listed_with_guarantees():
-    assert set(LABEL_EXTRACTORS) == {"surface-nets", "marching-tetrahedra"}
+    assert set(LABEL_EXTRACTORS) == {"surface-nets", "marching-tetrahedra", "lattice-cleaving"}
     mt = next(a for a in isolab.algorithms() if a["kind"] == "labels" and a["name"] == "marching-tetrahedra")
-    assert mt["guarantees"] == {"closed": True, "manifold": True, "outward": True}
+    assert mt["guarantees"] == {"closed": True, "manifold": True, "outward": True, "dihedral_degrees": None}
+    cleaving = next(a for a in isolab.algorithms() if a["kind"] == "labels" and a["name"] == "lattice-cleaving")
+    low, high = cleaving["guarantees"]["dihedral_degrees"]
+    assert 0 < low < 60 < 90 < high < 180 and "tetrahedra" in cleaving["promises"]
+
+
+def dihedral_angles(p):
+    """The six dihedral angles (degrees) of each tetrahedron of ``p`` (K, 4, 3)."""
+    out = []
+    for i, j, k, m in [(0, 1, 2, 3), (0, 2, 1, 3), (0, 3, 1, 2), (1, 2, 0, 3), (1, 3, 0, 2), (2, 3, 0, 1)]:
+        e = p[:, j] - p[:, i]
+        e /= np.linalg.norm(e, axis=1, keepdims=True)
+        u = p[:, k] - p[:, i]
+        w = p[:, m] - p[:, i]
+        u -= (u * e).sum(1, keepdims=True) * e
+        w -= (w * e).sum(1, keepdims=True) * e
+        c = (u * w).sum(1) / (np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1))
+        out.append(np.degrees(np.arccos(np.clip(c, -1, 1))))
+    return np.stack(out, 1)
+
+
+def test_lattice_cleaving_fills_every_label_with_conforming_tetrahedra():
+    seg = voronoi((18, 16, 14), 5, seed=3)
+    spacing = (0.5, 0.75, 1.0)
+    meshes = isolab.mesh_labels(seg, algorithm="lattice-cleaving", spacing=spacing)
+    tets, tet_labels, v = meshes.tetrahedra, meshes.tetrahedron_labels, meshes.vertices.astype(np.float64)
+    assert tets.shape[1] == 4 and tets.dtype == np.int32 and tet_labels.shape == (len(tets),)
+    assert sorted(set(tet_labels.tolist())) == sorted(meshes) == [1, 2, 3, 4]
+    p = v[tets]
+    volumes = np.einsum("ij,ij->i", p[:, 1] - p[:, 0], np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 0])) / 6
+    assert (volumes > 0).all()
+    # Each label's volume within 10% of its samples' (the voxel is 0.375 units): these regions
+    # are a few hundred samples, split in pieces and cut by the map's border, where the staircase's
+    # chamfer and the border's ties take most (the Rust tests hold a ball to 2.5%).
+    voxel = np.prod(spacing)
+    for label in meshes:
+        want = (seg == label).sum() * voxel
+        assert abs(volumes[tet_labels == label].sum() - want) < 0.10 * want, label
+    # Dihedral angles in the declared interval (spacing is not isotropic, so only on a cube grid).
+    cube = isolab.mesh_labels(seg, algorithm="lattice-cleaving")
+    low, high = next(a for a in isolab.algorithms() if a["name"] == "lattice-cleaving")["guarantees"]["dihedral_degrees"]
+    angles = dihedral_angles(cube.vertices.astype(np.float64)[cube.tetrahedra])
+    assert angles.min() >= low - 1e-3 and angles.max() <= high + 1e-3, (angles.min(), angles.max())
+    # Conforming: every face of a tetrahedron is shared by two of one label, or is an interface
+    # triangle of its two labels (one with the background).
+    faces = {}
+    for t, label in zip(tets.tolist(), tet_labels.tolist()):
+        for k in range(4):
+            f = tuple(sorted(t[:k] + t[k + 1:]))
+            faces.setdefault(f, []).append(label)
+    interfaces = {tuple(sorted(f)): tuple(pair) for f, pair in zip(meshes.faces.tolist(), meshes.pairs.tolist())}
+    for f, labels in faces.items():
+        assert len(labels) <= 2, f
+        sides = tuple(sorted(labels + [0] * (2 - len(labels)), reverse=True))
+        if sides[0] == sides[1]:
+            assert f not in interfaces
+        else:
+            assert interfaces[f] == sides, (f, labels)
+    assert set(interfaces) <= set(faces)
+    # Surface extractors give no tetrahedra.
+    nets = isolab.mesh_labels(seg)
+    assert nets.tetrahedra.shape == (0, 4) and nets.tetrahedron_labels.shape == (0,)
 
 
 @pytest.mark.parametrize("algorithm", LABEL_EXTRACTORS)

@@ -323,6 +323,8 @@ pub fn weld_label_fragments<'a>(fragments: impl IntoIterator<Item = &'a LabelFra
         out.mesh.triangles.extend(fragment.surface.mesh.triangles.iter().map(|t| t.map(|v| remap[v as usize])));
         out.pairs.extend_from_slice(&fragment.surface.pairs);
         out.active_cells += fragment.surface.active_cells;
+        out.tetrahedra.extend(fragment.surface.tetrahedra.iter().map(|t| t.map(|v| remap[v as usize])));
+        out.tetrahedron_labels.extend_from_slice(&fragment.surface.tetrahedron_labels);
     }
     out
 }

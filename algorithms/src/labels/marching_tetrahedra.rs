@@ -67,7 +67,7 @@ pub const INFO: LabelExtractorInfo = LabelExtractorInfo {
     description: DESCRIPTION,
     options: OPTION_NAMES,
     make: from_options,
-    guarantees: LabelGuarantees { closed: true, manifold: true, outward: true },
+    guarantees: LabelGuarantees { closed: true, manifold: true, outward: true, dihedral: None },
 };
 
 /// Builds multi-label marching tetrahedra from named options.

@@ -20,13 +20,14 @@
 
 pub mod blocks;
 pub mod cell;
+pub mod cleaving;
 pub mod marching_tetrahedra;
 pub mod surface_nets;
 pub mod values;
 
 use std::collections::BTreeMap;
 
-use crate::extract::ExtractError;
+use crate::extract::{DihedralInterval, ExtractError};
 use crate::mesh::TriMesh;
 use crate::options::{OptionError, Options};
 pub use blocks::{LabelBlock, LabelBlockPlan, LabelFragment};
@@ -109,6 +110,11 @@ pub struct LabelSurface {
     pub pairs: Vec<[u32; 2]>,
     /// Surface cells (cells whose corners are not all one label).
     pub active_cells: usize,
+    /// Tetrahedra filling the labels, from an extractor that makes them (empty otherwise), on
+    /// `mesh.positions`; each is positively oriented.
+    pub tetrahedra: Vec<[u32; 4]>,
+    /// Each tetrahedron's label.
+    pub tetrahedron_labels: Vec<u32>,
 }
 
 impl LabelSurface {
@@ -117,6 +123,8 @@ impl LabelSurface {
         self.mesh.clear();
         self.pairs.clear();
         self.active_cells = 0;
+        self.tetrahedra.clear();
+        self.tetrahedron_labels.clear();
     }
 
     /// The labels that have a mesh (every label named by a triangle, the background excluded),
@@ -280,7 +288,7 @@ impl LabelSurface {
 }
 
 /// What a label extractor promises, as data (checked for every entry by `tests/tests/labels.rs`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LabelGuarantees {
     /// Every label's mesh is closed with the default [`Border::Closed`].
     pub closed: bool,
@@ -288,6 +296,9 @@ pub struct LabelGuarantees {
     pub manifold: bool,
     /// Every label's mesh is wound outward (positive signed volume when closed).
     pub outward: bool,
+    /// Fills every label with tetrahedra, every dihedral angle in this interval and none
+    /// inverted (`None`: surfaces only).
+    pub dihedral: Option<DihedralInterval>,
 }
 
 /// A registry entry: the name, what it does, its options and its constructor.
@@ -330,7 +341,7 @@ pub trait LabelExtractor: Send + Sync {
 }
 
 /// Every label extractor, one line each.
-pub const LABEL_INFOS: &[LabelExtractorInfo] = &[surface_nets::INFO, marching_tetrahedra::INFO];
+pub const LABEL_INFOS: &[LabelExtractorInfo] = &[surface_nets::INFO, marching_tetrahedra::INFO, cleaving::INFO];
 
 /// The label extractor called `name`, built from `options`; `Ok(None)` for an unknown name.
 pub fn build(name: &str, options: &Options) -> Result<Option<Box<dyn LabelExtractor>>, OptionError> {

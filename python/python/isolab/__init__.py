@@ -423,6 +423,13 @@ class LabelMeshes(dict):
     pairs : (M, 2) uint32
         Each triangle's ``(inside, outside)`` labels, ``inside > outside``; its normal points
         from ``inside`` into ``outside``. ``0`` is the background.
+    tetrahedra : (K, 4) int32
+        From ``algorithm="lattice-cleaving"``: tetrahedra filling every label (indices into
+        ``vertices``, positively oriented), conforming where labels meet: every interface
+        triangle is a face of one tetrahedron of each of its two labels. Empty (0, 4) from a
+        surface algorithm.
+    tetrahedron_labels : (K,) uint32
+        Each tetrahedron's label.
     missing : list of int
         Labels asked for (``labels=``) that do not occur (a warning is also issued).
     notes : list of str
@@ -438,12 +445,15 @@ class LabelMeshes(dict):
         self.vertices: np.ndarray = parts["vertices"]
         self.faces: np.ndarray = parts["faces"]
         self.pairs: np.ndarray = parts["pairs"]
+        self.tetrahedra: np.ndarray = parts["tetrahedra"]
+        self.tetrahedron_labels: np.ndarray = parts["tetrahedron_labels"]
         self.missing: List[int] = list(parts["missing"])
         self.notes: List[str] = list(parts["notes"])
         self.extract_ms: float = float(parts["extract_ms"])
 
     def __repr__(self) -> str:
-        return f"<isolab.LabelMeshes: {len(self)} labels, {len(self.faces)} interface triangles>"
+        tets = f", {len(self.tetrahedra)} tetrahedra" if len(self.tetrahedra) else ""
+        return f"<isolab.LabelMeshes: {len(self)} labels, {len(self.faces)} interface triangles{tets}>"
 
 
 @raises_isolab_errors
@@ -473,7 +483,10 @@ def mesh_labels(label_map: Union[np.ndarray, str, os.PathLike], /, *, spacing: O
     algorithm : str
         ``"surface-nets"`` (Frisken 2022, as VTK's ``vtkSurfaceNets3D``: smoothed, junctions kept
         sharp; a label's mesh can be non-manifold where three labels meet) or
-        ``"marching-tetrahedra"`` (manifold for every map, unsmoothed, more triangles).
+        ``"marching-tetrahedra"`` (manifold for every map, unsmoothed, more triangles) or
+        ``"lattice-cleaving"`` (Bronson et al. 2012: also fills every label with tetrahedra,
+        ``tetrahedra`` and ``tetrahedron_labels``, every dihedral angle within the interval
+        ``isolab.algorithms()`` declares for it; closed border only).
     smoothing : bool or str, optional
         Surface nets' constrained smoothing: ``True``/``"constrained"`` (the default) or
         ``False``/``"none"``.

@@ -79,6 +79,8 @@ class LabelMeshes(Dict[int, Mesh]):
     vertices: np.ndarray
     faces: np.ndarray
     pairs: np.ndarray
+    tetrahedra: np.ndarray
+    tetrahedron_labels: np.ndarray
     missing: List[int]
     notes: List[str]
     extract_ms: float

@@ -358,7 +358,8 @@ def save_label_fragment(path: str, fragment: Dict[str, Any]) -> None:
     _save_npz(path, dict(id=np.asarray(fragment["id"], dtype=np.int64),
                          active_cells=np.asarray(fragment["active_cells"], dtype=np.int64),
                          positions=fragment["positions"], triangles=fragment["triangles"], pairs=fragment["pairs"],
-                         keys=fragment["keys"], count_labels=np.asarray(labels, dtype=np.uint32),
+                         keys=fragment["keys"], tetrahedra=fragment["tetrahedra"],
+                         tetrahedron_labels=fragment["tetrahedron_labels"], count_labels=np.asarray(labels, dtype=np.uint32),
                          count_samples=np.asarray([fragment["counts"][k] for k in labels], dtype=np.int64)))
 
 
@@ -367,10 +368,15 @@ def load_label_fragment(path: str) -> Dict[str, Any]:
     """A fragment ``mesh_labels(..., out=...)`` wrote: the block's interface triangles
     (``positions`` in the map's sample indices, isolab's x = numpy's last axis; ``triangles``;
     ``pairs``, each triangle's ``(inside, outside)`` labels), the weld ``keys`` (N x 2 uint64),
-    its ``id``, ``active_cells`` and ``counts`` (each label's samples among those it owns)."""
+    ``tetrahedra`` and ``tetrahedron_labels`` (lattice cleaving's; empty for a surface
+    extractor), its ``id``, ``active_cells`` and ``counts`` (each label's samples among those it
+    owns)."""
     with np.load(path) as z:
+        empty = (np.zeros((0, 4), np.uint32), np.zeros(0, np.uint32))
+        tets = (z["tetrahedra"], z["tetrahedron_labels"]) if "tetrahedra" in z.files else empty
         return {"id": tuple(int(v) for v in z["id"]), "active_cells": int(z["active_cells"]),
                 "positions": z["positions"], "triangles": z["triangles"], "pairs": z["pairs"], "keys": z["keys"],
+                "tetrahedra": tets[0], "tetrahedron_labels": tets[1],
                 "counts": {int(k): int(n) for k, n in zip(z["count_labels"], z["count_samples"])}}
 
 

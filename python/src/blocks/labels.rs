@@ -123,6 +123,8 @@ fn fragment_dict(py: Python<'_>, f: LabelFragment, counts: BTreeMap<u32, usize>)
     d.set_item("positions", out::vec3_array(py, positions)?)?;
     d.set_item("triangles", out::u32_rows(py, triangles)?)?;
     d.set_item("pairs", out::u32_rows(py, f.surface.pairs)?)?;
+    d.set_item("tetrahedra", out::u32_rows(py, f.surface.tetrahedra)?)?;
+    d.set_item("tetrahedron_labels", numpy::PyArray1::from_vec(py, f.surface.tetrahedron_labels))?;
     Ok(d)
 }
 
@@ -135,6 +137,22 @@ fn fragment_from(d: &Bound<'_, PyDict>) -> PyResult<(LabelFragment, BTreeMap<u32
     fragment.surface.pairs = rows::<u32, 2>(&item("pairs")?, "pairs", "uint32")?;
     fragment.surface.active_cells = item("active_cells")?.extract()?;
     fragment.keys = keys_from(&item("keys")?)?;
+    // Tetrahedra (lattice cleaving's), absent from fragments of surface extractors' older files.
+    if let (Some(tets), Some(labels)) = (d.get_item("tetrahedra")?, d.get_item("tetrahedron_labels")?) {
+        fragment.surface.tetrahedra = rows::<u32, 4>(&tets, "tetrahedra", "uint32")?;
+        fragment.surface.tetrahedron_labels = labels.extract()?;
+        let n = fragment.surface.mesh.positions.len() as u32;
+        if fragment.surface.tetrahedron_labels.len() != fragment.surface.tetrahedra.len()
+            || fragment.surface.tetrahedra.iter().flatten().any(|&v| v >= n)
+        {
+            return Err(PyValueError::new_err(format!(
+                "label fragment {:?}: {} tetrahedra with {} labels over {n} vertices",
+                fragment.id,
+                fragment.surface.tetrahedra.len(),
+                fragment.surface.tetrahedron_labels.len()
+            )));
+        }
+    }
     let (n, t) = (fragment.surface.mesh.positions.len(), fragment.surface.mesh.triangles.len());
     if fragment.keys.len() != n || fragment.surface.pairs.len() != t {
         return Err(PyValueError::new_err(format!(

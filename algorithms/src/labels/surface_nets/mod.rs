@@ -103,7 +103,7 @@ pub const INFO: LabelExtractorInfo = LabelExtractorInfo {
     description: DESCRIPTION,
     options: OPTION_NAMES,
     make: from_options,
-    guarantees: LabelGuarantees { closed: true, manifold: false, outward: true },
+    guarantees: LabelGuarantees { closed: true, manifold: false, outward: true, dihedral: None },
 };
 
 /// How vertices move after placement.

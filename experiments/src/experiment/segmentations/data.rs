@@ -73,4 +73,19 @@ pub struct Data {
     /// Whether the tissue map's pictures were drawn (`figures/segmentations/tissue.png`).
     #[serde(default)]
     pub(super) pictures: bool,
+    /// The label extractors drawn, left to right (empty in data from before this field, when the
+    /// registry's first two were all it had and all that were drawn).
+    #[serde(default)]
+    pub(super) drawn: Vec<String>,
+}
+
+impl Data {
+    /// The label extractors the tissue picture shows, left to right.
+    pub(super) fn drawn(&self) -> Vec<String> {
+        if self.drawn.is_empty() {
+            isolab_algorithms::labels::names().into_iter().take(2).map(String::from).collect()
+        } else {
+            self.drawn.clone()
+        }
+    }
 }

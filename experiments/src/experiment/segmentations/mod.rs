@@ -92,7 +92,7 @@ impl Experiment for Segmentations {
         let mut data: Data =
             serde_json::from_value(bench).map_err(|e| ExperimentError::Python(format!("bench.py wrote: {e}")))?;
         if tissue.exists() {
-            pictures(ctx, &tissue)?;
+            data.drawn = pictures(ctx, &tissue)?;
             data.pictures = true;
         }
         ctx.write_data(NAME, &data)
@@ -104,8 +104,8 @@ impl Experiment for Segmentations {
 }
 
 /// The tissue map meshed by each of our label extractors, cut open at the middle of its first
-/// axis so the inner labels show, coloured by label, side by side.
-fn pictures(ctx: &Context, tissue: &Path) -> Result<(), ExperimentError> {
+/// axis so the inner labels show, coloured by label, side by side; returns their names.
+fn pictures(ctx: &Context, tissue: &Path) -> Result<Vec<String>, ExperimentError> {
     let dir = ctx.figure_dir(NAME)?;
     let volume = LabelVolume::read(tissue, None)?;
     let mut images = Vec::new();
@@ -117,7 +117,8 @@ fn pictures(ctx: &Context, tissue: &Path) -> Result<(), ExperimentError> {
         images.push(render::render_coloured(&mesh, &colours, &opts));
     }
     let refs: Vec<&render::Image> = images.iter().collect();
-    render::save_png(&dir.join("tissue.png"), &render::grid(&refs, refs.len())).map_err(ExperimentError::Io)
+    render::save_png(&dir.join("tissue.png"), &render::grid(&refs, refs.len())).map_err(ExperimentError::Io)?;
+    Ok(isolab_algorithms::labels::names().into_iter().map(String::from).collect())
 }
 
 /// Every label's triangles whose centroid lies on the low side of the meshes' middle x, in one

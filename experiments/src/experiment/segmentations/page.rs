@@ -243,8 +243,8 @@ pub(super) fn page_body(data: &Data, pictures: bool) -> String {
         md.push_str(&format!(
             "![the tissue map, cut open at the middle: {}](figures/{NAME}/tissue.png)\n\nThe tissue map meshed by each of our \
              label extractors ({}, left to right), cut open at the middle of its first axis, each label in its colour.\n\n",
-            isolab_algorithms::labels::names().join(", "),
-            isolab_algorithms::labels::names().join(", ")
+            data.drawn().join(", "),
+            data.drawn().join(", ")
         ));
     }
     if !data.notes.is_empty() {

@@ -114,7 +114,7 @@ mod tests {
     }
 
     fn data(rows: Vec<Row>) -> Data {
-        Data { repeats: 1, versions: Default::default(), notes: Vec::new(), inputs: Vec::new(), rows, pictures: false }
+        Data { repeats: 1, versions: Default::default(), notes: Vec::new(), inputs: Vec::new(), rows, pictures: false, drawn: Vec::new() }
     }
 
     #[test]

@@ -45,7 +45,9 @@ pub(super) fn section(ctx: &Context) -> Result<String, ExperimentError> {
             s.push_str(&format!(
                 "\nThe surface each peer got: {}. Each peer's sizing parameter is scaled until its count is within {:.0}% of \
                  the target or its tries run out (\"tries\"); the row keeps the try nearest the target, and its time is the \
-                 median (fastest-slowest) of that setting's runs.\n\n",
+                 median (fastest-slowest) of that setting's runs. The timing protocols differ: each peer runs one-shot in a \
+                 fresh process, timed around its mesher's call alone, while ours repeat in one process (the first run \
+                 counted) with the signed distance's sampling included.\n\n",
                 inputs.join("; "),
                 100.0 * p.match_tolerance
             ));
@@ -148,6 +150,11 @@ fn peer_table(p: &Peers) -> String {
     markdown_table(&header, &body)
 }
 
+/// `n` models, in words ("1 model", "3 models").
+fn models(n: usize) -> String {
+    format!("{n} model{}", if n == 1 { "" } else { "s" })
+}
+
 /// One mesher's worst dihedral angles over the models given: the smallest minimum and the
 /// largest maximum.
 fn worst<'a>(qs: impl Iterator<Item = &'a Quality>) -> Option<[f64; 2]> {
@@ -200,7 +207,7 @@ pub(super) fn reading(data: &Data, peers: Option<&Peers>) -> String {
         .iter()
         .filter_map(|(tool, rows)| {
             let [lo, hi] = worst(rows.iter().map(|(_, q)| *q))?;
-            Some(format!("{tool} {lo:.1}-{hi:.1}° over {} models", rows.len()))
+            Some(format!("{tool} {lo:.1}-{hi:.1}° over {}", models(rows.len())))
         })
         .collect();
     if !scores.is_empty() {

@@ -114,7 +114,15 @@ mod tests {
     }
 
     fn data(rows: Vec<Row>) -> Data {
-        Data { repeats: 1, versions: Default::default(), notes: Vec::new(), inputs: Vec::new(), rows, pictures: false, drawn: Vec::new() }
+        Data {
+            repeats: 1,
+            versions: Default::default(),
+            notes: Vec::new(),
+            inputs: Vec::new(),
+            rows,
+            pictures: false,
+            drawn: Vec::new(),
+        }
     }
 
     #[test]

@@ -13,7 +13,8 @@ if [ ! -x "$venv/bin/python" ] || ! "$venv/bin/python" -c "import vtk, pymeshlab
 fi
 # The C++ decimators the `decimation` experiment runs (CGAL's edge_collapse, OpenMesh's
 # Decimater): Debian's libcgal-dev and libopenmesh-dev, installed when missing and possible, and
-# two small programs built into tests/reference/.bin when missing or older than their source.
+# two small programs built into tests/reference/.bin when missing or older than their source (and
+# a third, CGAL Mesh_3 on labeled images, beside them).
 # Without them the experiment lists those decimators as not run, with this script's note.
 build_decimators() {
   local bin="$here/.bin" src="$here/decimators"
@@ -35,6 +36,11 @@ build_decimators() {
   if [ ! -x "$bin/openmesh_decimater" ] || [ "$src/openmesh_decimater.cpp" -nt "$bin/openmesh_decimater" ]; then
     g++ -O2 -std=c++17 "$src/openmesh_decimater.cpp" -o "$bin/openmesh_decimater" -lOpenMeshTools -lOpenMeshCore \
       || echo "note: could not build tests/reference/decimators/openmesh_decimater.cpp" >&2
+  fi
+  # CGAL Mesh_3 on labeled images, the peer of lattice-cleaving (mesh3/labeled_vs_cleaving.py).
+  if [ ! -x "$bin/cgal_labeled_image" ] || [ "$here/mesh3/cgal_labeled_image.cpp" -nt "$bin/cgal_labeled_image" ]; then
+    g++ -O2 -std=c++17 "$here/mesh3/cgal_labeled_image.cpp" -o "$bin/cgal_labeled_image" -lgmp -lmpfr \
+      || echo "note: could not build tests/reference/mesh3/cgal_labeled_image.cpp" >&2
   fi
 }
 build_decimators

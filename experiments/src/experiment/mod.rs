@@ -45,9 +45,10 @@ use isolab_io::write_atomic;
 use std::path::PathBuf;
 
 /// Data files no experiment writes, made by a script of their own and committed (the Table 2
-/// peers of `stuart_tables` and the peers of `quality_tets`, each run by its `peers.py`): a quick
+/// peers of `stuart_tables` and the peers of `quality_tets`, each run by its `peers.py`, and
+/// `quality_tets`' label maps, run by `tests/reference/mesh3/labeled_vs_cleaving.py`): a quick
 /// run copies them from `report/data/`.
-pub const MADE_OUTSIDE: [&str; 2] = ["stuart_tables_peers", "quality_tets_peers"];
+pub const MADE_OUTSIDE: [&str; 3] = ["stuart_tables_peers", "quality_tets_peers", "quality_tets_labels"];
 
 /// Copies the [`MADE_OUTSIDE`] data files from the report into `ctx`'s folder (a quick run's),
 /// where they are missing.

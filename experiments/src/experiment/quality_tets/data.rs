@@ -1,5 +1,7 @@
-//! The data files: `report/data/quality_tets.json` (what the run writes) and
-//! `report/data/quality_tets_peers.json` (what `peers.py` writes); the page reads both.
+//! The data files: `report/data/quality_tets.json` (what the run writes),
+//! `report/data/quality_tets_peers.json` (what `peers.py` writes) and
+//! `report/data/quality_tets_labels.json` (what `tests/reference/mesh3/labeled_vs_cleaving.py`
+//! writes: label maps meshed by lattice cleaving and by CGAL Mesh_3); the page reads all three.
 
 use serde::{Deserialize, Serialize};
 
@@ -116,4 +118,60 @@ pub(crate) struct PeerInput {
     /// How the model became a closed input (unchanged, or its holes closed).
     pub(crate) how: String,
     pub(crate) triangles: usize,
+}
+
+/// Label maps meshed by lattice cleaving and by CGAL Mesh_3 (`labeled_vs_cleaving.py`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Labels {
+    /// The commit the script ran at, and whether the tree had changes.
+    pub commit: String,
+    /// Uncommitted changes at the run.
+    pub dirty: bool,
+    /// When (UTC).
+    pub date: String,
+    /// The CPU model.
+    pub cpu: String,
+    /// isolab's version.
+    pub isolab: String,
+    /// One row per input and mesher.
+    pub rows: Vec<LabelRow>,
+}
+
+/// One label map meshed by one mesher.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct LabelRow {
+    /// The map.
+    pub input: String,
+    /// Its shape (numpy order).
+    pub shape: Vec<usize>,
+    /// `lattice-cleaving` or `CGAL Mesh_3`.
+    pub tool: String,
+    /// Tetrahedra (0 on a failure).
+    #[serde(default)]
+    pub tetrahedra: usize,
+    /// Smallest and largest dihedral angle, degrees.
+    #[serde(default)]
+    pub dihedral: [f64; 2],
+    /// Tetrahedra of non-positive volume.
+    #[serde(default)]
+    pub inverted: usize,
+    /// Each label's tetrahedra's volume over its voxels', less one.
+    #[serde(default)]
+    pub volume_error: std::collections::BTreeMap<String, f64>,
+    /// Times, ms: ours every run of `isolab.mesh_labels` on one thread; CGAL's `make_mesh_3`
+    /// alone, one-shot in a fresh process.
+    #[serde(default)]
+    pub ms: Vec<f64>,
+    /// CGAL's cell (and facet) size, voxels, and the tries it took to match our count.
+    #[serde(default)]
+    pub cell_size: Option<f64>,
+    /// Tries.
+    #[serde(default)]
+    pub tries: Option<usize>,
+    /// CGAL's version.
+    #[serde(default)]
+    pub cgal: Option<String>,
+    /// Why a run failed.
+    #[serde(default)]
+    pub error: Option<String>,
 }

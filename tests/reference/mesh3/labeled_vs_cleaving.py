@@ -2,13 +2,20 @@
 
     python labeled_vs_cleaving.py OUT.json --map NAME:PATH.npy[:STEP] ... [--voronoi N:LABELS]
 
-Each map (a uint8 array; STEP keeps every STEP-th voxel along each axis) is meshed by
+Each map (a uint8 array saved by numpy; STEP keeps every STEP-th voxel along each axis) is meshed
+by
 `isolab.mesh_labels(..., algorithm="lattice-cleaving", threads=1)` three times (every run kept),
 then by `cgal_labeled_image` (tests/reference/mesh3, built by run.sh into .bin) one-shot in a fresh
 process, timed around `make_mesh_3` alone, its cell size scaled until its tetrahedron count is
 within 20% of ours (four tries; facet size = cell size). Both meshes get the same measures here:
 count, smallest and largest dihedral angle, inverted tetrahedra, and each label's volume against
-its voxels. Runs in the Python venv that has isolab (tests/all.sh's).
+its voxels. Runs in the Python venv that has isolab (tests/all.sh's). The report's run:
+
+    python tests/reference/mesh3/labeled_vs_cleaving.py report/data/quality_tets_labels.json \
+        --map "MNI152 tissue, every 4th voxel:mni_tissue.npy:4" --voronoi 32:7
+
+where mni_tissue.npy is the tissue map `segmentations` meshes (its bench.py's `--save-tissue`
+writes it as NIfTI; `np.save` of its data array, numpy order kept).
 """
 
 import argparse

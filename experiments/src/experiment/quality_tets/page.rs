@@ -60,10 +60,6 @@ pub(super) fn section(ctx: &Context) -> Result<String, ExperimentError> {
              `{SCULPT}` (right).\n\n"
         ));
     }
-    s.push_str(
-        "Not measured yet: the issue's label maps (multi-material tetrahedra against CGAL Mesh_3 on labeled images), \
-         since the multi-material mesher is not built.\n",
-    );
     s.push_str(&labels_section(ctx.read_data("quality_tets_labels").ok().as_ref()));
     Ok(s)
 }

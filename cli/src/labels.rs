@@ -109,11 +109,8 @@ fn target(output: &Path, format: &str, config: &LabelConfig) -> Result<Target, R
 
 /// The outcome's tetrahedra, a label per cell, as one `.vtk`.
 fn write_tetrahedra(path: &Path, outcome: &labels::LabelOutcome) -> Result<(), RunError> {
-    let mesh = isolab_algorithms::TetMesh {
-        positions: outcome.surface.mesh.positions.clone(),
-        tetrahedra: outcome.surface.tetrahedra.clone(),
-    };
-    io::write_vtk_labelled_tets(path, &mesh, &outcome.surface.tetrahedron_labels, outcome.space_tag)?;
+    let s = &outcome.surface;
+    io::write_vtk_labelled_tets(path, &s.mesh.positions, &s.tetrahedra, &s.tetrahedron_labels, outcome.space_tag)?;
     Ok(())
 }
 

@@ -101,6 +101,14 @@ def cgal(seg, target, tmp):
     return row
 
 
+def compiler():
+    """The C++ compiler that built the CGAL program (run.sh's g++)."""
+    try:
+        return subprocess.run(["g++", "--version"], capture_output=True, text=True).stdout.splitlines()[0]
+    except (OSError, IndexError):
+        return "unknown"
+
+
 def voronoi(n, labels, seed=7):
     rng = np.random.default_rng(seed)
     seeds = rng.uniform(0, n, (2 * labels, 3))
@@ -136,7 +144,8 @@ def main():
     cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), platform.machine())
     with open(a.out, "w") as f:
         json.dump({"commit": commit, "dirty": dirty, "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-                   "cpu": cpu, "isolab": isolab.__version__, "rows": rows}, f, indent=1)
+                   "cpu": cpu, "cores": os.cpu_count(), "os": platform.platform(), "python": platform.python_version(),
+                   "numpy": np.__version__, "compiler": compiler(), "isolab": isolab.__version__, "rows": rows}, f, indent=1)
 
 
 if __name__ == "__main__":

@@ -131,6 +131,21 @@ pub struct Labels {
     pub date: String,
     /// The CPU model.
     pub cpu: String,
+    /// Cores, OS, Python, numpy and the C++ compiler (absent from data before they were kept).
+    #[serde(default)]
+    pub cores: Option<usize>,
+    /// The OS.
+    #[serde(default)]
+    pub os: Option<String>,
+    /// Python's version.
+    #[serde(default)]
+    pub python: Option<String>,
+    /// numpy's version.
+    #[serde(default)]
+    pub numpy: Option<String>,
+    /// The compiler of the CGAL program.
+    #[serde(default)]
+    pub compiler: Option<String>,
     /// isolab's version.
     pub isolab: String,
     /// One row per input and mesher.

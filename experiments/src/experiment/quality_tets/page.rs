@@ -304,7 +304,7 @@ fn labels_section(labels: Option<&Labels>) -> String {
     };
     let mut s = String::from("### Label maps: `lattice-cleaving` and CGAL Mesh_3 on labeled images\n\n");
     s.push_str(&format!(
-        "Run at `{}`{} on {}, {} (isolab {}). Each map is meshed by `isolab.mesh_labels(..., \
+        "Run at `{}`{} on {}, {} (isolab {}{}). Each map is meshed by `isolab.mesh_labels(..., \
          algorithm=\"lattice-cleaving\")` on one thread, every run kept and timed around the whole call, and by CGAL Mesh_3's \
          labeled image domain (`tests/reference/mesh3/cgal_labeled_image.cpp`: facet angle and radius-edge bounds of its \
          example, facet size equal to the cell size), one-shot in a fresh process on one thread, timed around `make_mesh_3` \
@@ -313,7 +313,17 @@ fn labels_section(labels: Option<&Labels>) -> String {
         if l.dirty { " (with uncommitted changes)" } else { "" },
         l.cpu,
         l.date,
-        l.isolab
+        l.isolab,
+        [
+            ("cores", l.cores.map(|c| c.to_string())),
+            ("", l.os.clone()),
+            ("Python", l.python.clone()),
+            ("numpy", l.numpy.clone()),
+            ("", l.compiler.clone())
+        ]
+        .into_iter()
+        .filter_map(|(k, v)| v.map(|v| if k.is_empty() { format!("; {v}") } else { format!("; {k} {v}") }))
+        .collect::<String>(),
     ));
     let row = |r: &LabelRow| -> Vec<String> {
         if let Some(e) = &r.error {

@@ -46,7 +46,7 @@ enum Target {
     Folder(PathBuf, String),
     /// A folder holding a neuroglancer precomputed mesh source.
     Neuroglancer(PathBuf),
-    /// One `.vtk` unstructured grid: the tetrahedra, a `label` per cell.
+    /// One `.vtk` unstructured grid or `.msh` (Gmsh 2.2) file: the tetrahedra, a label per cell.
     Tetrahedra(PathBuf),
 }
 
@@ -55,17 +55,17 @@ fn bad_output(path: &Path, reason: &str) -> RunError {
         .into()
 }
 
-/// Checks the output before any work: a `.glb` in an existing folder, a `.vtk` there from an
-/// algorithm that makes tetrahedra, or a folder (created) and a mesh format.
+/// Checks the output before any work: a `.glb` in an existing folder, a `.vtk` or `.msh` there
+/// from an algorithm that makes tetrahedra, or a folder (created) and a mesh format.
 fn target(output: &Path, format: &str, config: &LabelConfig) -> Result<Target, RunError> {
     let ext = io::extension(output);
-    if ext.as_deref() == Some("vtk") {
+    if let Some(ext @ ("vtk" | "msh")) = ext.as_deref() {
         let extractor = labels::build(config)?;
         if extractor.info().guarantees.dihedral.is_none() {
             return Err(bad_output(
                 output,
                 &format!(
-                    "a .vtk output holds tetrahedra, and {} makes surfaces only: use -a lattice-cleaving, or give a folder or a .glb",
+                    "a .{ext} output holds tetrahedra, and {} makes surfaces only: use -a lattice-cleaving, or give a folder or a .glb",
                     config.algorithm
                 ),
             ));
@@ -107,10 +107,14 @@ fn target(output: &Path, format: &str, config: &LabelConfig) -> Result<Target, R
     Ok(Target::Folder(output.into(), format.to_owned()))
 }
 
-/// The outcome's tetrahedra, a label per cell, as one `.vtk`.
+/// The outcome's tetrahedra, a label per cell, as one `.vtk` or, by its extension, `.msh`.
 fn write_tetrahedra(path: &Path, outcome: &labels::LabelOutcome) -> Result<(), RunError> {
     let s = &outcome.surface;
-    io::write_vtk_labelled_tets(path, &s.mesh.positions, &s.tetrahedra, &s.tetrahedron_labels, outcome.space_tag)?;
+    if io::extension(path).as_deref() == Some("msh") {
+        io::write_msh_labelled_tets(path, &s.mesh.positions, &s.tetrahedra, &s.tetrahedron_labels)?;
+    } else {
+        io::write_vtk_labelled_tets(path, &s.mesh.positions, &s.tetrahedra, &s.tetrahedron_labels, outcome.space_tag)?;
+    }
     Ok(())
 }
 

@@ -143,7 +143,7 @@ enum Command {
         field: PathBuf,
         /// Label extractor: surface-nets (Frisken 2022, smoothed), marching-tetrahedra
         /// (manifold for every map) or lattice-cleaving (tetrahedra filling every label, dihedral
-        /// angles bounded; write them with `-o NAME.vtk`); see `isolab list`.
+        /// angles bounded; write them with `-o NAME.vtk` or `-o NAME.msh`); see `isolab list`.
         #[arg(long, short, default_value = "surface-nets")]
         algorithm: String,
         /// The labels to mesh, comma-separated (default: every label but 0); the others count as
@@ -162,8 +162,9 @@ enum Command {
         set: Vec<(String, String)>,
         /// Where to write: a folder (one mesh file per label, `<name>-label-<n>.<format>`,
         /// created if missing, and `<name>-tetrahedra.vtk` from an algorithm that makes
-        /// tetrahedra), a `.glb` file (one named, coloured node per label), or a `.vtk` file (the
-        /// tetrahedra of lattice-cleaving with their `label` cell array).
+        /// tetrahedra), a `.glb` file (one named, coloured node per label), a `.vtk` file (the
+        /// tetrahedra of lattice-cleaving with their `label` cell array) or a `.msh` file (the
+        /// same for Gmsh and finite element codes: MSH 2.2, a physical volume per label).
         #[arg(long, short)]
         output: Option<PathBuf>,
         /// Format of the per-label files in a folder: ply, obj, stl, glb or gltf; or

@@ -145,6 +145,48 @@ fn lattice_cleaving_writes_labelled_tetrahedra_as_vtk() {
 }
 
 #[test]
+fn lattice_cleaving_writes_the_same_tetrahedra_as_gmsh_msh() {
+    let dir = tempfile::tempdir().unwrap();
+    let seg = three_labels(dir.path());
+    let write = |name: &str| {
+        let path = dir.path().join(name);
+        let o = isolab(&["labels", "-f", seg.to_str().unwrap(), "-a", "lattice-cleaving", "-o", path.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read_to_string(path).unwrap()
+    };
+    let (vtk, msh) = (write("seg.vtk"), write("seg.msh"));
+    let section = |text: &str, name: &str| -> Vec<String> {
+        let mut lines = text.lines().skip_while(|l| *l != format!("${name}")).skip(1);
+        let n: usize = lines.next().unwrap().parse().unwrap();
+        lines.by_ref().take(n).map(str::to_owned).collect()
+    };
+    assert_eq!(section(&msh, "PhysicalNames"), ["3 1 \"label 1\"", "3 2 \"label 2\"", "3 5 \"label 5\""]);
+    // Nodes and tetrahedra are the .vtk's, numbered from one; each tetrahedron tagged by its label.
+    let points = vtk.lines().skip_while(|l| !l.starts_with("POINTS")).skip(1);
+    let nodes = section(&msh, "Nodes");
+    assert_eq!(
+        nodes.len(),
+        vtk.lines().find_map(|l| l.strip_prefix("POINTS ")).unwrap().split(' ').next().unwrap().parse::<usize>().unwrap()
+    );
+    for (i, (node, point)) in nodes.iter().zip(points).enumerate() {
+        assert_eq!(*node, format!("{} {point}", i + 1));
+    }
+    let cells: Vec<&str> =
+        vtk.lines().skip_while(|l| !l.starts_with("CELLS")).skip(1).take_while(|l| l.starts_with("4 ")).collect();
+    let labels: Vec<&str> = vtk.lines().skip_while(|l| *l != "LOOKUP_TABLE default").skip(1).collect();
+    let elements = section(&msh, "Elements");
+    assert_eq!((elements.len(), labels.len()), (cells.len(), cells.len()));
+    for (i, ((element, cell), label)) in elements.iter().zip(&cells).zip(&labels).enumerate() {
+        let one_based: Vec<String> = cell.split(' ').skip(1).map(|v| (v.parse::<u32>().unwrap() + 1).to_string()).collect();
+        assert_eq!(*element, format!("{} 4 2 {label} {label} {}", i + 1, one_based.join(" ")));
+    }
+    // A surface extractor has no tetrahedra: refused before any work, nothing written.
+    let refused = dir.path().join("nets.msh");
+    let o = isolab(&["labels", "-f", seg.to_str().unwrap(), "-o", refused.to_str().unwrap()]);
+    assert!(o.status.code() == Some(1) && stderr(&o).contains(".msh output") && !refused.exists(), "{}", stderr(&o));
+}
+
+#[test]
 fn a_glb_gets_a_named_node_per_label() {
     let dir = tempfile::tempdir().unwrap();
     let seg = three_labels(dir.path());

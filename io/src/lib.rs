@@ -8,6 +8,7 @@
 //! | STL ([`stl`]) | ascii and binary, vertices welded | binary |
 //! | glTF 2.0 ([`gltf`]) | `.glb`, `.gltf` (embedded or external buffers) | `.glb`, `.gltf` with an embedded buffer; normals, colours |
 //! | VTK legacy ([`vtk`]) | | tetrahedra |
+//! | Gmsh MSH 2.2 ([`msh`]) | | labelled tetrahedra |
 //! | volumes ([`volume`]) | NIfTI-1/2, NRRD, MetaImage, the raw + JSON grid of `--samples-out` | the raw + JSON grid |
 //!
 //! Every reader has a `parse_*` form taking bytes (and the path only to name it in errors), so
@@ -15,6 +16,7 @@
 
 pub mod choice;
 pub mod gltf;
+pub mod msh;
 pub mod neuroglancer;
 pub mod obj;
 pub mod ply;
@@ -24,6 +26,7 @@ pub mod volume;
 pub mod vtk;
 
 pub use choice::UnknownChoice;
+pub use msh::write_msh_labelled_tets;
 pub use obj::{parse_obj, write_obj_coloured};
 pub use ply::{parse_ply, write_ply, write_ply_coloured};
 pub use stream::PlyStream;

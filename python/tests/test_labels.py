@@ -204,3 +204,46 @@ def test_a_file_gives_the_clis_meshes(tmp_path):
         verts, faces = isolab.load(out / f"seg-label-{label}.ply")
         f, a = from_file[label], from_array[label]
         assert same_mesh(verts, faces, f.vertices, f.faces) and same_mesh(f.vertices, f.faces, a.vertices, a.faces), label
+
+
+@needs_cli
+def test_gmsh_reads_the_clis_msh_as_the_python_tetrahedra(tmp_path):
+    """`isolab labels -o x.msh` read by Gmsh's own API (the format's reference reader): the
+    same nodes and tetrahedra as `mesh_labels`, each in the physical volume of its label, and
+    every tetrahedron's volume positive by Gmsh's measure."""
+    import gmsh
+
+    seg = voronoi((12, 11, 10), 4, seed=5)
+    path = tmp_path / "seg.nrrd"
+    header = "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 12 11 10\nencoding: raw\n\n".encode()
+    path.write_bytes(header + np.asfortranarray(seg).tobytes(order="F"))
+    msh = tmp_path / "seg.msh"
+    done = subprocess.run([CLI, "labels", "-f", str(path), "-a", "lattice-cleaving", "-o", str(msh)],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    want = isolab.mesh_labels(str(path), algorithm="lattice-cleaving")
+    gmsh.initialize(["-noenv"], readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(msh))
+        tags, coords, _ = gmsh.model.mesh.getNodes()
+        order = np.argsort(tags)
+        nodes = coords.reshape(-1, 3)[order]
+        assert np.array_equal(tags[order], np.arange(1, len(want.vertices) + 1))
+        assert np.allclose(nodes, want.vertices, atol=1e-5)
+        groups = gmsh.model.getPhysicalGroups(3)
+        assert sorted(tag for _, tag in groups) == sorted(want) == sorted(set(want.tetrahedron_labels.tolist()))
+        got = []
+        for _, label in groups:
+            assert gmsh.model.getPhysicalName(3, label) == f"label {label}"
+            for entity in gmsh.model.getEntitiesForPhysicalGroup(3, label):
+                types, elements, corners = gmsh.model.mesh.getElements(3, entity)
+                assert list(types) == [4]  # 4-node tetrahedra
+                volumes = gmsh.model.mesh.getElementQualities(elements[0], "volume")
+                assert (volumes > 0).all(), label
+                got += [(int(e), label, tuple(c - 1)) for e, c in zip(elements[0], corners[0].reshape(-1, 4))]
+        got.sort()
+        assert [t for _, _, t in got] == [tuple(t) for t in want.tetrahedra.tolist()]
+        assert [label for _, label, _ in got] == want.tetrahedron_labels.tolist()
+    finally:
+        gmsh.finalize()

@@ -32,7 +32,7 @@ struct UseCase {
     choose: fn(&Context) -> Result<Choice, ExperimentError>,
 }
 
-const USE_CASES: [UseCase; 7] = [
+const USE_CASES: [UseCase; 8] = [
     UseCase { title: "Deformable game terrain", choose: |ctx| terrain(&ctx.read_data("terrain_edit")?) },
     UseCase { title: "Scans (a real MRI)", choose: |ctx| scans(&ctx.read_data("real_volumes")?) },
     UseCase { title: "Segmentations (label maps)", choose: |ctx| label_maps(&ctx.read_data("segmentations")?) },
@@ -45,6 +45,7 @@ const USE_CASES: [UseCase; 7] = [
         choose: |ctx| tetrahedra(&ctx.read_data("stuart_tables")?, &ctx.read_data("stuart_tables_peers")?),
     },
     UseCase { title: "Tetrahedra for simulation", choose: super::quality_tets::pick },
+    UseCase { title: "Tetrahedra for a whole segmentation", choose: super::quality_tets::pick_labels },
     UseCase {
         title: "Fewest triangles at a given error",
         choose: |ctx| {

@@ -16,10 +16,13 @@
 //!   surface sampled at vertices (in `h`), volume ratio and enclosure. Ours on one thread (a
 //!   one-thread rayon pool), every run kept; the peers single-threaded as `peers.py` says.
 //!
-//! Not here yet: the label maps (multi-material tetrahedra against CGAL Mesh_3 on labeled
-//! images), since the multi-material mesher is not built.
+//! - **Label maps** (the page's last section): `lattice-cleaving` against CGAL Mesh_3 on labeled
+//!   images, run by `tests/reference/mesh3/labeled_vs_cleaving.py` (its output
+//!   `data/quality_tets_labels.json` is committed, as the peers' is); the front page's pick for a
+//!   label map comes from it (`label_pick`).
 
 mod data;
+mod label_pick;
 mod page;
 #[cfg(test)]
 mod tests;
@@ -38,6 +41,7 @@ use isolab_render::{self as render, RenderOptions, Shading};
 use std::sync::Arc;
 use std::time::Instant;
 
+pub(crate) use label_pick::pick as pick_labels;
 pub(crate) use page::pick;
 
 /// The experiment.

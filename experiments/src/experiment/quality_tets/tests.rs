@@ -100,3 +100,70 @@ fn the_reading_says_whether_stuffing_stays_inside_its_interval_and_how_fast_it_i
     assert!(r.contains("outside its declared interval"), "{r}");
     assert!(!r.contains("fTetWild"), "no peers without their data: {r}");
 }
+
+fn label_row(input: &str, tool: &str, min: f64, inverted: usize, ms: f64) -> super::data::LabelRow {
+    super::data::LabelRow {
+        input: input.into(),
+        shape: vec![8, 8, 8],
+        tool: tool.into(),
+        tetrahedra: 1000,
+        dihedral: [min, 160.0],
+        inverted,
+        volume_error: [("1".to_owned(), -0.02), ("2".to_owned(), 0.01)].into(),
+        ms: vec![ms],
+        cell_size: None,
+        tries: None,
+        cgal: None,
+        error: None,
+    }
+}
+
+fn labels(rows: Vec<super::data::LabelRow>) -> super::data::Labels {
+    super::data::Labels {
+        commit: "c".into(),
+        dirty: false,
+        date: "d".into(),
+        cpu: "cpu".into(),
+        cores: None,
+        os: None,
+        python: None,
+        numpy: None,
+        compiler: None,
+        isolab: "0".into(),
+        rows,
+    }
+}
+
+#[test]
+fn the_label_map_pick_takes_the_highest_floor_among_meshers_of_every_map_without_inversions() {
+    use super::label_pick::pick_over;
+    const CGAL: &str = "CGAL Mesh_3";
+    let ours = |min| [label_row("m", "lattice-cleaving", min, 0, 10.0), label_row("v", "lattice-cleaving", min, 0, 5.0)];
+    // CGAL's floor is higher: picked, the sentence naming ours and the time ratios.
+    let mut rows = ours(5.0).to_vec();
+    rows.extend([label_row("m", CGAL, 8.0, 0, 1000.0), label_row("v", CGAL, 9.0, 0, 100.0)]);
+    let c = pick_over(&labels(rows.clone())).unwrap();
+    assert_eq!(c.pick, CGAL);
+    assert!(c.why.contains("8.0°") && c.why.contains("lattice-cleaving 5.0°") && c.why.contains("2.0%"), "{}", c.why);
+    assert!(
+        !c.why.contains("declares") && c.why.contains("lattice-cleaving 0.010x on m, lattice-cleaving 0.050x on v"),
+        "{}",
+        c.why
+    );
+    // An inverted tetrahedron on one map puts CGAL out.
+    rows[3].inverted = 1;
+    let c = pick_over(&labels(rows.clone())).unwrap();
+    assert_eq!(c.pick, "lattice-cleaving");
+    assert!(c.why.contains("declares every angle within") && c.why.contains("inverting a tetrahedron: CGAL Mesh_3"), "{}", c.why);
+    // So does a failed map; a tie within a tenth of a degree goes to the declared interval.
+    rows[3] = label_row("v", CGAL, 5.05, 0, 100.0);
+    rows[2].error = Some("crashed".into());
+    assert_eq!(pick_over(&labels(rows.clone())).unwrap().pick, "lattice-cleaving");
+    rows[2].error = None;
+    rows[2].dihedral[0] = 5.05;
+    let c = pick_over(&labels(rows)).unwrap();
+    assert_eq!(c.pick, "lattice-cleaving");
+    assert!(c.why.contains("CGAL Mesh_3 100x on m, CGAL Mesh_3 20x on v"), "{}", c.why);
+    // Nobody fit: no pick.
+    assert!(pick_over(&labels(vec![label_row("m", CGAL, 8.0, 2, 1.0)])).is_none());
+}

@@ -146,7 +146,7 @@ fn the_label_map_pick_takes_the_highest_floor_among_meshers_of_every_map_without
     assert_eq!(c.pick, CGAL);
     assert!(c.why.contains("8.0°") && c.why.contains("lattice-cleaving 5.0°") && c.why.contains("2.0%"), "{}", c.why);
     assert!(
-        !c.why.contains("declares") && c.why.contains("lattice-cleaving 0.010x on m, lattice-cleaving 0.050x on v"),
+        !c.why.contains("declares") && c.why.contains("lattice-cleaving 0.010x on m; lattice-cleaving 0.050x on v"),
         "{}",
         c.why
     );
@@ -163,7 +163,7 @@ fn the_label_map_pick_takes_the_highest_floor_among_meshers_of_every_map_without
     rows[2].dihedral[0] = 5.05;
     let c = pick_over(&labels(rows)).unwrap();
     assert_eq!(c.pick, "lattice-cleaving");
-    assert!(c.why.contains("CGAL Mesh_3 100x on m, CGAL Mesh_3 20x on v"), "{}", c.why);
+    assert!(c.why.contains("CGAL Mesh_3 100x on m; CGAL Mesh_3 20x on v"), "{}", c.why);
     // Nobody fit: no pick.
     assert!(pick_over(&labels(vec![label_row("m", CGAL, 8.0, 2, 1.0)])).is_none());
 }

@@ -24,6 +24,9 @@ conversions), VTK's `Update()`, zmesh's `mesh()`; scikit-image has no such step 
 of a call is building each label's mesh and handing arrays to Python:
 - `isolab surface-nets` (smoothed, the default), `isolab surface-nets unsmoothed`,
   `isolab marching-tetrahedra`: `isolab.mesh_labels`, per-label meshes built by it;
+- `isolab lattice-cleaving`: the same call, which also fills every label with tetrahedra (handed
+  to Python inside the timed call, then dropped); only on maps of at most `CLEAVING_MAX_SAMPLES`
+  samples (it keeps up to thirty tetrahedra a sample where labels fill the map, ten on the tissue map: memory, not time, sets the cap);
 - `VTK SurfaceNets3D` (smoothed, its defaults) and `VTK SurfaceNets3D unsmoothed`: the label
   map padded by one sample of background (as pyvista's `contour_labels` does, so labels at the
   border are closed) as vtkImageData (a copy into a VTK array), every label selected,
@@ -161,10 +164,16 @@ def skimage_impl(seg, labels, threads):
     return meshes, None
 
 
-def implementations(threads):
+# Lattice cleaving's largest map: the MNI152 tissue map (7.2M samples) is under it; 256³ is not.
+CLEAVING_MAX_SAMPLES = 8_000_000
+
+
+def implementations(threads, samples):
     impls = [("isolab surface-nets", isolab_impl("surface-nets", None)),
              ("isolab surface-nets unsmoothed", isolab_impl("surface-nets", False)),
              ("isolab marching-tetrahedra", isolab_impl("marching-tetrahedra", None))]
+    if samples <= CLEAVING_MAX_SAMPLES:
+        impls.append(("isolab lattice-cleaving", isolab_impl("lattice-cleaving", None)))
     if vtk is not None:
         impls += [("VTK SurfaceNets3D", vtk_impl(True)), ("VTK SurfaceNets3D unsmoothed", vtk_impl(False))]
     if threads == THREADS[0]:
@@ -263,7 +272,7 @@ THREADS = (1, 2)
 def time_input(name, seg, repeats, rows):
     labels = [int(l) for l in np.unique(seg) if l != 0]
     for threads in THREADS:
-        impls = implementations(threads)
+        impls = implementations(threads, seg.size)
         times = {label: [] for label, _ in impls}
         cores = {label: [] for label, _ in impls}
         last = {}
@@ -350,6 +359,9 @@ def main():
         n, labels = (int(x) for x in spec.split(":"))
         seg = voronoi(n, labels)
         name = f"voronoi {n}³, {labels - 1} labels"
+        if seg.size > CLEAVING_MAX_SAMPLES:
+            notes.append(f"isolab lattice-cleaving not run on {name}: {seg.size} samples, above its cap of "
+                         f"{CLEAVING_MAX_SAMPLES} (memory: up to thirty tetrahedra a sample)")
         time_input(name, seg, a.repeats, rows)
         inputs.append({"input": name, "shape": list(seg.shape), "dtype": str(seg.dtype), "order": "C",
                        "labels": labels - 1})

@@ -175,7 +175,8 @@ pub(super) fn page_body(data: &Data, pictures: bool) -> String {
     md.push_str(&format!(
         "Our options (the label extractors' defaults in this commit): `surface-nets` smoothing constrained, {} iterations, \
          relaxation {}, border closed; `isolab surface-nets unsmoothed` is `smoothing=none`; `marching-tetrahedra` has no \
-         smoothing. VTK SurfaceNets3D runs with its own defaults, and unsmoothed with its smoothing off.\n\n",
+         smoothing; `lattice-cleaving` has none either, and its timed call also fills every label with tetrahedra and \
+         hands them to Python. VTK SurfaceNets3D runs with its own defaults, and unsmoothed with its smoothing off.\n\n",
         sn.iterations, sn.relaxation
     ));
     md.push_str(&format!(

@@ -247,3 +247,55 @@ def test_gmsh_reads_the_clis_msh_as_the_python_tetrahedra(tmp_path):
         assert [label for _, label, _ in got] == want.tetrahedron_labels.tolist()
     finally:
         gmsh.finalize()
+
+
+@pytest.mark.parametrize("algorithm", LABEL_EXTRACTORS)
+def test_patches_split_the_interfaces_by_pair_and_meet_only_at_their_borders(algorithm):
+    seg = voronoi((14, 13, 12), 5, seed=11)
+    meshes = isolab.mesh_labels(seg, algorithm=algorithm)
+    patches = meshes.patches
+    assert set(patches) == {tuple(p) for p in meshes.pairs.tolist()} and len(patches) > 4
+    assert meshes.patches is patches  # computed once
+    seen = np.zeros(len(meshes.faces), dtype=int)
+    row_of = {tuple(f): i for i, f in enumerate(meshes.faces.tolist())}
+    owners = {}
+    for (a, b), patch in patches.items():
+        assert patch.labels == (a, b) and a > b
+        assert np.array_equal(patch.vertices, meshes.vertices[patch.vertex_ids])
+        assert len(np.unique(patch.vertex_ids)) == len(patch.vertex_ids) == len(patch.vertices)
+        for f in patch.vertex_ids[patch.faces].tolist():
+            i = row_of[tuple(f)]
+            seen[i] += 1
+            assert tuple(meshes.pairs[i]) == (a, b)
+        for v in patch.vertex_ids.tolist():
+            owners.setdefault(v, set()).add((a, b))
+    assert (seen == 1).all()  # every interface triangle in exactly one patch, as given
+    # Every label's mesh is closed, so a patch's border is where it meets others; where the
+    # meshes are manifold, two patches share border vertices only.
+    for key, patch in patches.items():
+        shared = np.array([len(owners[v]) > 1 for v in patch.vertex_ids.tolist()])
+        assert not (patch.border & ~shared).any(), key
+        if algorithm != "surface-nets":
+            assert np.array_equal(patch.border, shared), key
+
+
+def test_a_patch_smoothed_with_its_border_fixed_moves_that_interface_alone():
+    seg = voronoi((14, 13, 12), 4, seed=2)
+    meshes = isolab.mesh_labels(seg, algorithm="marching-tetrahedra")
+    key = max(meshes.patches, key=lambda k: len(meshes.patches[k].faces))
+    patch = meshes.patches[key]
+    v = patch.vertices.astype(np.float64)
+    edges = np.concatenate([patch.faces[:, [0, 1]], patch.faces[:, [1, 2]], patch.faces[:, [2, 0]]])
+    for _ in range(5):  # Laplacian smoothing of the interior
+        total, count = np.zeros_like(v), np.zeros(len(v))
+        for i, j in (edges.T, edges[:, ::-1].T):
+            np.add.at(total, i, v[j])
+            np.add.at(count, i, 1)
+        v = np.where(patch.border[:, None], v, total / count[:, None])
+    edited = meshes.vertices.copy()
+    edited[patch.vertex_ids] = v.astype(np.float32)
+    moved = np.nonzero((edited != meshes.vertices).any(1))[0]
+    assert len(moved) > 0 and not patch.border[np.searchsorted(patch.vertex_ids, moved)].any()
+    for other, p in meshes.patches.items():
+        if other != key:
+            assert np.array_equal(edited[p.vertex_ids], meshes.vertices[p.vertex_ids]), other

@@ -41,7 +41,7 @@ from . import _isolab
 from .errors import (IsolabError, IsolabMemoryError, IsolabOSError, IsolabTypeError, IsolabValueError,
                      raises_isolab_errors)
 
-__all__ = ["marching_cubes", "extract", "Mesh", "mesh_labels", "LabelMeshes", "metrics", "load", "algorithms", "fields",
+__all__ = ["marching_cubes", "extract", "Mesh", "mesh_labels", "LabelMeshes", "Patch", "metrics", "load", "algorithms", "fields",
            "IsolabError", "IsolabValueError", "IsolabTypeError", "IsolabOSError", "IsolabMemoryError", "__version__"]
 __version__ = _isolab.__version__
 
@@ -408,6 +408,62 @@ def extract(data: Union[np.ndarray, str, os.PathLike, Callable[[np.ndarray], Any
     return Mesh(parts)
 
 
+class Patch:
+    """One interface of a label map's meshes: the triangles two labels share (VTK's
+    ``vtkSurfaceNetsAtlas`` calls it a patch), from :attr:`LabelMeshes.patches`.
+
+    Attributes
+    ----------
+    labels : (int, int)
+        ``(inside, outside)``, ``inside > outside`` as in :attr:`LabelMeshes.pairs`; the normals
+        point from ``inside`` into ``outside``. ``0`` is the background.
+    vertices : (N, 3) float32
+        The patch's own vertices (a copy).
+    faces : (M, 3) int32
+        Its triangles, indices into ``vertices``.
+    vertex_ids : (N,) int64
+        Each vertex's index in :attr:`LabelMeshes.vertices`, so an edit of the patch can be
+        written back (``meshes.vertices[patch.vertex_ids] = patch.vertices``).
+    border : (N,) bool
+        The vertices on the patch's border (an edge in one of its triangles): where it meets
+        other patches (the junctions of three or more labels) or the map's open border. Keep
+        them in place to smooth or decimate this interface without pulling the others apart.
+    """
+
+    def __init__(self, labels: Tuple[int, int], vertices: np.ndarray, faces: np.ndarray, vertex_ids: np.ndarray,
+                 border: np.ndarray):
+        self.labels = labels
+        self.vertices = vertices
+        self.faces = faces
+        self.vertex_ids = vertex_ids
+        self.border = border
+
+    def __repr__(self) -> str:
+        return (f"<isolab.Patch {self.labels[0]}|{self.labels[1]}: {len(self.vertices)} vertices "
+                f"({int(self.border.sum())} on its border), {len(self.faces)} faces>")
+
+
+def _patches(vertices: np.ndarray, faces: np.ndarray, pairs: np.ndarray) -> Dict[Tuple[int, int], Patch]:
+    """The triangles of each label pair, each with its own vertices and border (see :class:`Patch`)."""
+    out: Dict[Tuple[int, int], Patch] = {}
+    if len(faces) == 0:
+        return out
+    key = (pairs[:, 0].astype(np.uint64) << np.uint64(32)) | pairs[:, 1].astype(np.uint64)
+    order = np.argsort(key, kind="stable")
+    _, starts = np.unique(key[order], return_index=True)
+    for lo, hi in zip(starts, list(starts[1:]) + [len(order)]):
+        rows = order[lo:hi]
+        ids, local = np.unique(faces[rows], return_inverse=True)
+        local = local.reshape(-1, 3).astype(np.int32)
+        edges = np.sort(np.concatenate([local[:, [0, 1]], local[:, [1, 2]], local[:, [2, 0]]]), axis=1)
+        unique_edges, counts = np.unique(edges, axis=0, return_counts=True)
+        border = np.zeros(len(ids), dtype=bool)
+        border[unique_edges[counts == 1].ravel()] = True
+        a, b = (int(x) for x in pairs[rows[0]])
+        out[(a, b)] = Patch((a, b), vertices[ids], local, ids.astype(np.int64), border)
+    return out
+
+
 class LabelMeshes(dict):
     """What :func:`mesh_labels` returns: a dict from each meshed label to its :class:`Mesh`
     (closed, wound outward from the label; ``mesh.stats`` has its label, counts and the triangles
@@ -430,6 +486,14 @@ class LabelMeshes(dict):
         surface algorithm.
     tetrahedron_labels : (K,) uint32
         Each tetrahedron's label.
+    patches : dict
+        Each label pair's interface, ``(inside, outside)`` to a :class:`Patch` (computed on first
+        use). With the per-label meshes (VTK's atlas calls them regions) this is what
+        ``vtkSurfaceNetsAtlas`` gives. A label's surface is the patches that name it, so an edit
+        of one patch that keeps its ``border`` in place, written back into ``vertices``, moves
+        that interface alone and leaves every label sealed against its neighbours (two patches
+        share only border vertices where the meshes are manifold: every map for
+        ``marching-tetrahedra`` and ``lattice-cleaving``).
     missing : list of int
         Labels asked for (``labels=``) that do not occur (a warning is also issued).
     notes : list of str
@@ -450,6 +514,24 @@ class LabelMeshes(dict):
         self.missing: List[int] = list(parts["missing"])
         self.notes: List[str] = list(parts["notes"])
         self.extract_ms: float = float(parts["extract_ms"])
+        self._patches: Optional[Dict[Tuple[int, int], Patch]] = None
+
+    @property
+    def patches(self) -> Dict[Tuple[int, int], Patch]:
+        """Each label pair's interface (see :class:`Patch`).
+
+        >>> import numpy as np, isolab
+        >>> seg = np.zeros((8, 8, 8), np.uint8); seg[2:6, 2:6, 2:6] = 1; seg[4:6, 2:6, 2:6] = 2
+        >>> meshes = isolab.mesh_labels(seg)
+        >>> sorted(meshes.patches)
+        [(1, 0), (2, 0), (2, 1)]
+        >>> inner = meshes.patches[(2, 1)]
+        >>> bool(inner.border.any()), len(inner.faces) == int((meshes.pairs == [2, 1]).all(1).sum())
+        (True, True)
+        """
+        if self._patches is None:
+            self._patches = _patches(self.vertices, self.faces, self.pairs)
+        return self._patches
 
     def __repr__(self) -> str:
         tets = f", {len(self.tetrahedra)} tetrahedra" if len(self.tetrahedra) else ""

@@ -6,7 +6,7 @@ from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["marching_cubes", "extract", "Mesh", "mesh_labels", "LabelMeshes", "metrics", "load", "algorithms", "fields",
+__all__ = ["marching_cubes", "extract", "Mesh", "mesh_labels", "LabelMeshes", "Patch", "metrics", "load", "algorithms", "fields",
            "IsolabError", "IsolabValueError", "IsolabTypeError", "IsolabOSError", "IsolabMemoryError", "__version__"]
 
 from .errors import IsolabError as IsolabError
@@ -75,6 +75,18 @@ def load(path: Union[str, os.PathLike[str]]) -> Tuple[npt.NDArray[Any], npt.NDAr
 def algorithms() -> List[Dict[str, Any]]: ...
 def fields() -> List[Tuple[str, str]]: ...
 
+class Patch:
+    labels: Tuple[int, int]
+    vertices: np.ndarray
+    faces: np.ndarray
+    vertex_ids: np.ndarray
+    border: np.ndarray
+    def __init__(
+        self, labels: Tuple[int, int], vertices: np.ndarray, faces: np.ndarray, vertex_ids: np.ndarray, border: np.ndarray
+    ) -> None: ...
+
+def _patches(vertices: np.ndarray, faces: np.ndarray, pairs: np.ndarray) -> Dict[Tuple[int, int], Patch]: ...
+
 class LabelMeshes(Dict[int, Mesh]):
     vertices: np.ndarray
     faces: np.ndarray
@@ -84,6 +96,9 @@ class LabelMeshes(Dict[int, Mesh]):
     missing: List[int]
     notes: List[str]
     extract_ms: float
+    _patches: Optional[Dict[Tuple[int, int], Patch]]
+    @property
+    def patches(self) -> Dict[Tuple[int, int], Patch]: ...
     def __init__(self, parts: Dict[str, Any]) -> None: ...
 
 def mesh_labels(

@@ -641,11 +641,11 @@ fn lattice_cleaving_keeps_its_promises_on_a_tissue_map_and_a_voronoi_foam() {
 
 /// The same promises on a whole label map from a file (`ISOLAB_TISSUE_MAP`: the `segmentations`
 /// experiment keeps its MNI152 tissue map, 8.7M samples, as
-/// `target/segmentations/mni-tissue.nii.gz`): tens of millions of tetrahedra, about 16 GB
+/// `target/segmentations/mni-tissue.nii.gz`): tens of millions of tetrahedra, about 11 GB
 /// at its peak, so not run by default. Run with
-/// `ISOLAB_TISSUE_MAP=PATH cargo test --release -p isolab-tests --test integration -- --ignored whole_tissue_map`.
+/// `ISOLAB_TISSUE_MAP=/absolute/path cargo test --release -p isolab-tests --test integration -- --ignored whole_tissue_map`.
 #[test]
-#[ignore = "needs ISOLAB_TISSUE_MAP and about 16 GB"]
+#[ignore = "needs ISOLAB_TISSUE_MAP and about 11 GB"]
 fn lattice_cleaving_keeps_its_promises_on_a_whole_tissue_map() {
     use isolab_pipeline::labels::LabelVolume;
     let path = std::env::var("ISOLAB_TISSUE_MAP").expect("ISOLAB_TISSUE_MAP names a label map");

@@ -6,7 +6,7 @@ Run by the `segmentations` experiment (`segmentations/mod.rs`) in the reference 
 (`tests/reference/.venv`, with `pip install ./python` done by the experiment):
 
     python bench.py OUT.json [--voronoi 128:64,256:64] [--repeats 5] [--threads 1,2] [--mni nilearn|PATH|none]
-        [--save-tissue PATH.nii.gz]
+        [--save-tissue PATH.nii.gz] [--wide 2] [--max-blocks 3]
 
 Inputs:
 - `MNI152 tissue`: the MNI152 T1 template nilearn ships, split by a three-class Otsu threshold
@@ -42,8 +42,10 @@ Threads: 1, then 2 for isolab (`threads=2`) and VTK (STDThread backend, `Initial
 and scikit-image have no threads to give.
 
 Protocol: one unrecorded warm-up round, then `repeats` rounds, each implementation once per
-round in an order rotated by one each round. After the timed rounds, the last output of each
-implementation is checked (untimed), each label's mesh welded first (vertices at one position
+round in an order rotated by one each round; while any implementation's calls in the last block
+of `repeats` rounds span more than `WIDE` times (slowest over fastest), another block, up to
+`MAX_BLOCKS` (each row records its blocks and whether its last block was still wide). After the
+timed rounds, the last output of each implementation is checked (untimed), each label's mesh welded first (vertices at one position
 made one, unused ones dropped, wound outward): per label, closed (every edge in two triangles), edge-manifold
 and vertex-manifold (isolab.metrics), triangle shape (minimum angle, mean radius ratio), and
 the interfaces: a triangle of label a that lies on the face between a sample of a and a
@@ -164,6 +166,11 @@ def skimage_impl(seg, labels, threads):
     return meshes, None
 
 
+# The report's rule for spreads (experiments/src/report.rs: WIDE, MAX_ROUNDS, which the experiment
+# passes as --wide and --max-blocks): a wide block of rounds is followed by another, up to a bound.
+WIDE = 2.0
+MAX_BLOCKS = 3
+
 # Lattice cleaving's largest map: the MNI152 tissue map (197 x 233 x 189, 8.7M samples) is under
 # it; 256³ is not.
 CLEAVING_MAX_SAMPLES = 10_000_000
@@ -280,21 +287,32 @@ def time_input(name, seg, repeats, rows):
         times = {label: [] for label, _ in impls}
         cores = {label: [] for label, _ in impls}
         last = {}
-        for r in range(repeats + 1):
-            k = r % len(impls)
-            for label, fn in impls[k:] + impls[:k]:
-                t = time.perf_counter()
-                out, core_ms = fn(seg, labels, threads)
-                ms = (time.perf_counter() - t) * 1e3
-                if r > 0:
-                    times[label].append(ms)
-                    if core_ms is not None:
-                        cores[label].append(core_ms)
-                last[label] = out
+        # Blocks of `repeats` rounds (after one warm-up round) until no implementation's block is
+        # wide (its slowest call over WIDE times its fastest) or MAX_BLOCKS have run; every call kept.
+        blocks, wide, r = 0, {label: False for label, _ in impls}, 0
+        while True:
+            first = len(times[impls[0][0]])
+            for _ in range(repeats + (1 if r == 0 else 0)):
+                k = r % len(impls)
+                for label, fn in impls[k:] + impls[:k]:
+                    t = time.perf_counter()
+                    out, core_ms = fn(seg, labels, threads)
+                    ms = (time.perf_counter() - t) * 1e3
+                    if r > 0:
+                        times[label].append(ms)
+                        if core_ms is not None:
+                            cores[label].append(core_ms)
+                    last[label] = out
+                r += 1
+            blocks += 1
+            wide = {label: repeats > 1 and max(times[label][first:]) > WIDE * min(times[label][first:])
+                    for label, _ in impls}
+            if not any(wide.values()) or blocks == MAX_BLOCKS:
+                break
         for label, _ in impls:
             out = last[label]
             row = {"implementation": label, "input": name, "threads": threads, "ms": times[label],
-                   "core_ms": cores[label] or None,
+                   "core_ms": cores[label] or None, "blocks": blocks, "wide": wide[label],
                    "labels": len([1 for v, f in out.values() if len(f)]),
                    "triangles": int(sum(len(f) for v, f in out.values()))}
             if threads == THREADS[0]:
@@ -330,6 +348,7 @@ def mni_tissue(path):
 
 
 def main():
+    global THREADS, WIDE, MAX_BLOCKS
     p = argparse.ArgumentParser()
     p.add_argument("out")
     p.add_argument("--voronoi", default="128:64,256:64")
@@ -337,9 +356,11 @@ def main():
     p.add_argument("--threads", default="1,2")
     p.add_argument("--mni", default="nilearn")
     p.add_argument("--save-tissue", default=None, help="write the tissue map here (NIfTI, the template's affine)")
+    p.add_argument("--wide", type=float, default=WIDE, help="a block is wide when its slowest call took this many times its fastest")
+    p.add_argument("--max-blocks", type=int, default=MAX_BLOCKS, help="blocks of rounds at most")
     a = p.parse_args()
-    global THREADS
     THREADS = tuple(int(t) for t in a.threads.split(","))
+    WIDE, MAX_BLOCKS = a.wide, a.max_blocks
     rows, inputs = [], []
     mni = a.mni
     if mni == "nilearn":

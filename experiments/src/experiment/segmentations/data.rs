@@ -19,6 +19,13 @@ pub struct Row {
     /// zmesh's `mesh()`; none for scikit-image).
     #[serde(default)]
     pub core_ms: Option<Vec<f64>>,
+    /// Blocks of rounds run (`bench.py` adds a block while one is wide; absent in older data).
+    #[serde(default)]
+    pub blocks: Option<usize>,
+    /// Whether its last block was still wide (slowest call over [`crate::report::WIDE`] times the
+    /// fastest).
+    #[serde(default)]
+    pub wide: Option<bool>,
     /// Labels with a mesh.
     pub labels: usize,
     /// Triangles over every label's mesh.

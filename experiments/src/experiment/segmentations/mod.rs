@@ -83,6 +83,10 @@ impl Experiment for Segmentations {
             &voronoi.join(","),
             "--save-tissue",
             tissue.to_str().unwrap_or_default(),
+            "--wide",
+            &crate::report::WIDE.to_string(),
+            "--max-blocks",
+            &crate::report::MAX_ROUNDS.to_string(),
         ]
         .iter()
         .map(|s| (*s).to_owned())

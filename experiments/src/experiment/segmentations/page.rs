@@ -64,7 +64,7 @@ pub(super) fn timing_table(data: &Data, input: &str) -> String {
             vec![
                 r.implementation.clone(),
                 ms(s.median),
-                format!("{}–{}", ms(s.min), ms(s.max)),
+                format!("{}–{}{}", ms(s.min), ms(s.max), if r.wide == Some(true) { " (wide)" } else { "" }),
                 ratio(s.median, ours),
                 core_median(r).map_or("–".into(), ms),
                 two.as_ref().map_or("–".into(), |t| ms(t.median)),
@@ -131,7 +131,9 @@ pub(super) fn target_sentences(data: &Data) -> Vec<String> {
                     (Some(p), Some(o)) if o > 0.0 => format!(", its meshing step alone {:.2}× ours", p / o),
                     _ => String::new(),
                 };
-                Some(format!("{peer} takes {}× the time of `{ours}` ({verdict}){core}", against_target(r)))
+                let range = crate::report::ratio_range(&our_row.ms, &peer_row.ms)
+                    .map_or(String::new(), |(lo, hi)| format!(" ({lo:.2}–{hi:.2}× round by round)"));
+                Some(format!("{peer} takes {}×{range} the time of `{ours}` ({verdict}){core}", against_target(r)))
             })
             .collect();
         if !verdicts.is_empty() {
@@ -164,11 +166,15 @@ pub(super) fn page_body(data: &Data, pictures: bool) -> String {
         "A label map (every sample an integer label, the background {BACKGROUND}) meshed into one surface per label, as a \
          segmentation user does it from Python: each implementation called in one process on the same numpy label map, \
          one-shot, with its conversions and the building of per-label meshes inside the timed call. After one unrecorded \
-         warm-up round, every round calls each implementation once, in an order rotated by one each round. {two} threads: \
+         warm-up round, every round calls each implementation once, in an order rotated by one each round. While an \
+         implementation's slowest call in a block of rounds took over {wide}× its fastest, another block runs, up to {blocks} \
+         (\"(wide)\" marks a cell still wide after its last); ratios round by round pair the calls of one round. {two} threads: \
          isolab (`threads={two}`) and VTK (its STDThread backend); zmesh and scikit-image run in the one-thread rounds only. \
          The script is `experiments/src/experiment/segmentations/bench.py`, run in `tests/reference/.venv` after \
          `pip install ./python` of this commit; its header gives each implementation's call.\n\n",
-        two = THREADS[1]
+        two = THREADS[1],
+        wide = crate::report::WIDE,
+        blocks = crate::report::MAX_ROUNDS
     ));
     md.push_str(&reading::reading(data));
     let sn = isolab_algorithms::labels::surface_nets::LabelSnOptions::default();

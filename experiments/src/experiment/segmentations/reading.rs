@@ -100,6 +100,8 @@ mod tests {
             threads: 1,
             ms: vec![ms],
             core_ms: None,
+            blocks: None,
+            wide: None,
             labels: 3,
             triangles: 100,
             labels_closed: Some(closed),
@@ -169,12 +171,21 @@ mod tests {
         let s = super::super::page::target_sentences(&data(rows.clone())).join(" ");
         assert!(
             s.contains(
-                "VTK SurfaceNets3D takes 1.20× the time of `isolab surface-nets` (missed), its meshing step alone 1.50× ours;"
+                "VTK SurfaceNets3D takes 1.20× (1.20–1.20× round by round) the time of `isolab surface-nets` (missed), its meshing step alone 1.50× ours;"
             ),
             "{s}"
         );
         // zmesh's row has a meshing step, ours unsmoothed none: the verdict alone.
-        assert!(s.contains("zmesh takes 2.00× the time of `isolab surface-nets unsmoothed` (met)."), "{s}");
+        assert!(
+            s.contains("zmesh takes 2.00× (2.00–2.00× round by round) the time of `isolab surface-nets unsmoothed` (met)."),
+            "{s}"
+        );
+        // Round by round: the calls of one round paired, both ends from the same rounds.
+        let mut paired = rows.clone();
+        paired[1].ms = vec![40.0, 50.0, 30.0];
+        paired[3].ms = vec![80.0, 75.0, 90.0];
+        let s = super::super::page::target_sentences(&data(paired)).join(" ");
+        assert!(s.contains("zmesh takes 2.00× (1.50–3.00× round by round)"), "{s}");
         rows[0].core_ms = None;
         let s = super::super::page::target_sentences(&data(rows)).join(" ");
         assert!(!s.contains("meshing step"), "{s}");

@@ -122,7 +122,8 @@ def test_a_guides_command_line_examples_run(page, tmp_path):
     if page.name == "choosing.md":
         assert "marching-cubes" in printed and "guarantees:" in printed, printed[:500]
     if page.name == "cli.md":
-        assert {"sphere.obj", "bunny.png", "brain.glb", "head-dc.glb", "spot-boundary.vtk", "sphere.vtk"} <= made, made
+        assert {"sphere.obj", "bunny.png", "brain.glb", "head-dc.glb", "spot-boundary.vtk", "sphere.vtk", "seg.glb", "meshes",
+                "seg.vtk", "seg.msh"} <= made, made
     if page.name == "python.md":
         assert {"stack.ply", "seg.glb", "meshes", "seg-mesh"} <= made, made
         assert (tmp_path / "seg-mesh" / "info").is_file(), "no neuroglancer source"

@@ -172,5 +172,6 @@ pub(crate) fn to_python<'py>(py: Python<'py>, outcome: LabelOutcome, algorithm: 
     d.set_item("missing", outcome.missing)?;
     d.set_item("notes", outcome.notes)?;
     d.set_item("extract_ms", outcome.extract_ms)?;
+    d.set_item("space", outcome.space_tag)?;
     Ok(d)
 }

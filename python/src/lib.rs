@@ -344,6 +344,36 @@ fn save(
         .map_err(run_error)
 }
 
+/// Writes labelled tetrahedra (a label map's, from `lattice-cleaving`) as `isolab labels -o`
+/// writes them, by `path`'s extension: `.vtk` (a `label` cell array) or `.msh` (Gmsh 2.2, a
+/// physical volume per label), atomically.
+#[pyfunction]
+#[pyo3(signature = (path, vertices, tetrahedra, labels, space=None))]
+fn save_tetrahedra(
+    py: Python<'_>,
+    path: std::path::PathBuf,
+    vertices: &Bound<'_, PyAny>,
+    tetrahedra: &Bound<'_, PyAny>,
+    labels: Vec<u32>,
+    space: Option<String>,
+) -> PyResult<()> {
+    let mesh = arrays::tet_mesh(vertices, tetrahedra)?;
+    if labels.len() != mesh.tetrahedra.len() {
+        return Err(value_error(format!("{} labels for {} tetrahedra (one each)", labels.len(), mesh.tetrahedra.len())));
+    }
+    let written = py.allow_threads(|| match isolab_io::extension(&path).as_deref() {
+        Some("vtk") => {
+            Ok(isolab_io::write_vtk_labelled_tets(&path, &mesh.positions, &mesh.tetrahedra, &labels, space.as_deref()))
+        }
+        Some("msh") => Ok(isolab_io::write_msh_labelled_tets(&path, &mesh.positions, &mesh.tetrahedra, &labels)),
+        _ => Err(value_error(format!("{}: tetrahedra are written as .vtk or .msh", path.display()))),
+    })?;
+    written.map_err(|e| match &e {
+        isolab_io::IoError::Write { source, .. } if source.kind() == std::io::ErrorKind::InvalidInput => value_error(e),
+        _ => run_error(e.into()),
+    })
+}
+
 /// Reads a volume file as `("volume", array, affine)` (the array in numpy index order `[i, j,
 /// k]`, Fortran-ordered over isolab's own buffer, no copy; the 4 x 4 index-to-world affine, RAS
 /// for anatomical files) or a mesh file as `("mesh", vertices, faces)`: whichever the file
@@ -375,6 +405,7 @@ fn _isolab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(extract_function, m)?)?;
     m.add_function(wrap_pyfunction!(metrics, m)?)?;
     m.add_function(wrap_pyfunction!(save, m)?)?;
+    m.add_function(wrap_pyfunction!(save_tetrahedra, m)?)?;
     m.add_function(wrap_pyfunction!(load, m)?)?;
     m.add_function(wrap_pyfunction!(labels::mesh_labels, m)?)?;
     m.add_function(wrap_pyfunction!(blocks::volume::block_plan, m)?)?;

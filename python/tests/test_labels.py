@@ -299,3 +299,32 @@ def test_a_patch_smoothed_with_its_border_fixed_moves_that_interface_alone():
     for other, p in meshes.patches.items():
         if other != key:
             assert np.array_equal(edited[p.vertex_ids], meshes.vertices[p.vertex_ids]), other
+
+
+def test_save_tetrahedra_writes_what_the_cli_writes(tmp_path):
+    seg = voronoi((10, 9, 8), 4, seed=4)
+    path = tmp_path / "seg.nrrd"
+    header = "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 10 9 8\nencoding: raw\n\n".encode()
+    path.write_bytes(header + np.asfortranarray(seg).tobytes(order="F"))
+    meshes = isolab.mesh_labels(str(path), algorithm="lattice-cleaving")
+    for ext in ("vtk", "msh"):
+        mine = tmp_path / f"python.{ext}"
+        meshes.save_tetrahedra(mine)
+        if os.path.exists(CLI):
+            cli_out = tmp_path / f"cli.{ext}"
+            done = subprocess.run([CLI, "labels", "-f", str(path), "-a", "lattice-cleaving", "-o", str(cli_out)],
+                                  capture_output=True, text=True)
+            assert done.returncode == 0, done.stderr
+            assert mine.read_text() == cli_out.read_text(), ext
+        else:
+            assert mine.stat().st_size > 0
+    text = (tmp_path / "python.vtk").read_text()
+    assert f"CELL_DATA {len(meshes.tetrahedra)}" in text
+    # Bad requests raise, and write nothing.
+    with pytest.raises(ValueError, match=r"\.vtk or \.msh"):
+        meshes.save_tetrahedra(tmp_path / "seg.obj")
+    with pytest.raises(ValueError, match="lattice-cleaving"):
+        isolab.mesh_labels(seg).save_tetrahedra(tmp_path / "nets.vtk")
+    with pytest.raises(OSError):
+        meshes.save_tetrahedra(tmp_path / "no" / "such" / "seg.msh")
+    assert not (tmp_path / "seg.obj").exists() and not (tmp_path / "nets.vtk").exists()

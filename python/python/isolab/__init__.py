@@ -515,6 +515,7 @@ class LabelMeshes(dict):
         self.notes: List[str] = list(parts["notes"])
         self.extract_ms: float = float(parts["extract_ms"])
         self._patches: Optional[Dict[Tuple[int, int], Patch]] = None
+        self._space: Optional[str] = parts.get("space")
 
     @property
     def patches(self) -> Dict[Tuple[int, int], Patch]:
@@ -532,6 +533,28 @@ class LabelMeshes(dict):
         if self._patches is None:
             self._patches = _patches(self.vertices, self.faces, self.pairs)
         return self._patches
+
+    @raises_isolab_errors
+    def save_tetrahedra(self, path: Union[str, os.PathLike]) -> None:
+        """Writes the tetrahedra and their labels as ``isolab labels -o`` does, in the format the
+        extension names: ``.vtk`` (a legacy unstructured grid with a ``label`` cell array, for
+        ParaView and meshio) or ``.msh`` (Gmsh's MSH 2.2, each label a physical volume of its
+        number, for finite element codes), atomically. Raises ``ValueError`` for another
+        extension or when there are no tetrahedra (only ``algorithm="lattice-cleaving"`` makes
+        them), ``OSError`` for an unwritable path.
+
+        >>> import numpy as np, isolab, os, tempfile
+        >>> seg = np.zeros((6, 6, 6), np.uint8); seg[1:5, 1:5, 1:3] = 1; seg[1:5, 1:5, 3:5] = 2
+        >>> meshes = isolab.mesh_labels(seg, algorithm="lattice-cleaving")
+        >>> path = os.path.join(tempfile.mkdtemp(), "seg.msh")
+        >>> meshes.save_tetrahedra(path)
+        >>> open(path).readline().strip()
+        '$MeshFormat'
+        """
+        if len(self.tetrahedra) == 0:
+            raise ValueError(f"{os.fspath(path)}: no tetrahedra to write (algorithm=\"lattice-cleaving\" makes them)")
+        _isolab.save_tetrahedra(os.fspath(path), self.vertices, self.tetrahedra, self.tetrahedron_labels.tolist(),
+                                self._space)
 
     def __repr__(self) -> str:
         tets = f", {len(self.tetrahedra)} tetrahedra" if len(self.tetrahedra) else ""

@@ -10,7 +10,9 @@ isolab installed from `python/`:
 Volumes (written to zarr in DIR, chunks of 64³, zarr's default compression):
 - synthetic: the built-in `asteroid` field sampled at n³ (float32), block by block through isolab;
 - MNI152 T1 tiled: nilearn's template as nibabel's get_fdata() returns it, cast to float32, tiled.
-For each volume, block size and worker count, `repeats` runs alternate between 1 and 2 workers,
+For each volume, block size and worker count, `repeats` runs alternate between 1 and 2 workers
+(another block of `repeats` rounds while either count's runs in the last block span more than
+`--wide` times, up to `--max-blocks`; each run records its round and block),
 each on a fresh cluster and a fresh fragment folder (merge=False: the blocks only), timed from
 submitting the tasks to the last fragment written; then the weld of those fragments, timed alone,
 in this process. Per run: wall time, blocks per second, each worker's peak resident memory
@@ -214,17 +216,27 @@ def measure_volume(name, vol, level, inside, args, work, rows, checks):
     log(f"{name}: {vol.shape} {vol.dtype}, {vol.nbytes / 2**20:.0f} MiB")
     kept = paths = None
     for chunk in args.chunks:
-        for r in range(args.repeats):
-            for workers in ((1, 2) if r % 2 == 0 else (2, 1)):
-                row, out, run_paths = one_run(vol, level, inside, workers, chunk, args, work)
-                row.update(volume=name, round=r)
-                rows.append(row)
-                log(f"  chunk {chunk}, {workers} worker(s): {row['seconds']:.1f} s, worker CPU "
-                    f"{row['worker_cpu_seconds']:.1f} s, driver CPU {row['driver_cpu_seconds']:.1f} s")
-                if kept is None and chunk == args.chunks[0]:
-                    kept, paths = out, run_paths
-                else:
-                    shutil.rmtree(out)
+        # Blocks of `repeats` rounds until neither worker count's block is wide (its slowest run
+        # over `--wide` times its fastest) or `--max-blocks` have run; every run kept.
+        r, block = 0, 0
+        while True:
+            start = len(rows)
+            for _ in range(args.repeats):
+                for workers in ((1, 2) if r % 2 == 0 else (2, 1)):
+                    row, out, run_paths = one_run(vol, level, inside, workers, chunk, args, work)
+                    row.update(volume=name, round=r, block=block)
+                    rows.append(row)
+                    log(f"  chunk {chunk}, {workers} worker(s): {row['seconds']:.1f} s, worker CPU "
+                        f"{row['worker_cpu_seconds']:.1f} s, driver CPU {row['driver_cpu_seconds']:.1f} s")
+                    if kept is None and chunk == args.chunks[0]:
+                        kept, paths = out, run_paths
+                    else:
+                        shutil.rmtree(out)
+                r += 1
+            block += 1
+            spans = [[x["seconds"] for x in rows[start:] if x["workers"] == w] for w in (1, 2)]
+            if not any(len(t) > 1 and max(t) > args.wide * min(t) for t in spans) or block == args.max_blocks:
+                break
     chunk = args.chunks[0]
     report = {"algorithm": "marching-cubes", "driver": "isolab.dask"}
     parts, weld_seconds = weld(paths, report)
@@ -253,6 +265,8 @@ def main():
     p = argparse.ArgumentParser()
     p.add_argument("out")
     p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--wide", type=float, default=2.0, help="a block of rounds is wide when its slowest run took this many times its fastest")
+    p.add_argument("--max-blocks", type=int, default=3, help="blocks of rounds at most")
     p.add_argument("--memory-limit-mib", type=int, default=256)
     p.add_argument("--chunks", default="128,64", help="block sizes in cells; checks run at the first")
     p.add_argument("--synthetic-n", type=int, default=640)

@@ -7,6 +7,9 @@ use std::collections::BTreeMap;
 pub(super) struct Run {
     pub(super) volume: String,
     pub(super) round: usize,
+    /// The block of rounds it ran in (`bench.py` adds a block while one is wide; 0 in older data).
+    #[serde(default)]
+    pub(super) block: usize,
     pub(super) workers: usize,
     pub(super) chunk: usize,
     pub(super) worker_cpu_seconds: f64,

@@ -61,6 +61,8 @@ impl Experiment for Distributed {
             // A quick run: a 256³ synthetic volume and the MRI untiled.
             ("--synthetic-n", ctx.pick(SYNTHETIC_N, 256).to_string()),
             ("--tiles", ctx.pick(TILES, [1, 1, 1]).map(|t| t.to_string()).join(",")),
+            ("--wide", crate::report::WIDE.to_string()),
+            ("--max-blocks", crate::report::MAX_ROUNDS.to_string()),
         ]
         .into_iter()
         .flat_map(|(k, v)| [k.to_owned(), v])
@@ -85,6 +87,7 @@ mod tests {
         Run {
             volume: "v".into(),
             round: 0,
+            block: 0,
             workers,
             chunk: 128,
             worker_cpu_seconds: cpu,
@@ -126,7 +129,8 @@ mod tests {
         let r = reading(&data);
         assert!(
             r.contains(
-                "On the largest volume (v), 2 workers against 1: 1.60× with 128³ blocks (where one worker alone keeps 1.00 cores"
+                "On the largest volume (v), 2 workers against 1: 1.60× (1.60–1.60× round by round) with 128³ blocks (where one \
+                 worker alone keeps 1.00 cores"
             ),
             "{r}"
         );
@@ -136,5 +140,16 @@ mod tests {
         );
         assert!(r.contains("largest worker peak is 120 MiB against the 256 MiB limit"), "{r}");
         assert!(r.contains("v 12 boundary and 3 non-manifold edges"), "{r}");
+        // Rounds paired: both ends of the range from one round each; the last block's spread.
+        let at =
+            |round: usize, block: usize, workers: usize, seconds: f64| Run { round, block, ..run(workers, seconds, seconds) };
+        data.runs =
+            vec![at(0, 0, 1, 8.0), at(0, 0, 2, 4.0), at(1, 0, 1, 9.0), at(1, 0, 2, 6.0), at(2, 1, 1, 30.0), at(2, 1, 2, 10.0)];
+        assert!(reading(&data).contains("(1.50–3.00× round by round)"), "{}", reading(&data));
+        let one: Vec<&Run> = data.runs.iter().filter(|r| r.workers == 1).collect();
+        assert!(!super::page::still_wide(&one), "one run in the last block");
+        data.runs.push(at(3, 1, 1, 10.0));
+        let one: Vec<&Run> = data.runs.iter().filter(|r| r.workers == 1).collect();
+        assert!(super::page::still_wide(&one), "30 and 10 in the last block");
     }
 }

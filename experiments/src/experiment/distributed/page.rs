@@ -38,6 +38,21 @@ pub(super) fn yes(b: bool) -> &'static str {
     }
 }
 
+/// Whether the runs of the last block of rounds still span more than [`crate::report::WIDE`]
+/// times (slowest over fastest).
+pub(super) fn still_wide(runs: &[&Run]) -> bool {
+    let last = runs.iter().map(|r| r.block).max().unwrap_or(0);
+    let times: Vec<f64> = runs.iter().filter(|r| r.block == last).map(|r| r.seconds).collect();
+    times.len() > 1 && Spread::of(times).is_wide()
+}
+
+/// `one`'s time over `two`'s, round by round (the runs of one round paired): its range.
+pub(super) fn speedup_range(one: &[&Run], two: &[&Run]) -> Option<(f64, f64)> {
+    let (a, b): (Vec<f64>, Vec<f64>) =
+        one.iter().filter_map(|o| two.iter().find(|t| t.round == o.round).map(|t| (t.seconds, o.seconds))).unzip();
+    crate::report::ratio_range(&a, &b)
+}
+
 /// The second worker on the largest volume, per block size, with how busy one worker alone keeps
 /// the cores.
 pub(super) fn two_workers(data: &Data) -> Option<String> {
@@ -50,8 +65,10 @@ pub(super) fn two_workers(data: &Data) -> Option<String> {
             let two = runs_of(data, &v.volume, chunk, WORKERS[1]);
             (!one.is_empty() && !two.is_empty()).then(|| {
                 let busy = median(one.iter().map(|r| r.worker_cpu_seconds)) / seconds(&one).median;
+                let range =
+                    speedup_range(&one, &two).map_or(String::new(), |(lo, hi)| format!(" ({lo:.2}–{hi:.2}× round by round)"));
                 format!(
-                    "{:.2}× with {chunk}³ blocks (where one worker alone keeps {busy:.2} cores busy: CPU seconds over \
+                    "{:.2}×{range} with {chunk}³ blocks (where one worker alone keeps {busy:.2} cores busy: CPU seconds over \
                      wall seconds)",
                     seconds(&one).median / seconds(&two).median
                 )
@@ -108,7 +125,9 @@ pub(super) fn page_body(data: &Data) -> String {
          127.0.0.1) on this machine's {} cores. Each worker may use {} MiB; each volume is a zarr array on disk several \
          times that ({}³ storage chunks), read block by block by the tasks (blocks of {chunks} cells, every block a \
          fragment written atomically). Each run starts a fresh cluster and a fresh fragment folder and is timed from \
-         submitting the tasks to the last fragment written; runs alternate between the worker counts, {} round(s). The \
+         submitting the tasks to the last fragment written; runs alternate between the worker counts, {} round(s) a block, \
+         another block while either count's runs in the last one span over {}× (slowest over fastest), up to {} blocks \
+         (\"(wide)\" marks a cell still wide after its last). The \
          weld of the fragments into one mesh is timed apart, in the driver process. Worker peak memory is each worker \
          process's high-water resident set (`VmHWM`), start-up included; CPU seconds are the workers' together and the \
          driver's (the client, the scheduler and the nannies share that process). Script: \
@@ -117,6 +136,8 @@ pub(super) fn page_body(data: &Data) -> String {
         data.memory_limit_mib,
         data.store_chunk,
         data.repeats,
+        crate::report::WIDE,
+        crate::report::MAX_ROUNDS,
         data.versions.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
     ));
     md.push_str(&reading(data));
@@ -139,7 +160,7 @@ pub(super) fn page_body(data: &Data) -> String {
                     format!("{chunk}³"),
                     workers.to_string(),
                     format!("{:.1}", s.median),
-                    format!("{:.1}–{:.1}", s.min, s.max),
+                    format!("{:.1}–{:.1}{}", s.min, s.max, if still_wide(&runs) { " (wide)" } else { "" }),
                     format!("{:.0}", runs[0].blocks as f64 / s.median),
                     format!("{:.1}", median(runs.iter().map(|r| r.worker_cpu_seconds))),
                     format!("{:.1}", median(runs.iter().map(|r| r.driver_cpu_seconds))),

@@ -110,11 +110,7 @@ fn target(output: &Path, format: &str, config: &LabelConfig) -> Result<Target, R
 /// The outcome's tetrahedra, a label per cell, as one `.vtk` or, by its extension, `.msh`.
 fn write_tetrahedra(path: &Path, outcome: &labels::LabelOutcome) -> Result<(), RunError> {
     let s = &outcome.surface;
-    if io::extension(path).as_deref() == Some("msh") {
-        io::write_msh_labelled_tets(path, &s.mesh.positions, &s.tetrahedra, &s.tetrahedron_labels)?;
-    } else {
-        io::write_vtk_labelled_tets(path, &s.mesh.positions, &s.tetrahedra, &s.tetrahedron_labels, outcome.space_tag)?;
-    }
+    io::write_labelled_tets(path, &s.mesh.positions, &s.tetrahedra, &s.tetrahedron_labels, outcome.space_tag)?;
     Ok(())
 }
 

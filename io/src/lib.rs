@@ -309,6 +309,27 @@ pub fn write_mesh_with(path: &Path, mesh: &TriMesh, extras: MeshExtras) -> Resul
     }
 }
 
+/// Writes labelled tetrahedra (`tetrahedra` index `positions`, one label each) in the format
+/// `path`'s extension names: `.vtk` ([`write_vtk_labelled_tets`], `space` in its title) or
+/// `.msh` ([`write_msh_labelled_tets`]). Another extension is an `InvalidInput` write error
+/// naming the two, and nothing is written.
+pub fn write_labelled_tets(
+    path: &Path,
+    positions: &[isolab_algorithms::Vec3],
+    tetrahedra: &[[u32; 4]],
+    labels: &[u32],
+    space: Option<&str>,
+) -> Result<(), IoError> {
+    match extension(path).as_deref() {
+        Some("vtk") => write_vtk_labelled_tets(path, positions, tetrahedra, labels, space),
+        Some("msh") => write_msh_labelled_tets(path, positions, tetrahedra, labels),
+        _ => Err(IoError::Write {
+            path: path.into(),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidInput, "tetrahedra are written as .vtk or .msh"),
+        }),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -347,6 +368,9 @@ mod tests {
         let missing = dir.path().join("no/such/dir/t.obj");
         assert!(matches!(write_mesh(&missing, &mesh), Err(IoError::Write { .. })));
         assert!(matches!(write_mesh(&dir.path().join("t.xyz"), &mesh), Err(IoError::UnknownFormat { .. })));
+        let tets = dir.path().join("tets.obj");
+        let err = write_labelled_tets(&tets, &mesh.positions, &[], &[], None).unwrap_err().to_string();
+        assert!(err.contains(".vtk or .msh") && err.contains("tets.obj") && !tets.exists(), "{err}");
         let p = dir.path().join("fail.obj");
         let r = write_atomic(&p, |_| Err(std::io::Error::other("boom")));
         assert!(r.is_err());

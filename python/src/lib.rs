@@ -361,13 +361,8 @@ fn save_tetrahedra(
     if labels.len() != mesh.tetrahedra.len() {
         return Err(value_error(format!("{} labels for {} tetrahedra (one each)", labels.len(), mesh.tetrahedra.len())));
     }
-    let written = py.allow_threads(|| match isolab_io::extension(&path).as_deref() {
-        Some("vtk") => {
-            Ok(isolab_io::write_vtk_labelled_tets(&path, &mesh.positions, &mesh.tetrahedra, &labels, space.as_deref()))
-        }
-        Some("msh") => Ok(isolab_io::write_msh_labelled_tets(&path, &mesh.positions, &mesh.tetrahedra, &labels)),
-        _ => Err(value_error(format!("{}: tetrahedra are written as .vtk or .msh", path.display()))),
-    })?;
+    let written =
+        py.allow_threads(|| isolab_io::write_labelled_tets(&path, &mesh.positions, &mesh.tetrahedra, &labels, space.as_deref()));
     written.map_err(|e| match &e {
         isolab_io::IoError::Write { source, .. } if source.kind() == std::io::ErrorKind::InvalidInput => value_error(e),
         _ => run_error(e.into()),

@@ -73,7 +73,11 @@ pub(super) fn pick_over(l: &Labels) -> Option<Choice> {
         })
         .collect();
     if !times.is_empty() {
-        why.push_str(&format!(" Time, each other's median over its median: {}.", times.join("; ")));
+        why.push_str(&format!(
+            " Time, each other's median over its median: {} (ours every run of the whole call in one process, CGAL's \
+             `make_mesh_3` alone, one-shot in a fresh process; one thread each).",
+            times.join("; ")
+        ));
     }
     let unfit: Vec<&str> = tools.iter().copied().filter(|t| !fit.iter().any(|(f, _)| f == t)).collect();
     if !unfit.is_empty() {

@@ -1,11 +1,13 @@
 //! Levels of detail: chunks at full, half and quarter resolution (and coarser), stitched at their
 //! seams, for every registered extractor whose [`LevelsOfDetail`] capability says it takes them
-//! (marching cubes by restriction and stitching, surface nets and dual contouring by octree dual
+//! (marching cubes by restriction and stitching, surface nets and both dual contourings by octree dual
 //! contouring's minimal edges). Over random terrains and random balanced level patterns, no
 //! boundary edge is left anywhere but on the world's boundary (a dual mesh's own border, inside
 //! the outer cells, excepted), every edge has at most two triangles, orientation agrees, and no
 //! seam edge goes unmatched; with every chunk at one level the result is the extractor's own mesh
-//! at that resolution. The others are refused with their reason.
+//! at that resolution; an extractor that declares itself free of self-intersections (marching
+//! cubes, manifold dual contouring) keeps that promise across levels. The others are refused
+//! with their reason.
 
 use isolab_algorithms::chunks::lod::{balance_levels, extract_lod, open_edges_away_from_bounds, open_edges_off_bounds};
 use isolab_algorithms::fields::{self, FieldParams};
@@ -19,7 +21,7 @@ fn lod_extractors() -> Vec<Box<dyn Extractor>> {
     let list: Vec<Box<dyn Extractor>> =
         extractors::registry().into_iter().filter(|e| !matches!(e.levels_of_detail(), LevelsOfDetail::Unsupported(_))).collect();
     let names: Vec<&str> = list.iter().map(|e| e.name()).collect();
-    for expected in ["marching-cubes", "surface-nets", "dual-contouring"] {
+    for expected in ["marching-cubes", "surface-nets", "dual-contouring", "manifold-dual-contouring"] {
         assert!(names.contains(&expected), "{expected} takes levels of detail: {names:?}");
     }
     list
@@ -61,8 +63,10 @@ fn random_terrains_and_level_patterns_leave_no_crack() {
             assert_eq!(t.non_manifold_vertices, 0, "{what}");
             assert_eq!(t.misoriented_edges, 0, "{what}");
             // Marching cubes' stitched seams are filled so that nothing crosses (the lod module
-            // doc); the dual methods' octree seams are not held to it.
-            if e.name() == "marching-cubes" {
+            // doc), and manifold dual contouring's fans keep every triangle in its cells: every
+            // extractor that declares itself free of self-intersections is held to it across
+            // levels too.
+            if e.info().guarantees.intersection_free {
                 assert_eq!((stats.fanned, isolab_metrics::self_intersections(&out.surface).count), (0, 0), "{what}");
             }
         }
@@ -140,9 +144,8 @@ fn bad_lod_requests_are_refused_by_name() {
     balance_levels([2, 2, 2], &mut balanced);
     assert_eq!(balanced, [0, 1, 1, 1, 1, 1, 1, 1]);
     extract_lod(mc.as_ref(), &samples, 8, &balanced, &mut out, None).unwrap();
-    let mdc = extractors::by_name("manifold-dual-contouring").unwrap();
-    assert!(err(extract_lod(mdc.as_ref(), &samples, 8, &[0; 8], &mut out, None))
-        .contains("not supported for manifold-dual-contouring"));
+    let mt = extractors::by_name("marching-tetrahedra").unwrap();
+    assert!(err(extract_lod(mt.as_ref(), &samples, 8, &[0; 8], &mut out, None)).contains("not supported for marching-tetrahedra"));
 }
 
 #[test]
@@ -165,7 +168,7 @@ fn the_extractors_that_take_levels_of_detail_say_so_and_the_others_are_refused_w
             }
         }
     }
-    for expected in ["marching-cubes", "surface-nets", "dual-contouring"] {
+    for expected in ["marching-cubes", "surface-nets", "dual-contouring", "manifold-dual-contouring"] {
         assert!(supported.contains(&expected), "{supported:?}");
     }
 }
@@ -191,9 +194,9 @@ proptest! {
             let mut out = Extraction::default();
             let stats = extract_lod(e.as_ref(), &samples, chunk, &levels, &mut out, None).unwrap();
             prop_assert_eq!(stats.unmatched, 0, "{}", e.name());
-            if e.name() == "marching-cubes" {
+            if e.info().guarantees.intersection_free {
                 let crossing = isolab_metrics::self_intersections(&out.surface).count;
-                prop_assert_eq!((stats.fanned, crossing), (0, 0), "levels {:?}", levels);
+                prop_assert_eq!((stats.fanned, crossing), (0, 0), "{}: levels {:?}", e.name(), levels);
             }
             let t = topology(&out.surface);
             prop_assert!(

@@ -199,6 +199,13 @@ pub fn extract_lod(
         let g = LodGrid { grid, values: &restricted_values, iso, field, chunk, counts, levels };
         let made = engine.extract_lod(g, &mut out.surface, levels_out);
         out.finish_counts(0);
+        if made.crossing_cells > 0 {
+            out.stats.warnings.push(format!(
+                "{}: {} cells with two pieces of surface whose triangles cross (please report the input)",
+                extractor.name(),
+                made.crossing_cells
+            ));
+        }
         return Ok(LodStats {
             chunks: counts,
             per_level,

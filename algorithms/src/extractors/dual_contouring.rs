@@ -283,7 +283,7 @@ impl ManifoldDualContouring {
     /// The extractor with `options`.
     pub fn new(options: MdcOptions) -> Self {
         let o = DcOptions { svd_tolerance: options.svd_tolerance, clamp: true, parallelism: options.parallelism };
-        Self { options, engine: engine(o, MANIFOLD_INFO.name) }
+        Self { options, engine: engine(o, MANIFOLD_INFO.name).with_intersection_free_levels() }
     }
 }
 
@@ -293,9 +293,7 @@ impl Extractor for ManifoldDualContouring {
     }
 
     fn levels_of_detail(&self) -> LevelsOfDetail<'_> {
-        LevelsOfDetail::Unsupported(
-            "its triangles are fans around edge points kept inside cells, which a polygon on a seam between levels (spanning a fine and a coarse cell) is not",
-        )
+        LevelsOfDetail::Dual(&self.engine)
     }
 
     fn settings(&self) -> String {

@@ -35,6 +35,9 @@ pub struct DualLodCounts {
     pub unmatched: usize,
     /// Vertices split where a seam edge had four triangles (`pinch`: where two rings met).
     pub pinched: usize,
+    /// Intersection-free levels (manifold dual contouring): cells with several pieces of surface
+    /// whose triangles still cross after the fallback (0 in every test).
+    pub crossing_cells: usize,
 }
 
 /// A dual method's own meshing of chunks at mixed levels (the dual engine's octree minimal

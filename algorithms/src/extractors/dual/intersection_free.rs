@@ -36,7 +36,7 @@ use rayon::prelude::*;
 /// How far inside its cell a cell vertex is kept, and inside its face region a piercing or face
 /// point, as a fraction of the spacing: room for rounding, so every strict inequality the proof
 /// needs holds in floating point.
-const MARGIN: f32 = 1e-3;
+pub(super) const MARGIN: f32 = 1e-3;
 
 /// What the sweep keeps for [`triangulate`] (each quad's four sides in order, as the engine's
 /// smoothing links, and each vertex's cell corner) and the pass's own buffers, kept between calls
@@ -204,8 +204,8 @@ impl Face {
 /// Where on a face one piece's path may run: the face, or the half of it at a corner (face
 /// coordinates) that the piece cuts off from the other three.
 #[derive(Clone, Copy)]
-struct Region {
-    corner: Option<(u8, u8)>,
+pub(super) struct Region {
+    pub(super) corner: Option<(u8, u8)>,
 }
 
 impl Region {
@@ -222,7 +222,7 @@ impl Region {
 
     /// `p` if it lies inside with twice the margin, else the farthest point toward it from the
     /// centre that does (the region is convex).
-    fn clamp(&self, p: (f32, f32)) -> (f32, f32) {
+    pub(super) fn clamp(&self, p: (f32, f32)) -> (f32, f32) {
         let margin = 2.0 * MARGIN;
         if self.contains(p, margin) {
             return p;
@@ -419,6 +419,30 @@ fn separate_pieces(
     incidence: &mut Incidence,
     has_normals: bool,
 ) -> usize {
+    let h = input.grid.spacing;
+    let cell_box = |v: usize| {
+        let min = input.grid.origin + Vec3::from(cells[v].map(|c| c as f32)) * h;
+        (min + Vec3::splat(MARGIN * h), min + Vec3::splat((1.0 - MARGIN) * h))
+    };
+    let moved = |mesh: &mut TriMesh, v: usize| {
+        if has_normals {
+            mesh.normals[v] = input.normal_at(mesh.positions[v]);
+        }
+    };
+    separate_cell_pieces(mesh, cells, cell_box, pieces, incidence, moved)
+}
+
+/// [`separate_pieces`] for any cells: `cells[v]` names vertex `v`'s cell (a cell's vertices are
+/// consecutive), `cell_box(v)` the box its vertex must stay in, and `moved` hears of each vertex
+/// moved. Returns the cells still crossing.
+pub(super) fn separate_cell_pieces<C: PartialEq>(
+    mesh: &mut TriMesh,
+    cells: &[C],
+    cell_box: impl Fn(usize) -> (Vec3, Vec3),
+    pieces: &mut Vec<(u32, u32)>,
+    incidence: &mut Incidence,
+    mut moved: impl FnMut(&mut TriMesh, usize),
+) -> usize {
     pieces.clear();
     let mut start = 0;
     for v in 1..=cells.len() {
@@ -448,12 +472,10 @@ fn separate_pieces(
         })
     };
     let mut unresolved = 0;
-    let h = input.grid.spacing;
     for &(lo, hi) in pieces.iter() {
         if !crossing(mesh, (lo, hi)) {
             continue;
         }
-        let min = input.grid.origin + Vec3::from(cells[lo as usize].map(|c| c as f32)) * h;
         for v in lo..hi {
             let ring = incidence.of_vertex(v);
             let (sum, count) = ring
@@ -462,11 +484,9 @@ fn separate_pieces(
                 .filter(|&x| x != v)
                 .fold((Vec3::ZERO, 0.0f32), |(s, c), x| (s + mesh.positions[x as usize], c + 1.0));
             if count > 0.0 {
-                let p = (sum / count).clamp(min + Vec3::splat(MARGIN * h), min + Vec3::splat((1.0 - MARGIN) * h));
-                mesh.positions[v as usize] = p;
-                if has_normals {
-                    mesh.normals[v as usize] = input.normal_at(p);
-                }
+                let (min, max) = cell_box(v as usize);
+                mesh.positions[v as usize] = (sum / count).clamp(min, max);
+                moved(mesh, v as usize);
             }
         }
         if crossing(mesh, (lo, hi)) {

@@ -122,6 +122,8 @@ pub struct DualEngine {
     scratch: ScratchPool<Scratch>,
     /// The intersection-free pass's buffers ([`DualEngine::extract_intersection_free`]).
     free_scratch: ScratchPool<intersection_free::Scratch>,
+    /// Levels of detail by intersection-free fans ([`lod`]), as the intersection-free pass.
+    intersection_free_lod: bool,
 }
 
 #[derive(Default)]
@@ -184,7 +186,21 @@ impl Scratch {
 impl DualEngine {
     /// The engine with `options` and a vertex `placement`, reporting as `name` in stats and errors.
     pub fn new(options: DualOptions, placement: Placement, name: &'static str) -> Self {
-        Self { options, placement, name, scratch: ScratchPool::default(), free_scratch: ScratchPool::default() }
+        Self {
+            options,
+            placement,
+            name,
+            scratch: ScratchPool::default(),
+            free_scratch: ScratchPool::default(),
+            intersection_free_lod: false,
+        }
+    }
+
+    /// The engine whose levels of detail keep every triangle inside its cells, as
+    /// [`DualEngine::extract_intersection_free_into`] does on one level.
+    pub fn with_intersection_free_levels(mut self) -> Self {
+        self.intersection_free_lod = true;
+        self
     }
 }
 

@@ -2,7 +2,8 @@
 //! chunks near a viewer at one corner are meshed at full resolution, farther ones at half and at a
 //! quarter, by every registered extractor that takes levels of detail
 //! ([`isolab_algorithms::chunks::lod`]: marching cubes by restriction and stitching, surface nets
-//! and dual contouring by restriction and octree dual contouring's minimal edges); the
+//! and both dual contourings by restriction and octree dual contouring's minimal edges, manifold
+//! dual contouring's polygons as fans kept in their cells); the
 //! `transvoxel` crate meshes the same chunks, samples and levels with Lengyel's transition cells
 //! (`transvoxel_peer`). For each level pattern and each implementation: triangles, boundary edges
 //! left where they are cracks, non-manifold edges and vertices, self-intersecting pairs, the shape
@@ -48,6 +49,7 @@ const TRANSVOXEL_VERSION: &str = "2.0.0";
 /// An implementation's name in the table: the extractor and its method.
 fn implementation_name(e: &dyn Extractor) -> String {
     let method = match e.levels_of_detail() {
+        LevelsOfDetail::Dual(_) if e.info().guarantees.intersection_free => "octree minimal edges, fans kept in cells",
         LevelsOfDetail::Dual(_) => "octree minimal edges",
         LevelsOfDetail::Stitched => "restriction + stitching",
         LevelsOfDetail::Unsupported(_) => "none",
@@ -389,9 +391,8 @@ impl Experiment for TerrainLod {
                 let path = dir.join("transvoxel.png");
                 render::save_png(&path, &render::side_by_side(&ours_close, &close(&peer.0, &peer.1)))?;
                 crate_picture = ctx.link(&path);
-                let duals: Vec<usize> =
-                    (0..ours.len()).filter(|&i| matches!(ours[i].levels_of_detail(), LevelsOfDetail::Dual(_))).collect();
-                if let [a, b, ..] = duals[..] {
+                let by_name = |name: &str| ours.iter().position(|e| e.name() == name);
+                if let (Some(a), Some(b)) = (by_name("dual-contouring"), by_name("manifold-dual-contouring")) {
                     let path = dir.join("dual.png");
                     let (left, right) = (close(&outs[a].0.surface, &outs[a].1), close(&outs[b].0.surface, &outs[b].1));
                     render::save_png(&path, &render::side_by_side(&left, &right))?;

@@ -27,7 +27,7 @@ pub(super) fn page(d: &Data) -> String {
          new vertex inside it whose triangles cross nothing near them (exact predicates); *octree minimal edges* (surface nets, dual contouring; Ju et al. 2002's rule for octrees) gives \
          every crossing edge of the finest cells around it a polygon joining the vertices of the cells around it, a \
          triangle where one coarse cell spans two of them, and splits a vertex where a fine cell's ring meets a coarse \
-         cell's across a seam (*pinched*). **The `transvoxel` crate** ({TRANSVOXEL_VERSION}, Lengyel 2010's transition \
+         cell's across a seam (*pinched*); *fans kept in cells* (manifold dual contouring: Ju and Udeshi 2006's          construction carried to the seams) turns each such polygon into a fan around its edge's crossing point, a side          between a fine and a coarse cell broken at a point inside the fine face they share, so that every triangle          stays inside its cells and the mesh cannot cross itself. **The `transvoxel` crate** ({TRANSVOXEL_VERSION}, Lengyel 2010's transition \
          cells, on the same chunks, samples and levels): each chunk is a block whose faces toward a finer face neighbour \
          are transition faces; blocks are welded by exact position (the crate keeps each transition cell's vertices \
          apart from the regular cells' at the same places). The crate's own `extract_from_field` with \
@@ -118,7 +118,7 @@ pub(super) fn page(d: &Data) -> String {
     }
     if !d.dual_picture.is_empty() {
         md.push_str(&format!(
-            "\n![the same close-up: surface nets left, dual contouring right, by octree minimal edges]({})\n",
+            "\n![the same close-up: dual contouring left, manifold dual contouring (fans kept in cells) right]({})\n",
             d.dual_picture
         ));
     }
@@ -139,12 +139,19 @@ fn reading(d: &Data) -> String {
         let non_manifold: usize = rows.iter().map(|r| r.non_manifold_edges + r.non_manifold_vertices).sum();
         let crossing: usize = rows.iter().map(|r| r.self_intersecting_pairs).sum();
         let pinched: usize = rows.iter().filter_map(|r| r.pinched).sum();
+        // Pairs on the patterns with no seam between levels are the extractor's own mesh's.
+        let without_seams: usize = rows.iter().filter(|r| r.seam_triangles == 0).map(|r| r.self_intersecting_pairs).sum();
         md.push_str(&format!(
             "- {implementation}: {}, {} over the {} patterns ({open} open seam edges, {non_manifold} non-manifold edges and \
-             vertices, {crossing} self-intersecting pairs in all{}).\n",
+             vertices, {crossing} self-intersecting pairs in all{}{}).\n",
             if open == 0 { "watertight" } else { "not watertight" },
             if non_manifold == 0 { "manifold" } else { "not manifold everywhere" },
             rows.len(),
+            if crossing > 0 {
+                format!(", {without_seams} of them on the patterns without seams, where every chunk is at one level")
+            } else {
+                String::new()
+            },
             if pinched > 0 { format!("; {pinched} vertices pinched") } else { String::new() },
         ));
     }

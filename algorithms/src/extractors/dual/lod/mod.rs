@@ -23,6 +23,7 @@
 //! with every chunk at one level the result is the engine's own mesh (tested, smoothing
 //! included). Smoothing runs once on the stitched net, each vertex kept in its own cell.
 
+mod fans;
 mod pinch;
 
 use super::boundary::{boundary_split, SPLIT};
@@ -57,6 +58,8 @@ struct ChunkPolygons {
     /// The triangles of polygons between levels (indices into `triangles`).
     seam_triangles: Vec<u32>,
     links: Vec<(u32, u32)>,
+    /// With fans: the polygons themselves, triangulated once every vertex is placed.
+    fans: Vec<fans::FanPolygon>,
     seam_polygons: usize,
     unmatched: usize,
 }
@@ -72,6 +75,8 @@ struct Lod<'a> {
     g: LodGrid<'a>,
     tables: Tables,
     placement: Placement,
+    /// Intersection-free fans ([`fans`]) instead of the engine's split quads.
+    fans: bool,
 }
 
 impl Lod<'_> {
@@ -364,6 +369,23 @@ impl Lod<'_> {
                             continue;
                         }
                         out.seam_polygons += usize::from(seam);
+                        if self.fans {
+                            let (distinct, n) = distinct_cells(ring);
+                            if n < 3 {
+                                out.unmatched += 1;
+                                continue;
+                            }
+                            let mut cycle = distinct;
+                            if !first_inside {
+                                cycle[1..n].reverse();
+                            }
+                            let edge = fans::MinimalEdge { start: p, axis: a, len: side };
+                            out.fans.push(fans::FanPolygon { ring: cycle, n: n as u8, edge, level });
+                            if links {
+                                out.links.extend((0..n).map(|k| (distinct[k], distinct[(k + 1) % n])));
+                            }
+                            continue;
+                        }
                         let before = out.triangles.len() as u32;
                         self.emit(ring, !first_inside, least_folded, positions, links, &mut out);
                         if seam {
@@ -380,14 +402,7 @@ impl Lod<'_> {
     /// from the edge's direction, a cell repeated where a coarse one spans two quadrants),
     /// wound the other way when `flip`; split as the engine splits its quads.
     fn emit(&self, ring: [u32; 4], flip: bool, least_folded: bool, positions: &[Vec3], links: bool, out: &mut ChunkPolygons) {
-        let mut distinct = [0u32; 4];
-        let mut n = 0;
-        for k in 0..4 {
-            if ring[k] != ring[(k + 3) % 4] {
-                distinct[n] = ring[k];
-                n += 1;
-            }
-        }
+        let (distinct, n) = distinct_cells(ring);
         let oriented = |t: [u32; 3]| if flip { [t[0], t[2], t[1]] } else { t };
         match n {
             4 => {
@@ -413,6 +428,20 @@ impl Lod<'_> {
             out.links.extend((0..n).map(|k| (distinct[k], distinct[(k + 1) % n])));
         }
     }
+}
+
+/// The distinct vertices of a ring around an edge (a coarse cell spanning two quadrants appears
+/// twice in a row), in order, and how many.
+fn distinct_cells(ring: [u32; 4]) -> ([u32; 4], usize) {
+    let mut distinct = [0u32; 4];
+    let mut n = 0;
+    for k in 0..4 {
+        if ring[k] != ring[(k + 3) % 4] {
+            distinct[n] = ring[k];
+            n += 1;
+        }
+    }
+    (distinct, n)
 }
 
 /// The cube edge along axis `a` whose lower corner is at offset `r` (each 0 or 1) in the cell.
@@ -442,7 +471,7 @@ impl DualLevels for DualEngine {
 /// with polygons on every minimal edge (module doc). The mesh is in world coordinates; `levels`
 /// (if given) receives each triangle's level (its owning chunk's).
 pub fn extract_lod(engine: &DualEngine, g: LodGrid<'_>, out: &mut TriMesh, levels: Option<&mut Vec<u8>>) -> DualLodCounts {
-    let lod = Lod { g, tables: Tables::get(), placement: engine.placement };
+    let lod = Lod { g, tables: Tables::get(), placement: engine.placement, fans: engine.intersection_free_lod };
     let total = g.levels.len();
     let cells: Vec<ChunkCells> = (0..total).into_par_iter().map(|k| lod.chunk_cells(k)).collect();
     let mut offsets = Vec::with_capacity(total);
@@ -466,7 +495,9 @@ pub fn extract_lod(engine: &DualEngine, g: LodGrid<'_>, out: &mut TriMesh, level
     let mut triangle_levels = Vec::new();
     let mut links = Vec::new();
     let mut seam_triangles = Vec::new();
+    let mut fan_polygons = Vec::new();
     for (k, p) in polygons.iter().enumerate() {
+        fan_polygons.extend_from_slice(&p.fans);
         let base = out.triangles.len() as u32;
         seam_triangles.extend(p.seam_triangles.iter().map(|&t| base + t));
         out.triangles.extend_from_slice(&p.triangles);
@@ -477,7 +508,9 @@ pub fn extract_lod(engine: &DualEngine, g: LodGrid<'_>, out: &mut TriMesh, level
     }
     // Each vertex's cell side, from its chunk's level.
     let side_of = |corner: [u32; 3]| 1u32 << lod.chunk_of(corner.map(|c| c as usize)).1;
-    counts.pinched = pinch::pinch(out, &mut corners, &seam_triangles, side_of, &mut links, smoothing);
+    if !lod.fans {
+        counts.pinched = pinch::pinch(out, &mut corners, &seam_triangles, side_of, &mut links, smoothing);
+    }
     if smoothing {
         let (mut start, mut adjacency) = (Vec::new(), Vec::new());
         build_adjacency(out.positions.len(), &links, &mut start, &mut adjacency);
@@ -486,6 +519,9 @@ pub fn extract_lod(engine: &DualEngine, g: LodGrid<'_>, out: &mut TriMesh, level
             (lo, lo + Vec3::splat(side_of(corners[i]) as f32))
         };
         smooth_within(&engine.options, &mut out.positions, (&start, &adjacency), &mut SmoothBuffers::default(), bound);
+    }
+    if lod.fans {
+        counts.crossing_cells = fans::triangulate(&lod, &fan_polygons, out, &mut corners, side_of, &mut triangle_levels);
     }
     // Normals: the gradient of the vertex's cell's trilinear interpolant there, as the engine.
     let normals: Vec<Vec3> = out

@@ -27,7 +27,10 @@ pub(super) fn page(d: &Data) -> String {
          new vertex inside it whose triangles cross nothing near them (exact predicates); *octree minimal edges* (surface nets, dual contouring; Ju et al. 2002's rule for octrees) gives \
          every crossing edge of the finest cells around it a polygon joining the vertices of the cells around it, a \
          triangle where one coarse cell spans two of them, and splits a vertex where a fine cell's ring meets a coarse \
-         cell's across a seam (*pinched*); *fans kept in cells* (manifold dual contouring: Ju and Udeshi 2006's          construction carried to the seams) turns each such polygon into a fan around its edge's crossing point, a side          between a fine and a coarse cell broken at a point inside the fine face they share, so that every triangle          stays inside its cells and the mesh cannot cross itself. **The `transvoxel` crate** ({TRANSVOXEL_VERSION}, Lengyel 2010's transition \
+         cell's across a seam (*pinched*); *fans kept in cells* (manifold dual contouring: Ju and Udeshi 2006's \
+         construction carried to the seams) turns each such polygon into a fan around its edge's crossing point, a side \
+         between a fine and a coarse cell broken at a point inside the fine face they share, so that every triangle \
+         stays inside its cells and the mesh cannot cross itself. **The `transvoxel` crate** ({TRANSVOXEL_VERSION}, Lengyel 2010's transition \
          cells, on the same chunks, samples and levels): each chunk is a block whose faces toward a finer face neighbour \
          are transition faces; blocks are welded by exact position (the crate keeps each transition cell's vertices \
          apart from the regular cells' at the same places). The crate's own `extract_from_field` with \

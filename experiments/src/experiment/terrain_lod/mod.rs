@@ -323,7 +323,7 @@ impl Experiment for TerrainLod {
     }
 
     fn question(&self) -> &'static str {
-        "Do three levels of detail meet without cracks for marching cubes, surface nets and dual contouring, how do they compare with Transvoxel's transition cells, and how many triangles do they save?"
+        "Do three levels of detail meet without cracks (and without self-intersections) for marching cubes, surface nets and both dual contourings, how do they compare with Transvoxel's transition cells, and how many triangles do they save?"
     }
 
     fn peers(&self) -> &'static [&'static str] {

@@ -24,8 +24,16 @@ pub(super) struct Row {
     pub(super) self_intersecting_pairs: usize,
     /// Triangles along a face between chunks of different levels (module doc of `seam_triangles`).
     pub(super) seam_triangles: usize,
+    /// Seam triangles without area (left out of the shape statistics).
+    #[serde(default)]
+    pub(super) seam_zero_area: usize,
     pub(super) seam_aspect_mean: f64,
+    #[serde(default)]
+    pub(super) seam_aspect_median: f64,
     pub(super) seam_aspect_max: f64,
+    /// The mean over seam triangles with no corner within `NEAR_SAMPLE` of a sample.
+    #[serde(default)]
+    pub(super) seam_aspect_mean_off_samples: f64,
     /// `None` without seam triangles.
     pub(super) seam_min_angle_deg: Option<f64>,
     /// Whole world, ms.

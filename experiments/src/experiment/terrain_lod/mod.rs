@@ -100,43 +100,84 @@ fn patterns() -> Vec<(String, Vec<u8>)> {
     ]
 }
 
-/// The shape of the seam triangles: those whose centroid lies within one cell of the coarser
-/// side (`2^level` samples) of a chunk face whose two chunks differ in level. Returns (count,
-/// mean and largest aspect ratio, smallest angle).
-fn seam_shape(mesh: &TriMesh, grid: &Grid, levels: &[u8]) -> (usize, f64, f64, Option<f64>) {
-    let (mut n, mut sum, mut worst, mut smallest) = (0usize, 0.0, 0.0f64, 180.0f64);
+/// The shape of the seam triangles (those whose centroid lies within one cell of the coarser side,
+/// `2^level` samples, of a chunk face whose two chunks differ in level).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct SeamShape {
+    /// Seam triangles with an area (the others have no shape and are counted apart).
+    count: usize,
+    zero_area: usize,
+    aspect_mean: f64,
+    aspect_median: f64,
+    aspect_max: f64,
+    /// The mean over the triangles none of whose corners lies within [`NEAR_SAMPLE`] of a sample:
+    /// marching cubes' needles where a crossing nearly meets a sample, left out.
+    aspect_mean_off_samples: f64,
+    /// `None` without seam triangles.
+    min_angle_deg: Option<f64>,
+}
+
+/// How close to a sample (in samples) a corner counts as on it, for
+/// [`SeamShape::aspect_mean_off_samples`]: above the margin that keeps marching cubes' vertices
+/// off the samples at every level.
+const NEAR_SAMPLE: f32 = 1e-3;
+
+/// Whether the triangle with centroid `c` (sample coordinates) is a seam triangle.
+fn near_seam(c: Vec3, levels: &[u8]) -> bool {
+    let id = [0, 1, 2].map(|a| ((c[a] / CHUNK as f32).floor().max(0.0) as usize).min(COUNTS[a] - 1));
+    let level = levels[flat(id)];
+    (0..3).any(|a| {
+        let within = |plane: usize, other: usize| {
+            let reach = (1u32 << level.max(levels[other])) as f32;
+            (c[a] - plane as f32).abs() <= reach && levels[other] != level
+        };
+        let lo = id[a] * CHUNK;
+        let mut below = id;
+        let mut above = id;
+        (id[a] > 0 && {
+            below[a] -= 1;
+            within(lo, flat(below))
+        }) || (id[a] + 1 < COUNTS[a] && {
+            above[a] += 1;
+            within(lo + CHUNK, flat(above))
+        })
+    })
+}
+
+fn seam_shape(mesh: &TriMesh, grid: &Grid, levels: &[u8]) -> SeamShape {
+    let mut aspects = Vec::new();
+    let (mut zero_area, mut smallest) = (0usize, 180.0f64);
+    let (mut off_sum, mut off_n) = (0.0, 0usize);
     for t in &mesh.triangles {
         let p = t.map(|v| mesh.positions[v as usize]);
-        let c = ((p[0] + p[1] + p[2]) / 3.0 - grid.origin) / grid.spacing;
-        let id = [0, 1, 2].map(|a| ((c[a] / CHUNK as f32).floor().max(0.0) as usize).min(COUNTS[a] - 1));
-        let level = levels[flat(id)];
-        let near_seam = (0..3).any(|a| {
-            let within = |plane: usize, other: usize| {
-                let reach = (1u32 << level.max(levels[other])) as f32;
-                (c[a] - plane as f32).abs() <= reach && levels[other] != level
-            };
-            let lo = id[a] * CHUNK;
-            let mut below = id;
-            let mut above = id;
-            (id[a] > 0 && {
-                below[a] -= 1;
-                within(lo, flat(below))
-            }) || (id[a] + 1 < COUNTS[a] && {
-                above[a] += 1;
-                within(lo + CHUNK, flat(above))
-            })
-        });
-        if !near_seam {
+        let q = p.map(|x| (x - grid.origin) / grid.spacing);
+        if !near_seam((q[0] + q[1] + q[2]) / 3.0, levels) {
             continue;
         }
-        if let Some(s) = isolab_metrics::quality::triangle_shape(p[0], p[1], p[2]) {
-            n += 1;
-            sum += s.aspect_ratio;
-            worst = worst.max(s.aspect_ratio);
-            smallest = smallest.min(s.min_angle_deg);
+        let Some(s) = isolab_metrics::quality::triangle_shape(p[0], p[1], p[2]) else {
+            zero_area += 1;
+            continue;
+        };
+        aspects.push(s.aspect_ratio);
+        smallest = smallest.min(s.min_angle_deg);
+        if q.iter().all(|x| (*x - x.round()).abs().max_element() > NEAR_SAMPLE) {
+            off_sum += s.aspect_ratio;
+            off_n += 1;
         }
     }
-    (n, sum / n.max(1) as f64, worst, (n > 0).then_some(smallest))
+    let count = aspects.len();
+    let mean = aspects.iter().sum::<f64>() / count.max(1) as f64;
+    let max = aspects.iter().copied().fold(0.0, f64::max);
+    aspects.sort_by(f64::total_cmp);
+    SeamShape {
+        count,
+        zero_area,
+        aspect_mean: mean,
+        aspect_median: aspects.get(count / 2).copied().unwrap_or(0.0),
+        aspect_max: max,
+        aspect_mean_off_samples: off_sum / off_n.max(1) as f64,
+        min_angle_deg: (count > 0).then_some(smallest),
+    }
 }
 
 /// One row: the mesh's seam checks and shape. `dual`: the mesh's own border lies inside the
@@ -160,7 +201,7 @@ fn row(
     } else {
         open_edges_off_bounds(mesh, &grid.bounds())
     };
-    let (seam_triangles, seam_aspect_mean, seam_aspect_max, seam_min_angle_deg) = seam_shape(mesh, grid, levels);
+    let shape = seam_shape(mesh, grid, levels);
     let mut per_level = vec![0; 1 + levels.iter().copied().max().unwrap_or(0) as usize];
     for &l in levels {
         per_level[l as usize] += 1;
@@ -177,10 +218,13 @@ fn row(
         non_manifold_vertices: t.non_manifold_vertices,
         misoriented_edges: t.misoriented_edges,
         self_intersecting_pairs: isolab_metrics::self_intersections(mesh).count,
-        seam_triangles,
-        seam_aspect_mean,
-        seam_aspect_max,
-        seam_min_angle_deg,
+        seam_triangles: shape.count,
+        seam_zero_area: shape.zero_area,
+        seam_aspect_mean: shape.aspect_mean,
+        seam_aspect_median: shape.aspect_median,
+        seam_aspect_max: shape.aspect_max,
+        seam_aspect_mean_off_samples: shape.aspect_mean_off_samples,
+        seam_min_angle_deg: shape.min_angle_deg,
         time_ms: Spread::of(times),
     }
 }

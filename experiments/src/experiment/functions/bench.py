@@ -9,7 +9,9 @@ Callables (numpy, batched: (N, 3) float64 points in, N values out):
 
 Implementations, each run in a fresh process (one-shot: import, call, exit) so that its peak RSS
 (`os.wait4`'s ru_maxrss) is its own; the time is the call's, after the imports (warp's `wp.init()`
-included in the set-up); the order alternates between rounds:
+included in the set-up); the order alternates between rounds, and while any implementation's
+block of rounds is wide (its slowest run over --wide times its fastest) another block runs, up to
+--max-blocks (each row records its blocks and whether its last block was still wide):
 - isolab: isolab.extract(fn, 0.0, "marching-cubes", bounds=..., resolution=n, lipschitz=L);
 - warp: warp.geometry.sparse_marching_cubes on the CPU, the same bound;
 - skimage: the dense grid sampled in batches, then skimage.measure.marching_cubes (sizes up to
@@ -22,6 +24,7 @@ would not fit this machine; scikit-image's dense 512³ would take minutes of eva
 
 Usage: functions/bench.py OUT.json --sizes 256,512 --repeats 3 [--dense-up-to 512]
        [--pymcubes-up-to 64] [--repeat-up-to 512] [--mlp-up-to 512] [--mlp-dense-up-to 256]
+       [--wide 2] [--max-blocks 3]
 """
 
 import argparse
@@ -117,6 +120,18 @@ def run_one(impl, callable_name, n):
     return row
 
 
+# The report's rule for spreads (experiments/src/report.rs: WIDE, MAX_ROUNDS, which the experiment
+# passes as --wide and --max-blocks): a wide block of rounds is followed by another, up to a bound.
+WIDE = 2.0
+
+
+def is_wide(seconds):
+    """Whether a block's slowest run took over WIDE times its fastest (runs that failed left out;
+    a block of one run is never wide)."""
+    done = [x for x in seconds if x is not None]
+    return len(done) > 1 and max(done) > WIDE * min(done)
+
+
 def version(module):
     try:
         from importlib.metadata import version as v
@@ -136,7 +151,11 @@ def main():
     ap.add_argument("--pymcubes-up-to", type=int, default=64)
     ap.add_argument("--mlp-up-to", type=int, default=512, help="largest grid for the mlp callable")
     ap.add_argument("--mlp-dense-up-to", type=int, default=256, help="largest dense grid for the mlp callable")
+    ap.add_argument("--wide", type=float, default=WIDE, help="a block is wide when its slowest run took this many times its fastest")
+    ap.add_argument("--max-blocks", type=int, default=3, help="the most blocks of rounds a grid gets")
     a = ap.parse_args()
+    global WIDE
+    WIDE = a.wide
     sizes = [int(s) for s in a.sizes.split(",")]
     rows = []
     for callable_name in a.callables.split(","):
@@ -151,13 +170,24 @@ def main():
                 impls.append("pymcubes")
             rounds = a.repeats if n <= a.repeat_up_to else 1
             runs = {i: [] for i in impls}
-            for r in range(rounds):
-                order = impls if r % 2 == 0 else impls[::-1]
-                for impl in order:
-                    runs[impl].append(run_one(impl, callable_name, n))
-                    print(f"{callable_name} {n} {impl}: {runs[impl][-1]}", file=sys.stderr, flush=True)
+            # Blocks of `rounds` rounds until no implementation's block is wide (its slowest run
+            # over WIDE times its fastest) or MAX_BLOCKS have run; every run kept.
+            blocks, r = 0, 0
+            while True:
+                first = {i: len(runs[i]) for i in impls}
+                for _ in range(rounds):
+                    order = impls if r % 2 == 0 else impls[::-1]
+                    for impl in order:
+                        runs[impl].append(run_one(impl, callable_name, n))
+                        print(f"{callable_name} {n} {impl}: {runs[impl][-1]}", file=sys.stderr, flush=True)
+                    r += 1
+                blocks += 1
+                wide = {i: is_wide([x.get("seconds") for x in runs[i][first[i]:]]) for i in impls}
+                if not any(wide.values()) or blocks == a.max_blocks:
+                    break
             for impl, rs in runs.items():
-                rows.append({"callable": callable_name, "n": n, "implementation": impl, "runs": rs})
+                rows.append({"callable": callable_name, "n": n, "implementation": impl, "runs": rs,
+                             "blocks": blocks, "wide": wide[impl]})
     versions = {m: version(m) for m in ["isolab", "warp-lang", "scikit-image", "PyMCubes", "numpy"]}
     versions["python"] = platform.python_version()
     versions["libigl"] = version("libigl")

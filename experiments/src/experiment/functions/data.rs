@@ -62,6 +62,12 @@ pub(super) struct PeerRow {
     pub(super) n: usize,
     pub(super) implementation: String,
     pub(super) runs: Vec<PeerRun>,
+    /// Blocks of rounds run (`bench.py` adds a block while one is wide; absent in older data).
+    #[serde(default)]
+    pub(super) blocks: Option<usize>,
+    /// Whether its last block was still wide after the last block allowed.
+    #[serde(default)]
+    pub(super) wide: Option<bool>,
 }
 
 /// What `functions/bench.py` wrote.

@@ -253,6 +253,10 @@ fn python_side(ctx: &Context) -> Result<PythonSide, String> {
         &DENSE_UP_TO.to_string(),
         "--pymcubes-up-to",
         &PYMCUBES_UP_TO.to_string(),
+        "--wide",
+        &crate::report::WIDE.to_string(),
+        "--max-blocks",
+        &crate::report::MAX_ROUNDS.to_string(),
     ]
     .iter()
     .map(|s| s.to_string())

@@ -85,12 +85,16 @@ pub(super) fn python_section(data: &Data) -> String {
         );
     };
     let mut s = String::from("\n### From Python, against the peers\n\n");
-    s.push_str(
+    s.push_str(&format!(
         "Each implementation meshes the same numpy callable on the same bounds and grid, one fresh process per run \
-         (one-shot: the time is the call's, after the imports; the peak is the process's RSS), rounds alternating. \
+         (one-shot: the time is the call's, after the imports; the peak is the process's RSS), rounds alternating, in \
+         blocks: while any implementation's slowest run in a block took over {}× its fastest, another block runs, up to \
+         {} (\"(wide)\" marks a cell still wide after its last); ratios round by round pair the runs of one round. \
          isolab and warp prune with the callable's Lipschitz bound; scikit-image samples the dense grid; PyMCubes calls \
          the function once per point. The callables:\n\n",
-    );
+        crate::report::WIDE,
+        crate::report::MAX_ROUNDS
+    ));
     for (name, what) in &side.callables {
         s.push_str(&format!("- `{name}`: {what}\n"));
     }
@@ -103,8 +107,13 @@ pub(super) fn python_section(data: &Data) -> String {
     };
     let mut rows = Vec::new();
     for r in &side.rows {
-        let ours =
-            side.rows.iter().find(|o| o.callable == r.callable && o.n == r.n && o.implementation == "isolab").and_then(median_of);
+        let ours_row = side.rows.iter().find(|o| o.callable == r.callable && o.n == r.n && o.implementation == "isolab");
+        let ours = ours_row.and_then(median_of);
+        // Runs of one round paired (a failed run pairs with nothing).
+        let range = ours_row.filter(|o| o.implementation != r.implementation).and_then(|o| {
+            let seconds = |row: &PeerRow| row.runs.iter().map(|x| x.seconds.unwrap_or(f64::NAN)).collect::<Vec<f64>>();
+            crate::report::ratio_range(&seconds(o), &seconds(r))
+        });
         let spread = median_of(r);
         let first = r.runs.iter().find(|x| x.error.is_none());
         let peak = r.runs.iter().filter_map(|x| x.peak_mib).fold(f64::NAN, f64::max);
@@ -114,10 +123,17 @@ pub(super) fn python_section(data: &Data) -> String {
             r.implementation.clone(),
             spread.as_ref().map_or_else(
                 || r.runs.iter().find_map(|x| x.error.clone()).unwrap_or_default(),
-                |sp| format!("{:.3} [{:.3}–{:.3}] ×{}", sp.median, sp.min, sp.max, r.runs.len()),
+                |sp| {
+                    let wide = if r.wide == Some(true) { " (wide)" } else { "" };
+                    format!("{:.3} [{:.3}–{:.3}] ×{}{wide}", sp.median, sp.min, sp.max, r.runs.len())
+                },
             ),
             match (&spread, &ours) {
-                (Some(sp), Some(o)) if o.median > 0.0 => format!("{:.2}x", sp.median / o.median),
+                (Some(sp), Some(o)) if o.median > 0.0 => format!(
+                    "{:.2}x{}",
+                    sp.median / o.median,
+                    range.map_or(String::new(), |(lo, hi)| format!(" ({lo:.2}–{hi:.2}x round by round)"))
+                ),
                 _ => "–".into(),
             },
             first.and_then(|x| x.evaluations).map_or("–".into(), |e| format!("{:.2} M", e as f64 / 1e6)),
@@ -191,4 +207,46 @@ pub(super) fn reading(data: &Data) -> String {
     let same = data.equality.iter().filter(|e| e.same_vertices && e.same_triangles && e.same_normals).count();
     s.push_str(&format!("{same} of {} certified meshes are the dense mesh bit for bit.\n\n", data.equality.len()));
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::data::{PeerRun, PythonSide};
+    use super::*;
+
+    fn peer(implementation: &str, seconds: &[f64], wide: bool) -> PeerRow {
+        let run = |s: f64| PeerRun {
+            seconds: Some(s),
+            faces: Some(10),
+            evaluations: Some(1000),
+            calls: None,
+            lipschitz: None,
+            peak_mib: Some(100.0),
+            error: None,
+        };
+        PeerRow {
+            callable: "sphere".into(),
+            n: 256,
+            implementation: implementation.into(),
+            runs: seconds.iter().map(|&s| run(s)).collect(),
+            blocks: Some(1),
+            wide: Some(wide),
+        }
+    }
+
+    #[test]
+    fn the_python_table_gives_each_peers_ratio_with_its_range_round_by_round_and_marks_wide_cells() {
+        let side = PythonSide {
+            versions: Default::default(),
+            rows: vec![peer("isolab", &[1.0, 2.0, 1.0], false), peer("warp", &[2.0, 3.0, 4.0], true)],
+            notes: Vec::new(),
+            callables: Default::default(),
+        };
+        let data = Data { rows: Vec::new(), equality: Vec::new(), python: Some(side), python_missing: None };
+        let s = python_section(&data);
+        // Medians 1 and 3; round by round 2/1, 3/2 and 4/1.
+        assert!(s.contains("| 3.00x (1.50–4.00x round by round) |"), "{s}");
+        assert!(s.contains("×3 (wide) |"), "{s}");
+        assert!(!s.contains("| 1.00x ("), "ours against itself has no range: {s}");
+    }
 }

@@ -7,6 +7,7 @@ Run by the `python_users` experiment (`python_users/mod.rs`) in the reference en
 
     python bench.py OUT.json [--sizes 64,128,256,512] [--repeats 7] [--large-repeats 3] [--mni nilearn]
         [--large-size 512] [--threads 1,2] [--uint8 512] [--peak] [--only NAME,NAME] [--environment LABEL]
+        [--wide 2] [--max-blocks 3]
 
 `--environment` labels the rows with how the process was started (the experiment runs the script
 a second time with glibc's malloc asking for transparent huge pages, `GLIBC_TUNABLES=glibc.malloc.hugetlb=1`).
@@ -19,7 +20,9 @@ Protocol, per input and per thread count (1, then 2):
   input outside the timed call (and not at all from 512³ on: 3 GiB of float64);
 - one unrecorded warm-up round, then `repeats` rounds; in each round every implementation runs
   once, in an order rotated by one each round (alternating, so drift on this shared machine falls
-  on all of them alike);
+  on all of them alike); while any implementation's block of rounds is wide (its slowest call over
+  `--wide` times its fastest), another block, up to `--max-blocks` (each row records its blocks and
+  whether its last block was still wide);
 - 2 threads: isolab (`threads=2`), VTK and pyvista (the STDThread SMP backend, `Initialize(2)`) and
   meshlib (TBB, which takes every core and offers no setting: it runs in these rounds only, in
   rounds of its own after the others', since TBB's workers keep spinning after a call and would
@@ -280,38 +283,58 @@ def mni_path():
 THREADS = (1, 2)
 
 
-def rounds(impls, vol, level, threads, repeats, times, counts):
-    """One warm-up round, then `repeats` rounds, each implementation once a round, in an order
-    rotated by one each round."""
-    for r in range(repeats + 1):
-        k = r % len(impls)
-        for label, fn in impls[k:] + impls[:k]:
-            t = time.perf_counter()
-            out = fn(vol, level, threads)
-            ms = (time.perf_counter() - t) * 1e3
-            counts[label] = (len(out[0]), len(out[1]))
-            del out
-            if r > 0:
-                times[label].append(ms)
+# The report's rule for spreads (experiments/src/report.rs: WIDE, MAX_ROUNDS, which the experiment
+# passes as --wide and --max-blocks): a wide block of rounds is followed by another, up to a bound.
+WIDE = 2.0
+MAX_BLOCKS = 3
+
+
+def rounds(impls, vol, level, threads, repeats, times, counts, blocks):
+    """One warm-up round, then blocks of `repeats` rounds, each implementation once a round, in an
+    order rotated by one each round, until no implementation's block is wide (its slowest call
+    over WIDE times its fastest) or MAX_BLOCKS have run; every call kept. `blocks` receives each
+    implementation's (blocks run, whether its last block was still wide)."""
+    r, run = 0, 0
+    while True:
+        first = {label: len(times[label]) for label, _ in impls}
+        for _ in range(repeats + (1 if r == 0 else 0)):
+            k = r % len(impls)
+            for label, fn in impls[k:] + impls[:k]:
+                t = time.perf_counter()
+                out = fn(vol, level, threads)
+                ms = (time.perf_counter() - t) * 1e3
+                counts[label] = (len(out[0]), len(out[1]))
+                del out
+                if r > 0:
+                    times[label].append(ms)
+            r += 1
+        run += 1
+        wide = {label: repeats > 1 and max(times[label][first[label]:]) > WIDE * min(times[label][first[label]:])
+                for label, _ in impls}
+        if not any(wide.values()) or run == MAX_BLOCKS:
+            break
+    for label, _ in impls:
+        blocks[label] = (run, wide[label])
 
 
 def time_input(name, n, vol, level, repeats, rows, environment, only, floors):
     for threads in THREADS:
         impls = implementations(threads, THREADS[0], only, n)
         times = {label: [] for label, _ in impls}
-        counts = {}
+        counts, blocks = {}, {}
         # What takes every core (TBB's workers keep spinning after a call, taking the cores from
         # whatever runs next) is timed in rounds of its own after the others'.
         alone = [i for i in impls if IMPLEMENTATIONS[i[0]][1] == "many"]
         shared = [i for i in impls if i not in alone]
-        rounds(shared, vol, level, threads, repeats, times, counts)
+        rounds(shared, vol, level, threads, repeats, times, counts, blocks)
         for one in alone:
-            rounds([one], vol, level, threads, repeats, times, counts)
+            rounds([one], vol, level, threads, repeats, times, counts, blocks)
         for label, _ in impls:
             _, _, returns, converts = IMPLEMENTATIONS[label]
             rows.append({"implementation": label, "input": name, "n": n, "threads": threads, "environment": environment,
                          "ms": times[label], "vertices": counts[label][0], "triangles": counts[label][1],
-                         "converts": converts, "returns": returns})
+                         "converts": converts, "returns": returns,
+                         "blocks": blocks[label][0], "wide": blocks[label][1]})
             med = sorted(times[label])[len(times[label]) // 2]
             print(f"{environment}: {name} {n} t{threads} {label}: {med:.1f} ms, {counts[label][1]} triangles",
                   file=sys.stderr, flush=True)
@@ -413,9 +436,12 @@ def main():
     p.add_argument("--only", default="", help="comma-separated implementations (default: all)")
     p.add_argument("--environment", default="default")
     p.add_argument("--measure-peak", nargs=4, metavar=("NAME", "NPY", "LEVEL", "THREADS"))
+    p.add_argument("--wide", type=float, default=WIDE, help="a block is wide when its slowest call took this many times its fastest")
+    p.add_argument("--max-blocks", type=int, default=MAX_BLOCKS, help="the most blocks of rounds an input gets")
     a = p.parse_args()
-    global THREADS
+    global THREADS, WIDE, MAX_BLOCKS
     THREADS = tuple(int(t) for t in a.threads.split(","))
+    WIDE, MAX_BLOCKS = a.wide, a.max_blocks
     if a.measure_peak:
         name, path, level, threads = a.measure_peak
         measure_peak(name, path, float(level), int(threads))

@@ -23,6 +23,13 @@ pub(super) struct Row {
     /// The arrays the call returns.
     #[serde(default)]
     pub(super) returns: String,
+    /// Blocks of rounds run (`bench.py` adds a block while one is wide; absent in older data).
+    #[serde(default)]
+    pub(super) blocks: Option<usize>,
+    /// Whether its last block was still wide (slowest call over [`crate::report::WIDE`] times the
+    /// fastest) after the last block allowed.
+    #[serde(default)]
+    pub(super) wide: Option<bool>,
 }
 
 /// One call's peak memory in a process of its own, as `bench.py` writes it.

@@ -138,6 +138,10 @@ fn bench(python: &Path, args: &[&[&str]], repeats: usize, tunable: Option<&str>)
         LARGE.to_string(),
         "--threads".into(),
         THREADS.map(|t| t.to_string()).join(","),
+        "--wide".into(),
+        crate::report::WIDE.to_string(),
+        "--max-blocks".into(),
+        crate::report::MAX_ROUNDS.to_string(),
     ];
     all.extend(args.iter().flat_map(|a| a.iter().map(|s| (*s).to_owned())));
     let env: Vec<(&str, &str)> = tunable.map(|t| ("GLIBC_TUNABLES", t)).into_iter().collect();
@@ -227,6 +231,8 @@ mod tests {
             triangles: 0,
             converts: String::new(),
             returns: String::new(),
+            blocks: None,
+            wide: None,
         }
     }
 

@@ -65,7 +65,7 @@ pub(super) fn timing_table(data: &Data, environment: &str, threads: usize) -> St
                 r.implementation.clone(),
                 r.triangles.to_string(),
                 ms(s.median),
-                format!("{}–{}", ms(s.min), ms(s.max)),
+                format!("{}–{}{}", ms(s.min), ms(s.max), if r.wide == Some(true) { " (wide)" } else { "" }),
                 ratio(s.median, ours),
             ];
             if against_default {
@@ -178,10 +178,14 @@ pub(super) fn page_body(data: &Data) -> String {
     ));
     md.push_str(&reading(data));
     md.push_str(&format!(
-        "Rounds: {} per input ({} from {LARGE}³ on). Versions: {}.\n\n",
+        "Rounds: {} per input ({} from {LARGE}³ on), in blocks: while any implementation's slowest call in a block took over \
+         {wide}× its fastest, another block runs, up to {blocks} (\"(wide)\" marks a cell still wide after its last); ratios \
+         round by round pair the calls of one round. Versions: {}.\n\n",
         data.repeats,
         data.large_repeats,
-        data.versions.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", ")
+        data.versions.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", "),
+        wide = crate::report::WIDE,
+        blocks = crate::report::MAX_ROUNDS,
     ));
     md.push_str("### One thread\n\n");
     md.push_str(&timing_table(data, "default", THREADS[0]));

@@ -40,6 +40,9 @@ struct Cell {
     ours: f64,
     vtk: Option<f64>,
     skimage: Option<f64>,
+    /// The peers' ratios round by round, where their calls and ours ran in the same rounds.
+    vtk_range: Option<(f64, f64)>,
+    skimage_range: Option<(f64, f64)>,
     floor: Option<f64>,
 }
 
@@ -59,6 +62,11 @@ fn cells(data: &Data) -> Vec<Cell> {
         for threads in super::THREADS {
             let Some(ours) = find(data, "default", OURS, &input, n, threads) else { continue };
             let median = |name: &str, t: usize| find(data, "default", name, &input, n, t).map(|r| spread(r).median);
+            // Calls of one round are paired; scikit-image runs in the one-thread rounds only.
+            let range = |name: &str| {
+                let theirs = find(data, "default", name, &input, n, threads)?;
+                crate::report::ratio_range(&ours.ms, &theirs.ms)
+            };
             let floor = data.floors.iter().find(|f| f.input == input && f.n == n).map(|f| f.read_ms + f.write_ms);
             out.push(Cell {
                 input: input.clone(),
@@ -67,6 +75,8 @@ fn cells(data: &Data) -> Vec<Cell> {
                 ours: spread(ours).median,
                 vtk: median(VTK, threads),
                 skimage: median(SKIMAGE, super::THREADS[0]),
+                vtk_range: range(VTK),
+                skimage_range: if threads == super::THREADS[0] { range(SKIMAGE) } else { None },
                 floor,
             });
         }
@@ -74,10 +84,15 @@ fn cells(data: &Data) -> Vec<Cell> {
     out
 }
 
-fn verdict(ratio: Option<f64>, target: f64) -> String {
+/// `" (1.40–1.80× round by round)"`, or empty without paired rounds.
+fn round_by_round(range: Option<(f64, f64)>) -> String {
+    range.map_or(String::new(), |(lo, hi)| format!(" ({lo:.2}–{hi:.2}× round by round)"))
+}
+
+fn verdict(ratio: Option<f64>, range: Option<(f64, f64)>, target: f64) -> String {
     match ratio {
-        Some(r) if r >= target => format!("{r:.2}× (met)"),
-        Some(r) => format!("{r:.2}× (missed)"),
+        Some(r) if r >= target => format!("{r:.2}× (met){}", round_by_round(range)),
+        Some(r) => format!("{r:.2}× (missed){}", round_by_round(range)),
         None => "not run".into(),
     }
 }
@@ -92,9 +107,9 @@ pub(super) fn table(data: &Data) -> String {
                 c.threads.to_string(),
                 ms(c.ours),
                 c.vtk.map_or("–".into(), ms),
-                verdict(c.vtk_ratio(), VTK_TARGET),
+                verdict(c.vtk_ratio(), c.vtk_range, VTK_TARGET),
                 c.skimage.map_or("–".into(), ms),
-                verdict(c.skimage_ratio(), SKIMAGE_TARGET),
+                verdict(c.skimage_ratio(), c.skimage_range, SKIMAGE_TARGET),
                 c.floor.map_or("–".into(), ms),
                 c.floor.map_or("–".into(), |f| format!("{:.1}", c.ours / f)),
             ]
@@ -124,22 +139,26 @@ pub(super) fn reading(data: &Data) -> Option<String> {
     if cells.is_empty() {
         return None;
     }
-    let missed = |ratio: fn(&Cell) -> Option<f64>, target: f64| -> (usize, Vec<String>) {
+    let missed = |ratio: fn(&Cell) -> Option<f64>, range: fn(&Cell) -> Option<(f64, f64)>, target: f64| {
         let mut met = 0;
         let mut missed = Vec::new();
         for c in &cells {
             match ratio(c) {
                 Some(r) if r >= target => met += 1,
-                Some(r) => {
-                    missed.push(format!("{} on {} thread{} ({r:.2}×)", label(&c.input, c.n, data), c.threads, plural(c.threads)))
-                }
+                Some(r) => missed.push(format!(
+                    "{} on {} thread{} ({r:.2}×{})",
+                    label(&c.input, c.n, data),
+                    c.threads,
+                    plural(c.threads),
+                    range(c).map_or(String::new(), |(lo, hi)| format!(", {lo:.2}–{hi:.2}× round by round"))
+                )),
                 None => {}
             }
         }
         (met, missed)
     };
-    let (vtk_met, vtk_missed) = missed(Cell::vtk_ratio, VTK_TARGET);
-    let (sk_met, sk_missed) = missed(Cell::skimage_ratio, SKIMAGE_TARGET);
+    let (vtk_met, vtk_missed) = missed(Cell::vtk_ratio, |c| c.vtk_range, VTK_TARGET);
+    let (sk_met, sk_missed) = missed(Cell::skimage_ratio, |c| c.skimage_range, SKIMAGE_TARGET);
     let count = |f: fn(&Cell) -> Option<f64>| cells.iter().filter(|c| f(c).is_some()).count();
     Some(format!(
         "Targets: `isolab.marching_cubes` returning all four arrays at least {VTK_TARGET}× faster than {VTK} (no normals) in \
@@ -235,10 +254,17 @@ mod tests {
         }];
         let r = reading(&d).unwrap();
         assert!(r.contains("faster than VTK flying edges (no normals) in 1 of 2 cells"), "{r}");
-        assert!(r.contains("missed in gyroid 256 on 2 threads (1.33×)"), "{r}");
+        assert!(r.contains("missed in gyroid 256 on 2 threads (1.33×, 1.33–1.33× round by round)"), "{r}");
         assert!(r.contains("faster than skimage lorensen in 2 of 2, missed in none"), "{r}");
         let t = table(&d);
-        assert!(t.contains("| 1.60× (met) |") && t.contains("| 1.33× (missed) |") && t.contains("| 10.0 |"), "{t}");
+        assert!(
+            t.contains("| 1.60× (met) (1.60–1.60× round by round) |")
+                && t.contains("| 1.33× (missed) (1.33–1.33× round by round) |")
+                && t.contains("| 10.0 |"),
+            "{t}"
+        );
+        // scikit-image ran in the one-thread rounds only: no range against our two-thread calls.
+        assert!(t.contains("| 6.00× (met) (6.00–6.00× round by round) |") && t.contains("| 10.00× (met) |"), "{t}");
         d.rows[1].ms = vec![40.0];
         assert!(reading(&d).unwrap().contains("in 2 of 2 cells (input and threads), missed in none"));
     }

@@ -141,6 +141,7 @@ def version(module):
 
 
 def main():
+    global WIDE
     ap = argparse.ArgumentParser()
     ap.add_argument("out")
     ap.add_argument("--sizes", default="256,512")
@@ -154,7 +155,6 @@ def main():
     ap.add_argument("--wide", type=float, default=WIDE, help="a block is wide when its slowest run took this many times its fastest")
     ap.add_argument("--max-blocks", type=int, default=3, help="the most blocks of rounds a grid gets")
     a = ap.parse_args()
-    global WIDE
     WIDE = a.wide
     sizes = [int(s) for s in a.sizes.split(",")]
     rows = []

@@ -423,6 +423,7 @@ def peaks(inputs, only):
 
 
 def main():
+    global THREADS, WIDE, MAX_BLOCKS
     p = argparse.ArgumentParser()
     p.add_argument("out")
     p.add_argument("--sizes", default="64,128,256,512")
@@ -439,7 +440,6 @@ def main():
     p.add_argument("--wide", type=float, default=WIDE, help="a block is wide when its slowest call took this many times its fastest")
     p.add_argument("--max-blocks", type=int, default=MAX_BLOCKS, help="the most blocks of rounds an input gets")
     a = p.parse_args()
-    global THREADS, WIDE, MAX_BLOCKS
     THREADS = tuple(int(t) for t in a.threads.split(","))
     WIDE, MAX_BLOCKS = a.wide, a.max_blocks
     if a.measure_peak:

@@ -120,7 +120,7 @@ struct SeamShape {
 /// How close to a sample (in samples) a corner counts as on it, for
 /// [`SeamShape::aspect_mean_off_samples`]: above the margin that keeps marching cubes' vertices
 /// off the samples at every level.
-const NEAR_SAMPLE: f32 = 1e-3;
+const NEAR_SAMPLE: f32 = 0.001;
 
 /// Whether the triangle with centroid `c` (sample coordinates) is a seam triangle.
 fn near_seam(c: Vec3, levels: &[u8]) -> bool {

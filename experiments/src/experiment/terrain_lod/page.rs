@@ -2,7 +2,7 @@
 //! (generated from the rows), the switching cost and the pictures.
 
 use super::data::{Data, Row};
-use super::{CHUNK, CRATE, DIMS, NAME, RUNS, TRANSVOXEL_VERSION};
+use super::{CHUNK, CRATE, DIMS, NAME, NEAR_SAMPLE, RUNS, TRANSVOXEL_VERSION};
 use crate::experiment::context::{Context, ExperimentError};
 use crate::report::{first_seen, markdown_table};
 
@@ -40,8 +40,8 @@ pub(super) fn page(d: &Data) -> String {
          that are cracks: for marching cubes and the crate any off the world's boundary; for the dual methods, whose \
          own border lies inside the outer cells, any more than a coarsest cell from it. *Seam triangles* are those \
          within one coarser-side cell of a chunk face between two levels; their aspect ratio (longest edge times \
-         perimeter over 4√3 times the area, 1 for an equilateral triangle) is given as a mean, a median and a mean \
-         *off samples* (over the triangles with no corner within a thousandth of a cell of a sample: marching \
+         perimeter over area, normalised to the equilateral triangle's) is given as a mean, a median and a mean \
+         *off samples* (over the triangles with no corner within {NEAR_SAMPLE} of a cell of a sample: marching \
          cubes' needles, where a crossing nearly meets a sample, outweigh the rest of a mean), and triangles \
          without area, which have no shape, are counted apart. Times are medians of {RUNS} runs alternating \
          all implementations (range in brackets), on the same thread pool, sampling excluded, welding included.\n\n",

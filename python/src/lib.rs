@@ -18,6 +18,13 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::collections::BTreeMap;
 
+/// Every allocation the extension makes (the meshes it hands to numpy among them, freed by it
+/// again when numpy drops them) goes through mimalloc: measured on the MNI tissue map, glibc's
+/// malloc gave each call's large buffers back to the system and faulted them in again on the
+/// next call.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 mod arrays;
 mod blocks;
 mod drop_in;

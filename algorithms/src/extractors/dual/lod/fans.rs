@@ -131,6 +131,9 @@ impl Face {
     }
 }
 
+/// A side's face point, if it has one: the point and its chord (a key among the side's chords).
+type FacePoint = Option<(Vec3, usize)>;
+
 /// No face point: the side is kept whole.
 const WHOLE: u32 = u32::MAX;
 
@@ -148,22 +151,18 @@ impl Lod<'_> {
     }
 }
 
-/// The face point of each chord that needs one, for the polygons sharing one side `(u, w)`:
-/// `members` are their slots `(polygon, side)`; returns each member's point (or none).
+/// The face point of each chord across the face of cells `(corner, side)` `cells`, for the
+/// polygons sharing one side `(u, w)` that is to be broken: `members` are their slots
+/// `(polygon, side)`; returns each member's point (none where the cells share no face).
 fn side_points(
     lod: &Lod,
     polygons: &[FanPolygon],
     edge_points: &[Vec3],
     members: &[(usize, usize)],
     cells: ([usize; 3], usize, [usize; 3], usize),
-    several_pieces: bool,
-) -> Vec<Option<(Vec3, usize)>> {
+) -> Vec<FacePoint> {
     let (cu, su, cw, sw) = cells;
-    let none = vec![None; members.len()];
-    if su == sw && !several_pieces && members.len() <= 2 {
-        return none;
-    }
-    let Some(face) = Face::between((cu, su), (cw, sw)) else { return none };
+    let Some(face) = Face::between((cu, su), (cw, sw)) else { return vec![None; members.len()] };
     let edges = face.edges();
     let face_edge = |e: &MinimalEdge| edges.iter().position(|f| e.lies_on(f));
     let own: Vec<Option<usize>> = members.iter().map(|&(j, _)| face_edge(&polygons[j].edge)).collect();
@@ -250,15 +249,21 @@ pub(super) fn triangulate(
         let c = cell_corners[v as usize];
         (c.map(|x| x as usize), side_of(c) as usize)
     };
-    let points: Vec<Vec<Option<(Vec3, usize)>>> = groups
+    // `None` for a side kept whole (the common case, decided before anything is gathered): both
+    // cells of one size, each with one piece, and at most two polygons on the side.
+    let points: Vec<Option<Vec<FacePoint>>> = groups
         .par_iter()
         .map(|range| {
-            let members: Vec<(usize, usize)> =
-                keyed[range.clone()].iter().map(|&(_, s)| (s as usize / 4, s as usize % 4)).collect();
-            let (u, w) = side(members[0].0, members[0].1);
+            let first = keyed[range.start].1 as usize;
+            let (u, w) = side(first / 4, first % 4);
             let ((cu, su), (cw, sw)) = (cell(u), cell(w));
             let several = shares_cell(u as usize) || shares_cell(w as usize);
-            side_points(lod, polygons, &edge_points, &members, (cu, su, cw, sw), several)
+            if su == sw && !several && range.len() <= 2 {
+                return None;
+            }
+            let members: Vec<(usize, usize)> =
+                keyed[range.clone()].iter().map(|&(_, s)| (s as usize / 4, s as usize % 4)).collect();
+            Some(side_points(lod, polygons, &edge_points, &members, (cu, su, cw, sw)))
         })
         .collect();
     // New vertices: the edge points, then one face point per chord.
@@ -267,6 +272,7 @@ pub(super) fn triangulate(
     corners.extend(polygons.iter().map(|p| cell_corners[p.ring[0] as usize]));
     let mut side_point = vec![WHOLE; 4 * polygons.len()];
     for (range, points) in groups.iter().zip(&points) {
+        let Some(points) = points else { continue };
         let mut chords: Vec<(usize, u32)> = Vec::new();
         for (&(_, slot), point) in keyed[range.clone()].iter().zip(points) {
             let Some((p, chord)) = *point else { continue };

@@ -180,7 +180,9 @@ pub fn utc_date(secs: u64) -> String {
 }
 
 /// The experiment's own source files: every file under `experiments/src/experiment/<name>/`
-/// (or a single `<name>.rs`, as experiments once were), sorted by path.
+/// (or a single `<name>.rs`, as experiments once were), sorted by path. What running or
+/// checking the sources leaves beside them is not source and is skipped (see [`is_generated`]),
+/// so a digest depends on the checkout's sources alone.
 pub fn source_files(root: &Path, name: &str) -> Vec<PathBuf> {
     let dir = root.join("experiments/src/experiment");
     let single = dir.join(format!("{name}.rs"));
@@ -197,12 +199,24 @@ fn collect_files(dir: &Path, out: &mut Vec<PathBuf>) {
     let Ok(entries) = std::fs::read_dir(dir) else { return };
     for entry in entries.flatten() {
         let path = entry.path();
+        if is_generated(&path) {
+            continue;
+        }
         if path.is_dir() {
             collect_files(&path, out);
         } else {
             out.push(path);
         }
     }
+}
+
+/// Whether `path` is something a run leaves beside the sources rather than a source: Python's
+/// bytecode caches (`__pycache__/`, `*.pyc`, made by importing or `py_compile`), hidden files
+/// and editor backups. Counting them once flagged unchanged experiments as changed on a clean
+/// checkout.
+fn is_generated(path: &Path) -> bool {
+    let name = path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
+    name == "__pycache__" || name.starts_with('.') || name.ends_with('~') || name.ends_with(".pyc") || name.ends_with(".pyo")
 }
 
 /// FNV-1a (64 bits) over each source file's path relative to the root and its bytes, as 16 hex
@@ -344,6 +358,13 @@ mod tests {
         assert_ne!(source_digest(dir.path(), "big"), big);
         assert_eq!(code_since(dir.path(), "big", Some(&p)), Some(true));
         assert_eq!(code_since(dir.path(), "big", None), None);
+        let changed = source_digest(dir.path(), "big");
+        std::fs::create_dir_all(exp.join("big/sub/__pycache__")).unwrap();
+        std::fs::write(exp.join("big/sub/__pycache__/bench.cpython-311.pyc"), [0u8, 1, 2]).unwrap();
+        std::fs::write(exp.join("big/stray.pyc"), [3u8]).unwrap();
+        std::fs::write(exp.join("big/.mod.rs.swp"), [4u8]).unwrap();
+        assert_eq!(source_files(dir.path(), "big").len(), 2, "bytecode and hidden files are not sources");
+        assert_eq!(source_digest(dir.path(), "big"), changed);
     }
 
     #[test]

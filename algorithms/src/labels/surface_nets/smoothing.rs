@@ -64,19 +64,19 @@ struct Around {
 }
 
 impl Around {
-    fn with_capacity(n: usize) -> Self {
-        Self { rows: Vec::with_capacity(n), count: Vec::with_capacity(n), more_start: vec![0], more: Vec::new() }
+    /// `n` vertices without neighbours yet, rows padded with `pad`.
+    fn empty(n: usize, pad: u32) -> Self {
+        Self { rows: vec![[pad; ROW]; n], count: vec![0; n], more_start: vec![0; n + 1], more: Vec::new() }
     }
 
-    /// Appends the next vertex's neighbours; `pad` is the padding vertex.
-    fn push(&mut self, all: &[u32], pad: u32) {
-        let mut row = [pad; ROW];
+    /// Sets vertex `v`'s neighbours to `all`; vertices are set in increasing order.
+    #[inline]
+    fn set(&mut self, v: usize, all: &[u32]) {
         let k = all.len().min(ROW);
-        row[..k].copy_from_slice(&all[..k]);
-        self.rows.push(row);
-        self.count.push(all.len() as u32);
+        self.rows[v][..k].copy_from_slice(&all[..k]);
+        self.count[v] = all.len() as u32;
         self.more.extend_from_slice(&all[k..]);
-        self.more_start.push(self.more.len() as u32);
+        self.more_start[v + 1] = self.more.len() as u32;
     }
 
     /// Vertex `v`'s neighbours, in order.
@@ -140,7 +140,11 @@ fn passes(rule: &Rule<'_>, even: &mut [Vec3A], odd: &mut [Vec3A], iterations: us
 }
 
 /// Each vertex's net neighbours (the vertices it shares a quad side with) whose labels include
-/// all of its own, in increasing order; none for a cap's vertex. A vertex of two labels follows
+/// all of its own, each once, in the order the quads and then the walls name them; none for a
+/// cap's vertex. The sweep makes quads in the same order over a block as over the whole map, so
+/// a vertex's neighbours, and the sum of their positions, are the same wherever it is meshed
+/// (`tests/tests/labels.rs` holds blocks to the whole map's positions bit for bit). Keeping
+/// that order rather than sorting saves a sort per vertex. A vertex of two labels follows
 /// every neighbour: each quad at it separates its two labels, and each corner of the quad has
 /// them both.
 ///
@@ -157,8 +161,12 @@ fn followed_neighbours(net: &Net) -> Around {
     // Every quad gives each of its corners the sides' other ends (a side shared by two or more
     // quads gives them more than once).
     let mut count = vec![0u32; n + 1];
-    for &v in net.quads.iter().flatten().chain(net.tris.iter().flatten()) {
-        count[v as usize + 1] += if one_side[v as usize] { 1 } else { 2 };
+    let mut tally = |v: u32| count[v as usize + 1] += 2 - u32::from(one_side[v as usize]);
+    for q in &net.quads {
+        q.iter().for_each(|&v| tally(v));
+    }
+    for t in &net.tris {
+        t.iter().for_each(|&v| tally(v));
     }
     for i in 0..n {
         count[i + 1] += count[i];
@@ -188,24 +196,21 @@ fn followed_neighbours(net: &Net) -> Around {
         }
     }
     let labels_of = |v: usize| &net.labels[net.label_start[v] as usize..net.label_start[v + 1] as usize];
-    let mut out = Around::with_capacity(n);
+    let mut out = Around::empty(n, n as u32);
     let mut caps = net.caps.iter().map(|c| c[0]).peekable();
     let mut kept = Vec::new();
     for v in 0..n {
         kept.clear();
         if caps.next_if_eq(&(v as u32)).is_none() {
-            let around = &mut all[count[v] as usize..count[v + 1] as usize];
-            around.sort_unstable();
+            let around = &all[count[v] as usize..count[v + 1] as usize];
             let mine = labels_of(v);
-            let mut last = u32::MAX;
-            for &w in around.iter() {
-                if w != last && (mine.len() == 2 || mine.iter().all(|l| labels_of(w as usize).contains(l))) {
+            for (i, &w) in around.iter().enumerate() {
+                if !around[..i].contains(&w) && (mine.len() == 2 || mine.iter().all(|l| labels_of(w as usize).contains(l))) {
                     kept.push(w);
                 }
-                last = w;
             }
         }
-        out.push(&kept, n as u32);
+        out.set(v, &kept);
     }
     out
 }
@@ -270,7 +275,13 @@ mod tests {
             let around = followed_neighbours(&net);
             for (v, expected) in by_the_rule(&net).iter().enumerate() {
                 let expected = if net.caps.iter().any(|c| c[0] == v as u32) { Vec::new() } else { expected.clone() };
-                assert_eq!(around.of(v), expected, "vertex {v} of round {round}");
+                // In the quads' order, each once: sorted, the rule's set.
+                let mut got = around.of(v);
+                got.sort_unstable();
+                let named = got.len();
+                got.dedup();
+                assert_eq!(got.len(), named, "vertex {v} of round {round}: a neighbour named twice");
+                assert_eq!(got, expected, "vertex {v} of round {round}");
                 if net.label_start[v + 1] - net.label_start[v] == 2 {
                     two += 1;
                 } else {

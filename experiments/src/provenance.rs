@@ -181,8 +181,8 @@ pub fn utc_date(secs: u64) -> String {
 
 /// The experiment's own source files: every file under `experiments/src/experiment/<name>/`
 /// (or a single `<name>.rs`, as experiments once were), sorted by path. What running or
-/// checking the sources leaves beside them is not source and is skipped (see [`is_generated`]),
-/// so a digest depends on the checkout's sources alone.
+/// checking the sources leaves beside them is not source and is skipped (Python bytecode
+/// caches, hidden files, editor backups), so a digest depends on the checkout's sources alone.
 pub fn source_files(root: &Path, name: &str) -> Vec<PathBuf> {
     let dir = root.join("experiments/src/experiment");
     let single = dir.join(format!("{name}.rs"));

@@ -139,6 +139,7 @@ fn report_json(
         "origin": grid.origin,
         "chunk": chunk,
         "evaluations": stats.evaluations,
+        "pruning_evaluations": stats.pruning_evaluations,
         "dense_points": stats.dense_points,
         "batches": stats.batches,
         "blocks": stats.blocks,

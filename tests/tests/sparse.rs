@@ -55,8 +55,12 @@ fn certified_pruning_gives_the_dense_mesh_for_every_extractor_that_meshes_in_blo
             assert_eq!(sparse.surface.positions, dense.surface.positions, "{what}: vertices");
             assert_eq!(sparse.surface.triangles, dense.surface.triangles, "{what}: triangles");
             assert_eq!(sparse.surface.normals, dense.surface.normals, "{what}: normals");
+            // Each grid sample is evaluated at most once (dense: exactly once), so the sparse
+            // run's evaluations are at most the dense grid's and the octree's centres (fewer
+            // than two per block).
+            assert_eq!(dense_stats.evaluations, dense_stats.dense_points, "{what}: dense evaluations");
             assert!(
-                stats.evaluations < dense_stats.evaluations,
+                stats.evaluations < dense_stats.evaluations + 2 * stats.blocks as u64,
                 "{what}: {} evaluations, dense {}",
                 stats.evaluations,
                 dense_stats.evaluations
@@ -98,6 +102,56 @@ fn certified_pruning_evaluates_a_shell_not_the_volume() {
     assert!(ratio > 5.0, "dense {} / sparse {} = {ratio}", stats.dense_points, stats.evaluations);
     let t = topology(&out.surface);
     assert!(t.closed && t.edge_manifold && t.euler == 2, "{t:?}");
+}
+
+/// A field that records every point it is asked for.
+struct Recording<'a> {
+    field: &'a dyn Field,
+    points: Vec<[f64; 3]>,
+}
+
+impl BatchEval for Recording<'_> {
+    fn eval(&mut self, points: &[[f64; 3]], out: &mut Vec<f64>) -> Result<(), EvalError> {
+        self.points.extend_from_slice(points);
+        FieldEval(self.field).eval(points, out)
+    }
+}
+
+#[test]
+fn no_grid_sample_is_evaluated_twice_and_the_dense_mode_evaluates_each_once() {
+    // Small batches (many groups, blocks left for the next batch) and every apron: blocks share
+    // faces and aprons, and each shared sample is still evaluated once; the mesh is the one
+    // the dense mode gives.
+    let f = field("torus");
+    let grid = domain_grid(f.as_ref(), 41);
+    let on_grid = |p: &[f64; 3]| {
+        let t = [0, 1, 2].map(|a| (p[a] - grid.origin[a]) / grid.spacing);
+        t.iter().all(|t| (t - t.round()).abs() < 1e-6).then(|| t.map(|t| t.round() as usize))
+    };
+    for e in chunking_extractors() {
+        for pruning in [Pruning::Dense, Pruning::Lipschitz(1.0), Pruning::SignChange { margin: 1 }] {
+            let what = format!("{} ({pruning:?})", e.name());
+            let options = SparseOptions { chunk: 6, batch: 700, pruning };
+            let mut recording = Recording { field: f.as_ref(), points: Vec::new() };
+            let mut out = Extraction::default();
+            let stats = extract_sparse(e.as_ref(), &grid, 0.0, &options, &mut recording, &mut out).expect("sparse");
+            assert_eq!(stats.evaluations, recording.points.len() as u64, "{what}");
+            let mut seen = std::collections::HashSet::new();
+            // The pruning's own evaluations come first; every later point is a grid sample.
+            let sampling = &recording.points[stats.pruning_evaluations as usize..];
+            let samples: Vec<[usize; 3]> = sampling.iter().filter_map(on_grid).collect();
+            assert_eq!(samples.len(), sampling.len(), "{what}: a sampled point off the grid");
+            for s in &samples {
+                assert!(seen.insert(*s), "{what}: sample {s:?} evaluated twice");
+            }
+            if pruning == Pruning::Dense {
+                assert_eq!(stats.pruning_evaluations, 0, "{what}");
+                assert_eq!(samples.len() as u64, stats.dense_points, "{what}");
+                assert_eq!(stats.evaluations, stats.dense_points, "{what}");
+            }
+            assert!(!out.surface.triangles.is_empty(), "{what}: no surface");
+        }
+    }
 }
 
 #[test]

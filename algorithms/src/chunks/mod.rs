@@ -51,6 +51,7 @@ use std::time::Instant;
 mod blocks;
 mod edit;
 pub mod lod;
+mod shared_samples;
 mod sparse;
 mod stream;
 mod weld;

@@ -327,7 +327,9 @@ def extract(data: Union[np.ndarray, str, os.PathLike, Callable[[np.ndarray], Any
         wholly inside the blocks it drops (a bubble or a tube thinner than a block that crosses no
         block edge twice). ``sparse=False`` evaluates every sample, for comparison. Points come in
         batches of at most ``batch``; the GIL is held only while ``fn`` runs. ``mesh.stats``
-        gives ``evaluations``, ``batches``, ``function_ms`` (time inside ``fn``) and ``other_ms``.
+        gives ``evaluations`` (each grid sample at most once, however many blocks read it, and
+        ``pruning_evaluations`` of them spent ruling blocks out), ``batches``, ``function_ms``
+        (time inside ``fn``) and ``other_ms``.
         A wrong length, dtype or a NaN raises ``ValueError`` naming the batch and its points'
         bounds; an exception inside ``fn`` propagates unchanged.
     level : float, optional

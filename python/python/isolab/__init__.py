@@ -319,7 +319,10 @@ def extract(data: Union[np.ndarray, str, os.PathLike, Callable[[np.ndarray], Any
         along the longest side, the first and last on the bounds there (along a shorter side,
         the last within ``h / 2`` of its bound), so a numpy grid built that way and meshed with
         ``affine=`` gives the same mesh. The grid is split into blocks of ``chunk`` cells (default 4,
-        or for an extractor with an apron four times it and at least 8) and only the blocks that may hold the surface are evaluated: with ``lipschitz`` (a
+        or for an extractor with an apron four times it and at least 8; a sample two blocks read is
+        evaluated once, so smaller blocks follow the surface closer for more work outside ``fn``:
+        ``chunk=2`` pays for an expensive ``fn`` such as a neural network, a larger chunk for a
+        cheap one) and only the blocks that may hold the surface are evaluated: with ``lipschitz`` (a
         bound L with ``|fn(p) - fn(q)| <= L |p - q|``; 1 for a signed distance) a block is dropped
         only when its centre's value proves it one-sided, and the mesh equals the dense grid's
         meshed in blocks; without one, blocks are kept where the values at the block corners change

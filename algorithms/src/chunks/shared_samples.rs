@@ -20,8 +20,8 @@ use rustc_hash::FxHashMap;
 
 /// A value not asked for yet.
 const UNKNOWN: f32 = f32::NAN;
-/// A value asked for and not yet evaluated (every evaluated value is finite; one that rounds to
-/// an infinite `f32` is not asked for twice either, which is all the mark is for).
+/// A value asked for and not yet evaluated. The mark only keeps a sample from being asked for
+/// twice, so an evaluated value that rounds to an infinite `f32` may share it.
 const ASKED: f32 = f32::INFINITY;
 
 /// The values of one block's core.
@@ -40,8 +40,8 @@ pub(super) struct SharedSamples {
     index: FxHashMap<[usize; 3], u32>,
     cores: Vec<Core>,
     free: Vec<u32>,
-    /// Per sample asked for, in the order its point was pushed: its core and index in it.
-    asked: Vec<(u32, u32)>,
+    /// Per sample asked for, in the order asked: its core and index in it.
+    asked: Vec<(u32, usize)>,
     /// The spans of the blocks scheduled since the last gather, in order.
     spans: Vec<Span>,
     /// Per block scheduled since the last gather, where its spans start.
@@ -119,7 +119,8 @@ impl SharedSamples {
     }
 
     /// The cores block `b`'s box overlaps, with the part of the box in each, appended to
-    /// `self.spans` (at most 27: a box is at most one chunk and twice the apron wide).
+    /// `self.spans` (at most 27 when the apron is at most a chunk: a box is one chunk and twice
+    /// the apron wide).
     fn overlaps(&mut self, b: &BlockBounds) {
         let first = [0, 1, 2].map(|a| self.owner(a, b.lo[a]));
         let last = [0, 1, 2].map(|a| self.owner(a, b.lo[a] + b.dims[a] - 1));
@@ -162,7 +163,7 @@ impl SharedSamples {
                     for (i, v) in core.values[start..start + n].iter_mut().enumerate() {
                         if v.is_nan() {
                             *v = ASKED;
-                            self.asked.push((s.core, (start + i) as u32));
+                            self.asked.push((s.core, start + i));
                         }
                     }
                 }
@@ -176,7 +177,6 @@ impl SharedSamples {
             .par_iter()
             .map(|&(c, i)| {
                 let core = &self.cores[c as usize];
-                let i = i as usize;
                 let (x, yz) = (i % core.dims[0], i / core.dims[0]);
                 let (y, z) = (yz % core.dims[1], yz / core.dims[1]);
                 grid.point([core.lo[0] + x, core.lo[1] + y, core.lo[2] + z])
@@ -187,7 +187,7 @@ impl SharedSamples {
     /// Undoes the scheduling since `mark` (a block left for the next batch).
     pub(super) fn undo(&mut self, mark: Mark) {
         for &(c, i) in &self.asked[mark.asked..] {
-            self.cores[c as usize].values[i as usize] = UNKNOWN;
+            self.cores[c as usize].values[i] = UNKNOWN;
         }
         self.asked.truncate(mark.asked);
         self.spans.truncate(mark.spans);
@@ -198,7 +198,7 @@ impl SharedSamples {
     pub(super) fn fill(&mut self, values: &[f64]) {
         debug_assert_eq!(values.len(), self.asked.len());
         for (&(c, i), &v) in self.asked.iter().zip(values) {
-            self.cores[c as usize].values[i as usize] = v as f32;
+            self.cores[c as usize].values[i] = v as f32;
         }
         self.asked.clear();
     }

@@ -67,6 +67,11 @@ pub struct SparseReport {
     pub chunk: usize,
     /// Points evaluated, octree centres included.
     pub evaluations: u64,
+    /// Of those, the points evaluated ruling blocks out (the octree's and its refinement's
+    /// centres).
+    pub pruning_evaluations: u64,
+    /// Of the pruning's, the refinement's below the blocks.
+    pub refinement_evaluations: u64,
     /// Points a dense run evaluates.
     pub dense_points: u64,
     /// Blocks of the grid.
@@ -146,6 +151,8 @@ pub(crate) fn extract_sparse_run(
         field_bound,
         chunk,
         evaluations: stats.evaluations,
+        pruning_evaluations: stats.pruning_evaluations,
+        refinement_evaluations: stats.refinement_evaluations,
         dense_points: stats.dense_points,
         blocks: stats.blocks,
         sampled_blocks: stats.sampled_blocks,

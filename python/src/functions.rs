@@ -140,6 +140,7 @@ fn report_json(
         "chunk": chunk,
         "evaluations": stats.evaluations,
         "pruning_evaluations": stats.pruning_evaluations,
+        "refinement_evaluations": stats.refinement_evaluations,
         "dense_points": stats.dense_points,
         "batches": stats.batches,
         "blocks": stats.blocks,

@@ -56,15 +56,17 @@ fn certified_pruning_gives_the_dense_mesh_for_every_extractor_that_meshes_in_blo
             assert_eq!(sparse.surface.triangles, dense.surface.triangles, "{what}: triangles");
             assert_eq!(sparse.surface.normals, dense.surface.normals, "{what}: normals");
             // Each grid sample is evaluated at most once (dense: exactly once), so the sparse
-            // run's evaluations are at most the dense grid's and the octree's centres (fewer
-            // than two per block).
+            // run's evaluations are at most the dense grid's, the octree's centres (fewer than
+            // two per block) and the refinement's (at most 8 + 64 per leaf).
             assert_eq!(dense_stats.evaluations, dense_stats.dense_points, "{what}: dense evaluations");
             assert!(
-                stats.evaluations < dense_stats.evaluations + 2 * stats.blocks as u64,
-                "{what}: {} evaluations, dense {}",
+                stats.evaluations - stats.refinement_evaluations < dense_stats.evaluations + 2 * stats.blocks as u64,
+                "{what}: {} evaluations, {} refining, dense {}",
                 stats.evaluations,
+                stats.refinement_evaluations,
                 dense_stats.evaluations
             );
+            assert!(stats.refinement_evaluations <= 72 * stats.blocks as u64, "{what}");
             assert!(stats.sampled_blocks < stats.blocks, "{what}: every block sampled");
         }
     }
@@ -137,12 +139,20 @@ fn no_grid_sample_is_evaluated_twice_and_the_dense_mode_evaluates_each_once() {
             let stats = extract_sparse(e.as_ref(), &grid, 0.0, &options, &mut recording, &mut out).expect("sparse");
             assert_eq!(stats.evaluations, recording.points.len() as u64, "{what}");
             let mut seen = std::collections::HashSet::new();
-            // The pruning's own evaluations come first; every later point is a grid sample.
-            let sampling = &recording.points[stats.pruning_evaluations as usize..];
-            let samples: Vec<[usize; 3]> = sampling.iter().filter_map(on_grid).collect();
-            assert_eq!(samples.len(), sampling.len(), "{what}: a sampled point off the grid");
+            // The octree's evaluations come first. After them the leaves' refinement and the
+            // sampling take turns: every point off the grid is the refinement's, and no grid
+            // sample is evaluated twice (a refinement centre on the grid is not sampled again).
+            let octree = (stats.pruning_evaluations - stats.refinement_evaluations) as usize;
+            let after = &recording.points[octree..];
+            let samples: Vec<[usize; 3]> = after.iter().filter_map(on_grid).collect();
+            assert!(after.len() - samples.len() <= stats.refinement_evaluations as usize, "{what}: a sampled point off the grid");
             for s in &samples {
                 assert!(seen.insert(*s), "{what}: sample {s:?} evaluated twice");
+            }
+            if let Pruning::Lipschitz(_) = pruning {
+                assert!(stats.refinement_evaluations > 0, "{what}: no leaf refined");
+            } else {
+                assert_eq!(stats.refinement_evaluations, 0, "{what}");
             }
             if pruning == Pruning::Dense {
                 assert_eq!(stats.pruning_evaluations, 0, "{what}");

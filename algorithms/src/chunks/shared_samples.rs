@@ -32,6 +32,13 @@ struct Core {
     values: Vec<f32>,
 }
 
+impl Core {
+    /// Where `sample` (inside the core) lies in its values.
+    fn offset(&self, sample: [usize; 3]) -> usize {
+        self.dims[0] * ((sample[1] - self.lo[1]) + self.dims[1] * (sample[2] - self.lo[2])) + sample[0] - self.lo[0]
+    }
+}
+
 /// The cores of the blocks read so far, and the samples asked for and not yet evaluated.
 pub(super) struct SharedSamples {
     dims: [usize; 3],
@@ -135,6 +142,28 @@ impl SharedSamples {
                     self.spans.push(Span { core, lo, hi });
                 }
             }
+        }
+    }
+
+    /// The value of `sample` if it is known (evaluated, or kept by [`SharedSamples::know`]).
+    /// Not for a sample asked for and not yet evaluated: call it between a gather and the next
+    /// schedule.
+    pub(super) fn value(&self, sample: [usize; 3]) -> Option<f32> {
+        let id = [0, 1, 2].map(|a| self.owner(a, sample[a]));
+        let core = &self.cores[*self.index.get(&id)? as usize];
+        let v = core.values[core.offset(sample)];
+        (!v.is_nan()).then_some(v)
+    }
+
+    /// Keeps the value of `sample` evaluated elsewhere (the pruning's), unless the sample is
+    /// already asked for or known: no block asks for it again.
+    pub(super) fn know(&mut self, sample: [usize; 3], value: f32) {
+        let id = [0, 1, 2].map(|a| self.owner(a, sample[a]));
+        let c = self.core(id);
+        let i = self.cores[c as usize].offset(sample);
+        let v = &mut self.cores[c as usize].values[i];
+        if v.is_nan() {
+            *v = value;
         }
     }
 

@@ -324,14 +324,15 @@ def extract(data: Union[np.ndarray, str, os.PathLike, Callable[[np.ndarray], Any
         ``chunk=2`` pays for an expensive ``fn`` such as a neural network, a larger chunk for a
         cheap one) and only the blocks that may hold the surface are evaluated: with ``lipschitz`` (a
         bound L with ``|fn(p) - fn(q)| <= L |p - q|``; 1 for a signed distance) a block is dropped
-        only when its centre's value proves it one-sided, and the mesh equals the dense grid's
-        meshed in blocks; without one, blocks are kept where the values at the block corners change
+        only when values at its centre, or at its halves' and quarters' centres, prove it
+        one-sided, and the mesh equals the dense grid's meshed in blocks; without one, blocks are kept where the values at the block corners change
         sign, with one block of margin, a heuristic that misses any part of the surface that lies
         wholly inside the blocks it drops (a bubble or a tube thinner than a block that crosses no
         block edge twice). ``sparse=False`` evaluates every sample, for comparison. Points come in
         batches of at most ``batch``; the GIL is held only while ``fn`` runs. ``mesh.stats``
         gives ``evaluations`` (each grid sample at most once, however many blocks read it, and
-        ``pruning_evaluations`` of them spent ruling blocks out), ``batches``, ``function_ms``
+        ``pruning_evaluations`` of them spent ruling blocks out, ``refinement_evaluations`` of
+        those below the blocks), ``batches``, ``function_ms``
         (time inside ``fn``) and ``other_ms``.
         A wrong length, dtype or a NaN raises ``ValueError`` naming the batch and its points'
         bounds; an exception inside ``fn`` propagates unchanged.

@@ -12,6 +12,12 @@ pub(super) struct Row {
     pub(super) lipschitz: Option<f64>,
     pub(super) chunk: Option<usize>,
     pub(super) evaluations: u64,
+    /// Of those, the pruning's (octree and refinement centres); `None` for dense runs.
+    #[serde(default)]
+    pub(super) pruning_evaluations: Option<u64>,
+    /// Of the pruning's, the refinement's below the blocks.
+    #[serde(default)]
+    pub(super) refinement_evaluations: Option<u64>,
     pub(super) dense_points: u64,
     pub(super) batches: u64,
     pub(super) sampled_blocks: Option<usize>,

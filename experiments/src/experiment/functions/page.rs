@@ -11,8 +11,8 @@ pub(super) fn section(ctx: &Context) -> Result<String, ExperimentError> {
     let mut s = String::from("## Meshes from functions (`functions`)\n\n");
     s.push_str(&format!(
         "Marching cubes of a field evaluated only in the blocks its Lipschitz bound cannot rule out (sparse), and of \
-             the whole grid (dense, up to {DENSE_UP_TO}³). Evaluations count every point the field was asked for, octree \
-             centres included; peak is the heap the run added. One run per cell, in one process.\n\n"
+             the whole grid (dense, up to {DENSE_UP_TO}³). Evaluations count every point the field was asked for, the \
+             octree's centres and its refinement's below the blocks included; peak is the heap the run added. One run per cell, in one process.\n\n"
     ));
     s.push_str(&reading(&data));
     let rows: Vec<Vec<String>> = data

@@ -330,7 +330,7 @@ pub fn extract_sparse(
     let retire = plan.chunk > 2 * plan.apron;
     let (mut points, mut values, mut samples) = (Vec::new(), Vec::new(), Vec::<f32>::new());
     let mut shared = SharedSamples::new(grid.dims, plan.chunk, plan.counts);
-    let mut kept = KeptBlocks { candidates, queue: VecDeque::new() };
+    let mut kept = KeptBlocks { candidates, queue: VecDeque::new(), scratch: RefineScratch::default() };
     // Enough blocks queued for one batch of new samples, refined between groups (when no sample
     // is asked for and not evaluated).
     let enough = (2 * options.batch / plan.chunk.pow(3)).max(1);
@@ -525,6 +525,7 @@ impl Candidates {
 struct KeptBlocks {
     candidates: Candidates,
     queue: VecDeque<[usize; 3]>,
+    scratch: RefineScratch,
 }
 
 impl KeptBlocks {
@@ -550,11 +551,11 @@ impl KeptBlocks {
                     *next = end;
                 }
                 Candidates::Leaves { leaves, next, l } => {
-                    let end = (*next + (ev.batch / 8).max(1)).min(leaves.len());
+                    let end = (*next + (ev.batch / 8).clamp(1, REFINED_AT_ONCE)).min(leaves.len());
                     if *next == end {
                         return Ok(());
                     }
-                    refine_leaves(plan, grid, iso, *l, &leaves[*next..end], ev, shared, &mut self.queue)?;
+                    refine_leaves(plan, grid, iso, *l, &leaves[*next..end], ev, shared, &mut self.queue, &mut self.scratch)?;
                     *next = end;
                 }
             }
@@ -569,6 +570,20 @@ struct SubBox {
     lo: [usize; 3],
     hi: [usize; 3],
     d: f64,
+}
+
+/// The buffers [`refine_leaves`] reuses from one group of leaves to the next.
+#[derive(Default)]
+struct RefineScratch {
+    state: Vec<Refined>,
+    known: Vec<(usize, [usize; 3], f32)>,
+    nodes: Vec<SubBox>,
+    children: Vec<SubBox>,
+    centres: Vec<[f64; 3]>,
+    values: Vec<Answer>,
+    asked: Vec<(usize, Option<[usize; 3]>)>,
+    answers: Vec<f64>,
+    same: FxHashMap<[usize; 3], usize>,
 }
 
 /// A part's value: a sample's known value, or the `k`-th of the level's evaluations.
@@ -586,6 +601,10 @@ enum Refined {
     OneSide(i8),
     Needed,
 }
+
+/// Leaves refined in one group, at most: their first halves are one batch of `8 x` this (or
+/// `batch`) points, and the group's buffers stay small.
+const REFINED_AT_ONCE: usize = 4096;
 
 /// Levels of halves a leaf's box is refined into, at most: a leaf costs at most 8 + 64
 /// evaluations (for 4-cell blocks, down to boxes of one cell).
@@ -609,10 +628,17 @@ fn refine_leaves(
     ev: &mut Evaluator,
     shared: &mut SharedSamples,
     kept: &mut VecDeque<[usize; 3]>,
+    scratch: &mut RefineScratch,
 ) -> Result<(), SparseError> {
-    let mut state = vec![Refined::OneSide(0); leaves.len()];
-    let mut known = Vec::new();
-    let mut nodes: Vec<SubBox> = Vec::with_capacity(leaves.len());
+    let RefineScratch { state, known, nodes, children, centres, values, asked, answers, same } = scratch;
+    state.clear();
+    state.resize(leaves.len(), Refined::OneSide(0));
+    known.clear();
+    nodes.clear();
+    same.clear();
+    // Without an apron a centre inside one block's box is no other block's sample: none is known
+    // before this block's refinement, and no two blocks share one.
+    let shared_centres = plan.apron > 0;
     for (k, leaf) in leaves.iter().enumerate() {
         let Some(b) = plan.block(leaf.id.map(|i| i as usize)) else { continue };
         let hi = [0, 1, 2].map(|a| b.lo[a] + b.dims[a] - 1);
@@ -625,23 +651,20 @@ fn refine_leaves(
         }
         nodes.push(SubBox { leaf: k, lo: b.lo, hi, d: f64::from(leaf.value) - f64::from(iso) });
     }
-    let (mut children, mut centres, mut values) = (Vec::new(), Vec::new(), Vec::new());
-    let (mut asked, mut answers) = (Vec::new(), Vec::new());
-    let mut same: FxHashMap<[usize; 3], usize> = FxHashMap::default();
     for level in 1..=REFINEMENT_LEVELS + 1 {
         if level > REFINEMENT_LEVELS {
-            for n in &nodes {
+            for n in nodes.iter() {
                 state[n.leaf] = Refined::Needed;
             }
             break;
         }
         children.clear();
-        for n in &nodes {
+        for n in nodes.iter() {
             if state[n.leaf] == Refined::Needed {
                 continue;
             }
             let before = children.len();
-            split_samples(n, &mut children);
+            split_samples(n, children);
             let promising = children.get(before).is_some_and(|c| n.d.abs() > l * half_diagonal(grid, c.lo, c.hi));
             if !promising {
                 children.truncate(before);
@@ -658,38 +681,40 @@ fn refine_leaves(
         asked.clear();
         centres.clear();
         same.clear();
-        for c in &children {
+        for c in children.iter() {
             let sample = grid_sample(c.lo, c.hi);
-            if let Some(v) = sample.and_then(|s| shared.value(s)) {
-                values.push(Answer::Known(v));
-                continue;
-            }
-            if let Some(&k) = sample.and_then(|s| same.get(&s)) {
-                values.push(Answer::Asked(k));
-                continue;
-            }
-            if let Some(s) = sample {
-                same.insert(s, centres.len());
+            if shared_centres {
+                if let Some(v) = sample.and_then(|s| shared.value(s)) {
+                    values.push(Answer::Known(v));
+                    continue;
+                }
+                if let Some(&k) = sample.and_then(|s| same.get(&s)) {
+                    values.push(Answer::Asked(k));
+                    continue;
+                }
+                if let Some(s) = sample {
+                    same.insert(s, centres.len());
+                }
             }
             values.push(Answer::Asked(centres.len()));
             asked.push((c.leaf, sample));
             centres.push(box_centre(grid, c.lo, c.hi));
         }
         let before = ev.stats.evaluations;
-        ev.values(&centres, &mut answers)?;
+        ev.values(centres, answers)?;
         ev.stats.pruning_evaluations += ev.stats.evaluations - before;
         ev.stats.refinement_evaluations += ev.stats.evaluations - before;
-        for (&(leaf, sample), &v) in asked.iter().zip(&answers) {
+        for (&(leaf, sample), &v) in asked.iter().zip(answers.iter()) {
             match sample {
                 // With an apron another block's box may hold it: kept now, whatever this
                 // leaf's fate. Without, only this block reads it: kept if the block is.
-                Some(s) if plan.apron > 0 => shared.know(s, v as f32),
+                Some(s) if shared_centres => shared.know(s, v as f32),
                 Some(s) => known.push((leaf, s, v as f32)),
                 None => {}
             }
         }
         nodes.clear();
-        for (mut c, &v) in children.drain(..).zip(&values) {
+        for (mut c, &v) in children.drain(..).zip(values.iter()) {
             let v = match v {
                 Answer::Known(v) => f64::from(v),
                 Answer::Asked(k) => answers[k],
@@ -707,12 +732,12 @@ fn refine_leaves(
             };
         }
     }
-    for (leaf, s) in leaves.iter().zip(&state) {
+    for (leaf, s) in leaves.iter().zip(state.iter()) {
         if *s == Refined::Needed {
             kept.push_back(leaf.id.map(|i| i as usize));
         }
     }
-    for (k, sample, value) in known {
+    for &(k, sample, value) in known.iter() {
         if state[k] == Refined::Needed {
             shared.know(sample, value);
         }
@@ -885,7 +910,8 @@ mod tests {
         let leaves: Vec<Leaf> =
             plan.blocks().map(|b| Leaf { id: b.id.map(|i| i as u32), value: (b.lo[0] as f64 + 2.0 - 5.2) as f32 }).collect();
         let mut kept = VecDeque::new();
-        refine_leaves(&plan, &grid, 0.0, 1.0, &leaves, &mut ev, &mut shared, &mut kept).expect("refined");
+        refine_leaves(&plan, &grid, 0.0, 1.0, &leaves, &mut ev, &mut shared, &mut kept, &mut RefineScratch::default())
+            .expect("refined");
         let kept: Vec<[usize; 3]> = kept.into_iter().collect();
         let expected: Vec<[usize; 3]> = plan.blocks().map(|b| b.id).filter(|id| id[0] == 1).collect();
         assert_eq!(kept, expected);

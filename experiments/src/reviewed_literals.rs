@@ -54,6 +54,7 @@ pub(crate) const REVIEWED_COMPARISONS: &[(&str, &str, &str)] = &[
     ("real_volumes/page.rs", "Inside is above the", "which side is inside: a setting (`--inside above`), not a verdict"),
     ("real_volumes/second.rs", "the meshes \\\n         below overlay", "a place on the page"),
     ("stuart_tables/checks.rs", "from the rows above", "a place on the page"),
+    ("functions/page.rs", "its refinement's below the blocks", "a place (the octree refined inside the blocks), not a verdict"),
     (
         "stuart_tables/table_two.rs",
         "claim of the fewest elements is not reproduced",

@@ -30,6 +30,12 @@
 //! thin sheet that crosses no coarse edge twice ...): no certificate.
 //!
 //! [`Pruning::Dense`] samples every block, for comparison.
+//!
+//! **Why one file of about 950 lines.** The octree, its refinement and the sampling loop take
+//! turns on one evaluator and one [`SharedSamples`]: the refinement runs between sampling groups
+//! and hands its grid-sample values to the sampling, so their order is one contract read in one
+//! place. A third of the file is tests. The refinement could move to a module of its own beside
+//! `shared_samples`; not done yet.
 
 use super::shared_samples::SharedSamples;
 use super::{mesh_block_view_of, BlockBounds, BlockPlan, ChunkStats, Fragment, Welder};

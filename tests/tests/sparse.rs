@@ -344,3 +344,38 @@ fn every_certified_field_gives_the_dense_chunked_mesh_for_every_extractor_that_m
         }
     }
 }
+
+/// A mesh the memory limit cannot hold is refused before the samples of the blocks past the
+/// limit are evaluated: the error names the bytes needed and the limit, nothing is output, and
+/// fewer points were evaluated than the full run's; at the full run's estimate it goes through.
+/// The estimate (48 bytes per face cell of a kept block) is within a factor of two of the mesh.
+#[test]
+fn a_sparse_mesh_over_the_memory_limit_is_refused_before_its_blocks_are_sampled() {
+    use isolab_algorithms::ExtractError;
+    let f = field("sphere");
+    let grid = domain_grid(f.as_ref(), 257);
+    let mc = extractors::by_name("marching-cubes").expect("marching cubes");
+    let options = SparseOptions { chunk: 8, batch: 1 << 12, pruning: Pruning::Lipschitz(1.0) };
+    let mut full = Extraction::default();
+    let mut all = Recording { field: f.as_ref(), points: Vec::new() };
+    let stats = extract_sparse(mc.as_ref(), &grid, 0.0, &options, &mut all, &mut full).expect("sparse");
+    let estimate = stats.sampled_blocks as u64 * 64 * 48;
+    let made = (full.surface.positions.len() * 24 + full.surface.triangles.len() * 12) as u64;
+    assert!(estimate < 2 * made && made < 2 * estimate, "estimate {estimate} for a mesh of {made} bytes");
+
+    let mut refused = Extraction { memory_limit: Some(estimate / 2), ..Default::default() };
+    let mut some = Recording { field: f.as_ref(), points: Vec::new() };
+    match extract_sparse(mc.as_ref(), &grid, 0.0, &options, &mut some, &mut refused) {
+        Err(SparseError::Extract(ExtractError::OverMemory { needed, limit, .. })) => {
+            assert_eq!(limit, estimate / 2);
+            assert!(needed > limit && needed <= estimate, "needed {needed}, limit {limit}, whole {estimate}");
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+    assert!(refused.surface.positions.is_empty() && refused.surface.triangles.is_empty());
+    assert!(some.points.len() < all.points.len(), "{} of {} points evaluated", some.points.len(), all.points.len());
+
+    let mut enough = Extraction { memory_limit: Some(estimate), ..Default::default() };
+    extract_sparse(mc.as_ref(), &grid, 0.0, &options, &mut FieldEval(f.as_ref()), &mut enough).expect("within the limit");
+    assert_eq!(enough.surface.triangles, full.surface.triangles);
+}

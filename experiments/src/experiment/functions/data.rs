@@ -88,10 +88,26 @@ pub(super) struct PythonSide {
     pub(super) callables: std::collections::BTreeMap<String, String>,
 }
 
+/// What a cell-by-cell test with the same bound could not rule out ([`super::floor::cell_floor`]).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) struct Floor {
+    pub(super) field: String,
+    pub(super) n: usize,
+    pub(super) lipschitz: f64,
+    /// Cells whose centre's value does not rule them out.
+    pub(super) cells: u64,
+    /// Samples that are corners of those cells.
+    pub(super) samples: u64,
+    pub(super) dense_points: u64,
+}
+
 #[derive(Serialize, Deserialize)]
 pub(super) struct Data {
     pub(super) rows: Vec<Row>,
     pub(super) equality: Vec<Equality>,
+    /// The cell-by-cell floor at the reading's size (absent in older data).
+    #[serde(default)]
+    pub(super) floors: Vec<Floor>,
     /// The Python callables and peers; `None` where the reference environment could not be made.
     #[serde(default)]
     pub(super) python: Option<PythonSide>,

@@ -6,6 +6,7 @@ use super::{ChunkState, ChunkStats};
 use crate::extract::Extraction;
 use crate::mesh::TriMesh;
 use glam::Vec3;
+use rustc_hash::FxHashMap;
 use std::collections::HashMap;
 
 /// A weld key from exact position bits.
@@ -38,16 +39,18 @@ pub(super) fn weld<'a>(pieces: impl Iterator<Item = WeldPiece<'a>>, out: &mut Ex
 /// holds the keys of two layers only, which is enough when no vertex is made by blocks two
 /// layers apart (blocks thicker than twice their apron). Without retires, every key is kept.
 pub(super) struct Welder {
-    index: HashMap<u128, u32>,
-    older: HashMap<u128, u32>,
+    index: FxHashMap<u128, u32>,
+    older: FxHashMap<u128, u32>,
     with_normals: bool,
+    /// A piece's vertices to the welded mesh's, reused from piece to piece.
+    remap: Vec<u32>,
 }
 
 impl Welder {
     /// A weld into `out`, which it clears.
     pub(super) fn new(out: &mut Extraction) -> Welder {
         out.surface.clear();
-        Welder { index: HashMap::new(), older: HashMap::new(), with_normals: true }
+        Welder { index: FxHashMap::default(), older: FxHashMap::default(), with_normals: true, remap: Vec::new() }
     }
 
     /// Drops the keys of the generation before the current one.
@@ -66,31 +69,29 @@ impl Welder {
                 out.stats.discarded_triangles += piece.discarded_triangles;
                 out.stats.active_cells += piece.active_cells;
                 self.with_normals &= e.normals.len() == e.positions.len();
-                let remap: Vec<u32> = e
-                    .positions
-                    .iter()
-                    .enumerate()
-                    .map(|(i, &p)| {
-                        let next = out.surface.positions.len() as u32;
-                        let id = match piece.keys[i] {
-                            Some(key) => match self.older.get(&key) {
-                                Some(&id) => id,
-                                None => *self.index.entry(key).or_insert(next),
-                            },
-                            None => next,
-                        };
-                        if id == next {
-                            out.surface.positions.push(p);
-                            if let Some(&n) = e.normals.get(i) {
-                                out.surface.normals.push(n);
-                            }
-                        } else {
-                            stats.welded += 1;
+                let mut remap = std::mem::take(&mut self.remap);
+                remap.clear();
+                remap.extend(e.positions.iter().enumerate().map(|(i, &p)| {
+                    let next = out.surface.positions.len() as u32;
+                    let id = match piece.keys[i] {
+                        Some(key) => match self.older.get(&key) {
+                            Some(&id) => id,
+                            None => *self.index.entry(key).or_insert(next),
+                        },
+                        None => next,
+                    };
+                    if id == next {
+                        out.surface.positions.push(p);
+                        if let Some(&n) = e.normals.get(i) {
+                            out.surface.normals.push(n);
                         }
-                        id
-                    })
-                    .collect();
+                    } else {
+                        stats.welded += 1;
+                    }
+                    id
+                }));
                 out.surface.triangles.extend(e.triangles.iter().map(|t| t.map(|v| remap[v as usize])));
+                self.remap = remap;
             }
         }
     }

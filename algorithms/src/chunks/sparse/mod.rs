@@ -345,64 +345,47 @@ fn extract_sparse_into(
     // the keys of two layers only.
     let field = ev.eval.field_on_grid().map(|(f, g)| (f.clone(), *g));
     let field = field.as_ref().map(|(f, g)| (f, g));
-    let mut welder = Welder::new(out);
-    let mut weld_stats = ChunkStats::default();
-    let retire = plan.chunk > 2 * plan.apron;
-    let (mut points, mut values, mut samples) = (Vec::new(), Vec::new(), Vec::<f32>::new());
+    let mut weld =
+        LayerWeld { welder: Welder::new(out), stats: ChunkStats::default(), retire: plan.chunk > 2 * plan.apron, layer: None };
+    let limit = out.memory_limit;
     let mut shared = SharedSamples::new(grid.dims, plan.chunk, plan.counts);
     let mut kept = KeptBlocks { candidates, queue: VecDeque::new(), scratch: RefineScratch::default() };
     // Enough blocks queued for one batch of new samples, refined between groups (when no sample
     // is asked for and not evaluated).
     let enough = (2 * options.batch / plan.chunk.pow(3)).max(1);
     kept.refill(enough, &plan, grid, iso, &mut ev, &mut shared)?;
-    let mut layer = kept.queue.front().map_or(0, |id| id[2]);
-    let mut group: Vec<BlockBounds> = Vec::new();
-    let mut offsets = Vec::new();
-    while !kept.queue.is_empty() {
-        // A group of blocks whose samples not yet evaluated make about one batch (at least one
-        // block); a sample shared with an earlier block is evaluated once.
-        group.clear();
-        while let Some(b) = kept.queue.front().and_then(|&id| plan.block(id)) {
-            let mark = shared.mark();
-            shared.schedule(&b);
-            if !group.is_empty() && shared.asked() > options.batch {
-                shared.undo(mark);
-                break;
-            }
-            group.push(b);
-            kept.queue.pop_front();
-        }
-        ev.stats.sampled_blocks += group.len();
-        check_output_memory(extractor, ev.stats.sampled_blocks, plan.chunk, out.memory_limit)?;
-        shared.points(grid, &mut points);
-        ev.values(&points, &mut values)?;
-        shared.fill(&values);
-        // The samples as the extractors read them, each block's run gathered from the cores it
-        // overlaps; each block meshes its run where it lies.
-        shared.gather(&mut samples, &mut offsets);
-        kept.refill(enough, &plan, grid, iso, &mut ev, &mut shared)?;
-        if let Some(next) = kept.queue.front() {
-            shared.retire_below((next[2] * plan.chunk).saturating_sub(plan.apron));
-        }
-        let meshed: Vec<Result<Fragment, ExtractError>> = group
-            .par_iter()
-            .zip(&offsets)
-            .map(|(b, &off)| {
-                let view = GridView::contiguous(&samples[off..off + block_points(b)], b.dims)
-                    .map_err(|e| ExtractError::BadInput { algorithm: extractor.name(), reason: e.to_string() })?;
-                mesh_block_view_of(extractor, &plan, b.id, view.into(), iso, field)
-            })
-            .collect();
-        for f in meshed {
-            let f = f?;
-            while retire && layer < f.id[2] {
-                welder.retire();
-                layer += 1;
-            }
-            welder.add(f.piece(), out, &mut weld_stats);
-        }
+    let mut sampler = Sampler {
+        plan: &plan,
+        grid,
+        iso,
+        batch: options.batch,
+        enough,
+        extractor,
+        limit,
+        ev,
+        shared,
+        kept,
+        points: Vec::new(),
+        values: Vec::new(),
+    };
+    let (mut current, mut next) = (SampledGroup::default(), SampledGroup::default());
+    let mut more = sampler.next_group(&mut current)?;
+    while more {
+        // The group sampled is meshed on the pool while this thread samples the next one: a
+        // callable that holds one core (a Python function under its lock) runs beside the
+        // meshing instead of before it.
+        let mut meshed = Vec::new();
+        let sampled = rayon::in_place_scope(|s| {
+            let (current, meshed, plan) = (&current, &mut meshed, &plan);
+            s.spawn(move |_| *meshed = current.mesh(extractor, plan, iso, field));
+            sampler.next_group(&mut next)
+        });
+        weld.add(meshed, out)?;
+        more = sampled?;
+        std::mem::swap(&mut current, &mut next);
     }
-    welder.finish(out);
+    let mut ev = sampler.ev;
+    weld.welder.finish(out);
     to_world(grid, out);
     // As extract_chunked: a field with an analytic gradient gives the normals.
     super::field_normals(field.map(|(f, _)| f), out);
@@ -410,6 +393,112 @@ fn extract_sparse_into(
     let eval_time = ev.stats.eval_time;
     ev.stats.other_time = start.elapsed().saturating_sub(eval_time);
     Ok(ev.stats)
+}
+
+/// A group of kept blocks with their samples, gathered as the extractors read them: each
+/// block's run, from its offset.
+#[derive(Default)]
+struct SampledGroup {
+    blocks: Vec<BlockBounds>,
+    samples: Vec<f32>,
+    offsets: Vec<usize>,
+}
+
+impl SampledGroup {
+    /// Each block meshed where its run lies, in the group's order.
+    fn mesh(
+        &self,
+        extractor: &dyn Extractor,
+        plan: &BlockPlan,
+        iso: f32,
+        field: Option<(&Arc<dyn Field>, &Grid)>,
+    ) -> Vec<Result<Fragment, ExtractError>> {
+        self.blocks
+            .par_iter()
+            .zip(&self.offsets)
+            .map(|(b, &off)| {
+                let view = GridView::contiguous(&self.samples[off..off + block_points(b)], b.dims)
+                    .map_err(|e| ExtractError::BadInput { algorithm: extractor.name(), reason: e.to_string() })?;
+                mesh_block_view_of(extractor, plan, b.id, view.into(), iso, field)
+            })
+            .collect()
+    }
+}
+
+/// What takes the kept blocks a group at a time: schedules their samples, evaluates the ones no
+/// earlier block asked for, gathers each block's run and refines the next leaves.
+struct Sampler<'a, 'e> {
+    plan: &'a BlockPlan,
+    grid: &'a SparseGrid,
+    iso: f32,
+    batch: usize,
+    enough: usize,
+    extractor: &'a dyn Extractor,
+    limit: Option<u64>,
+    ev: Evaluator<'e>,
+    shared: SharedSamples,
+    kept: KeptBlocks,
+    points: Vec<[f64; 3]>,
+    values: Vec<f64>,
+}
+
+impl Sampler<'_, '_> {
+    /// Samples the next group into `group`: blocks whose samples not yet evaluated make about
+    /// one batch (at least one block; a sample shared with an earlier block is evaluated once).
+    /// `false` when no block is left.
+    fn next_group(&mut self, group: &mut SampledGroup) -> Result<bool, SparseError> {
+        group.blocks.clear();
+        let shared = &mut self.shared;
+        while let Some(b) = self.kept.queue.front().and_then(|&id| self.plan.block(id)) {
+            let mark = shared.mark();
+            shared.schedule(&b);
+            if !group.blocks.is_empty() && shared.asked() > self.batch {
+                shared.undo(mark);
+                break;
+            }
+            group.blocks.push(b);
+            self.kept.queue.pop_front();
+        }
+        if group.blocks.is_empty() {
+            return Ok(false);
+        }
+        self.ev.stats.sampled_blocks += group.blocks.len();
+        check_output_memory(self.extractor, self.ev.stats.sampled_blocks, self.plan.chunk, self.limit)?;
+        shared.points(self.grid, &mut self.points);
+        self.ev.values(&self.points, &mut self.values)?;
+        shared.fill(&self.values);
+        shared.gather(&mut group.samples, &mut group.offsets);
+        self.kept.refill(self.enough, self.plan, self.grid, self.iso, &mut self.ev, shared)?;
+        if let Some(next) = self.kept.queue.front() {
+            shared.retire_below((next[2] * self.plan.chunk).saturating_sub(self.plan.apron));
+        }
+        Ok(true)
+    }
+}
+
+/// The weld of the fragments as they come, in the plan's order, retiring the keys of a block
+/// layer no later fragment can share (when `retire`: blocks thicker than twice their apron).
+struct LayerWeld {
+    welder: Welder,
+    stats: ChunkStats,
+    retire: bool,
+    /// The block layer of the last fragment added.
+    layer: Option<usize>,
+}
+
+impl LayerWeld {
+    fn add(&mut self, fragments: Vec<Result<Fragment, ExtractError>>, out: &mut Extraction) -> Result<(), ExtractError> {
+        for f in fragments {
+            let f = f?;
+            let layer = self.layer.get_or_insert(f.id[2]);
+            while self.retire && *layer < f.id[2] {
+                self.welder.retire();
+                *layer += 1;
+            }
+            self.welder.add(f.piece(), out, &mut self.stats);
+        }
+        Ok(())
+    }
 }
 
 /// Bytes of surface a kept block is taken to add: a smooth surface crosses about `chunk²` of

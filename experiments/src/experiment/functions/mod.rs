@@ -17,7 +17,7 @@
 //! `gyroid` (not a distance; bound `k √6`) and the shipped `spot` model's signed distance
 //! (closed, so 1-Lipschitz).
 //!
-//! **The floor of any block size** ([`floor::cell_floor`]): at the reading's size, the corners of
+//! **The floor of any block size** (`floor::cell_floor`): at the reading's size, the corners of
 //! the cells whose centre's value the bound cannot rule out, which a test cell by cell would
 //! still evaluate; the blocks' evaluations are read against it.
 //!

@@ -2,8 +2,9 @@
 //! [`BlockPlan`], whole octants of blocks are ruled out from one evaluation at their centre, and
 //! only the surviving blocks are sampled (each with its extractor's apron; a sample two blocks
 //! read is evaluated once, [`super::shared_samples`]), meshed by
-//! [`mesh_block_view`] and welded as they come, as [`weld_fragments`](super::weld_fragments) welds. Memory holds one
-//! batch of samples, the samples of about three layers of kept blocks, the octree's leaves (16
+//! [`mesh_block_view`] and welded as they come, as [`weld_fragments`](super::weld_fragments) welds. Memory holds two
+//! groups of samples (the group meshed and the next, sampled beside it), the samples of about
+//! three layers of kept blocks, the octree's leaves (16
 //! bytes each), the mesh and the weld keys of two block layers, never the dense grid.
 //!
 //! **Certified pruning** ([`Pruning::Lipschitz`]), after libigl's Lipschitz octree (PRs #2488

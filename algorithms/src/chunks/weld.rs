@@ -7,7 +7,6 @@ use crate::extract::Extraction;
 use crate::mesh::TriMesh;
 use glam::Vec3;
 use rustc_hash::FxHashMap;
-use std::collections::HashMap;
 
 /// A weld key from exact position bits.
 pub(super) fn position_key(p: Vec3) -> u128 {
@@ -111,7 +110,7 @@ impl Welder {
 /// keep no weld keys.
 pub fn weld_on_chunk_planes<'a>(parts: impl IntoIterator<Item = &'a TriMesh>, chunk: usize, out: &mut TriMesh) -> Vec<usize> {
     out.clear();
-    let mut index: HashMap<u128, u32> = HashMap::new();
+    let mut index: FxHashMap<u128, u32> = FxHashMap::default();
     let mut triangles = Vec::new();
     for part in parts {
         let remap: Vec<u32> = part

@@ -51,8 +51,7 @@ use crate::samples::GridView;
 use glam::Vec3;
 use octree::{lipschitz_leaves, sign_change_blocks};
 use rayon::prelude::*;
-use refine::{Candidates, KeptBlocks, RefineScratch};
-use std::collections::VecDeque;
+use refine::{Candidates, KeptBlocks};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -350,7 +349,7 @@ fn extract_sparse_into(
         LayerWeld { welder: Welder::new(out), stats: ChunkStats::default(), retire: plan.chunk > 2 * plan.apron, layer: None };
     let limit = out.memory_limit;
     let mut shared = SharedSamples::new(grid.dims, plan.chunk, plan.counts);
-    let mut kept = KeptBlocks { candidates, queue: VecDeque::new(), scratch: RefineScratch::default() };
+    let mut kept = KeptBlocks::new(candidates);
     // Enough blocks queued for one batch of new samples, refined between groups (when no sample
     // is asked for and not evaluated).
     let enough = (2 * options.batch / plan.chunk.pow(3)).max(1);

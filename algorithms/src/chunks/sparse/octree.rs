@@ -9,7 +9,7 @@ use crate::chunks::BlockPlan;
 
 /// A box of blocks: block ids `lo..hi` per axis.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Octant {
+struct Octant {
     lo: [usize; 3],
     hi: [usize; 3],
 }
@@ -88,7 +88,7 @@ pub(super) fn half_diagonal(grid: &SparseGrid, lo: [usize; 3], hi: [usize; 3]) -
 }
 
 /// The eight (or fewer) halves of an octant.
-pub(super) fn split(o: &Octant, out: &mut Vec<Octant>) {
+fn split(o: &Octant, out: &mut Vec<Octant>) {
     let halves = |a: usize| {
         let mid = o.lo[a] + (o.hi[a] - o.lo[a]).div_ceil(2);
         if o.hi[a] - o.lo[a] > 1 {
@@ -106,7 +106,7 @@ pub(super) fn split(o: &Octant, out: &mut Vec<Octant>) {
     }
 }
 
-pub(super) fn for_each_block(o: &Octant, mut f: impl FnMut([usize; 3])) {
+fn for_each_block(o: &Octant, mut f: impl FnMut([usize; 3])) {
     for z in o.lo[2]..o.hi[2] {
         for y in o.lo[1]..o.hi[1] {
             for x in o.lo[0]..o.hi[0] {

@@ -30,12 +30,17 @@ impl Candidates {
 /// The blocks to sample, in the plan's order: leaves are refined as the blocks before them are
 /// sampled, so memory holds a few groups of leaves' refinement, not the whole octree's.
 pub(super) struct KeptBlocks {
-    pub(super) candidates: Candidates,
+    candidates: Candidates,
     pub(super) queue: VecDeque<[usize; 3]>,
-    pub(super) scratch: RefineScratch,
+    scratch: RefineScratch,
 }
 
 impl KeptBlocks {
+    /// Nothing queued yet: the blocks come from `candidates` as [`KeptBlocks::refill`] asks.
+    pub(super) fn new(candidates: Candidates) -> KeptBlocks {
+        KeptBlocks { candidates, queue: VecDeque::new(), scratch: RefineScratch::default() }
+    }
+
     /// Queues blocks until `enough` are queued or no candidate is left, refining leaves a group
     /// at a time. Called between groups only: no sample is then asked for and not evaluated.
     pub(super) fn refill(
@@ -81,7 +86,7 @@ struct SubBox {
 
 /// The buffers [`refine_leaves`] reuses from one group of leaves to the next.
 #[derive(Default)]
-pub(super) struct RefineScratch {
+struct RefineScratch {
     state: Vec<Refined>,
     known: Vec<(usize, [usize; 3], f32)>,
     nodes: Vec<SubBox>,

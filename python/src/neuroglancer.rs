@@ -100,14 +100,26 @@ pub fn ng_level0(
     .map_err(ng_error)
 }
 
-/// Box `position` at `level` from its children's: `[(label, triangles, bytes), ...]`.
+/// Box `position` at `level` from its children's: `[(label, triangles, bytes), ...]`, its
+/// labels simplified and encoded on `threads` threads.
 #[pyfunction]
-pub fn ng_coarser(py: Python<'_>, job: Job, level: usize, position: [u32; 3], work: PathBuf) -> PyResult<Vec<(u32, u32, u64)>> {
+#[pyo3(signature = (job, level, position, work, threads=1))]
+pub fn ng_coarser(
+    py: Python<'_>,
+    job: Job,
+    level: usize,
+    position: [u32; 3],
+    work: PathBuf,
+    threads: Option<usize>,
+) -> PyResult<Vec<(u32, u32, u64)>> {
     let (_, _, layout) = layout_of(&job)?;
     if level == 0 || level >= layout.lods {
         return Err(PyValueError::new_err(format!("level {level} is not a coarser level of {} levels", layout.lods)));
     }
-    py.allow_threads(|| ngp::coarser_box(&layout, level, position, &work)).map(index_rows).map_err(ng_error)
+    let pool = pools::pool(threads)?;
+    py.allow_threads(|| pools::install(pool.as_deref(), || ngp::coarser_box(&layout, level, position, &work)))
+        .map(index_rows)
+        .map_err(ng_error)
 }
 
 type Segments = BTreeMap<u32, Vec<(usize, [u32; 3], u64)>>;

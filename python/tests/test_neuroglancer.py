@@ -14,6 +14,7 @@ import gzip
 import json
 import os
 import struct
+import time
 
 import DracoPy
 import mmh3
@@ -207,7 +208,14 @@ def read_manifest_chunk(src, label):
 
 def test_unsharded_source_reads_back(tmp_path):
     lab = voronoi((34, 30, 38), 12)
+    started = time.perf_counter()
     report = idask.mesh_labels(lab, chunk=8, format="neuroglancer", out=tmp_path / "ng", names={1: "first", 2: "second"})
+    took = time.perf_counter() - started
+    # The phases' wall times: each measured (boxes take the meshing), together within the call.
+    phases = report["seconds"]
+    assert sorted(phases) == ["boxes", "files", "info_and_cleanup"]
+    assert all(s >= 0 for s in phases.values()) and phases["boxes"] > 0
+    assert sum(phases.values()) <= took
     assert report["lods"] == 4 and report["segments"] == 12
     assert report["fragments"][0] > report["fragments"][-1] >= 12
     assert report["triangles"][0] > report["triangles"][1] > report["triangles"][-1]

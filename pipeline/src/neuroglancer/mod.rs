@@ -40,6 +40,7 @@ use isolab_algorithms::labels::{LabelBlockPlan, LabelExtractor, LabelFragment, L
 use isolab_algorithms::{ExtractError, TriMesh};
 use isolab_io::neuroglancer::{self as ng, Manifest, MultilodInfo, ShardingSpec};
 use isolab_io::{write_atomic, IoError};
+use rayon::prelude::*;
 
 pub use boxfile::{BoxIndex, BoxMeshes};
 pub use run::{write_source, NgConfig, NgReport};
@@ -247,18 +248,28 @@ pub fn coarser_box(layout: &Layout, level: usize, position: [u32; 3], work: &Pat
     if let Some(index) = boxfile::read_index_if_complete(&path) {
         return Ok(index);
     }
+    // Each child's labels are simplified on their own, in parallel on the pool the caller
+    // installed (one thread unless told: a Dask task's), then joined in the children's order:
+    // the same box as serially.
+    let children = layout.children(level, position);
+    let read: Vec<Vec<(u32, TriMesh)>> =
+        children.par_iter().map(|&child| boxfile::read_meshes(&box_path(work, level - 1, child))).collect::<Result<_, _>>()?;
+    let jobs: Vec<(usize, u32, &TriMesh)> =
+        read.iter().enumerate().flat_map(|(k, meshes)| meshes.iter().map(move |(label, mesh)| (k, *label, mesh))).collect();
+    let simplified: Vec<TriMesh> = jobs
+        .par_iter()
+        .map(|&(k, _, mesh)| {
+            let (lo, size) = layout.box_at(level - 1, children[k]);
+            let lo32 = lo.map(|v| v as f32);
+            let hi32 = std::array::from_fn(|a| (lo[a] + size[a]) as f32);
+            cut::simplify_locked(mesh, lo32, hi32, level)
+        })
+        .collect();
     let mut parts: BTreeMap<u32, Vec<TriMesh>> = BTreeMap::new();
-    for child in layout.children(level, position) {
-        let child_path = box_path(work, level - 1, child);
-        let meshes = boxfile::read_meshes(&child_path)?;
-        let (lo, size) = layout.box_at(level - 1, child);
-        let lo32 = lo.map(|v| v as f32);
-        let hi32 = std::array::from_fn(|a| (lo[a] + size[a]) as f32);
-        for (label, mesh) in meshes {
-            parts.entry(label).or_default().push(cut::simplify_locked(&mesh, lo32, hi32, level));
-        }
+    for (&(_, label, _), mesh) in jobs.iter().zip(simplified) {
+        parts.entry(label).or_default().push(mesh);
     }
-    let meshes = parts.into_iter().map(|(l, ms)| (l, cut::join_welded(&ms))).collect();
+    let meshes = parts.into_par_iter().map(|(l, ms)| (l, cut::join_welded(&ms))).collect();
     encode_and_write(layout, level, position, meshes, &path)
 }
 
@@ -270,12 +281,14 @@ fn encode_and_write(
     path: &Path,
 ) -> Result<BoxIndex, NgError> {
     let (lo, size) = layout.box_at(level, position);
-    let mut labels = Vec::with_capacity(meshes.len());
-    for (label, mesh) in meshes {
-        let q = ng::quantize_fragment(&mesh.positions, lo, size, layout.bits);
-        let draco = ng::encode_fragment(&q, &mesh.triangles).map_err(NgError::Invalid)?;
-        labels.push((label, mesh, draco));
-    }
+    let labels = meshes
+        .into_par_iter()
+        .map(|(label, mesh)| {
+            let q = ng::quantize_fragment(&mesh.positions, lo, size, layout.bits);
+            let draco = ng::encode_fragment(&q, &mesh.triangles).map_err(NgError::Invalid)?;
+            Ok((label, mesh, draco))
+        })
+        .collect::<Result<Vec<_>, NgError>>()?;
     let b = BoxMeshes { level: level as u32, position, labels };
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).map_err(file_error(dir))?;

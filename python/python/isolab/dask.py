@@ -26,6 +26,7 @@ import importlib.util
 import json
 import os
 import tempfile
+import time
 import warnings
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 
@@ -475,6 +476,8 @@ def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] =
         faces locked (so no triangle crosses the 2x2x2 grid, and levels meet without cracks);
         the segments' files are the fragments' bytes copied in Z-curve order. No label is ever
         held whole by a task, and a rerun resumes from the box files in ``out/.isolab-work``.
+        A level of fewer boxes than the scheduler has threads (the octree's top, whose tasks run
+        alone at the end) gives each of its tasks a share of them, more than ``threads``.
         Coordinates: ``affine`` or ``spacing`` become the ``info``'s transform; with neither,
         vertices are in voxels in the array's axis order, as :func:`isolab.mesh_labels` gives
         them (axis 0 is neuroglancer's x, as for arrays cloud-volume reads).
@@ -497,7 +500,9 @@ def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] =
     -------
     isolab.LabelMeshes, or a list of fragment paths when ``merge=False``, or with
     ``format="neuroglancer"`` a dict of what was written (``segments``, ``lods``, per level
-    ``fragments``, ``triangles`` and ``bytes``, ``shards``)
+    ``fragments``, ``triangles`` and ``bytes``, ``shards``, and ``seconds``: wall time of the
+    ``boxes`` (every level's boxes, planning and reading included), of the segments' ``files``
+    (shards, or manifests and fragment files) and of ``info_and_cleanup``)
         Its ``extract_ms`` is the weld's time (the blocks ran on the workers).
 
     >>> import numpy as np, isolab, isolab.dask
@@ -555,10 +560,18 @@ def _ng_level0_task(source, slices, block_id, job, work: str, select, threads: i
     return _isolab.ng_level0(job, _read_block(source, slices), list(block_id), work, select, threads)
 
 
-def _ng_coarser_task(job, level: int, position, work: str, *children):
+def _ng_coarser_task(job, level: int, position, work: str, threads: int, *children):
     """One Dask task: a box at ``level`` from its children (``children``: their tasks, so that
-    Dask runs them first)."""
-    return _isolab.ng_coarser(job, level, list(position), work)
+    Dask runs them first), on ``threads`` threads."""
+    return _isolab.ng_coarser(job, level, list(position), work, threads)
+
+
+def _scheduler_threads(client) -> int:
+    """Threads the tasks run on at once: the cluster's (``client``), else this machine's cores
+    (Dask's local schedulers)."""
+    if client is not None:
+        return max(1, sum(int(n) for n in client.nthreads().values()))
+    return max(1, os.cpu_count() or 1)
 
 
 def _ng_segments_task(job, work: str, out_dir: str, segments) -> None:
@@ -585,6 +598,7 @@ def _neuroglancer(array, algorithm, opts, dims, chunk, counts, lods, sharded, bi
                   out, progress, threads, keep_work) -> Dict[str, Any]:
     """``mesh_labels(..., format="neuroglancer")``: level-0 boxes, coarser boxes, segments."""
     import shutil
+    started = time.perf_counter()
     if lods is None:
         lods = 1 + max(int(np.ceil(np.log2(c))) if c > 1 else 0 for c in counts)
     job = (algorithm, opts, list(dims), chunk, int(lods), bits)
@@ -597,9 +611,13 @@ def _neuroglancer(array, algorithm, opts, dims, chunk, counts, lods, sharded, bi
     for block_id, lo, bdims in windows:
         tasks[(0, tuple(block_id))] = dask.delayed(_ng_level0_task, pure=False)(
             *_block_input(array, source, lo, bdims), tuple(block_id), job, work, chosen, threads)
+    # A level of fewer boxes than the scheduler has threads (the top of the octree, its tasks
+    # alone at the end of the run) gives each box's task a share of the idle threads.
+    total_threads = _scheduler_threads(client)
     for level in range(1, lods):
         cx, cy, cz = level_counts[level]
         below = level_counts[level - 1]
+        level_threads = max(threads, total_threads // max(1, cx * cy * cz))
         for z in range(cz):
             for y in range(cy):
                 for x in range(cx):
@@ -607,9 +625,10 @@ def _neuroglancer(array, algorithm, opts, dims, chunk, counts, lods, sharded, bi
                             for dz in (0, 1) for dy in (0, 1) for dx in (0, 1)
                             if 2 * x + dx < below[0] and 2 * y + dy < below[1] and 2 * z + dz < below[2]]
                     tasks[(level, (x, y, z))] = dask.delayed(_ng_coarser_task, pure=False)(job, level, (x, y, z), work,
-                                                                                           *kids)
+                                                                                           level_threads, *kids)
     keys = list(tasks)
     results = _compute([tasks[k] for k in keys], client, progress)
+    boxes_done = time.perf_counter()
     segments: Dict[int, List[Any]] = {}
     per_level = [[0, 0, 0] for _ in range(lods)]
     for (level, position), index in zip(keys, results):
@@ -633,17 +652,21 @@ def _neuroglancer(array, algorithm, opts, dims, chunk, counts, lods, sharded, bi
             segs = {label: segments[label] for label in labels_[i:i + batch]}
             writes.append(dask.delayed(_ng_segments_task, pure=False)(job, work, out_dir, segs))
     _compute(writes, client, progress)
+    files_done = time.perf_counter()
     named = None if names is None else sorted((int(k), str(v)) for k, v in names.items())
     _isolab.ng_info(job, out_dir, _ng_transform(affine_), len(labels_) if sharded else None, named)
     if not keep_work:
         shutil.rmtree(work, ignore_errors=True)
+    finished = time.perf_counter()
     missing = [] if chosen is None else [label for label in chosen if label not in segments]
     if missing:
         warnings.warn(f"labels {missing} do not occur in the label map: no mesh for them", stacklevel=3)
     return {"out": out_dir, "format": "neuroglancer", "segments": len(labels_), "lods": int(lods),
             "fragments": [p[0] for p in per_level], "triangles": [p[1] for p in per_level],
             "bytes": [p[2] for p in per_level], "shards": len(writes) if sharded else 0,
-            "sharded": sharded, "quantization_bits": bits, "chunk": chunk}
+            "sharded": sharded, "quantization_bits": bits, "chunk": chunk,
+            "seconds": {"boxes": boxes_done - started, "files": files_done - boxes_done,
+                        "info_and_cleanup": finished - files_done}}
 
 
 def _ng_legacy_task(source, slices, block_id, job, out_dir: str, transform, select, threads: int):

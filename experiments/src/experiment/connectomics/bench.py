@@ -24,7 +24,9 @@ Runs, one round, alternating isolab and igneous at each worker count:
   shards), both on `LocalTaskQueue(parallel=workers)`, timed together.
 Per run: wall seconds, bytes written, peak resident memory of the worker processes (isolab: each
 Dask worker's VmHWM; igneous: the largest of its pool's processes, getrusage of the children),
-and for isolab the fragments, triangles and bytes per level. Then the Draco encoders side by side
+and for isolab the fragments, triangles and bytes per level, the wall time of its phases (the
+`seconds` mesh_labels returns) and, from Dask's task stream, each worker's seconds computing and
+the seconds per kind of task. Then the Draco encoders side by side
 on the same fragments (`draco_comparison`), and neuroglancer's own viewer draws
 some segments of isolab's source in headless Chromium (tests/browser/neuroglancer.mjs), the
 screenshot kept for the page.
@@ -124,12 +126,15 @@ def run_isolab(vol, workers, args, out):
     c = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
                      dashboard_address="127.0.0.1:0", memory_limit=f"{args.memory_limit_mib}MiB", silence_logs=50)
     client = Client(c, timeout=120)
+    from distributed import get_task_stream
     try:
         pids = client.run(os.getpid)
         t = time.perf_counter()
-        report = idask.mesh_labels(vol, chunk=args.chunk, format="neuroglancer", sharded=True, out=out,
-                                   client=client, spacing=(RESOLUTION,) * 3)
+        with get_task_stream(client) as stream:
+            report = idask.mesh_labels(vol, chunk=args.chunk, format="neuroglancer", sharded=True, out=out,
+                                       client=client, spacing=(RESOLUTION,) * 3)
         seconds = time.perf_counter() - t
+        busy, by_kind = task_seconds(stream.data)
         peaks = sorted(client.run(peak_rss_mib).values())
         restarted = client.run(os.getpid) != pids
     finally:
@@ -138,7 +143,21 @@ def run_isolab(vol, workers, args, out):
     return {"tool": "isolab", "workers": workers, "seconds": seconds, "bytes": dir_bytes(out),
             "peak_rss_mib": peaks, "restarted": restarted, "segments": report["segments"], "lods": report["lods"],
             "fragments": report["fragments"], "triangles": report["triangles"], "level_bytes": report["bytes"],
-            "shards": report["shards"]}
+            "shards": report["shards"], "phases": report.get("seconds", {}), "busy_seconds": busy,
+            "task_seconds": by_kind}
+
+
+def task_seconds(stream):
+    """From Dask's task stream: each worker's seconds computing (sorted), and the seconds computing
+    per kind of task (the task function's name, as Dask keys it)."""
+    busy, by_kind = {}, {}
+    for task in stream:
+        spent = sum(s["stop"] - s["start"] for s in task.get("startstops", ()) if s.get("action") == "compute")
+        busy[task.get("worker")] = busy.get(task.get("worker"), 0.0) + spent
+        kind = str(task.get("key", "?"))
+        kind = kind.strip("()'").split("-")[0]
+        by_kind[kind] = by_kind.get(kind, 0.0) + spent
+    return sorted(busy.values()), by_kind
 
 
 def igneous_job(seg, workers, shape, mesh_dir):

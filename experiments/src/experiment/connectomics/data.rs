@@ -21,6 +21,16 @@ pub(super) struct Run {
     pub(super) triangles: Vec<u64>,
     #[serde(default)]
     pub(super) level_bytes: Vec<u64>,
+    /// isolab's phases, wall seconds: `boxes`, `files`, `info_and_cleanup` (absent from data made
+    /// before they were measured).
+    #[serde(default)]
+    pub(super) phases: BTreeMap<String, f64>,
+    /// isolab's workers' seconds computing, from Dask's task stream, sorted.
+    #[serde(default)]
+    pub(super) busy_seconds: Vec<f64>,
+    /// isolab's seconds computing per kind of task (the task function's name).
+    #[serde(default)]
+    pub(super) task_seconds: BTreeMap<String, f64>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]

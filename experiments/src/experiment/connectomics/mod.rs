@@ -103,6 +103,9 @@ mod tests {
             fragments: vec![20, 9],
             triangles: vec![1000, 250],
             level_bytes: vec![100, 30],
+            phases: BTreeMap::new(),
+            busy_seconds: Vec::new(),
+            task_seconds: BTreeMap::new(),
         }
     }
 
@@ -147,5 +150,25 @@ mod tests {
         assert!(slow.contains("2.00× igneous's speed, short of"), "{slow}");
         assert!(slow.contains("ours encoded at 3.00× the speed of theirs (1.0 MiB against 2.0 MiB)"), "{slow}");
         assert!(page_body(&data(10.0, 20.0)).contains("| igneous | 2 | 20.0 |"));
+        assert!(!slow.contains("computed tasks"), "no task stream, no split: {slow}");
+    }
+
+    #[test]
+    fn the_time_split_follows_the_task_stream() {
+        let mut d = data(10.0, 20.0);
+        let ours = &mut d.runs[0];
+        ours.busy_seconds = vec![6.0, 9.0];
+        ours.phases = [("boxes", 8.0), ("files", 1.5), ("info_and_cleanup", 0.25)].map(|(k, v)| (k.to_string(), v)).into();
+        ours.task_seconds = [("_ng_level0_task", 12.0), ("_ng_shard_task", 1.4)].map(|(k, v)| (k.to_string(), v)).into();
+        let s = reading(&d);
+        assert!(
+            s.contains(
+                "computed tasks for 75% of 2 × its 10 s (idle 5 worker-seconds); its boxes took 8.0 s of wall time, \
+                        its segments' files 1.5 s and its info and cleanup 0.2 s."
+            ),
+            "{s}"
+        );
+        let page = page_body(&d);
+        assert!(page.contains("| 2 | 10.0 | 8.0 | 1.5 | 0.2 | 75% | 12.0 | 1.4 |"), "{page}");
     }
 }

@@ -83,10 +83,69 @@ pub(super) fn reading(data: &Data) -> String {
             ));
         }
     }
+    lines.extend(ours.iter().filter_map(|r| time_split(r)));
     if lines.is_empty() {
         return String::new();
     }
     format!("**Reading.** {}\n\n", lines.join(" "))
+}
+
+/// The share of the workers' time (their count times the wall time) spent computing tasks, from
+/// Dask's task stream; `None` for data made before it was measured.
+pub(super) fn busy_share(r: &Run) -> Option<f64> {
+    (!r.busy_seconds.is_empty() && r.seconds > 0.0).then(|| r.busy_seconds.iter().sum::<f64>() / (r.workers as f64 * r.seconds))
+}
+
+/// Where an isolab run's wall time went: its workers' busy share and its phases.
+pub(super) fn time_split(r: &Run) -> Option<String> {
+    let share = busy_share(r)?;
+    let phase = |name: &str| r.phases.get(name).copied().unwrap_or(f64::NAN);
+    Some(format!(
+        "With {} worker(s), isolab's workers computed tasks for {:.0}% of {} × its {:.0} s (idle {:.0} worker-seconds); \
+         its boxes took {:.1} s of wall time, its segments' files {:.1} s and its info and cleanup {:.1} s.",
+        r.workers,
+        100.0 * share,
+        r.workers,
+        r.seconds,
+        r.workers as f64 * r.seconds - r.busy_seconds.iter().sum::<f64>(),
+        phase("boxes"),
+        phase("files"),
+        phase("info_and_cleanup"),
+    ))
+}
+
+/// The table of isolab's runs' phases and their workers' seconds per kind of task.
+fn time_table(data: &Data) -> String {
+    let ours: Vec<&Run> = data.runs.iter().filter(|r| r.tool == "isolab" && !r.busy_seconds.is_empty()).collect();
+    if ours.is_empty() {
+        return String::new();
+    }
+    let mut kinds: Vec<&String> = ours.iter().flat_map(|r| r.task_seconds.keys()).collect();
+    kinds.sort();
+    kinds.dedup();
+    let mut header: Vec<String> =
+        ["workers", "wall s", "boxes s", "files s", "info and cleanup s", "workers computing"].map(String::from).to_vec();
+    header.extend(kinds.iter().map(|k| format!("`{k}` s")));
+    let rows: Vec<Vec<String>> = ours
+        .iter()
+        .map(|r| {
+            let mut row = vec![r.workers.to_string(), format!("{:.1}", r.seconds)];
+            row.extend(
+                ["boxes", "files", "info_and_cleanup"].map(|p| r.phases.get(p).map_or(String::new(), |s| format!("{s:.1}"))),
+            );
+            row.push(busy_share(r).map_or(String::new(), |s| format!("{:.0}%", 100.0 * s)));
+            row.extend(kinds.iter().map(|k| r.task_seconds.get(*k).map_or(String::new(), |s| format!("{s:.1}"))));
+            row
+        })
+        .collect();
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    format!(
+        "\n### Where isolab's time goes\n\nThe phases' wall times are the ones `mesh_labels` returns (`seconds`): the boxes \
+         of every level (reading the blocks included), the segments' files (the shards) and the info and the work \
+         folder's removal. Workers computing is the sum of the seconds Dask's task stream shows each worker computing, \
+         over the workers' count times the wall time; the last columns split it by the task's function.\n\n{}",
+        markdown_table(&header, &rows)
+    )
 }
 
 pub(super) fn page_body(data: &Data) -> String {
@@ -133,6 +192,7 @@ pub(super) fn page_body(data: &Data) -> String {
         })
         .collect();
     md.push_str(&markdown_table(&["tool", "workers", "wall s", "MiB written", "peak process MiB", "a worker restarted"], &rows));
+    md.push_str(&time_table(data));
     if let Some(r) = data.runs.iter().find(|r| r.tool == "isolab" && !r.triangles.is_empty()) {
         md.push_str("\n### isolab's levels of detail\n\n");
         let rows: Vec<Vec<String>> = (0..r.triangles.len())

@@ -248,26 +248,22 @@ pub fn coarser_box(layout: &Layout, level: usize, position: [u32; 3], work: &Pat
     if let Some(index) = boxfile::read_index_if_complete(&path) {
         return Ok(index);
     }
-    // Each child's labels are simplified on their own, in parallel on the pool the caller
-    // installed (one thread unless told: a Dask task's), then joined in the children's order:
-    // the same box as serially.
-    let children = layout.children(level, position);
-    let read: Vec<Vec<(u32, TriMesh)>> =
-        children.par_iter().map(|&child| boxfile::read_meshes(&box_path(work, level - 1, child))).collect::<Result<_, _>>()?;
-    let jobs: Vec<(usize, u32, &TriMesh)> =
-        read.iter().enumerate().flat_map(|(k, meshes)| meshes.iter().map(move |(label, mesh)| (k, *label, mesh))).collect();
-    let simplified: Vec<TriMesh> = jobs
-        .par_iter()
-        .map(|&(k, _, mesh)| {
-            let (lo, size) = layout.box_at(level - 1, children[k]);
-            let lo32 = lo.map(|v| v as f32);
-            let hi32 = std::array::from_fn(|a| (lo[a] + size[a]) as f32);
-            cut::simplify_locked(mesh, lo32, hi32, level)
-        })
-        .collect();
+    // A child at a time (its meshes read, then dropped: memory holds one child's and the
+    // simplified parts), its labels simplified in parallel on the pool the caller installed (one
+    // thread unless told: a Dask task's), then joined in the children's order: the same box as
+    // serially.
     let mut parts: BTreeMap<u32, Vec<TriMesh>> = BTreeMap::new();
-    for (&(_, label, _), mesh) in jobs.iter().zip(simplified) {
-        parts.entry(label).or_default().push(mesh);
+    for child in layout.children(level, position) {
+        let meshes = boxfile::read_meshes(&box_path(work, level - 1, child))?;
+        let (lo, size) = layout.box_at(level - 1, child);
+        let lo32 = lo.map(|v| v as f32);
+        let hi32 = std::array::from_fn(|a| (lo[a] + size[a]) as f32);
+        let simplified: Vec<(u32, TriMesh)> =
+            meshes.par_iter().map(|(label, mesh)| (*label, cut::simplify_locked(mesh, lo32, hi32, level))).collect();
+        drop(meshes);
+        for (label, mesh) in simplified {
+            parts.entry(label).or_default().push(mesh);
+        }
     }
     let meshes = parts.into_par_iter().map(|(l, ms)| (l, cut::join_welded(&ms))).collect();
     encode_and_write(layout, level, position, meshes, &path)

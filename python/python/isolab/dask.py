@@ -477,7 +477,8 @@ def mesh_labels(array, *, chunk: int = 128, spacing: Optional[Sequence[float]] =
         the segments' files are the fragments' bytes copied in Z-curve order. No label is ever
         held whole by a task, and a rerun resumes from the box files in ``out/.isolab-work``.
         A level of fewer boxes than the scheduler has threads (the octree's top, whose tasks run
-        alone at the end) gives each of its tasks a share of them, more than ``threads``.
+        alone at the end) gives each of its tasks an equal share of them where that share is
+        more than ``threads``.
         Coordinates: ``affine`` or ``spacing`` become the ``info``'s transform; with neither,
         vertices are in voxels in the array's axis order, as :func:`isolab.mesh_labels` gives
         them (axis 0 is neuroglancer's x, as for arrays cloud-volume reads).
